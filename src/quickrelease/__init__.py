@@ -1,0 +1,55 @@
+"""quickrelease: dynamics of the pushing and quick-release device.
+
+Implements Oliveto et al., "The dynamics of a pushing and quick release device for
+dynamic testing of seismic isolated buildings": statics (Eq. 1-2, Table 3),
+kinematics (Tables 4-5), release dynamics with lumped or distributed mass and
+Coulomb friction (Eq. 3-10), three solvers (the paper's Table 6 scheme, Runge-Kutta,
+the energy first integral) and the identification of the friction forces (Eq. 11-13,
+Table 7). SI units throughout.
+"""
+
+from __future__ import annotations
+
+from importlib.metadata import PackageNotFoundError, version
+
+from . import dynamics, kinematics, statics
+from .device import DEVICE_KEYS, Device, load_device, preset, preset_names
+from .dynamics import (
+    MASS_MODELS,
+    angular_acceleration,
+    dissipated_energy,
+    final_angle,
+    friction_limits,
+    initial_rate,
+    kinetic_energy,
+    mass_factor,
+    reaches_geometric_limit,
+)
+from .errors import (
+    DeviceFileError,
+    InfeasibleObservationError,
+    ParameterError,
+    QuickReleaseError,
+    UnitError,
+)
+from .identify import Identification, identify_friction, stop_time_on_line
+from .response import STOP_REASONS, Response
+from .solvers import METHODS, simulate, stop_time
+from .statics import InternalForces, StrainEnergy, fuse_force, internal_forces, push_force, strain_energy
+from .units import parse_quantity
+
+try:
+    __version__ = version("quickrelease")
+except PackageNotFoundError:  # running from a source tree
+    __version__ = "0.0.0+unknown"
+
+__all__ = [
+    "DEVICE_KEYS", "Device", "load_device", "preset", "preset_names",
+    "MASS_MODELS", "mass_factor", "angular_acceleration", "kinetic_energy", "initial_rate",
+    "dissipated_energy", "final_angle", "reaches_geometric_limit", "friction_limits",
+    "QuickReleaseError", "ParameterError", "DeviceFileError", "UnitError", "InfeasibleObservationError",
+    "Identification", "identify_friction", "stop_time_on_line",
+    "Response", "STOP_REASONS", "METHODS", "simulate", "stop_time",
+    "InternalForces", "StrainEnergy", "fuse_force", "internal_forces", "push_force", "strain_energy",
+    "parse_quantity", "dynamics", "kinematics", "statics", "__version__",
+]

@@ -1,0 +1,186 @@
+"""Identification of the friction forces from a test (Eq. 11-13, Table 7).
+
+What a test shows: the angle at release alpha0, the final angle alpha_F, the time
+t_F the device took to get there, and the push force P (hence E_S by Eq. 2). The
+friction forces must satisfy Eq. 8, which puts them on the line of Eq. 13,
+``F2 = F2* (1 - F1 / F1*)`` with ``0 <= F1 <= F1*`` (Eq. 11-12). Along that line
+the stop time grows monotonically with F1 (the hinge friction, whose dissipation
+is concentrated late in the motion, leaves more kinetic energy early on), from
+``t_F(F1 = 0)`` to ``t_F(F1 = F1*)``; a bracketed root find on F1 then matches the
+measured t_F.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from . import dynamics
+from ._validate import check_angle, check_positive
+from .device import Device, preset
+from .errors import InfeasibleObservationError, ParameterError
+from .solvers import FirstIntegral
+from .statics import strain_energy
+
+__all__ = ["Identification", "identify_friction", "stop_time_on_line"]
+
+
+@dataclass(frozen=True)
+class Identification:
+    """Friction forces identified from a stop observation (Eq. 11-13), with the inputs."""
+
+    F1: float
+    """Friction at the central hinges [N]."""
+    F2: float
+    """Friction at the rail supports [N]."""
+    F1_max: float
+    """F1*, the bound of Eq. 11 [N]."""
+    F2_max: float
+    """F2*, the bound of Eq. 12 [N]."""
+    stored_energy: float
+    """E_S used [J]."""
+    alpha0: float
+    """Angle at release [rad]."""
+    alpha_final: float
+    """Observed final angle alpha_F [rad]."""
+    stop_time: float
+    """Observed stop time t_F [s]."""
+    mass_factor: float
+    """c of Eq. 5 [-]."""
+    device: Device
+    """The device."""
+    stop_time_residual: float
+    """Model t_F at the identified (F1, F2) minus the observed t_F [s]."""
+    feasible_stop_times: tuple[float, float]
+    """(t_F(F1 = 0), t_F(F1 = F1*)) [s]: what the line of Eq. 13 can produce."""
+    push_force: float | None = None
+    """P, when E_S was computed from it by Eq. 2 [N]."""
+    iterations: int = 0
+    """Function evaluations of the root find."""
+
+    @property
+    def F2_ratio(self) -> float:
+        """F2 / F2*, the paper's identification parameter [-]."""
+        return self.F2 / self.F2_max
+
+    @property
+    def F1_ratio(self) -> float:
+        """F1 / F1* [-]; ``F1_ratio + F2_ratio = 1`` (Eq. 13)."""
+        return self.F1 / self.F1_max
+
+    def summary(self) -> dict[str, Any]:
+        """The identification in numbers, units in the key names (JSON-ready)."""
+        return {
+            "F1_N": self.F1,
+            "F2_N": self.F2,
+            "F1_max_N": self.F1_max,
+            "F2_max_N": self.F2_max,
+            "F2_ratio": self.F2_ratio,
+            "stored_energy_J": self.stored_energy,
+            "push_force_N": self.push_force,
+            "alpha0_rad": self.alpha0,
+            "alpha_final_rad": self.alpha_final,
+            "stop_time_s": self.stop_time,
+            "stop_time_residual_s": self.stop_time_residual,
+            "feasible_stop_time_s": list(self.feasible_stop_times),
+            "mass_factor": self.mass_factor,
+        }
+
+
+def stop_time_on_line(F1: float, E_S: float, alpha0: float, alpha_final: float, *,
+                      device: Device | None = None, mass_model: str | float = "distributed") -> float:
+    """Stop time of the release with F1 and ``F2 = F2* (1 - F1/F1*)`` (Eq. 13) [s].
+
+    Every point of the line stops at alpha_final (Eq. 8); only the time differs.
+    """
+    device = device or preset("paper")
+    c = dynamics.mass_factor(mass_model)
+    lim = dynamics.friction_limits(E_S, alpha0, alpha_final, device.L1)
+    return _line_time(F1, E_S, alpha0, float(lim["F1_max"]), float(lim["F2_max"]), device, c)
+
+
+def _line_time(F1, E_S, alpha0, F1_max, F2_max, device, c) -> float:
+    F1 = min(max(F1, 0.0), F1_max)
+    F2 = F2_max * (1.0 - F1 / F1_max) if F1 < F1_max else 0.0
+    return FirstIntegral(E_S, alpha0, F1, F2, device.m1, device.m2, device.L1, c).stop_time()
+
+
+def identify_friction(alpha0: float, alpha_final: float, stop_time: float, *,
+                      stored_energy: float | None = None, push_force: float | None = None,
+                      device: Device | None = None,
+                      mass_model: str | float = "distributed") -> Identification:
+    """Identify F1 and F2 from a test (Eq. 11-13): the paper's Table 7 procedure.
+
+    Parameters
+    ----------
+    alpha0 : float
+        Angle at release [rad], in (0, pi/2).
+    alpha_final : float
+        Observed final angle alpha_F [rad], in (alpha0, pi/2).
+    stop_time : float
+        Observed time from release to stop t_F [s], > 0.
+    stored_energy : float, optional
+        E_S [J]. Give this or ``push_force``.
+    push_force : float, optional
+        P [N]; E_S then follows from Eq. 2 with the device's data.
+    device : Device, optional
+        The paper's device by default.
+    mass_model : {"distributed", "lumped"} or float
+        Mass factor c.
+
+    Returns
+    -------
+    Identification
+
+    Raises
+    ------
+    InfeasibleObservationError
+        When t_F is outside ``[t_F(F1 = 0), t_F(F1 = F1*)]``.
+    ParameterError
+        For out-of-range inputs.
+    """
+    from scipy.optimize import brentq
+
+    device = device or preset("paper")
+    c = dynamics.mass_factor(mass_model)
+    check_angle("alpha0", alpha0)
+    check_angle("alpha_final", alpha_final)
+    if alpha_final <= alpha0:
+        raise ParameterError("alpha_final", float(alpha_final), f"(alpha0, pi/2) = ({alpha0:.6g}, 1.5708)", "rad")
+    check_positive("stop_time", stop_time, "s")
+    if (stored_energy is None) == (push_force is None):
+        raise ParameterError("stored_energy/push_force", "both" if stored_energy is not None else "neither",
+                             "exactly one of the two")
+    if push_force is not None:
+        check_positive("P", push_force, "N")
+        E_S = strain_energy(push_force, alpha0, device).total
+    else:
+        check_positive("E_S", stored_energy, "J")
+        E_S = float(stored_energy)
+    lim = dynamics.friction_limits(E_S, alpha0, alpha_final, device.L1)
+    F1_max, F2_max = float(lim["F1_max"]), float(lim["F2_max"])
+    count = 0
+
+    def residual(F1: float) -> float:
+        nonlocal count
+        count += 1
+        return _line_time(F1, E_S, alpha0, F1_max, F2_max, device, c) - stop_time
+
+    lo, hi = residual(0.0), residual(F1_max)
+    feasible = (lo + stop_time, hi + stop_time)
+    if lo > 0.0 or hi < 0.0:
+        raise InfeasibleObservationError(float(stop_time), feasible)
+    if lo == 0.0:
+        F1 = 0.0
+    elif hi == 0.0:
+        F1 = F1_max
+    else:
+        F1 = brentq(residual, 0.0, F1_max, xtol=1e-14 * F1_max, rtol=1e-15, maxiter=200)
+    F2 = F2_max * (1.0 - F1 / F1_max)
+    res = residual(F1)
+    return Identification(
+        F1=float(F1), F2=float(F2), F1_max=F1_max, F2_max=F2_max, stored_energy=E_S,
+        alpha0=float(alpha0), alpha_final=float(alpha_final), stop_time=float(stop_time),
+        mass_factor=c, device=device, stop_time_residual=float(res), feasible_stop_times=feasible,
+        push_force=None if push_force is None else float(push_force), iterations=count,
+    )

@@ -1,0 +1,423 @@
+"""Three solvers of the release, one Response.
+
+``explicit``
+    The paper's scheme of Table 6, exactly as printed: the angular velocity from a
+    first-order Taylor step, the angle by the mid-point (trapezoidal) rule on the
+    velocity, the acceleration from the equation of motion (Eq. 3/4). First order
+    in dt. The stop is located inside the last step, where the velocity (linear
+    within a step) vanishes, so sign(alpha_dot) never chatters at rest.
+``rk``
+    scipy ``solve_ivp`` (DOP853 by default, or RK45) on the first-order system
+    (alpha, alpha_dot) with terminal events at alpha_dot = 0 (friction stop) and
+    alpha = pi/2 (geometric limit).
+``energy``
+    The first integral, Eq. 9-10: ``alpha_dot = sqrt((E_S - W_F(alpha)) / M(alpha))``
+    and the time map ``t(alpha) = int dalpha / alpha_dot`` by adaptive quadrature.
+    The substitution ``alpha = alpha_F - (alpha_F - alpha0) w^2`` removes the
+    inverse-square-root singularity at the stop and the remaining energy is written
+    without cancellation (``dynamics.remaining_energy``), so the integrand is smooth
+    and the result accurate to near machine precision.
+
+During the release alpha_dot > 0, so sign(alpha_dot) = +1 until the stop; the
+``rk`` solver integrates that smooth branch and lets the event end it.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+
+from . import dynamics
+from ._validate import HALF_PI, check_angle, check_nonnegative, check_positive
+from .device import Device, preset
+from .errors import ParameterError
+from .response import Response
+
+__all__ = ["METHODS", "simulate", "stop_time", "FirstIntegral"]
+
+#: Solver names accepted by :func:`simulate`.
+METHODS = ("energy", "rk", "explicit")
+
+
+@lru_cache(maxsize=8)
+def _gauss_legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
+    return np.polynomial.legendre.leggauss(n)
+
+
+class FirstIntegral:
+    """The energy solution of one release (Eq. 8-10) with a smooth time integrand.
+
+    Three regimes, chosen from E_S and W_F(pi/2) (Eq. 7):
+
+    * ``friction`` stop before pi/2: anchor ``a = alpha_F`` of Eq. 8; with
+      ``alpha = a - D w^2`` (``D = a - alpha0``) the time integrand becomes
+      ``2 sqrt(D M(alpha) / (R C(alpha) g(D w^2 / 2)))`` with
+      ``C = cos((a + alpha)/2 - phi)`` and ``g(x) = sin(x)/x``: smooth on [0, 1].
+    * geometric limit with a *virtual* stop beyond pi/2 (Eq. 8 still has a root
+      a > pi/2): the same integrand, over ``w`` from ``sqrt((a - pi/2)/D)`` to 1.
+    * geometric limit with no root: anchor pi/2 and the remaining energy
+      ``E_S - W_F(pi/2) + (W_F(pi/2) - W_F(alpha))``, both terms non-negative.
+
+    Parameters are SI floats; ``c`` is the mass factor.
+    """
+
+    def __init__(self, E_S: float, alpha0: float, F1: float, F2: float,
+                 m1: float, m2: float, L1: float, c: float) -> None:
+        self.E_S, self.alpha0, self.F1, self.F2 = float(E_S), float(alpha0), float(F1), float(F2)
+        self.m1, self.m2, self.L1, self.c = float(m1), float(m2), float(L1), float(c)
+        A = 2.0 * self.F1 * self.L1
+        B = 4.0 * self.F2 * self.L1
+        self.A, self.B = A, B
+        self.R = math.hypot(A, B)
+        self.phi = math.atan2(B, A)
+        self.W_limit = float(dynamics.dissipation_at_limit(self.alpha0, self.F1, self.F2, self.L1))
+        self.geometric_limit = self.E_S > self.W_limit
+        if self.R > 0.0:
+            s = math.sin(self.alpha0 - self.phi) + self.E_S / self.R
+        else:
+            s = math.inf
+        if not self.geometric_limit:
+            self.regime = "friction"
+            self.anchor = float(dynamics.final_angle(self.E_S, self.alpha0, self.F1, self.F2, self.L1))
+            self.w_end = 0.0
+        elif s <= 1.0:
+            self.regime = "virtual"
+            self.anchor = self.phi + math.asin(s)
+            self.w_end = math.sqrt(max(self.anchor - HALF_PI, 0.0) / (self.anchor - self.alpha0))
+        else:
+            self.regime = "free"
+            self.anchor = HALF_PI
+            self.w_end = 0.0
+        self.D = self.anchor - self.alpha0
+        self.alpha_final = HALF_PI if self.geometric_limit else self.anchor
+        self.stopped_by = "geometric_limit" if self.geometric_limit else "friction"
+
+    # -- maps ------------------------------------------------------------------
+    def alpha(self, w):
+        """Angle at the integration variable w [rad]."""
+        return self.anchor - self.D * np.square(w)
+
+    def mass(self, alpha):
+        return dynamics.generalized_mass(alpha, self.m1, self.m2, self.L1, self.c)
+
+    def remaining(self, alpha):
+        """E_S - W_F(alpha) without cancellation [J] (Eq. 9)."""
+        if self.regime == "free":
+            x = HALF_PI - np.asarray(alpha)
+            return (self.E_S - self.W_limit) + 2.0 * self.A * np.sin(0.5 * x) ** 2 + self.B * np.sin(x)
+        return np.maximum(dynamics.remaining_energy(alpha, self.anchor, self.F1, self.F2, self.L1), 0.0)
+
+    def rate(self, alpha):
+        """alpha_dot from the first integral (Eq. 10) [rad/s]."""
+        return np.sqrt(self.remaining(alpha) / self.mass(alpha))
+
+    def integrand(self, w):
+        """dt/dw, smooth on [w_end, 1] [s]."""
+        w = np.asarray(w, dtype=float)
+        a = self.alpha(w)
+        if self.regime == "free":
+            return 2.0 * self.D * w * np.sqrt(self.mass(a) / self.remaining(a))
+        x = 0.5 * self.D * w * w
+        g = np.sinc(x / math.pi)  # sin(x)/x
+        C = np.cos(0.5 * (self.anchor + a) - self.phi)
+        return 2.0 * np.sqrt(self.D * self.mass(a) / (self.R * C * g))
+
+    # -- times -----------------------------------------------------------------
+    def stop_time(self) -> float:
+        """Time from release to the end of the motion [s] (Eq. 10 integrated).
+
+        Gauss-Legendre rules of 48 and 96 nodes on the smooth integrand; when they
+        differ by more than 1e-14 relative (the integrand is nearly singular, e.g.
+        close to the geometric limit) adaptive ``quad`` takes over.
+        """
+        from scipy.integrate import quad
+
+        coarse, fine = (self._gauss(n) for n in (48, 96))
+        if abs(fine - coarse) <= 1e-14 * abs(fine):
+            return fine
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            value, _ = quad(lambda w: float(self.integrand(w)), self.w_end, 1.0,
+                            epsabs=0.0, epsrel=1e-13, limit=500)
+        return value
+
+    def _gauss(self, n: int) -> float:
+        x, wts = _gauss_legendre(n)
+        half = 0.5 * (1.0 - self.w_end)
+        return float(half * np.dot(wts, self.integrand(self.w_end + half * (x + 1.0))))
+
+    def _gauss_elapsed(self, w: np.ndarray, span: np.ndarray, n: int) -> np.ndarray:
+        x, wts = _gauss_legendre(n)
+        nodes = w[..., None] + span[..., None] * (0.5 * (x + 1.0))
+        return 0.5 * span * (self.integrand(nodes) @ wts)
+
+    def elapsed(self, w) -> np.ndarray:
+        """Time from release to the angle alpha(w), for an array of w in [w_end, 1] [s]."""
+        from scipy.integrate import quad_vec
+
+        w = np.asarray(w, dtype=float)
+        span = 1.0 - w
+        coarse, fine = (self._gauss_elapsed(w, span, n) for n in (48, 96))
+        if np.all(np.abs(fine - coarse) <= 1e-14 * max(float(np.max(np.abs(fine))), 1e-300)):
+            return fine
+
+        def f(x):
+            return self.integrand(w + span * x) * span
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            value, _ = quad_vec(f, 0.0, 1.0, epsabs=1e-15, epsrel=1e-13, norm="max", limit=2000)
+        return value
+
+    def w_at_times(self, t, t_stop: float) -> np.ndarray:
+        """The integration variable w reached at times t in [0, t_stop] (Newton on the time map)."""
+        t = np.asarray(t, dtype=float)
+        table_w = np.linspace(self.w_end, 1.0, 257)
+        table_t = self.elapsed(table_w)
+        w = np.interp(t, table_t[::-1], table_w[::-1])
+        for _ in range(12):
+            inner = (t > 0.0) & (t < t_stop)
+            if not np.any(inner):
+                break
+            residual = self.elapsed(w[inner]) - t[inner]
+            step = residual / self.integrand(w[inner])
+            w[inner] = np.clip(w[inner] + step, self.w_end, 1.0)
+            if np.max(np.abs(residual)) <= 1e-14 * max(t_stop, 1e-300):
+                break
+        w[t <= 0.0] = 1.0
+        w[t >= t_stop] = self.w_end
+        return w
+
+
+def stop_time(E_S: float, alpha0: float, F1: float, F2: float, *,
+              device: Device | None = None, mass_model: str | float = "distributed") -> float:
+    """Time from release to the end of the motion, t_F, by the energy solution (Eq. 10) [s].
+
+    Parameters
+    ----------
+    E_S : float
+        Stored strain energy [J].
+    alpha0 : float
+        Angle at release [rad], in (0, pi/2).
+    F1, F2 : float
+        Friction at the central hinges and at the rail supports [N], >= 0.
+    device : Device, optional
+        The device (m1, m2, L1 enter); the paper's device by default.
+    mass_model : {"distributed", "lumped"} or float
+        Mass factor c (Eq. 5).
+    """
+    device = device or preset("paper")
+    c = dynamics.mass_factor(mass_model)
+    _check_release(E_S, alpha0, F1, F2)
+    return FirstIntegral(E_S, alpha0, F1, F2, device.m1, device.m2, device.L1, c).stop_time()
+
+
+def _check_release(E_S, alpha0, F1, F2) -> None:
+    check_positive("E_S", E_S, "J")
+    check_angle("alpha0", alpha0)
+    check_nonnegative("F1", F1, "N")
+    check_nonnegative("F2", F2, "N")
+
+
+# -- the three methods ----------------------------------------------------------------
+
+def _solve_energy(fi: FirstIntegral, n_points: int, **_: Any) -> dict[str, Any]:
+    t_stop = fi.stop_time()
+    t = np.linspace(0.0, t_stop, n_points)
+    w = fi.w_at_times(t, t_stop)
+    alpha = fi.alpha(w)
+    alpha[0] = fi.alpha0
+    alpha[-1] = fi.alpha_final
+    alpha_dot = fi.rate(alpha)
+    return {"t": t, "alpha": alpha, "alpha_dot": alpha_dot, "stop_time": t_stop,
+            "alpha_final": fi.alpha_final, "stats": {"n_points": n_points}}
+
+
+def _solve_rk(fi: FirstIntegral, n_points: int, rtol: float = 1e-10, atol: float | None = None,
+              rk_method: str = "DOP853", max_time: float | None = None, **_: Any) -> dict[str, Any]:
+    from scipy.integrate import solve_ivp
+
+    if rk_method not in ("DOP853", "RK45"):
+        raise ParameterError("rk_method", rk_method, "'DOP853' or 'RK45'")
+    m1, m2, L1, c, F1, F2 = fi.m1, fi.m2, fi.L1, fi.c, fi.F1, fi.F2
+    k = c * m1 / m2
+    q = 1.0 / (m2 * L1)
+
+    def rhs(_t, y):
+        s, co = math.sin(y[0]), math.cos(y[0])
+        d = k + s * s
+        # Eq. 3/4 on the branch sign(alpha_dot) = +1, valid until the stop event.
+        return [y[1], -(y[1] * y[1]) * s * co / d - (2.0 * F2 * s + F1 * co) * q / d]
+
+    def stopped(_t, y):
+        return y[1]
+
+    stopped.terminal = True
+    stopped.direction = -1
+
+    def flat(_t, y):
+        return y[0] - HALF_PI
+
+    flat.terminal = True
+    flat.direction = 1
+
+    alpha_dot0 = float(dynamics.initial_rate(fi.E_S, fi.alpha0, m1, m2, L1, c))
+    if max_time is None:
+        # generous horizon: the slowest release stops long before this
+        max_time = 1e3 * (HALF_PI - fi.alpha0) / alpha_dot0 + 10.0
+    atol = 1e-12 * max(1.0, alpha_dot0) if atol is None else atol
+    sol = solve_ivp(rhs, (0.0, max_time), [fi.alpha0, alpha_dot0], method=rk_method,
+                    rtol=rtol, atol=atol, events=(stopped, flat), dense_output=True)
+    if sol.status != 1:
+        raise RuntimeError(f"solve_ivp ended without reaching a stop: {sol.message}")
+    if sol.t_events[1].size:
+        t_stop = float(sol.t_events[1][0])
+        alpha_final = HALF_PI
+        stopped_by = "geometric_limit"
+        end_rate = float(sol.y_events[1][0][1])
+    else:
+        t_stop = float(sol.t_events[0][0])
+        alpha_final = float(sol.y_events[0][0][0])
+        stopped_by = "friction"
+        end_rate = 0.0
+    t = np.linspace(0.0, t_stop, n_points)
+    y = sol.sol(t)
+    alpha, alpha_dot = y[0].copy(), y[1].copy()
+    alpha[0], alpha_dot[0] = fi.alpha0, alpha_dot0
+    alpha[-1], alpha_dot[-1] = alpha_final, end_rate
+    return {"t": t, "alpha": alpha, "alpha_dot": alpha_dot, "stop_time": t_stop,
+            "alpha_final": alpha_final, "stopped_by": stopped_by,
+            "stats": {"nfev": int(sol.nfev), "steps": int(sol.t.size - 1), "rk_method": rk_method,
+                      "rtol": rtol, "atol": atol}}
+
+
+def _solve_explicit(fi: FirstIntegral, dt: float | None = None, max_steps: int = 20_000_000,
+                    **_: Any) -> dict[str, Any]:
+    """Table 6, step by step; the stop is found inside the last step."""
+    dt = 1e-4 if dt is None else float(dt)
+    check_positive("dt", dt, "s")
+    m1, m2, L1, c, F1, F2 = fi.m1, fi.m2, fi.L1, fi.c, fi.F1, fi.F2
+    k = c * m1 / m2
+    q = 1.0 / (m2 * L1)
+    sin, cos = math.sin, math.cos
+
+    def acc(a, ad):
+        # Table 6, third line; sign(alpha_dot) = +1 while the device moves
+        s, co = sin(a), cos(a)
+        d = k + s * s
+        return -(ad * ad) * s * co / d - (2.0 * F2 * s + F1 * co) * q / d
+
+    a = fi.alpha0
+    ad = float(dynamics.initial_rate(fi.E_S, fi.alpha0, m1, m2, L1, c))
+    add = acc(a, ad)
+    ts, als, ads = [0.0], [a], [ad]
+    stopped_by = "friction"
+    t = 0.0
+    for k_step in range(1, max_steps + 1):
+        ad_new = ad + add * dt  # Table 6, first line
+        if ad_new <= 0.0:
+            # velocity is linear in the step: it vanishes at tau = -ad/add
+            tau = -ad / add
+            a = a + 0.5 * ad * tau  # mid-point rule with alpha_dot = 0 at the end
+            t = t + tau
+            if a >= HALF_PI:  # cannot happen before the flat check below, but be safe
+                a = HALF_PI
+            ts.append(t)
+            als.append(a)
+            ads.append(0.0)
+            break
+        a_new = a + 0.5 * (ad_new + ad) * dt  # Table 6, second line
+        if a_new >= HALF_PI:
+            # alpha(tau) = a + ad tau + add tau^2 / 2 reaches pi/2 inside the step
+            gap = HALF_PI - a
+            disc = ad * ad + 2.0 * add * gap
+            tau = 2.0 * gap / (ad + math.sqrt(max(disc, 0.0)))
+            t = t + tau
+            ad = ad + add * tau
+            ts.append(t)
+            als.append(HALF_PI)
+            ads.append(ad)
+            stopped_by = "geometric_limit"
+            break
+        a, ad = a_new, ad_new
+        add = acc(a, ad)  # Table 6, third line
+        t = k_step * dt
+        ts.append(t)
+        als.append(a)
+        ads.append(ad)
+    else:
+        raise ParameterError("dt", dt, f"values that reach the stop within max_steps = {max_steps}", "s")
+    return {"t": np.array(ts), "alpha": np.array(als), "alpha_dot": np.array(ads),
+            "stop_time": t, "alpha_final": als[-1], "stopped_by": stopped_by,
+            "stats": {"dt": dt, "steps": len(ts) - 1}}
+
+
+_SOLVERS = {"energy": _solve_energy, "rk": _solve_rk, "explicit": _solve_explicit}
+
+
+def simulate(E_S: float, alpha0: float, F1: float = 0.0, F2: float = 0.0, *,
+             device: Device | None = None, mass_model: str | float = "distributed",
+             method: str = "energy", dt: float | None = None, n_points: int = 1001,
+             t_end: float | None = None, rtol: float = 1e-10, atol: float | None = None,
+             rk_method: str = "DOP853") -> Response:
+    """Simulate the release of the device from the fuse rupture to the stop.
+
+    Parameters
+    ----------
+    E_S : float
+        Strain energy stored before release [J] (e.g. ``strain_energy(P, alpha0, device).total``).
+    alpha0 : float
+        Angle of the bars with the loading axis at release [rad], in (0, pi/2).
+    F1, F2 : float
+        Coulomb friction at the central hinges and at the rail supports [N], >= 0.
+    device : Device, optional
+        The device; the paper's (Table 2) by default.
+    mass_model : {"distributed", "lumped"} or float
+        Mass factor c: 2/3 (Eq. 4), 1 (Eq. 3) or a positive number.
+    method : {"energy", "rk", "explicit"}
+        The solver (see the module notes).
+    dt : float, optional
+        Time step of ``explicit`` [s] (default 1e-4 s).
+    n_points : int
+        Samples, evenly spaced in time, returned by ``energy`` and ``rk``.
+    t_end : float, optional
+        Pad the response with rest samples up to this time [s] (after a friction stop).
+    rtol, atol : float
+        Tolerances of ``rk``.
+    rk_method : {"DOP853", "RK45"}
+        Runge-Kutta scheme of ``rk``.
+
+    Returns
+    -------
+    Response
+    """
+    _check_release(E_S, alpha0, F1, F2)
+    if method not in _SOLVERS:
+        raise ParameterError("method", method, "'" + "', '".join(METHODS) + "'")
+    if not isinstance(n_points, int | np.integer) or n_points < 2:
+        raise ParameterError("n_points", n_points, "integers >= 2")
+    device = device or preset("paper")
+    c = dynamics.mass_factor(mass_model)
+    fi = FirstIntegral(E_S, alpha0, F1, F2, device.m1, device.m2, device.L1, c)
+    out = _SOLVERS[method](fi, n_points=int(n_points), dt=dt, rtol=rtol, atol=atol, rk_method=rk_method)
+    stopped_by = out.get("stopped_by", fi.stopped_by)
+    alpha_dot = out["alpha_dot"]
+    alpha_ddot = dynamics.angular_acceleration(out["alpha"], alpha_dot, float(F1), float(F2),
+                                               device.m1, device.m2, device.L1, c)
+    response = Response(
+        t=out["t"], alpha=out["alpha"], alpha_dot=alpha_dot, alpha_ddot=alpha_ddot,
+        stored_energy=float(E_S), alpha0=float(alpha0), F1=float(F1), F2=float(F2),
+        mass_factor=c, device=device, stop_time=float(out["stop_time"]),
+        alpha_final=float(out["alpha_final"]), stopped_by=stopped_by, method=method,
+        stats=out["stats"],
+    )
+    if t_end is not None:
+        check_positive("t_end", t_end, "s")
+        spacing = float(np.min(np.diff(response.t))) if response.t.size > 1 else t_end
+        spacing = max(spacing, response.stop_time / max(n_points - 1, 1)) if method == "explicit" else spacing
+        response = response.pad_to(float(t_end), spacing)
+    return response
