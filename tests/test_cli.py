@@ -77,9 +77,11 @@ def test_errors_are_one_line_exit_2(args, fragment):
     assert "Traceback" not in r.output
 
 
-def test_demo_prints_the_comparison():
-    r = run("demo")
+def test_demo_prints_the_comparison(tmp_path):
+    r = run("demo", "--out", str(tmp_path / "demo"))
     assert r.exit_code == 0, r.output
+    assert (tmp_path / "demo" / "report.html").exists()
+    assert f"{tmp_path / 'demo' / 'report.html'}" in r.stdout
     assert "0.4056 kN" in r.stdout and "0.4198 kN" in r.stdout
     assert "2.9154 kJ" in r.stdout
 
@@ -89,3 +91,45 @@ def test_installed_script_runs():
                         "--f1", "400", "--f2", "800", "--json"], capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
     assert json.loads(r.stdout)["stopped_by"] == "friction"
+
+
+EXAMPLES = __import__("pathlib").Path(__file__).parent.parent / "examples"
+
+
+def test_simulate_case_file_with_override():
+    base = json.loads(run("simulate", str(EXAMPLES / "larger_push.toml"), "--json").stdout)
+    assert base["method"] == "rk" and base["stored_energy_J"] > 6000
+    over = run("simulate", str(EXAMPLES / "larger_push.toml"), "--f1", "1 kN", "--method", "energy", "--json")
+    data = json.loads(over.stdout)
+    assert data["F1_N"] == 1000.0 and data["F2_N"] == pytest.approx(804.57) and data["method"] == "energy"
+    assert data["stop_time_s"] < base["stop_time_s"]
+
+
+def test_identify_case_file():
+    data = json.loads(run("identify", str(EXAMPLES / "paper.toml"), "--json").stdout)
+    assert data["F1_N"] == pytest.approx(419.850, abs=1e-3) and data["push_force_N"] == 1598e3
+    data = json.loads(run("identify", str(EXAMPLES / "paper.toml"), "--stop-time", "1.1 s", "--json").stdout)
+    assert data["F1_N"] > 500
+
+
+def test_simulate_case_without_friction_says_what_to_do():
+    r = run("simulate", str(EXAMPLES / "paper.toml"))
+    assert r.exit_code == 2 and "quickrelease run" in r.stderr
+
+
+def test_run_and_report_commands(tmp_path):
+    r = run("run", str(EXAMPLES / "paper.toml"), "--out", str(tmp_path / "o"))
+    assert r.exit_code == 0, r.output
+    assert (tmp_path / "o" / "report.html").exists() and (tmp_path / "o" / "figures" / "fig13_response.png").exists()
+    assert "Wrote 15 files" in r.stdout
+    r = run("report", str(EXAMPLES / "larger_push.toml"), "--out", str(tmp_path / "r"))
+    assert r.exit_code == 0, r.output
+    assert sorted(p.name for p in (tmp_path / "r").iterdir()) == ["report.html"]
+
+
+def test_case_file_error_is_one_line(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[test]\nforce = "1598 m"\nalpha0 = 0.2\n[friction]\nF1 = 1\nF2 = 1\n')
+    r = run("run", str(bad), "--out", str(tmp_path / "o"))
+    assert r.exit_code == 2
+    assert r.stderr == f"error: {bad}: [test] force = '1598 m': has dimension [length]; expected a force (e.g. in N)\n"

@@ -28,8 +28,8 @@ app = typer.Typer(
 DeviceOpt = Annotated[Path | None, typer.Option("--device", help="Device TOML file (Table 2 keys); default: the paper's device.")]
 ForceOpt = Annotated[str | None, typer.Option("--force", "-P", help="Push force P at release, e.g. '1598 kN' (SI number: N).")]
 EnergyOpt = Annotated[str | None, typer.Option("--energy", help="Stored strain energy E_S, e.g. '2.90 kJ' (SI number: J).")]
-Alpha0Opt = Annotated[str, typer.Option("--alpha0", help="Angle of the bars with the loading axis at release, e.g. '0.2' or '11.46 deg'.")]
-MassOpt = Annotated[str, typer.Option("--mass-model", help="distributed (c = 2/3), lumped (c = 1) or a number c.")]
+Alpha0Opt = Annotated[str | None, typer.Option("--alpha0", help="Angle of the bars with the loading axis at release, e.g. '0.2' or '11.46 deg'.")]
+MassOpt = Annotated[str | None, typer.Option("--mass-model", help="distributed (c = 2/3, default), lumped (c = 1) or a number c.")]
 JsonOpt = Annotated[bool, typer.Option("--json", help="Print one JSON object instead of a table.")]
 
 
@@ -92,17 +92,62 @@ def _fmt(value: Any) -> str:
     return str(value)
 
 
+CaseArg = Annotated[Path | None, typer.Argument(help="Case file (TOML); flags override its entries.",
+                                                 show_default=False)]
+
+
+def _case_with_flags(case_file: Path | None, device: Path | None, force: str | None, energy: str | None,
+                     alpha0: str | None, mass_model: str | None, **extra: Any):
+    """A Case from the file (if any) with the command-line flags applied on top."""
+    from ._validate import check_angle
+    from .case import Case, load_case
+    from .units import parse_quantity
+
+    case = load_case(case_file) if case_file is not None else None
+    changes: dict[str, Any] = {}
+    if device is not None:
+        changes["device"] = _device(device)
+    dev = changes.get("device", case.device if case else _device(None))
+    if alpha0 is not None:
+        changes["alpha0"] = parse_quantity(alpha0, "angle", "--alpha0")
+        check_angle("alpha0", changes["alpha0"])
+    elif case is None:
+        raise ParameterError("--alpha0", "missing", "an angle (give --alpha0 or a case file)")
+    a0 = changes.get("alpha0", case.alpha0 if case else None)
+    if force is not None and energy is not None:
+        raise ParameterError("--force/--energy", "both", "exactly one of the two")
+    if force is not None:
+        changes["push_force"] = parse_quantity(force, "force", "--force")
+        changes["stored_energy"] = _energy(dev, force, None, a0)[0]
+        changes["energy_given"] = False
+    elif energy is not None:
+        changes["stored_energy"] = parse_quantity(energy, "energy", "--energy")
+        changes["energy_given"] = True
+        changes["push_force"] = None
+    elif case is None:
+        raise ParameterError("--force/--energy", "neither", "exactly one of the two")
+    if mass_model is not None:
+        changes["mass_model"] = mass_model
+    changes.update({k: v for k, v in extra.items() if v is not None})
+    if case is None:
+        changes.pop("device", None)
+        changes.pop("alpha0", None)
+        return Case(device=dev, alpha0=a0, stored_energy=changes.pop("stored_energy"), **changes)
+    return case.replace(**changes)
+
+
 @app.command()
 @_guard
 def simulate(
+    case_file: CaseArg = None,
     device: DeviceOpt = None,
     force: ForceOpt = None,
     energy: EnergyOpt = None,
-    alpha0: Alpha0Opt = ...,
-    f1: Annotated[str, typer.Option("--f1", help="Friction at the central hinges F1, e.g. '420 N'.")] = "0",
-    f2: Annotated[str, typer.Option("--f2", help="Friction at the rail supports F2, e.g. '0.8 kN'.")] = "0",
-    mass_model: MassOpt = "distributed",
-    method: Annotated[str, typer.Option("--method", help="energy, rk or explicit.")] = "energy",
+    alpha0: Alpha0Opt = None,
+    f1: Annotated[str | None, typer.Option("--f1", help="Friction at the central hinges F1, e.g. '420 N' (default 0).")] = None,
+    f2: Annotated[str | None, typer.Option("--f2", help="Friction at the rail supports F2, e.g. '0.8 kN' (default 0).")] = None,
+    mass_model: MassOpt = None,
+    method: Annotated[str | None, typer.Option("--method", help="energy (default), rk or explicit.")] = None,
     dt: Annotated[str | None, typer.Option("--dt", help="Time step of the explicit method, e.g. '1e-4 s'.")] = None,
     as_json: JsonOpt = False,
 ) -> None:
@@ -110,17 +155,18 @@ def simulate(
     from .solvers import simulate as run
     from .units import parse_quantity
 
-    dev = _device(device)
-    a0 = parse_quantity(alpha0, "angle", "--alpha0")
-    from ._validate import check_angle
-
-    check_angle("alpha0", a0)
-    E_S, P = _energy(dev, force, energy, a0)
-    F1 = parse_quantity(f1, "force", "--f1")
-    F2 = parse_quantity(f2, "force", "--f2")
+    F1 = None if f1 is None else parse_quantity(f1, "force", "--f1")
+    F2 = None if f2 is None else parse_quantity(f2, "force", "--f2")
     step = None if dt is None else parse_quantity(dt, "time", "--dt")
-    response = run(E_S, a0, F1, F2, device=dev, mass_model=mass_model, method=method, dt=step)
-    summary = {"push_force_N": P, **response.summary(), "device": dev.name}
+    case = _case_with_flags(case_file, device, force, energy, alpha0, mass_model, F1=F1, F2=F2, method=method,
+                            dt=step)
+    if case_file is not None and not case.has_friction:
+        raise ParameterError("friction", "missing", "[friction] in the case file or --f1/--f2 "
+                             "(to identify first, use 'quickrelease run')")
+    response = run(case.stored_energy, case.alpha0, case.F1 or 0.0, case.F2 or 0.0, device=case.device,
+                   mass_model=case.mass_model, method=case.method, dt=case.dt, n_points=case.n_points,
+                   rk_method=case.rk_method)
+    summary = {"push_force_N": case.push_force, **response.summary(), "device": case.device.name}
     if as_json:
         _print_json(summary)
         return
@@ -130,47 +176,100 @@ def simulate(
 @app.command()
 @_guard
 def identify(
+    case_file: CaseArg = None,
     device: DeviceOpt = None,
     force: ForceOpt = None,
     energy: EnergyOpt = None,
-    alpha0: Alpha0Opt = ...,
-    alpha_final: Annotated[str, typer.Option("--alpha-final", help="Observed final angle alpha_F, e.g. '0.7378 rad'.")] = ...,
-    stop_time: Annotated[str, typer.Option("--stop-time", help="Observed time from release to stop t_F, e.g. '1.05 s'.")] = ...,
-    mass_model: MassOpt = "distributed",
+    alpha0: Alpha0Opt = None,
+    alpha_final: Annotated[str | None, typer.Option("--alpha-final", help="Observed final angle alpha_F, e.g. '0.7378 rad'.")] = None,
+    stop_time: Annotated[str | None, typer.Option("--stop-time", help="Observed time from release to stop t_F, e.g. '1.05 s'.")] = None,
+    mass_model: MassOpt = None,
     as_json: JsonOpt = False,
 ) -> None:
     """Identify the friction forces F1, F2 from a test (Eq. 11-13, Table 7)."""
-    from ._validate import check_angle
     from .identify import identify_friction
     from .units import parse_quantity
 
-    dev = _device(device)
-    a0 = parse_quantity(alpha0, "angle", "--alpha0")
-    check_angle("alpha0", a0)
-    E_S, P = _energy(dev, force, energy, a0)
-    result = identify_friction(
-        a0,
-        parse_quantity(alpha_final, "angle", "--alpha-final"),
-        parse_quantity(stop_time, "time", "--stop-time"),
-        stored_energy=E_S,
-        device=dev,
-        mass_model=mass_model,
-    )
-    summary = {**result.summary(), "push_force_N": P, "device": dev.name}
+    aF = None if alpha_final is None else parse_quantity(alpha_final, "angle", "--alpha-final")
+    tF = None if stop_time is None else parse_quantity(stop_time, "time", "--stop-time")
+    case = _case_with_flags(case_file, device, force, energy, alpha0, mass_model, alpha_final=aF, stop_time=tF)
+    if case.alpha_final is None or case.stop_time is None:
+        missing = "--alpha-final" if case.alpha_final is None else "--stop-time"
+        raise ParameterError(missing, "missing", "a value (flag or [observations] in the case file)")
+    result = identify_friction(case.alpha0, case.alpha_final, case.stop_time, stored_energy=case.stored_energy,
+                               device=case.device, mass_model=case.mass_model)
+    summary = {**result.summary(), "push_force_N": case.push_force, "device": case.device.name}
     if as_json:
         _print_json(summary)
         return
     _table("Identified friction (Eq. 11-13)", [(k, _fmt(v)) for k, v in summary.items()], ("quantity", "value"))
 
 
+OutOpt = Annotated[Path, typer.Option("--out", "-o", help="Output folder (created if needed).")]
+
+
+def _listing(paths: dict[str, Path], out: Path) -> None:
+    typer.echo(f"Wrote {len(paths)} files to {out}/:")
+    for path in paths.values():
+        typer.echo(f"  {path.relative_to(out)}")
+
+
+@app.command("run")
+@_guard
+def run_command(
+    case_file: Annotated[Path, typer.Argument(help="Case file (TOML).")],
+    out: OutOpt = Path("quickrelease-out"),
+    as_json: JsonOpt = False,
+) -> None:
+    """Do what the case file asks (identify if observed, then simulate) and write all results into --out."""
+    from .case import load_case
+    from .workflow import run_case, write_results
+
+    result = run_case(load_case(case_file))
+    paths = write_results(result, out)
+    if as_json:
+        _print_json({"release": result.summary(), "identification": result.identification_summary(),
+                     "files": {k: str(v) for k, v in paths.items()}})
+        return
+    rows = [(k, _fmt(v)) for k, v in result.summary().items()]
+    if result.identification is not None:
+        i = result.identification
+        rows = [("F1_N (identified)", _fmt(i.F1)), ("F2_N (identified)", _fmt(i.F2))] + rows
+    _table(result.case.title, rows, ("quantity", "value"))
+    _listing(paths, out)
+
+
+@app.command()
+@_guard
+def report(
+    case_file: Annotated[Path, typer.Argument(help="Case file (TOML).")],
+    out: OutOpt = Path("quickrelease-out"),
+) -> None:
+    """Write the self-contained HTML report of a case (figures embedded) as --out/report.html."""
+    from .case import load_case
+    from .workflow import run_case, write_results
+
+    paths = write_results(run_case(load_case(case_file)), out, figures=False, data=False)
+    typer.echo(f"Wrote {paths['report']}")
+
+
 @app.command()
 @_guard
 def demo(
-    mass_model: MassOpt = "distributed",
+    out: OutOpt = Path("quickrelease-demo"),
+    mass_model: Annotated[str, typer.Option("--mass-model", help="distributed (c = 2/3), lumped (c = 1) or a number c.")] = "distributed",
 ) -> None:
-    """The paper's test: E_S from Eq. 2 at P = 1598 kN, alpha0 = 0.2 rad; Table 7 identified; paper vs us."""
+    """The paper's test: E_S from Eq. 2 at P = 1598 kN, alpha0 = 0.2 rad; Table 7 identified; paper vs us.
+
+    Also writes the figures (Fig. 13-15, identification, strain energy) and the HTML report of the
+    paper case into --out.
+    """
+    from importlib import resources
+
+    from .case import load_case
     from .device import preset
     from .paper import reproduce_table7
+    from .workflow import run_case, write_results
 
     dev = preset("paper")
     cmp = reproduce_table7(dev, mass_model=mass_model)
@@ -184,6 +283,10 @@ def demo(
         f"u_F = {cmp.u_final:.4f} m, v_F = {cmp.v_final:.4f} m, "
         f"peak u_dot = {cmp.peak_u_dot:.3f} m/s, peak v_dot = {cmp.peak_v_dot:.3f} m/s"
     )
+    with resources.as_file(resources.files("quickrelease") / "data" / "cases" / "paper.toml") as path:
+        case = load_case(path).replace(mass_model=mass_model, source="paper case (built in)")
+    paths = write_results(run_case(case), out)
+    typer.echo(f"Figures and report of the paper case: {out / 'report.html'} ({len(paths)} files in {out}/)")
 
 
 def main() -> None:

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from . import dynamics
+from ._roots import brent
 from ._validate import check_angle, check_positive
 from .device import Device, preset
 from .errors import InfeasibleObservationError, ParameterError
@@ -139,8 +140,6 @@ def identify_friction(alpha0: float, alpha_final: float, stop_time: float, *,
     ParameterError
         For out-of-range inputs.
     """
-    from scipy.optimize import brentq
-
     device = device or preset("paper")
     c = dynamics.mass_factor(mass_model)
     check_angle("alpha0", alpha0)
@@ -170,12 +169,7 @@ def identify_friction(alpha0: float, alpha_final: float, stop_time: float, *,
     feasible = (lo + stop_time, hi + stop_time)
     if lo > 0.0 or hi < 0.0:
         raise InfeasibleObservationError(float(stop_time), feasible)
-    if lo == 0.0:
-        F1 = 0.0
-    elif hi == 0.0:
-        F1 = F1_max
-    else:
-        F1 = brentq(residual, 0.0, F1_max, xtol=1e-14 * F1_max, rtol=1e-15, maxiter=200)
+    F1 = brent(residual, 0.0, F1_max, lo, hi, xtol=1e-14 * F1_max)
     F2 = F2_max * (1.0 - F1 / F1_max)
     res = residual(F1)
     return Identification(

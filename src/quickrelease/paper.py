@@ -17,6 +17,7 @@ from importlib import resources
 from typing import Any
 
 from . import dynamics
+from ._roots import brent
 from .device import Device, preset
 from .identify import identify_friction, stop_time_on_line
 from .solvers import simulate
@@ -156,8 +157,6 @@ def reproduce_table7(device: Device | None = None, mass_model: str | float = "di
     rounding intervals of the printed inputs, and checks the paper's own (F1, F2)
     against Eq. 8 and Eq. 13.
     """
-    from scipy.optimize import brentq
-
     device = device or preset("paper")
     p = printed_table7()
     P, a0, aF, ES, tF = (p[k].value for k in ("P", "alpha0", "alpha_final", "E_S", "t_F"))
@@ -176,9 +175,9 @@ def reproduce_table7(device: Device | None = None, mass_model: str | float = "di
                     corners.append((r.F1, r.F2))
     F1s, F2s = [c[0] for c in corners], [c[1] for c in corners]
     paper_F1, paper_F2 = p["F1"].value, p["F2"].value
-    t_paper = brentq(lambda t: identify_friction(a0, aF, t, stored_energy=ES, device=device,
-                                                 mass_model=mass_model).F1 - paper_F1,
-                     ident.feasible_stop_times[0] + 1e-9, ident.feasible_stop_times[1] - 1e-9, xtol=1e-12)
+    t_paper = brent(lambda t: identify_friction(a0, aF, t, stored_energy=ES, device=device,
+                                                mass_model=mass_model).F1 - paper_F1,
+                    ident.feasible_stop_times[0] + 1e-9, ident.feasible_stop_times[1] - 1e-9, xtol=1e-12)
     E_implied = float(dynamics.dissipated_energy(aF, a0, paper_F1, paper_F2, device.L1))
     pair = simulate(ES, a0, paper_F1, paper_F2, device=device, mass_model=mass_model)
     pair_on_line = simulate(E_implied, a0, paper_F1, paper_F2, device=device, mass_model=mass_model)

@@ -134,11 +134,11 @@ class FirstIntegral:
         differ by more than 1e-14 relative (the integrand is nearly singular, e.g.
         close to the geometric limit) adaptive ``quad`` takes over.
         """
-        from scipy.integrate import quad
-
         coarse, fine = (self._gauss(n) for n in (48, 96))
         if abs(fine - coarse) <= 1e-14 * abs(fine):
             return fine
+        from scipy.integrate import quad
+
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             value, _ = quad(lambda w: float(self.integrand(w)), self.w_end, 1.0,
@@ -157,13 +157,12 @@ class FirstIntegral:
 
     def elapsed(self, w) -> np.ndarray:
         """Time from release to the angle alpha(w), for an array of w in [w_end, 1] [s]."""
-        from scipy.integrate import quad_vec
-
         w = np.asarray(w, dtype=float)
         span = 1.0 - w
         coarse, fine = (self._gauss_elapsed(w, span, n) for n in (48, 96))
         if np.all(np.abs(fine - coarse) <= 1e-14 * max(float(np.max(np.abs(fine))), 1e-300)):
             return fine
+        from scipy.integrate import quad_vec
 
         def f(x):
             return self.integrand(w + span * x) * span

@@ -8,6 +8,7 @@ pint is imported on first use only.
 
 from __future__ import annotations
 
+import math
 from functools import lru_cache
 from typing import Any
 
@@ -33,6 +34,37 @@ DIMENSIONS: dict[str, tuple[str, str]] = {
     "angular_velocity": ("rad/s", "1 / [time]"),
     "angular_acceleration": ("rad/s^2", "1 / [time] ** 2"),
 }
+
+
+#: Exact SI factors of common units, so that "1598 kN" needs no pint (importing it costs ~0.3 s).
+#: Anything else goes to pint. A test checks every entry against pint.
+_FAST_UNITS: dict[str, tuple[str, float]] = {
+    "N": ("force", 1.0), "kN": ("force", 1e3), "MN": ("force", 1e6),
+    "J": ("energy", 1.0), "kJ": ("energy", 1e3), "MJ": ("energy", 1e6),
+    "rad": ("angle", 1.0), "deg": ("angle", math.pi / 180.0), "mrad": ("angle", 1e-3),
+    "s": ("time", 1.0), "ms": ("time", 1e-3),
+    "m": ("length", 1.0), "cm": ("length", 1e-2), "mm": ("length", 1e-3),
+    "m^2": ("area", 1.0), "cm^2": ("area", 1e-4), "mm^2": ("area", 1e-6),
+    "m^4": ("second_moment", 1.0), "cm^4": ("second_moment", 1e-8), "mm^4": ("second_moment", 1e-12),
+    "kg": ("mass", 1.0), "t": ("mass", 1e3),
+    "Pa": ("pressure", 1.0), "kPa": ("pressure", 1e3), "MPa": ("pressure", 1e6), "GPa": ("pressure", 1e9),
+    "Hz": ("frequency", 1.0),
+    "m/s": ("velocity", 1.0), "m/s^2": ("acceleration", 1.0),
+    "rad/s": ("angular_velocity", 1.0), "rad/s^2": ("angular_acceleration", 1.0),
+}
+
+
+def _fast(text: str, kind: str) -> float | None:
+    """SI value of '<number> <unit>' for a unit of :data:`_FAST_UNITS` of the right kind, else None."""
+    number, _, unit = text.partition(" ")
+    entry = _FAST_UNITS.get(unit.strip())
+    if entry is None or entry[0] != kind:
+        return None
+    try:
+        value = float(number)
+    except ValueError:
+        return None
+    return value * entry[1] if entry[1] != 1.0 else value
 
 
 @lru_cache(maxsize=1)
@@ -81,6 +113,9 @@ def parse_quantity(value: object, kind: str, name: str) -> float:
         return float(text)
     except ValueError:
         pass
+    fast = _fast(text, kind)
+    if fast is not None:
+        return fast
     ureg = _registry()
     import pint
 

@@ -1,0 +1,308 @@
+"""Case files: a device, a test set-up and friction or observations, in one TOML file.
+
+A case file is what an engineer keeps with the test records::
+
+    title = "Paper test (Table 7)"
+    notes = "Free text, shown (escaped) in the report."
+
+    [device]
+    preset = "paper"            # or: file = "my_device.toml" (relative to this file), or Table 2 keys inline
+
+    [test]
+    force = "1598 kN"           # and/or: energy = "2.90 kJ" (when both: E_S drives the release,
+                                # P the statics: fuse force, member forces, Eq. 2 breakdown)
+    alpha0 = "0.2 rad"
+    mass_model = "distributed"  # "lumped" or a number c
+
+    [friction]                  # to simulate
+    F1 = "419.85 N"
+    F2 = "804.57 N"
+
+    [observations]              # to identify (then simulate with the identified friction)
+    alpha_final = "0.7378 rad"
+    stop_time = "1.05 s"
+
+    [simulation]                # optional
+    method = "energy"           # "rk", "explicit"
+    dt = "0.1 ms"               # explicit only
+    n_points = 1001
+    t_end = "1.3 s"             # pad with rest samples after the stop
+
+Quantities are bare SI numbers or strings with units. Every error names the file,
+the key, the value and what was expected, on one line; unknown keys are errors.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+from .device import Device, load_device, preset
+from .dynamics import mass_factor
+from .errors import QuickReleaseError
+from .statics import StrainEnergy, strain_energy
+from .units import parse_quantity
+
+__all__ = ["Case", "CaseFileError", "load_case", "CASE_SCHEMA"]
+
+
+class CaseFileError(QuickReleaseError):
+    """A case file is malformed or one of its entries is missing, unknown or invalid."""
+
+
+#: section -> key -> (quantity kind or type, what is expected)
+CASE_SCHEMA: dict[str, dict[str, tuple[str, str]]] = {
+    "": {"title": ("str", "a string"), "notes": ("str", "a string")},
+    "device": {"preset": ("str", "a preset name"), "file": ("str", "a device file path")},
+    "test": {
+        "force": ("force", "a positive force, e.g. '1598 kN'"),
+        "energy": ("energy", "a positive energy, e.g. '2.90 kJ'"),
+        "alpha0": ("angle", "an angle in (0, pi/2), e.g. '0.2 rad' or '11.46 deg'"),
+        "mass_model": ("mass_model", "'distributed', 'lumped' or a positive number"),
+    },
+    "friction": {
+        "F1": ("force", "a force >= 0, e.g. '420 N'"),
+        "F2": ("force", "a force >= 0, e.g. '0.8 kN'"),
+    },
+    "observations": {
+        "alpha_final": ("angle", "an angle in (alpha0, pi/2), e.g. '0.7378 rad'"),
+        "stop_time": ("time", "a positive time, e.g. '1.05 s'"),
+    },
+    "simulation": {
+        "method": ("method", "'energy', 'rk' or 'explicit'"),
+        "dt": ("time", "a positive time step, e.g. '0.1 ms'"),
+        "n_points": ("int", "an integer >= 2"),
+        "t_end": ("time", "a positive time, e.g. '1.3 s'"),
+        "rk_method": ("rk_method", "'DOP853' or 'RK45'"),
+    },
+}
+
+
+@dataclass(frozen=True)
+class Case:
+    """A test described by a case file, resolved to SI values."""
+
+    device: Device
+    alpha0: float
+    """Angle at release [rad]."""
+    stored_energy: float
+    """E_S [J]: as given, else from Eq. 2 with the push force."""
+    push_force: float | None = None
+    """P [N] when given (E_S then from Eq. 2)."""
+    mass_model: str | float = "distributed"
+    F1: float | None = None
+    """Friction at the hinges [N] (to simulate)."""
+    F2: float | None = None
+    """Friction on the rail [N] (to simulate)."""
+    alpha_final: float | None = None
+    """Observed final angle [rad] (to identify)."""
+    stop_time: float | None = None
+    """Observed stop time [s] (to identify)."""
+    method: str = "energy"
+    dt: float | None = None
+    n_points: int = 1001
+    t_end: float | None = None
+    rk_method: str = "DOP853"
+    energy_given: bool = False
+    """True when E_S was given in the file (not computed from P by Eq. 2)."""
+    title: str = "quickrelease case"
+    notes: str = ""
+    source: str = "<case>"
+
+    @property
+    def mass_factor(self) -> float:
+        return mass_factor(self.mass_model)
+
+    @property
+    def has_observations(self) -> bool:
+        return self.alpha_final is not None and self.stop_time is not None
+
+    @property
+    def has_friction(self) -> bool:
+        return self.F1 is not None or self.F2 is not None
+
+    def strain(self) -> StrainEnergy | None:
+        """Eq. 2's breakdown when the push force is known."""
+        return None if self.push_force is None else strain_energy(self.push_force, self.alpha0, self.device)
+
+    def replace(self, **changes: Any) -> Case:
+        """A copy with some fields changed (e.g. command-line overrides)."""
+        new = replace(self, **changes)
+        if ("push_force" in changes or "alpha0" in changes or "device" in changes) and new.push_force is not None \
+                and "stored_energy" not in changes and not self.energy_given:
+            new = replace(new, stored_energy=strain_energy(new.push_force, new.alpha0, new.device).total)
+        return new
+
+    def inputs(self) -> dict[str, Any]:
+        """The inputs with units in the key names (for reports and JSON)."""
+        return {
+            "device": self.device.name,
+            "push_force_N": self.push_force,
+            "stored_energy_J": self.stored_energy,
+            "alpha0_rad": self.alpha0,
+            "mass_model": self.mass_model,
+            "mass_factor": self.mass_factor,
+            "F1_N": self.F1,
+            "F2_N": self.F2,
+            "alpha_final_rad": self.alpha_final,
+            "stop_time_s": self.stop_time,
+            "method": self.method,
+        }
+
+
+def _fail(source: str, key: str, value: Any, expected: str) -> CaseFileError:
+    shown = repr(value) if not isinstance(value, dict) else "a table"
+    return CaseFileError(f"{source}: {key} = {shown}: expected {expected}")
+
+
+def _entry(source: str, section: str, key: str, value: Any) -> Any:
+    """Validate and convert one entry of the case file."""
+    kind, expected = CASE_SCHEMA[section][key]
+    where = f"[{section}] {key}" if section else key
+    if kind == "str":
+        if not isinstance(value, str):
+            raise _fail(source, where, value, expected)
+        return value
+    if kind == "int":
+        if isinstance(value, bool) or not isinstance(value, int) or value < 2:
+            raise _fail(source, where, value, expected)
+        return value
+    if kind == "mass_model":
+        try:
+            mass_factor(value)
+        except QuickReleaseError:
+            raise _fail(source, where, value, expected) from None
+        return value
+    if kind == "method":
+        if value not in ("energy", "rk", "explicit"):
+            raise _fail(source, where, value, expected)
+        return value
+    if kind == "rk_method":
+        if value not in ("DOP853", "RK45"):
+            raise _fail(source, where, value, expected)
+        return value
+    if isinstance(value, dict | list):
+        raise _fail(source, where, value, expected)
+    try:
+        number = parse_quantity(value, kind, key)
+    except QuickReleaseError as exc:
+        reason = str(exc)
+        raise CaseFileError(f"{source}: {where} = {value!r}: {_strip_name(reason, key, value)}") from None
+    ok = math.isfinite(number) and (number >= 0.0 if section == "friction" else number > 0.0)
+    if kind == "angle" and number >= 0.5 * math.pi:
+        ok = False
+    if not ok:
+        raise _fail(source, where, value, expected)
+    return number
+
+
+def _strip_name(reason: str, key: str, value: Any) -> str:
+    prefix = f"{key} = {value!r} "
+    return reason[len(prefix):] if reason.startswith(prefix) else reason
+
+
+def load_case(path: str | Path) -> Case:
+    """Read and validate a case file.
+
+    Raises
+    ------
+    CaseFileError
+        For malformed TOML, missing, unknown or invalid entries; the one-line
+        message names the file, the key, the value and what was expected.
+    """
+    path = Path(path)
+    source = str(path)
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise CaseFileError(f"{source}: cannot read the case file ({exc.strerror})") from None
+    try:
+        data = tomllib.loads(raw.decode("utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise CaseFileError(f"{source}: not valid TOML ({exc})") from None
+    return case_from_mapping(data, source=source, base=path.parent)
+
+
+def case_from_mapping(data: dict[str, Any], source: str = "<case>", base: Path | None = None) -> Case:
+    """Build a Case from the parsed TOML mapping (see :func:`load_case`)."""
+    base = base or Path.cwd()
+    sections = [s for s in CASE_SCHEMA if s]
+    values: dict[str, Any] = {}
+    for key, value in data.items():
+        if isinstance(value, dict) and key in sections:
+            continue
+        if key not in CASE_SCHEMA[""]:
+            valid = ", ".join(list(CASE_SCHEMA[""]) + [f"[{s}]" for s in sections])
+            raise CaseFileError(f"{source}: unknown key {key!r}; valid top-level entries: {valid}")
+        values[key] = _entry(source, "", key, value)
+    for section in sections:
+        table = data.get(section, {})
+        if not isinstance(table, dict):
+            raise _fail(source, section, table, f"a table [{section}]")
+        if section == "device":
+            continue
+        for key, value in table.items():
+            if key not in CASE_SCHEMA[section]:
+                raise CaseFileError(f"{source}: unknown key [{section}] {key!r}; "
+                                    f"valid: {', '.join(CASE_SCHEMA[section])}")
+            values[f"{section}.{key}"] = _entry(source, section, key, value)
+    device = _device(data.get("device", {}), source, base)
+    if "test" not in data:
+        raise CaseFileError(f"{source}: missing table [test] (force or energy, alpha0)")
+    if "test.alpha0" not in values:
+        raise CaseFileError(f"{source}: missing key [test] alpha0 ({CASE_SCHEMA['test']['alpha0'][1]})")
+    has_force, has_energy = "test.force" in values, "test.energy" in values
+    if not (has_force or has_energy):
+        raise CaseFileError(f"{source}: missing key [test] force or energy (a push force, e.g. '1598 kN', "
+                            "or a stored energy, e.g. '2.90 kJ')")
+    friction = data.get("friction")
+    if friction is not None and set(friction) != {"F1", "F2"}:
+        missing = sorted({"F1", "F2"} - set(friction))
+        raise CaseFileError(f"{source}: missing key [friction] {missing[0]} (give both F1 and F2)")
+    observations = data.get("observations")
+    if observations is not None and set(observations) != {"alpha_final", "stop_time"}:
+        missing = sorted({"alpha_final", "stop_time"} - set(observations))
+        raise CaseFileError(f"{source}: missing key [observations] {missing[0]} (give alpha_final and stop_time)")
+    if friction is None and observations is None:
+        raise CaseFileError(f"{source}: missing table [friction] (to simulate) or [observations] (to identify)")
+    alpha0 = values["test.alpha0"]
+    aF = values.get("observations.alpha_final")
+    if aF is not None and aF <= alpha0:
+        raise _fail(source, "[observations] alpha_final", observations["alpha_final"],
+                    f"an angle greater than alpha0 = {alpha0:.6g} rad")
+    P = values.get("test.force")
+    E_S = values["test.energy"] if has_energy else strain_energy(P, alpha0, device).total
+    sim = {k.split(".", 1)[1]: v for k, v in values.items() if k.startswith("simulation.")}
+    return Case(
+        device=device, alpha0=alpha0, stored_energy=E_S, push_force=P,
+        mass_model=values.get("test.mass_model", "distributed"),
+        F1=values.get("friction.F1"), F2=values.get("friction.F2"),
+        alpha_final=aF, stop_time=values.get("observations.stop_time"),
+        energy_given=has_energy,
+        title=values.get("title", Path(source).stem), notes=values.get("notes", ""), source=source,
+        **sim,
+    )
+
+
+def _device(table: dict[str, Any], source: str, base: Path) -> Device:
+    if not table:
+        return preset("paper")
+    where = f"{source} [device]"
+    if "preset" in table or "file" in table:
+        extra = sorted(set(table) - {"preset", "file"})
+        if extra or ("preset" in table and "file" in table):
+            key = extra[0] if extra else "file"
+            raise CaseFileError(f"{where}: unknown key {key!r} beside preset/file; give one of preset, file or "
+                                "the Table 2 keys inline")
+        if "preset" in table:
+            name = _entry(source, "device", "preset", table["preset"])
+            try:
+                return preset(name)
+            except QuickReleaseError as exc:
+                raise CaseFileError(f"{where}: {exc}") from None
+        file = Path(_entry(source, "device", "file", table["file"]))
+        return load_device(file if file.is_absolute() else base / file)
+    return Device.from_mapping(table, source=where)

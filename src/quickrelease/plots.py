@@ -1,0 +1,219 @@
+"""Figures: the paper's Fig. 13, 14 and 15, the identification curve, the strain-energy breakdown.
+
+Every function takes results and returns a matplotlib ``Figure`` (never calls ``show``);
+:func:`save_figure` writes it as PNG and SVG, atomically. The ``*_data`` functions return
+the numbers behind a figure, so tests can check them without reading pixels.
+Uses the object-oriented API (no pyplot state); matplotlib is imported on first use.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from . import dynamics
+from .identify import Identification, stop_time_on_line
+from .response import Response
+from .statics import StrainEnergy
+
+__all__ = [
+    "fig13", "fig14", "fig15", "identification_figure", "strain_energy_figure", "save_figure",
+    "state_diagram_data", "identification_curve_data",
+]
+
+_STYLE = {
+    "font.size": 9, "axes.titlesize": 9, "axes.labelsize": 9, "legend.fontsize": 8,
+    "xtick.labelsize": 8, "ytick.labelsize": 8, "axes.grid": True, "grid.alpha": 0.3,
+    "lines.linewidth": 1.4, "svg.hashsalt": "quickrelease", "figure.dpi": 100,
+}
+_COLORS = {"a": "#1f4e79", "b": "#c0504d", "c": "#4f8a3c", "d": "#7f7f7f"}
+
+
+def _figure(width: float, height: float, **margins: float):
+    """A Figure with fixed margins (fractions of the figure): much cheaper to save than a layout engine."""
+    import matplotlib
+
+    matplotlib.rcParams.update(_STYLE)
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width, height))
+    fig.subplots_adjust(**{"left": 0.12, "right": 0.97, "bottom": 0.14, "top": 0.9, **margins})
+    return fig
+
+
+def _mark_stop(ax, response: Response) -> None:
+    ax.axvline(response.stop_time, color=_COLORS["d"], lw=0.8, ls="--")
+
+
+def fig13(response: Response):
+    """Fig. 13: (a) position angle, (b) angular velocity, (c) angular acceleration, (d) energy balance vs time."""
+    fig = _figure(7.0, 5.0, left=0.09, right=0.98, bottom=0.09, top=0.88, wspace=0.28, hspace=0.28)
+    axes = fig.subplots(2, 2, sharex=True)
+    r = response
+    (a, b), (c, d) = axes
+    a.plot(r.t, r.alpha, color=_COLORS["a"])
+    a.set_ylabel(r"$\alpha$ [rad]")
+    a.set_title("(a) position angle")
+    b.plot(r.t, r.alpha_dot, color=_COLORS["a"])
+    b.set_ylabel(r"$\dot\alpha$ [rad/s]")
+    b.set_title("(b) angular velocity")
+    c.plot(r.t, r.alpha_ddot, color=_COLORS["a"])
+    c.set_ylabel(r"$\ddot\alpha$ [rad/s$^2$]")
+    c.set_title("(c) angular acceleration")
+    d.plot(r.t, r.kinetic_energy / 1e3, color=_COLORS["a"], label="kinetic $E_K$")
+    d.plot(r.t, r.dissipated_energy / 1e3, color=_COLORS["b"], label="dissipated $W_F$")
+    d.plot(r.t, (r.kinetic_energy + r.dissipated_energy) / 1e3, color=_COLORS["c"], ls="--",
+           label="$E_K + W_F$")
+    d.axhline(r.stored_energy / 1e3, color=_COLORS["d"], lw=0.8, ls=":", label="$E_S$")
+    d.set_ylabel("energy [kJ]")
+    d.set_title("(d) energy balance")
+    d.legend(loc="center right")
+    for ax in (c, d):
+        ax.set_xlabel("time $t$ [s]")
+    for ax in axes.flat:
+        _mark_stop(ax, r)
+    fig.suptitle(f"Release response ({r.method}, c = {r.mass_factor:.4g}): "
+                 f"$t_F$ = {r.stop_time:.4f} s, $\\alpha_F$ = {r.alpha_final:.4f} rad")
+    return fig
+
+
+def fig14(response: Response):
+    """Fig. 14: (a) retraction u and opening v, (b) their velocities, vs time."""
+    fig = _figure(7.0, 2.8, left=0.08, right=0.98, bottom=0.16, top=0.9, wspace=0.28)
+    a, b = fig.subplots(1, 2, sharex=True)
+    r = response
+    a.plot(r.t, r.u, color=_COLORS["a"], label="longitudinal $u$")
+    a.plot(r.t, r.v, color=_COLORS["b"], label="transverse $v$")
+    a.set_ylabel("displacement [m]")
+    a.set_title("(a) linear displacement")
+    b.plot(r.t, r.u_dot, color=_COLORS["a"], label=r"longitudinal $\dot u$")
+    b.plot(r.t, r.v_dot, color=_COLORS["b"], label=r"transverse $\dot v$")
+    b.set_ylabel("velocity [m/s]")
+    b.set_title("(b) linear velocity")
+    for ax in (a, b):
+        ax.set_xlabel("time $t$ [s]")
+        ax.legend()
+        _mark_stop(ax, r)
+    return fig
+
+
+def state_diagram_data(response: Response) -> dict[str, np.ndarray]:
+    """Numbers behind Fig. 15: the numerical (alpha, alpha_dot), Eq. 10 at the same alpha, and the distance.
+
+    ``distance`` is the distance of each numerical point from the analytic curve, to first order:
+    ``|F| / |grad F|`` with ``F(alpha, alpha_dot) = M(alpha) alpha_dot^2 + W_F(alpha) - E_S`` (Eq. 9), whose
+    zero level is the curve. Unlike the vertical gap it stays meaningful near the stop, where the
+    curve is vertical (units: rad and rad/s taken together).
+    """
+    r = response
+    d = r.device
+    moving = r.t <= r.stop_time
+    alpha, alpha_dot = r.alpha[moving], r.alpha_dot[moving]
+    W = dynamics.dissipated_energy(alpha, r.alpha0, r.F1, r.F2, d.L1)
+    M = dynamics.generalized_mass(alpha, d.m1, d.m2, d.L1, r.mass_factor)
+    analytic = np.sqrt(np.maximum(r.stored_energy - W, 0.0) / M)
+    F = M * alpha_dot**2 + W - r.stored_energy
+    dM = d.m2 * d.L1**2 * np.sin(2.0 * alpha)
+    dW = 2.0 * r.F1 * d.L1 * np.cos(alpha) + 4.0 * r.F2 * d.L1 * np.sin(alpha)
+    grad = np.hypot(dM * alpha_dot**2 + dW, 2.0 * M * alpha_dot)
+    return {"alpha": alpha, "alpha_dot": alpha_dot, "alpha_dot_analytic": analytic,
+            "distance": np.abs(F) / grad}
+
+
+def fig15(responses: Response | list[Response], n_markers: int = 40):
+    """Fig. 15: state diagram, numerical solutions (markers) over the analytic curve of Eq. 10 (line).
+
+    Each response's legend entry gives its largest distance from the curve.
+    """
+    responses = [responses] if isinstance(responses, Response) else list(responses)
+    r = responses[0]
+    d = r.device
+    fig = _figure(4.6, 3.4, left=0.14, bottom=0.14)
+    ax = fig.subplots()
+    fine = np.linspace(r.alpha0, r.alpha_final, 400)
+    W = dynamics.dissipated_energy(fine, r.alpha0, r.F1, r.F2, d.L1)
+    M = dynamics.generalized_mass(fine, d.m1, d.m2, d.L1, r.mass_factor)
+    ax.plot(fine, np.sqrt(np.maximum(r.stored_energy - W, 0.0) / M), color=_COLORS["d"], lw=2.2,
+            label="analytic, Eq. 10")
+    markers = [("o", _COLORS["b"]), ("x", _COLORS["a"]), ("s", _COLORS["c"])]
+    for k, resp in enumerate(responses):
+        data = state_diagram_data(resp)
+        step = max(1, data["alpha"].size // n_markers)
+        name = {"rk": f"Runge-Kutta ({resp.stats.get('rk_method', 'DOP853')})",
+                "explicit": f"Table 6, dt = {1e3 * resp.stats.get('dt', 0.0):g} ms",
+                "energy": "energy solution"}[resp.method]
+        marker, color = markers[k % len(markers)]
+        idx = np.arange(k * step // max(len(responses), 1), data["alpha"].size, step)
+        ax.plot(data["alpha"][idx], data["alpha_dot"][idx], marker, ms=3.5, mfc="none", color=color,
+                label=f"{name}: max distance {np.max(data['distance']):.1e}")
+    ax.set_xlabel(r"position angle $\alpha$ [rad]")
+    ax.set_ylabel(r"angular velocity $\dot\alpha$ [rad/s]")
+    ax.set_title("Response state diagram")
+    ax.legend(loc="lower left")
+    return fig
+
+
+def identification_curve_data(ident: Identification, n: int = 41) -> dict[str, np.ndarray]:
+    """Numbers behind the identification figure: t_F along Eq. 13 for F2/F2* from 0 to 1."""
+    ratio = np.linspace(0.0, 1.0, n)
+    F1 = ident.F1_max * (1.0 - ratio)
+    t = np.array([
+        stop_time_on_line(f, ident.stored_energy, ident.alpha0, ident.alpha_final, device=ident.device,
+                          mass_model=ident.mass_factor)
+        for f in F1
+    ])
+    return {"F2_ratio": ratio, "F1": F1, "F2": ident.F2_max * ratio, "stop_time": t}
+
+
+def identification_figure(ident: Identification):
+    """Stop time along the line of Eq. 13, with the measured t_F and the identified point."""
+    data = identification_curve_data(ident)
+    fig = _figure(4.6, 3.4, left=0.14, bottom=0.15)
+    ax = fig.subplots()
+    ax.plot(data["F2_ratio"], data["stop_time"], color=_COLORS["a"], label="model $t_F$ on Eq. 13")
+    ax.axhline(ident.stop_time, color=_COLORS["d"], ls="--", lw=0.9, label=f"measured $t_F$ = {ident.stop_time:g} s")
+    ax.plot([ident.F2_ratio], [ident.stop_time + ident.stop_time_residual], "o", color=_COLORS["b"],
+            label=f"identified: $F_1$ = {ident.F1:.1f} N, $F_2$ = {ident.F2:.1f} N")
+    ax.set_xlabel(r"$F_2 / F_2^*$ [-]   ($F_1 = F_1^* (1 - F_2/F_2^*)$)")
+    ax.set_ylabel("stop time $t_F$ [s]")
+    ax.set_title("Identification of the friction forces")
+    ax.legend(loc="best")
+    return fig
+
+
+def strain_energy_figure(strain: StrainEnergy):
+    """Bar chart of the six terms of Eq. 2, grouped by member and coloured by effect."""
+    terms = strain.terms()
+    labels = {"axial_E1": "E1 axial", "axial_E2": "E2 axial", "axial_E3": "E3 axial", "axial_E4": "E4 (fuse) axial",
+              "bending_E2": "E2 bending", "shear_E2": "E2 shear"}
+    colors = {"axial": _COLORS["a"], "bending": _COLORS["b"], "shear": _COLORS["c"]}
+    fig = _figure(5.6, 3.2, left=0.2, right=0.98, bottom=0.14, top=0.84)
+    ax = fig.subplots()
+    names = list(terms)
+    values = [terms[n] for n in names]
+    bars = ax.barh([labels[n] for n in names], values, color=[colors[n.split("_")[0]] for n in names])
+    for bar, value in zip(bars, values, strict=True):
+        label = f" {value:.0f} J ({100 * value / strain.total:.1f}%)"
+        ax.text(bar.get_width(), bar.get_y() + bar.get_height() / 2, label, va="center", fontsize=8)
+    ax.invert_yaxis()
+    ax.set_xlabel("strain energy [J]")
+    ax.set_xlim(0, max(values) * 1.35)
+    ax.set_title(f"Stored strain energy (Eq. 2): $E_S$ = {strain.total:.1f} J\n"
+                 f"at P = {strain.forces.P / 1e3:.0f} kN, $\\alpha_0$ = {strain.forces.alpha0:.4g} rad")
+    return fig
+
+
+def save_figure(fig: Any, folder: str | Path, stem: str, formats: tuple[str, ...] = ("png", "svg"),
+                dpi: int = 150) -> dict[str, Path]:
+    """Write ``fig`` as ``folder/stem.png`` and ``.svg`` (atomically); returns the paths by format."""
+    from .export import atomic_path
+
+    out = {}
+    for fmt in formats:
+        path = Path(folder) / f"{stem}.{fmt}"
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, format=fmt, dpi=dpi, metadata={"Date": None} if fmt == "svg" else None)
+        out[fmt] = path
+    return out

@@ -1,0 +1,162 @@
+"""A self-contained HTML report of a case: inputs, strain energy, identification, release, figures.
+
+One file, no network fetches: figures are embedded as inline SVG and the style is inline.
+Every piece of user-provided text (title, notes, names) is escaped.
+"""
+
+from __future__ import annotations
+
+import html
+import math
+import re
+from typing import Any
+
+from .device import DEVICE_KEYS
+from .workflow import FIGURES, CaseResult
+
+__all__ = ["render_report"]
+
+_CSS = """
+body { font-family: system-ui, -apple-system, "Segoe UI", Roboto, sans-serif; margin: 2rem auto; max-width: 980px;
+       color: #1a1a1a; line-height: 1.45; padding: 0 1rem; }
+h1 { font-size: 1.6rem; margin-bottom: 0.2rem; } h2 { font-size: 1.2rem; border-bottom: 2px solid #1f4e79;
+     padding-bottom: 0.2rem; margin-top: 2rem; }
+.meta { color: #555; font-size: 0.9rem; } .notes { white-space: pre-wrap; background: #f4f6f8; padding: 0.8rem;
+     border-left: 4px solid #1f4e79; }
+table { border-collapse: collapse; margin: 0.6rem 0; font-size: 0.92rem; }
+th, td { border: 1px solid #c8ccd0; padding: 0.25rem 0.6rem; text-align: left; }
+th { background: #e8edf2; } td.num { text-align: right; font-variant-numeric: tabular-nums; }
+figure { margin: 1rem 0; } figure svg { width: 100%; max-width: 760px; height: auto; }
+figcaption { font-size: 0.9rem; color: #444; }
+.flag { color: #a00; font-weight: bold; }
+"""
+
+
+def _e(text: Any) -> str:
+    return html.escape(str(text), quote=True)
+
+
+def _num(value: float | None, fmt: str = ".6g") -> str:
+    if value is None:
+        return "&ndash;"
+    if isinstance(value, float) and not math.isfinite(value):
+        return "&ndash;"
+    return format(value, fmt)
+
+
+def _table(rows: list[tuple[str, str, str]], headers: tuple[str, str, str] = ("quantity", "value", "unit")) -> str:
+    head = "".join(f"<th>{_e(h)}</th>" for h in headers)
+    body = "".join(f"<tr><td>{_e(a)}</td><td class=\"num\">{b}</td><td>{_e(c)}</td></tr>" for a, b, c in rows)
+    return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
+
+
+def _svg_inline(svg: str) -> str:
+    """Strip the XML prolog and DOCTYPE so the SVG can sit inside HTML."""
+    svg = re.sub(r"<\?xml[^>]*\?>", "", svg)
+    svg = re.sub(r"<!DOCTYPE[^>]*>", "", svg, flags=re.S)
+    return svg.strip()
+
+
+_DEVICE_UNITS = {"mass": "kg", "length": "m", "area": "m²", "second_moment": "m⁴", "pressure": "Pa",
+                 "dimensionless": "–"}
+
+
+def render_report(result: CaseResult, svgs: dict[str, str]) -> str:
+    """The HTML text of the report for a case result, with the given SVG figures embedded."""
+    from . import __version__
+
+    case = result.case
+    r = result.response
+    s = r.summary()
+    parts: list[str] = []
+    parts.append(f"<h1>{_e(case.title)}</h1>")
+    parts.append(f"<p class=\"meta\">Case file: {_e(case.source)} &middot; quickrelease {_e(__version__)} &middot; "
+                 f"device: {_e(case.device.name)}</p>")
+    if case.notes:
+        parts.append(f"<div class=\"notes\">{_e(case.notes)}</div>")
+
+    # inputs
+    parts.append("<h2>Inputs</h2>")
+    rows = [
+        ("push force P", _num(case.push_force / 1e3 if case.push_force else None), "kN"),
+        ("stored energy E_S" + (" (given)" if case.energy_given else " (Eq. 2)"), _num(case.stored_energy), "J"),
+        ("initial angle α0", f"{_num(case.alpha0)} ({_num(math.degrees(case.alpha0), '.4g')}°)", "rad"),
+        ("mass model", f"{_e(case.mass_model)} (c = {_num(case.mass_factor, '.4g')})", ""),
+        ("solver", _e(case.method), ""),
+    ]
+    if case.has_friction:
+        rows += [("friction F1 (case file)", _num(case.F1), "N"), ("friction F2 (case file)", _num(case.F2), "N")]
+    if case.has_observations:
+        rows += [("observed final angle α_F", _num(case.alpha_final), "rad"),
+                 ("observed stop time t_F", _num(case.stop_time), "s")]
+    parts.append(_table(rows))
+    dev_rows = [(f"{k}: {desc.rsplit(' [', 1)[0]}", _num(getattr(case.device, k)), _DEVICE_UNITS[kind])
+                for k, (kind, desc) in DEVICE_KEYS.items()]
+    parts.append("<details><summary>Device data (Table 2)</summary>" + _table(dev_rows) + "</details>")
+
+    # statics
+    if result.strain is not None:
+        st = result.strain
+        f = st.forces
+        parts.append("<h2>Statics before release</h2>")
+        parts.append(_table([
+            ("fuse force N4 = P tan α0 (Table 3)", _num(f.N4 / 1e3), "kN"),
+            ("fuse stress N4 / A4", _num(f.N4 / case.device.A4 / 1e6), "MPa"),
+            ("bar force N1 = P / (2 cos α0)", _num(f.N1 / 1e3), "kN"),
+            ("head bending moment M2 = P L2 / 4", _num(f.M2 / 1e3), "kN m"),
+        ]))
+        terms = [(name.replace("_", " "), _num(value, ".2f"), "J") for name, value in st.terms().items()]
+        terms.append(("total E_S (Eq. 2)", _num(st.total, ".2f"), "J"))
+        parts.append(_table(terms, ("term of Eq. 2", "energy", "unit")))
+        if case.energy_given:
+            parts.append(f"<p>The case gives E_S = {_num(case.stored_energy)} J; Eq. 2 at this P gives "
+                         f"{_num(st.total)} J ({_num(100 * (st.total / case.stored_energy - 1), '+.2f')}%). "
+                         "The release uses the given value.</p>")
+        parts.append(_figure(svgs, "strain_energy"))
+
+    # identification
+    if result.identification is not None:
+        i = result.identification
+        parts.append("<h2>Identified friction (Eq. 11-13)</h2>")
+        parts.append(_table([
+            ("F1 (central hinges)", f"<strong id=\"F1\">{_num(i.F1, '.6g')}</strong>", "N"),
+            ("F2 (rail supports)", f"<strong id=\"F2\">{_num(i.F2, '.6g')}</strong>", "N"),
+            ("F1* (Eq. 11)", _num(i.F1_max), "N"),
+            ("F2* (Eq. 12)", _num(i.F2_max), "N"),
+            ("F2 / F2*", _num(i.F2_ratio), "–"),
+            ("stop-time residual (model − observed)", _num(i.stop_time_residual, ".3g"), "s"),
+            ("feasible t_F on Eq. 13", f"[{_num(i.feasible_stop_times[0])}, {_num(i.feasible_stop_times[1])}]", "s"),
+        ]))
+        parts.append(_figure(svgs, "identification"))
+
+    # release
+    parts.append("<h2>Release</h2>")
+    stopped = "friction stopped the device (Eq. 8)" if r.stopped_by == "friction" else \
+        "<span class=\"flag\">the device reached the geometric limit α = π/2 with kinetic energy left</span>"
+    parts.append(f"<p>Friction used: F1 = {_num(r.F1)} N, F2 = {_num(r.F2)} N. End of motion: {stopped}.</p>")
+    parts.append(_table([
+        ("stop time t_F", _num(s["stop_time_s"]), "s"),
+        ("final angle α_F", _num(s["alpha_final_rad"]), "rad"),
+        ("head stroke u_F", _num(s["u_final_m"]), "m"),
+        ("hinge opening v_F", _num(s["v_final_m"]), "m"),
+        ("initial angular velocity (Eq. 6)", _num(s["alpha_dot0_rad_s"]), "rad/s"),
+        ("peak head velocity", _num(s["peak_u_dot_m_s"]), "m/s"),
+        ("peak hinge velocity", _num(s["peak_v_dot_m_s"]), "m/s"),
+        ("peak head acceleration", _num(s["peak_u_ddot_m_s2"]), "m/s²"),
+        ("peak hinge acceleration", _num(s["peak_v_ddot_m_s2"]), "m/s²"),
+    ]))
+    for stem in ("fig13_response", "fig14_displacements", "fig15_state_diagram"):
+        parts.append(_figure(svgs, stem))
+    parts.append(f"<p class=\"meta\">Generated by quickrelease {_e(__version__)}.</p>")
+    body = "\n".join(p for p in parts if p)
+    return (f"<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
+            f"<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
+            f"<title>{_e(case.title)} – quickrelease report</title><style>{_CSS}</style></head>\n"
+            f"<body>\n{body}\n</body></html>\n")
+
+
+def _figure(svgs: dict[str, str], stem: str) -> str:
+    if stem not in svgs:
+        return ""
+    return (f"<figure id=\"{stem}\">{_svg_inline(svgs[stem])}"
+            f"<figcaption>{_e(FIGURES[stem])}</figcaption></figure>")
