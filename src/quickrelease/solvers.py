@@ -12,11 +12,10 @@
     alpha = pi/2 (geometric limit).
 ``energy``
     The first integral, Eq. 9-10: ``alpha_dot = sqrt((E_S - W_F(alpha)) / M(alpha))``
-    and the time map ``t(alpha) = int dalpha / alpha_dot`` by adaptive quadrature.
-    The substitution ``alpha = alpha_F - (alpha_F - alpha0) w^2`` removes the
-    inverse-square-root singularity at the stop and the remaining energy is written
-    without cancellation (``dynamics.remaining_energy``), so the integrand is smooth
-    and the result accurate to near machine precision.
+    and the time map ``t(alpha) = int dalpha / alpha_dot`` by Gauss quadrature (see ``_kernels``).
+    The substitution ``sin((alpha_F - alpha)/2) = sin((alpha_F - alpha0)/2) w^2`` removes the
+    inverse-square-root singularity at the stop and writes the remaining energy without
+    cancellation, so the integrand is smooth and the result accurate to near machine precision.
 
 During the release alpha_dot > 0, so sign(alpha_dot) = +1 until the stop; the
 ``rk`` solver integrates that smooth branch and lets the event end it.
@@ -25,13 +24,13 @@ During the release alpha_dot > 0, so sign(alpha_dot) = +1 until the stop; the
 from __future__ import annotations
 
 import math
-import warnings
-from functools import lru_cache
 from typing import Any
 
 import numpy as np
 
 from . import dynamics
+from ._kernels import Releases
+from ._roots import brent
 from ._validate import HALF_PI, check_angle, check_nonnegative, check_positive
 from .device import Device, preset
 from .errors import ParameterError
@@ -43,25 +42,11 @@ __all__ = ["METHODS", "simulate", "stop_time", "FirstIntegral"]
 METHODS = ("energy", "rk", "explicit")
 
 
-@lru_cache(maxsize=8)
-def _gauss_legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
-    return np.polynomial.legendre.leggauss(n)
-
-
 class FirstIntegral:
-    """The energy solution of one release (Eq. 8-10) with a smooth time integrand.
+    """The energy solution of one release (Eq. 8-10): a scalar view of :class:`_kernels.Releases`.
 
-    Three regimes, chosen from E_S and W_F(pi/2) (Eq. 7):
-
-    * ``friction`` stop before pi/2: anchor ``a = alpha_F`` of Eq. 8; with
-      ``alpha = a - D w^2`` (``D = a - alpha0``) the time integrand becomes
-      ``2 sqrt(D M(alpha) / (R C(alpha) g(D w^2 / 2)))`` with
-      ``C = cos((a + alpha)/2 - phi)`` and ``g(x) = sin(x)/x``: smooth on [0, 1].
-    * geometric limit with a *virtual* stop beyond pi/2 (Eq. 8 still has a root
-      a > pi/2): the same integrand, over ``w`` from ``sqrt((a - pi/2)/D)`` to 1.
-    * geometric limit with no root: anchor pi/2 and the remaining energy
-      ``E_S - W_F(pi/2) + (W_F(pi/2) - W_F(alpha))``, both terms non-negative.
-
+    See :mod:`quickrelease._kernels` for the regimes (``friction``, ``virtual``, ``free``), the
+    substitution that makes the time integrand smooth, and the rule for nearly singular cases.
     Parameters are SI floats; ``c`` is the mass factor.
     """
 
@@ -69,113 +54,45 @@ class FirstIntegral:
                  m1: float, m2: float, L1: float, c: float) -> None:
         self.E_S, self.alpha0, self.F1, self.F2 = float(E_S), float(alpha0), float(F1), float(F2)
         self.m1, self.m2, self.L1, self.c = float(m1), float(m2), float(L1), float(c)
-        A = 2.0 * self.F1 * self.L1
-        B = 4.0 * self.F2 * self.L1
-        self.A, self.B = A, B
-        self.R = math.hypot(A, B)
-        self.phi = math.atan2(B, A)
-        self.W_limit = float(dynamics.dissipation_at_limit(self.alpha0, self.F1, self.F2, self.L1))
-        self.geometric_limit = self.E_S > self.W_limit
-        if self.R > 0.0:
-            s = math.sin(self.alpha0 - self.phi) + self.E_S / self.R
-        else:
-            s = math.inf
-        if not self.geometric_limit:
-            self.regime = "friction"
-            self.anchor = float(dynamics.final_angle(self.E_S, self.alpha0, self.F1, self.F2, self.L1))
-            self.w_end = 0.0
-        elif s <= 1.0:
-            self.regime = "virtual"
-            self.anchor = self.phi + math.asin(s)
-            self.w_end = math.sqrt(max(self.anchor - HALF_PI, 0.0) / (self.anchor - self.alpha0))
-        else:
-            self.regime = "free"
-            self.anchor = HALF_PI
-            self.w_end = 0.0
-        self.D = self.anchor - self.alpha0
-        self.alpha_final = HALF_PI if self.geometric_limit else self.anchor
+        self._rel = Releases.build(*(np.array([v]) for v in (E_S, alpha0, F1, F2, c * m1 / m2, m2, L1)))
+        self.regime = ("friction", "limit")[int(self._rel.regime[0])]
+        self.geometric_limit = self.regime != "friction"
+        self.anchor = float(self._rel.anchor[0])
+        self.alpha_final = float(self._rel.alpha_final[0])
         self.stopped_by = "geometric_limit" if self.geometric_limit else "friction"
 
-    # -- maps ------------------------------------------------------------------
     def alpha(self, w):
         """Angle at the integration variable w [rad]."""
-        return self.anchor - self.D * np.square(w)
+        return self._rel.alpha_at(w)
 
     def mass(self, alpha):
         return dynamics.generalized_mass(alpha, self.m1, self.m2, self.L1, self.c)
 
     def remaining(self, alpha):
         """E_S - W_F(alpha) without cancellation [J] (Eq. 9)."""
-        if self.regime == "free":
-            x = HALF_PI - np.asarray(alpha)
-            return (self.E_S - self.W_limit) + 2.0 * self.A * np.sin(0.5 * x) ** 2 + self.B * np.sin(x)
-        return np.maximum(dynamics.remaining_energy(alpha, self.anchor, self.F1, self.F2, self.L1), 0.0)
+        return self._rel.remaining_energy(alpha)
 
     def rate(self, alpha):
         """alpha_dot from the first integral (Eq. 10) [rad/s]."""
         return np.sqrt(self.remaining(alpha) / self.mass(alpha))
 
     def integrand(self, w):
-        """dt/dw, smooth on [w_end, 1] [s]."""
+        """dt/dw, smooth on [0, 1] [s]."""
         w = np.asarray(w, dtype=float)
-        a = self.alpha(w)
-        if self.regime == "free":
-            return 2.0 * self.D * w * np.sqrt(self.mass(a) / self.remaining(a))
-        x = 0.5 * self.D * w * w
-        g = np.sinc(x / math.pi)  # sin(x)/x
-        C = np.cos(0.5 * (self.anchor + a) - self.phi)
-        return 2.0 * np.sqrt(self.D * self.mass(a) / (self.R * C * g))
+        return self._rel.integrand(w.reshape(1, -1)).reshape(w.shape)
 
-    # -- times -----------------------------------------------------------------
     def stop_time(self) -> float:
-        """Time from release to the end of the motion [s] (Eq. 10 integrated).
-
-        Gauss-Legendre rules of 48 and 96 nodes on the smooth integrand; when they
-        differ by more than 1e-14 relative (the integrand is nearly singular, e.g.
-        close to the geometric limit) adaptive ``quad`` takes over.
-        """
-        coarse, fine = (self._gauss(n) for n in (48, 96))
-        if abs(fine - coarse) <= 1e-14 * abs(fine):
-            return fine
-        from scipy.integrate import quad
-
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            value, _ = quad(lambda w: float(self.integrand(w)), self.w_end, 1.0,
-                            epsabs=0.0, epsrel=1e-13, limit=500)
-        return value
-
-    def _gauss(self, n: int) -> float:
-        x, wts = _gauss_legendre(n)
-        half = 0.5 * (1.0 - self.w_end)
-        return float(half * np.dot(wts, self.integrand(self.w_end + half * (x + 1.0))))
-
-    def _gauss_elapsed(self, w: np.ndarray, span: np.ndarray, n: int) -> np.ndarray:
-        x, wts = _gauss_legendre(n)
-        nodes = w[..., None] + span[..., None] * (0.5 * (x + 1.0))
-        return 0.5 * span * (self.integrand(nodes) @ wts)
+        """Time from release to the end of the motion [s] (Eq. 10 integrated)."""
+        return float(self._rel.stop_time()[0])
 
     def elapsed(self, w) -> np.ndarray:
-        """Time from release to the angle alpha(w), for an array of w in [w_end, 1] [s]."""
-        w = np.asarray(w, dtype=float)
-        span = 1.0 - w
-        coarse, fine = (self._gauss_elapsed(w, span, n) for n in (48, 96))
-        if np.all(np.abs(fine - coarse) <= 1e-14 * max(float(np.max(np.abs(fine))), 1e-300)):
-            return fine
-        from scipy.integrate import quad_vec
-
-        def f(x):
-            return self.integrand(w + span * x) * span
-
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            value, _ = quad_vec(f, 0.0, 1.0, epsabs=1e-15, epsrel=1e-13, norm="max", limit=2000)
-        return value
+        """Time from release to the angle alpha(w), for an array of w in [0, 1] [s]."""
+        return self._rel.elapsed(np.asarray(w, dtype=float))
 
     def w_at_times(self, t, t_stop: float) -> np.ndarray:
         """The integration variable w reached at times t in [0, t_stop] (Newton on the time map)."""
         t = np.asarray(t, dtype=float)
-        table_w = np.linspace(self.w_end, 1.0, 257)
+        table_w = np.linspace(0.0, 1.0, 257)
         table_t = self.elapsed(table_w)
         w = np.interp(t, table_t[::-1], table_w[::-1])
         for _ in range(12):
@@ -184,11 +101,11 @@ class FirstIntegral:
                 break
             residual = self.elapsed(w[inner]) - t[inner]
             step = residual / self.integrand(w[inner])
-            w[inner] = np.clip(w[inner] + step, self.w_end, 1.0)
+            w[inner] = np.clip(w[inner] + step, 0.0, 1.0)
             if np.max(np.abs(residual)) <= 1e-14 * max(t_stop, 1e-300):
                 break
         w[t <= 0.0] = 1.0
-        w[t >= t_stop] = self.w_end
+        w[t >= t_stop] = 0.0
         return w
 
 
@@ -278,6 +195,15 @@ def _solve_rk(fi: FirstIntegral, n_points: int, rtol: float = 1e-10, atol: float
         alpha_final = HALF_PI
         stopped_by = "geometric_limit"
         end_rate = float(sol.y_events[1][0][1])
+    elif float(sol.y_events[0][0][0]) > HALF_PI:
+        # The step that crossed pi/2 also passed the stop, and alpha had fallen back below pi/2 by its end
+        # (the smooth branch runs on past the stop), so the sign check at the step ends saw no crossing:
+        # find it on the dense output of that step.
+        t_lo = float(sol.t[-2]) if sol.t.size > 1 else 0.0
+        t_stop = brent(lambda t: float(sol.sol(t)[0]) - HALF_PI, t_lo, float(sol.t_events[0][0]), xtol=1e-15)
+        alpha_final = HALF_PI
+        stopped_by = "geometric_limit"
+        end_rate = float(sol.sol(t_stop)[1])
     else:
         t_stop = float(sol.t_events[0][0])
         alpha_final = float(sol.y_events[0][0][0])

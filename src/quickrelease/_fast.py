@@ -1,0 +1,168 @@
+"""Compiled (numba) loops of the batch kernels: the formulas of :mod:`quickrelease._kernels`, fused.
+
+numpy evaluates ``_kernels`` one operation at a time, about 17 passes over the (nodes x cases) arrays;
+here each case is one loop over its 16 or 24 nodes with every intermediate in registers, which is what
+it takes to reach millions of cases a second on one core. The formulas, node rules and tier criteria
+are those of ``_kernels`` (a test checks the two agree case by case); cases of the graded tier (a nearly
+singular end, rare) are flagged here with code -1 and finished by the numpy implementation.
+Compiled on first use and cached on disk (``cache=True``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from . import _kernels
+
+_HALF_PI = 0.5 * math.pi
+
+
+def rules() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The 16- and 24-node Gauss-Legendre rules on [0, 1] (as in ``_kernels``)."""
+    x16, w16 = _kernels.gauss_unit(_kernels.N_NODES)
+    x24, w24 = _kernels.gauss_unit(_kernels.N_NODES_MASS)
+    return x16, w16, x24, w24
+
+
+@njit(cache=True, nogil=True)
+def stop_kernel(E, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, near, hard, mass_sq, t_out, aF_out, code_out):
+    """t_F, alpha_F and the regime code (0 friction, 1 limit, -1: graded tier, left to numpy)."""
+    for i in range(E.size):
+        sa0 = math.sin(a0[i])
+        ca0 = math.cos(a0[i])
+        A = 2.0 * F1[i] * L1[i]
+        B = 4.0 * F2[i] * L1[i]
+        R = math.hypot(A, B)
+        Wl = A * (1.0 - sa0) + B * ca0
+        if E[i] > Wl:  # the rhombus becomes flat first: anchor pi/2
+            sm = math.sin(0.5 * (_HALF_PI - a0[i]))
+            qm = math.sqrt(1.0 - sm * sm)
+            Kl = E[i] - Wl
+            ratio = Kl / (Kl + 2.0 * A * sm * sm + 2.0 * B * sm * qm)
+            msq = (k[i] + sa0 * sa0) / (_HALF_PI - a0[i]) ** 2
+            aF_out[i] = _HALF_PI
+            if ratio < hard:
+                code_out[i] = -1
+                continue
+            if ratio < near or msq < mass_sq:
+                x, w = x24, w24
+            else:
+                x, w = x16, w16
+            acc = 0.0
+            for j in range(x.size):
+                s = sm * x[j] * x[j]
+                s2 = s * s
+                q2 = 1.0 - s2
+                sal = 1.0 - 2.0 * s2
+                K = Kl + 2.0 * A * s2 + 2.0 * B * s * math.sqrt(q2)
+                acc += w[j] * x[j] * math.sqrt((k[i] + sal * sal) / (K * q2))
+            t_out[i] = 4.0 * sm * L1[i] * math.sqrt(m2[i]) * acc
+            code_out[i] = 1
+        else:  # friction stop at alpha_F (Eq. 8)
+            s = (A * sa0 - B * ca0 + E[i]) / R
+            cb = math.sqrt((1.0 - s) * (1.0 + s))
+            sA = (B * cb + A * s) / R
+            cA = (A * cb - B * s) / R
+            aF = min(math.atan2(sA, cA), _HALF_PI)
+            aF_out[i] = aF
+            sm = math.sin(0.5 * (aF - a0[i]))
+            qm = math.sqrt(1.0 - sm * sm)
+            ratio = cb / (cb * qm + s * sm)
+            msq = (k[i] + sa0 * sa0) / (aF - a0[i]) ** 2
+            if ratio < hard:
+                code_out[i] = -1
+                continue
+            if ratio < near or msq < mass_sq:
+                x, w = x24, w24
+            else:
+                x, w = x16, w16
+            acc = 0.0
+            for j in range(x.size):
+                sg = sm * x[j] * x[j]
+                s2 = sg * sg
+                q2 = 1.0 - s2
+                q = math.sqrt(q2)
+                sal = sA * (1.0 - 2.0 * s2) - cA * 2.0 * sg * q
+                C = cb * q + s * sg
+                acc += w[j] * math.sqrt((k[i] + sal * sal) / (C * q2))
+            t_out[i] = 4.0 * L1[i] * math.sqrt(sm * m2[i] / (2.0 * R)) * acc
+            code_out[i] = 0
+
+
+@njit(cache=True, nogil=True)
+def identify_kernel(a0, aF, tF, E, k, m2, L1, x16, w16, x24, w24, near, hard, mass_sq, tol, max_iter,
+                    lam_out, F1max_out, F2max_out, tlo_out, thi_out, status_out, iter_out):
+    """Newton in lambda = F1/F1* on the line of Eq. 13 (status -1: graded tier, left to numpy)."""
+    P = np.empty(24)
+    a = np.empty(24)
+    b = np.empty(24)
+    for i in range(a0.size):
+        if status_out[i] != 0:
+            continue
+        sA = math.sin(aF[i])
+        cA = math.cos(aF[i])
+        half = 0.5 * (aF[i] - a0[i])
+        sm = math.sin(half)
+        ch = math.cos(half)
+        c1 = cA * ch + sA * sm
+        c2 = sA * ch - cA * sm
+        F1max_out[i] = E[i] / (4.0 * L1[i] * c1 * sm)
+        F2max_out[i] = E[i] / (8.0 * L1[i] * c2 * sm)
+        ratio = cA / c1
+        sa0 = math.sin(a0[i])
+        msq = (k[i] + sa0 * sa0) / (aF[i] - a0[i]) ** 2
+        if ratio < hard:
+            status_out[i] = -1
+            continue
+        if ratio < near or msq < mass_sq:
+            x, w = x24, w24
+        else:
+            x, w = x16, w16
+        n = x.size
+        pref = 4.0 * sm * L1[i] * math.sqrt(m2[i] / E[i])
+        lo = 0.0
+        hi = 0.0
+        for j in range(n):
+            sg = sm * x[j] * x[j]
+            q = math.sqrt(1.0 - sg * sg)
+            sal = sA * (1.0 - 2.0 * sg * sg) - cA * 2.0 * sg * q
+            P[j] = w[j] * math.sqrt(k[i] + sal * sal) / q
+            a[j] = (cA * q + sA * sg) / c1
+            b[j] = (sA * q - cA * sg) / c2
+            lo += P[j] / math.sqrt(b[j])
+            hi += P[j] / math.sqrt(a[j])
+        lo *= pref
+        hi *= pref
+        tlo_out[i] = lo
+        thi_out[i] = hi
+        if tF[i] < lo:
+            status_out[i] = 1
+            continue
+        if tF[i] > hi:
+            status_out[i] = 2
+            continue
+        lam = 1.0
+        iterations = 0
+        if hi > tF[i]:
+            while iterations < max_iter:
+                iterations += 1
+                tv = 0.0
+                dv = 0.0
+                for j in range(n):
+                    d = a[j] - b[j]
+                    r = 1.0 / math.sqrt(b[j] + lam * d)
+                    tv += P[j] * r
+                    dv += P[j] * d * r * r * r
+                slope = -0.5 * pref * dv
+                step = (pref * tv - tF[i]) / slope
+                new = min(max(lam - step, 0.0), 1.0)
+                # converged to tol, or to the rounding floor of lambda (t known to a few ulps)
+                done = abs(new - lam) <= max(tol, 8.0 * 2.220446049250313e-16 * pref * tv / abs(slope))
+                lam = new
+                if done:
+                    break
+        lam_out[i] = lam
+        iter_out[i] = iterations

@@ -1,0 +1,389 @@
+"""Vectorized kernels over many releases: stop times, release envelopes, identification.
+
+Arrays of cases in, arrays of answers out, no Python loop per case: the closed-form alpha_F (Eq. 8)
+and a fixed-node Gauss quadrature of the first integral (Eq. 10) after the substitution of
+:mod:`quickrelease._kernels`, which leaves only square roots and arithmetic at the nodes and writes
+the integrand without cancellation. Inputs broadcast against each other (numpy rules); cases are
+processed in chunks that fit the CPU cache.
+
+* :func:`stop_time` - t_F, alpha_F and why the motion ended (the fast kernel).
+* :func:`release` - the same plus the stroke u_F, the opening v_F and the peak velocities.
+* :func:`identify` - F1, F2 on the line of Eq. 13 from (alpha0, alpha_F, t_F, E_S), by Newton's
+  method in lambda = F1/F1* on the same nodes (which do not depend on F1); infeasible cases are
+  flagged with a reason code (:data:`IDENTIFY_STATUS`), never dropped.
+
+All SI units. ``c`` is the mass factor (2/3 distributed, 1 lumped); ``m1``, ``m2``, ``L1`` default
+to the paper's device.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+from typing import Any
+
+import numpy as np
+
+from . import _kernels
+from ._kernels import HALF_PI, Releases, gauss_unit, graded_unit
+
+__all__ = [
+    "CHUNK", "BatchStop", "BatchRelease", "BatchIdentification", "IDENTIFY_STATUS", "STOPPED_BY",
+    "stop_time", "release", "identify",
+]
+
+#: Cases per chunk: keeps the (nodes x cases) work arrays in the CPU cache.
+CHUNK = 2048
+
+#: Codes of ``stopped_by`` arrays.
+STOPPED_BY = {0: "friction", 1: "geometric_limit"}
+
+#: Codes of :attr:`BatchIdentification.status` and what they mean.
+IDENTIFY_STATUS = {
+    0: "ok",
+    1: "t_F below t_F(F1 = 0): faster than any friction on the line of Eq. 13 allows",
+    2: "t_F above t_F(F1 = F1*): slower than any friction on the line of Eq. 13 allows",
+    3: "alpha_final not in (alpha0, pi/2)",
+    4: "alpha0 not in (0, pi/2)",
+    5: "E_S, t_F, c, m1, m2 or L1 not positive and finite",
+}
+
+
+def _paper_defaults(m1, m2, L1):
+    if m1 is None or m2 is None or L1 is None:
+        from .device import preset
+
+        d = preset("paper")
+        m1 = d.m1 if m1 is None else m1
+        m2 = d.m2 if m2 is None else m2
+        L1 = d.L1 if L1 is None else L1
+    return m1, m2, L1
+
+
+def _flat(*arrays) -> tuple[tuple[int, ...], list[np.ndarray]]:
+    b = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in arrays))
+    return b[0].shape, [np.ascontiguousarray(x).ravel() for x in b]
+
+
+class _Result:
+    """Shared conversions of the batch result types."""
+
+    def to_dict(self) -> dict[str, np.ndarray]:
+        return {f.name: getattr(self, f.name) for f in fields(self) if getattr(self, f.name) is not None}
+
+    def to_pandas(self):
+        import pandas as pd
+
+        return pd.DataFrame({k: np.ravel(v) for k, v in self.to_dict().items()})
+
+    def __len__(self) -> int:
+        return int(np.size(getattr(self, fields(self)[0].name)))
+
+
+@dataclass(frozen=True)
+class BatchStop(_Result):
+    """Stop time and final angle of many releases (arrays of the broadcast input shape)."""
+
+    stop_time: np.ndarray
+    """t_F [s]: to the friction stop, or to the flat rhombus."""
+    alpha_final: np.ndarray
+    """alpha_F [rad] (pi/2 at the geometric limit)."""
+    stopped_by: np.ndarray
+    """0 friction, 1 geometric limit (see :data:`STOPPED_BY`)."""
+
+    @property
+    def geometric_limit(self) -> np.ndarray:
+        return self.stopped_by == 1
+
+
+@dataclass(frozen=True)
+class BatchRelease(_Result):
+    """Stop, stroke, opening and peak velocities of many releases."""
+
+    stop_time: np.ndarray
+    """t_F [s]."""
+    alpha_final: np.ndarray
+    """alpha_F [rad]."""
+    stopped_by: np.ndarray
+    """0 friction, 1 geometric limit."""
+    u_final: np.ndarray
+    """Head stroke u_F [m] (Table 4)."""
+    v_final: np.ndarray
+    """Central hinge opening v_F [m] (Table 4)."""
+    alpha_dot0: np.ndarray
+    """Initial (and peak) angular velocity [rad/s] (Eq. 6)."""
+    peak_u_dot: np.ndarray
+    """Peak head velocity [m/s]."""
+    peak_v_dot: np.ndarray
+    """Peak central hinge velocity [m/s] (at release)."""
+
+
+@dataclass(frozen=True)
+class BatchIdentification(_Result):
+    """Friction identified from many stop observations (Eq. 11-13)."""
+
+    F1: np.ndarray
+    """Hinge friction [N] (NaN where status != 0)."""
+    F2: np.ndarray
+    """Rail friction [N] (NaN where status != 0)."""
+    F1_max: np.ndarray
+    """F1* (Eq. 11) [N]."""
+    F2_max: np.ndarray
+    """F2* (Eq. 12) [N]."""
+    stop_time_min: np.ndarray
+    """t_F(F1 = 0) [s]: the fastest stop the line of Eq. 13 allows."""
+    stop_time_max: np.ndarray
+    """t_F(F1 = F1*) [s]: the slowest."""
+    status: np.ndarray
+    """0 ok, else the reason (see :data:`IDENTIFY_STATUS`)."""
+    iterations: np.ndarray
+    """Newton iterations used."""
+
+    @property
+    def feasible(self) -> np.ndarray:
+        return self.status == 0
+
+    def reasons(self) -> dict[str, int]:
+        """How many cases ended with each status, by message."""
+        codes, counts = np.unique(self.status, return_counts=True)
+        return {IDENTIFY_STATUS[int(c)]: int(n) for c, n in zip(codes, counts, strict=True)}
+
+
+def _chunks(n: int, chunk: int):
+    for start in range(0, n, chunk):
+        yield slice(start, min(start + chunk, n))
+
+
+def stop_time(E_S, alpha0, F1, F2, c=2.0 / 3.0, m1=None, m2=None, L1=None, *, chunk: int = CHUNK) -> BatchStop:
+    """Stop time t_F and final angle alpha_F of many releases (Eq. 8 and 10).
+
+    Parameters broadcast: E_S [J], alpha0 [rad], F1, F2 [N], c [-], m1, m2 [kg], L1 [m] (the paper's
+    device where not given). Cases must be valid (E_S > 0, alpha0 in (0, pi/2), F1, F2 >= 0); they are
+    not checked one by one here (see :func:`quickrelease.simulate` for checked single releases).
+    """
+    m1, m2, L1 = _paper_defaults(m1, m2, L1)
+    shape, (E_S, alpha0, F1, F2, c, m1, m2, L1) = _flat(E_S, alpha0, F1, F2, c, m1, m2, L1)
+    t, aF, code = _stop_arrays(E_S, alpha0, F1, F2, c * m1 / m2, m2, L1, chunk)
+    return BatchStop(t.reshape(shape), aF.reshape(shape), code.reshape(shape))
+
+
+def _stop_arrays(E_S, alpha0, F1, F2, k, m2, L1, chunk):
+    """Flat arrays in, (t_F, alpha_F, code) out: the compiled loop, numpy for the graded tier."""
+    from . import _fast
+
+    n = E_S.size
+    t = np.empty(n)
+    aF = np.empty(n)
+    code = np.empty(n, dtype=np.int8)
+    x16, w16, x24, w24 = _fast.rules()
+    for sl in _chunks(n, max(chunk, 65536)):
+        _fast.stop_kernel(E_S[sl], alpha0[sl], F1[sl], F2[sl], k[sl], m2[sl], L1[sl], x16, w16, x24, w24,
+                          _kernels.NEAR_RATIO, _kernels.HARD_RATIO, _kernels.MASS_RATIO**2, t[sl], aF[sl], code[sl])
+    graded = np.nonzero(code < 0)[0]
+    if graded.size:
+        rel = Releases.build(E_S[graded], alpha0[graded], F1[graded], F2[graded], k[graded], m2[graded], L1[graded])
+        t[graded] = rel.stop_time()
+        aF[graded] = rel.alpha_final
+        code[graded] = rel.regime
+    return t, aF, code
+
+
+def _peak_head_velocity(E_S, alpha0, alpha_end, A, B, k, m2, n_samples: int = 8, newton: int = 5):
+    """Peak of u_dot = sqrt(sin^2(a) K(a) / (m2 (k + sin^2 a))) over [alpha0, alpha_end] [m/s].
+
+    Samples the interval, then Newton's method on d ln(g)/d alpha from the best sample, with
+    g = sin^2(a) K(a) / (k + sin^2 a) and K = E_S - W_F (Eq. 9); the endpoints are kept as candidates.
+    """
+    frac = np.arange(n_samples) / n_samples  # alpha_end itself has K = 0 at a friction stop
+    a = alpha0[:, None] + (alpha_end - alpha0)[:, None] * frac
+
+    def g(alpha, s, co):
+        K = E_S[..., None] if np.ndim(alpha) == 2 else E_S
+        sa0, ca0 = np.sin(alpha0), np.cos(alpha0)
+        if np.ndim(alpha) == 2:
+            sa0, ca0 = sa0[:, None], ca0[:, None]
+            AA, BB, kk = A[:, None], B[:, None], k[:, None]
+        else:
+            AA, BB, kk = A, B, k
+        K = K - AA * (s - sa0) - BB * (ca0 - co)
+        return s * s * np.maximum(K, 0.0) / (kk + s * s), K, AA, BB, kk
+
+    s, co = np.sin(a), np.cos(a)
+    vals = g(a, s, co)[0]
+    j = np.argmax(vals, axis=1)
+    rows = np.arange(a.shape[0])
+    best = vals[rows, j]
+    x = a[rows, j]
+    lo, hi = alpha0, alpha_end
+    for _ in range(newton):
+        s, co = np.sin(x), np.cos(x)
+        _, K, AA, BB, kk = g(x, s, co)
+        K = np.maximum(K, 1e-300)
+        d = kk + s * s
+        Kp = -(AA * co + BB * s)
+        Kpp = AA * s - BB * co
+        with np.errstate(divide="ignore", invalid="ignore"):
+            G = 2.0 * kk * co / (s * d) + Kp / K
+            Gp = 2.0 * kk * (-d - 2.0 * s * s * co * co) / (s * s * d * d) + (Kpp * K - Kp * Kp) / (K * K)
+            step = np.where(Gp < 0, G / Gp, 0.0)
+        x = np.clip(x - np.nan_to_num(step), lo, hi)
+    s, co = np.sin(x), np.cos(x)
+    best = np.maximum(best, g(x, s, co)[0])
+    return np.sqrt(best / m2)
+
+
+def release(E_S, alpha0, F1, F2, c=2.0 / 3.0, m1=None, m2=None, L1=None, *, chunk: int = CHUNK) -> BatchRelease:
+    """Release envelope of many cases: t_F, alpha_F, u_F, v_F, initial and peak velocities.
+
+    Same inputs as :func:`stop_time`.
+    """
+    m1, m2, L1 = _paper_defaults(m1, m2, L1)
+    shape, (E_S, alpha0, F1, F2, c, m1, m2, L1) = _flat(E_S, alpha0, F1, F2, c, m1, m2, L1)
+    n = E_S.size
+    out = {name: np.empty(n) for name in ("stop_time", "alpha_final", "u_final", "v_final", "alpha_dot0",
+                                          "peak_u_dot", "peak_v_dot")}
+    code = np.empty(n, dtype=np.int8)
+    k = c * m1 / m2
+    t, aF_all, code[:] = _stop_arrays(E_S, alpha0, F1, F2, k, m2, L1, chunk)
+    out["stop_time"][:] = t
+    out["alpha_final"][:] = aF_all
+    for sl in _chunks(n, chunk):
+        aF = aF_all[sl]
+        half_sum = 0.5 * (aF + alpha0[sl])
+        sigma_m = np.sin(0.5 * (aF - alpha0[sl]))
+        out["u_final"][sl] = 2.0 * L1[sl] * np.sin(half_sum) * sigma_m  # Table 4, cancellation-free
+        out["v_final"][sl] = 2.0 * L1[sl] * np.cos(half_sum) * sigma_m
+        sa0 = np.sin(alpha0[sl])
+        ad0 = np.sqrt(E_S[sl] / (m2[sl] * L1[sl] ** 2 * (k[sl] + sa0 * sa0)))  # Eq. 6
+        out["alpha_dot0"][sl] = ad0
+        out["peak_v_dot"][sl] = L1[sl] * np.cos(alpha0[sl]) * ad0  # v_dot decreases from release on
+        out["peak_u_dot"][sl] = _peak_head_velocity(E_S[sl], alpha0[sl], aF, 2.0 * F1[sl] * L1[sl],
+                                                    4.0 * F2[sl] * L1[sl], k[sl], m2[sl])
+    res = {key: v.reshape(shape) for key, v in out.items()}
+    return BatchRelease(stopped_by=code.reshape(shape), **res)
+
+
+def identify(alpha0, alpha_final, stop_time, E_S, c=2.0 / 3.0, m1=None, m2=None, L1=None, *,
+             chunk: int = CHUNK, tol: float = 1e-14, max_iter: int = 40) -> BatchIdentification:
+    """Identify F1, F2 from many stop observations (Eq. 11-13), vectorized.
+
+    On the line of Eq. 13 every case stops at alpha_final; with lambda = F1/F1*, the remaining energy
+    is ``K = E_S w^2 (lambda a + (1 - lambda) b)`` at the quadrature nodes, where a and b are the
+    normalized remaining energies of pure hinge and pure rail friction. The nodes, a and b do not
+    depend on lambda, so each Newton step costs one square root per node. t(lambda) is increasing and
+    convex, so Newton's method from lambda = 1 converges monotonically.
+
+    Returns
+    -------
+    BatchIdentification
+        Infeasible or invalid cases have NaN F1, F2 and a nonzero ``status``.
+    """
+    m1, m2, L1 = _paper_defaults(m1, m2, L1)
+    shape, (alpha0, aF, tF, E_S, c, m1, m2, L1) = _flat(alpha0, alpha_final, stop_time, E_S, c, m1, m2, L1)
+    n = alpha0.size
+    names = ("F1", "F2", "F1_max", "F2_max", "stop_time_min", "stop_time_max")
+    out = {name: np.full(n, np.nan) for name in names}
+    status = np.zeros(n, dtype=np.int8)
+    iters = np.zeros(n, dtype=np.int16)
+    finite = np.isfinite(alpha0) & np.isfinite(aF) & np.isfinite(tF) & np.isfinite(E_S)
+    with np.errstate(invalid="ignore"):
+        good_pos = finite & (E_S > 0) & (tF > 0) & (c > 0) & (m1 > 0) & (m2 > 0) & (L1 > 0)
+        status[~good_pos] = 5
+        status[good_pos & ~((alpha0 > 0) & (alpha0 < HALF_PI))] = 4
+        status[(status == 0) & ~((aF > alpha0) & (aF < HALF_PI))] = 3
+    k = c * m1 / m2
+    from . import _fast
+
+    lam = np.full(n, np.nan)
+    x16, w16, x24, w24 = _fast.rules()
+    _fast.identify_kernel(alpha0, aF, tF, E_S, k, m2, L1, x16, w16, x24, w24, _kernels.NEAR_RATIO,
+                          _kernels.HARD_RATIO, _kernels.MASS_RATIO**2, tol, max_iter, lam, out["F1_max"],
+                          out["F2_max"], out["stop_time_min"], out["stop_time_max"], status, iters)
+    graded = np.nonzero(status < 0)[0]
+    if graded.size:
+        res = _identify_chunk(alpha0[graded], aF[graded], tF[graded], E_S[graded], k[graded], m2[graded],
+                              L1[graded], tol, max_iter)
+        for name in ("F1_max", "F2_max", "stop_time_min", "stop_time_max"):
+            out[name][graded] = res[name]
+        lam[graded] = res["F1"] / res["F1_max"]
+        status[graded] = res["status"]
+        iters[graded] = res["iterations"]
+    out["F1"] = lam * out["F1_max"]
+    out["F2"] = (1.0 - lam) * out["F2_max"]
+    bad = status != 0
+    out["F1"][bad] = np.nan
+    out["F2"][bad] = np.nan
+    return BatchIdentification(**{k_: v.reshape(shape) for k_, v in out.items()},
+                               status=status.reshape(shape), iterations=iters.reshape(shape))
+
+
+def _newton_on_line(x, wt, sigma_m, sA, cA, c1_0, c2_0, k, pref, target, tol, max_iter):
+    """Newton's method in lambda = F1/F1* on fixed nodes (nodes-first arrays, in place where it counts)."""
+    sigma = (x * x)[:, None] * sigma_m
+    q = np.sqrt(1.0 - sigma * sigma)
+    sin_alpha = sA * (1.0 - 2.0 * sigma * sigma) - cA * 2.0 * sigma * q
+    P = wt[:, None] * np.sqrt(k + sin_alpha * sin_alpha) / q
+    a = (cA * q + sA * sigma) / c1_0  # pure hinge friction: (sin aF - sin alpha) / (sin aF - sin a0) / w^2
+    b = (sA * q - cA * sigma) / c2_0  # pure rail friction: (cos alpha - cos aF) / (cos a0 - cos aF) / w^2
+    d = a - b
+    Pd = P * d
+    t_lo = pref * np.einsum("ij,ij->j", P, 1.0 / np.sqrt(b))  # lambda = 0: F1 = 0
+    t_hi = pref * np.einsum("ij,ij->j", P, 1.0 / np.sqrt(a))  # lambda = 1: F1 = F1*
+    feasible = (target >= t_lo) & (target <= t_hi)
+    lam = np.ones(sigma_m.size)
+    iters = np.zeros(sigma_m.size, dtype=np.int16)
+    active = feasible & (t_hi > target)
+    H = np.empty_like(P)
+    R = np.empty_like(P)
+    for _ in range(max_iter):
+        if not np.any(active):
+            break
+        np.multiply(d, lam, out=H)
+        H += b
+        np.sqrt(H, out=R)
+        np.divide(1.0, R, out=R)  # h^(-1/2)
+        t_val = pref * np.einsum("ij,ij->j", P, R)
+        np.multiply(R, R, out=H)
+        H *= R  # h^(-3/2)
+        slope = -0.5 * pref * np.einsum("ij,ij->j", Pd, H)
+        new = np.clip(lam - (t_val - target) / slope, 0.0, 1.0)
+        # converged: lambda final to tol of its range [0, 1] (F1 to tol F1*), or to its rounding floor
+        done = np.abs(new - lam) <= np.maximum(tol, 8.0 * np.finfo(float).eps * t_val / np.abs(slope))
+        lam = np.where(active, new, lam)
+        iters += active
+        active &= ~done
+    lam = np.where(feasible, lam, np.nan)
+    return lam, t_lo, t_hi, iters
+
+
+def _identify_chunk(alpha0, aF, tF, E_S, k, m2, L1, tol, max_iter) -> dict[str, Any]:
+    sA, cA = np.sin(aF), np.cos(aF)
+    half = 0.5 * (aF - alpha0)
+    sigma_m = np.sin(half)
+    # normalizers: cos and sin of (aF + alpha0)/2 = aF - half
+    c1_0 = cA * np.cos(half) + sA * sigma_m
+    c2_0 = sA * np.cos(half) - cA * sigma_m
+    F1_max = E_S / (4.0 * L1 * c1_0 * sigma_m)  # Eq. 11: E_S / (2 L1 (sin aF - sin a0))
+    F2_max = E_S / (8.0 * L1 * c2_0 * sigma_m)  # Eq. 12: E_S / (4 L1 (cos a0 - cos aF))
+    # tiers as for the stop-time kernel: the pure-hinge remaining energy a vanishes at the stop when
+    # alpha_F -> pi/2 (a(0) = cos aF / c1_0); a small mass factor near the start needs more nodes
+    end_ratio = cA / c1_0
+    mass_sq = (k + np.sin(alpha0) ** 2) / (aF - alpha0) ** 2
+    tier = np.where(end_ratio < _kernels.HARD_RATIO, 2,
+                    np.where((end_ratio < _kernels.NEAR_RATIO) | (mass_sq < _kernels.MASS_RATIO**2), 1, 0))
+    pref = 4.0 * sigma_m * L1 * np.sqrt(m2 / E_S)
+    lam = np.empty(alpha0.size)
+    t_lo = np.empty(alpha0.size)
+    t_hi = np.empty(alpha0.size)
+    iters = np.zeros(alpha0.size, dtype=np.int16)
+    rules = {0: gauss_unit(_kernels.N_NODES), 1: gauss_unit(_kernels.N_NODES_MASS), 2: graded_unit()}
+    for tr, (x, wt) in rules.items():
+        m = tier == tr
+        if not np.any(m):
+            continue
+        sub = slice(None) if m.all() else m
+        lm, lo, hi, it = _newton_on_line(x, wt, sigma_m[sub], sA[sub], cA[sub], c1_0[sub], c2_0[sub], k[sub],
+                                         pref[sub], tF[sub], tol, max_iter)
+        lam[sub], t_lo[sub], t_hi[sub], iters[sub] = lm, lo, hi, it
+    status = np.where(tF < t_lo, 1, np.where(tF > t_hi, 2, 0)).astype(np.int8)
+    return {"F1": lam * F1_max, "F2": (1.0 - lam) * F2_max, "F1_max": F1_max, "F2_max": F2_max,
+            "stop_time_min": t_lo, "stop_time_max": t_hi, "status": status, "iterations": iters}

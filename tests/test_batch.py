@@ -1,0 +1,129 @@
+"""Batch kernels: agreement with the core solver, accuracy against mpmath, flags, broadcasting."""
+
+import numpy as np
+import pytest
+
+from quickrelease import _fast, _kernels, batch, identify_friction, simulate, stop_time
+from quickrelease.reference import identify_mp, stop_time_mp
+from quickrelease.sampling import random_releases
+from quickrelease.solvers import FirstIntegral
+
+
+@pytest.fixture(scope="module")
+def cases():
+    return random_releases(10_000, seed=11)
+
+
+def test_agrees_with_the_core_energy_method_on_10000_cases(cases):
+    r = batch.stop_time(**cases)
+    assert (r.stopped_by == 1).mean() == pytest.approx(0.15, abs=0.02)
+    k = cases["c"] * cases["m1"] / cases["m2"]
+    t_core = np.array([FirstIntegral(*(cases[n][i] for n in ("E_S", "alpha0", "F1", "F2", "m1", "m2", "L1")),
+                                     cases["c"][i]).stop_time() for i in range(10_000)])
+    assert np.max(np.abs(r.stop_time / t_core - 1)) < 1e-10
+    assert k.shape == (10_000,)
+
+
+def test_identification_agrees_with_the_core_method(cases):
+    sub = {key: v[:300] for key, v in cases.items()}
+    st = batch.stop_time(**sub)
+    fr = st.stopped_by == 0
+    ident = batch.identify(sub["alpha0"][fr], st.alpha_final[fr], st.stop_time[fr], sub["E_S"][fr], sub["c"][fr],
+                           sub["m1"][fr], sub["m2"][fr], sub["L1"][fr])
+    assert np.all(ident.status == 0)
+    from quickrelease import Device
+
+    for j, i in enumerate(np.nonzero(fr)[0][:60]):
+        dev = Device(m1=sub["m1"][i], m2=sub["m2"][i], L1=sub["L1"][i], L2=1, L3=1, L4=1, A1=1, A2=1, A3=1, A4=1,
+                     I2=1, E=1, G=1, kappa=1)
+        core = identify_friction(sub["alpha0"][i], st.alpha_final[i], st.stop_time[i], stored_energy=sub["E_S"][i],
+                                 device=dev, mass_model=sub["c"][i])
+        assert abs(ident.F1[j] - core.F1) <= 1e-10 * core.F1_max
+        assert abs(ident.F2[j] - core.F2) <= 1e-10 * core.F2_max
+    # and the round trip: the friction that produced the stop comes back
+    err = np.maximum(np.abs(ident.F1 - sub["F1"][fr]) / ident.F1_max, np.abs(ident.F2 - sub["F2"][fr]) / ident.F2_max)
+    assert np.median(err) < 1e-13 and np.max(err) < 1e-9
+
+
+def test_stop_time_against_mpmath():
+    cases = random_releases(20, seed=5)
+    r = batch.stop_time(**cases)
+    k = cases["c"] * cases["m1"] / cases["m2"]
+    ref = np.array([stop_time_mp(cases["E_S"][i], cases["alpha0"][i], cases["F1"][i], cases["F2"][i], k[i],
+                                 cases["m2"][i], cases["L1"][i])[0] for i in range(20)])
+    err = np.abs(r.stop_time / ref - 1)
+    assert np.median(err) < 1e-14 and np.max(err) < 1e-12
+
+
+def test_identify_against_mpmath():
+    cases = random_releases(3, seed=9, limit_share=0.0)
+    st = batch.stop_time(**cases)
+    k = cases["c"] * cases["m1"] / cases["m2"]
+    ident = batch.identify(cases["alpha0"], st.alpha_final, st.stop_time, cases["E_S"], cases["c"], cases["m1"],
+                           cases["m2"], cases["L1"])
+    for i in range(3):
+        F1, F2 = identify_mp(cases["alpha0"][i], st.alpha_final[i], st.stop_time[i], cases["E_S"][i], k[i],
+                             cases["m2"][i], cases["L1"][i])
+        assert abs(ident.F1[i] - F1) <= 1e-12 * ident.F1_max[i]
+        assert abs(ident.F2[i] - F2) <= 1e-12 * ident.F2_max[i]
+
+
+def test_compiled_and_numpy_kernels_agree(cases):
+    """_fast fuses the formulas of _kernels: the two give the same numbers case by case."""
+    sub = {key: v[:2000] for key, v in cases.items()}
+    k = sub["c"] * sub["m1"] / sub["m2"]
+    rel = _kernels.Releases.build(sub["E_S"], sub["alpha0"], sub["F1"], sub["F2"], k, sub["m2"], sub["L1"])
+    t_np = rel.stop_time()
+    n = k.size
+    t, aF, code = np.empty(n), np.empty(n), np.empty(n, dtype=np.int8)
+    _fast.stop_kernel(sub["E_S"], sub["alpha0"], sub["F1"], sub["F2"], k, sub["m2"], sub["L1"], *_fast.rules(),
+                      _kernels.NEAR_RATIO, _kernels.HARD_RATIO, _kernels.MASS_RATIO**2, t, aF, code)
+    fast = code >= 0
+    assert np.all(code[fast] == rel.regime[fast]) and np.all((code < 0) == (rel.tier == 2))
+    assert np.max(np.abs(t[fast] / t_np[fast] - 1)) < 1e-14
+    assert np.max(np.abs(aF - rel.alpha_final)) < 1e-15
+
+
+def test_near_the_geometric_limit_accuracy_follows_the_conditioning():
+    """Stops within ~1e-6 rad of pi/2 with almost no rail friction: t_F moves by up to 1e-6 when one input
+    moves by one ulp (the difference E_S - W_F(pi/2) is ill-conditioned); the kernel stays within that."""
+    E, a0, F1, F2, k, m2, L1 = 2496.7064827214417, 0.9878228096162034, 2737.145215750118, 0.0005289992104389708, \
+        0.2508887330655966, 1839.7073266913917, 2.76125386875275
+    t = batch.stop_time(E, a0, F1, F2, k, m2, m2, L1)  # c = k with m1 = m2
+    ref = stop_time_mp(E, a0, F1, F2, k, m2, L1)[0]
+    sens = abs(stop_time_mp(np.nextafter(E, np.inf), a0, F1, F2, k, m2, L1)[0] / ref - 1)
+    assert sens > 1e-7  # ill-conditioned indeed
+    assert abs(float(t.stop_time) / ref - 1) < 4 * sens
+
+
+def test_release_envelope_matches_simulate():
+    r = batch.release(2900.0, 0.2, 419.85, 804.57)
+    s = simulate(2900.0, 0.2, 419.85, 804.57, method="rk", n_points=20001).summary()
+    assert float(r.u_final) == pytest.approx(s["u_final_m"], rel=1e-9)
+    assert float(r.v_final) == pytest.approx(s["v_final_m"], rel=1e-9)
+    assert float(r.peak_v_dot) == pytest.approx(s["peak_v_dot_m_s"], rel=1e-12)
+    # the kernel's peak is the true maximum; the sampled one is below it, by less than the sampling step allows
+    assert float(r.peak_u_dot) >= s["peak_u_dot_m_s"]
+    assert float(r.peak_u_dot) == pytest.approx(s["peak_u_dot_m_s"], rel=1e-8)
+    assert float(r.stop_time) == pytest.approx(stop_time(2900.0, 0.2, 419.85, 804.57), rel=1e-14)
+
+
+def test_broadcasting_and_shapes():
+    P = np.linspace(1000, 3000, 5)[:, None]
+    a0 = np.array([0.15, 0.2, 0.25])[None, :]
+    r = batch.release(P, a0, 400.0, 800.0)
+    assert r.stop_time.shape == (5, 3) and r.peak_u_dot.shape == (5, 3)
+    assert np.all(np.diff(r.stop_time, axis=0) > 0)  # more energy, longer release
+    df = r.to_pandas()
+    assert len(df) == 15 and "u_final" in df
+
+
+def test_infeasible_cases_are_flagged_not_dropped():
+    ident = batch.identify([0.2, 0.2, 0.2, 0.8, 0.2, np.nan, 1.7], [0.7378, 0.7378, 0.7378, 0.7, 1.6, 0.5, 1.0],
+                           [0.9, 1.05, 1.3, 1.0, 1.0, 1.0, 1.0], 2900.0)
+    assert ident.status.tolist() == [1, 0, 2, 3, 3, 5, 4]
+    assert np.isnan(ident.F1[[0, 2, 3, 4, 5, 6]]).all() and np.isfinite(ident.F1[1])
+    assert ident.stop_time_min[0] == pytest.approx(0.990644, abs=1e-6) and ident.stop_time_max[2] == pytest.approx(
+        1.213893, abs=1e-6)
+    assert ident.reasons()["ok"] == 1
+    assert "faster than any friction" in batch.IDENTIFY_STATUS[1]
