@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import math
 import tomllib
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -46,7 +46,36 @@ from .errors import QuickReleaseError
 from .statics import StrainEnergy, strain_energy
 from .units import parse_quantity
 
-__all__ = ["Case", "CaseFileError", "load_case", "CASE_SCHEMA"]
+__all__ = ["Case", "CaseFileError", "Distribution", "load_case", "CASE_SCHEMA", "UNCERTAIN_KEYS"]
+
+#: Entries that may be given with an uncertainty (a table with std, or low and high), and their
+#: names in :attr:`Case.uncertainty`.
+UNCERTAIN_KEYS = {("test", "force"): "force", ("test", "energy"): "energy", ("test", "alpha0"): "alpha0",
+                  ("observations", "alpha_final"): "alpha_final", ("observations", "stop_time"): "stop_time"}
+
+
+@dataclass(frozen=True)
+class Distribution:
+    """The uncertainty of one input: ``normal`` (loc = mean, scale = std) or ``uniform`` (loc = low,
+    scale = high - low), SI units."""
+
+    kind: str
+    loc: float
+    scale: float
+
+    @property
+    def nominal(self) -> float:
+        return self.loc if self.kind == "normal" else self.loc + 0.5 * self.scale
+
+    def sample(self, rng, n: int):
+        if self.kind == "normal":
+            return rng.normal(self.loc, self.scale, n)
+        return rng.uniform(self.loc, self.loc + self.scale, n)
+
+    def describe(self, unit: str) -> str:
+        if self.kind == "normal":
+            return f"normal(mean {self.loc:.6g} {unit}, std {self.scale:.4g} {unit})"
+        return f"uniform({self.loc:.6g} {unit}, {self.loc + self.scale:.6g} {unit})"
 
 
 class CaseFileError(QuickReleaseError):
@@ -106,6 +135,8 @@ class Case:
     n_points: int = 1001
     t_end: float | None = None
     rk_method: str = "DOP853"
+    uncertainty: dict[str, Distribution] = field(default_factory=dict)
+    """Inputs with a scatter (force, energy, alpha0, alpha_final, stop_time) and their distributions."""
     energy_given: bool = False
     """True when E_S was given in the file (not computed from P by Eq. 2)."""
     title: str = "quickrelease case"
@@ -184,6 +215,8 @@ def _entry(source: str, section: str, key: str, value: Any) -> Any:
         if value not in ("DOP853", "RK45"):
             raise _fail(source, where, value, expected)
         return value
+    if isinstance(value, dict) and (section, key) in UNCERTAIN_KEYS:
+        return _distribution(source, section, key, value)
     if isinstance(value, dict | list):
         raise _fail(source, where, value, expected)
     try:
@@ -197,6 +230,37 @@ def _entry(source: str, section: str, key: str, value: Any) -> Any:
     if not ok:
         raise _fail(source, where, value, expected)
     return number
+
+
+def _distribution(source: str, section: str, key: str, table: dict[str, Any]) -> Distribution:
+    """A quantity with its scatter: {value, std} (normal) or {low, high} (uniform, value optional)."""
+    where = f"[{section}] {key}"
+    allowed = {"value", "std", "low", "high"}
+    unknown = sorted(set(table) - allowed)
+    if unknown:
+        raise CaseFileError(f"{source}: unknown key {unknown[0]!r} in {where}; valid: value, std (normal) or "
+                            "low, high (uniform)")
+    kind, _ = CASE_SCHEMA[section][key]
+
+    def q(name: str) -> float:
+        try:
+            return parse_quantity(table[name], kind, f"{key}.{name}")
+        except QuickReleaseError as exc:
+            raise CaseFileError(f"{source}: {where}.{name}: {exc}") from None
+
+    if "std" in table:
+        if "value" not in table or "low" in table or "high" in table:
+            raise CaseFileError(f"{source}: {where}: a normal uncertainty needs value and std (and no low, high)")
+        std = q("std")
+        if not (math.isfinite(std) and std >= 0.0):
+            raise _fail(source, f"{where}.std", table["std"], "a standard deviation >= 0")
+        return Distribution("normal", _entry(source, section, key, table["value"]), std)
+    if "low" in table and "high" in table:
+        low, high = _entry(source, section, key, table["low"]), _entry(source, section, key, table["high"])
+        if not high > low:
+            raise _fail(source, f"{where}.high", table["high"], f"a value above low = {table['low']!r}")
+        return Distribution("uniform", low, high - low)
+    raise CaseFileError(f"{source}: {where}: give value and std (normal) or low and high (uniform)")
 
 
 def _strip_name(reason: str, key: str, value: Any) -> str:
@@ -268,6 +332,12 @@ def case_from_mapping(data: dict[str, Any], source: str = "<case>", base: Path |
         raise CaseFileError(f"{source}: missing key [observations] {missing[0]} (give alpha_final and stop_time)")
     if friction is None and observations is None:
         raise CaseFileError(f"{source}: missing table [friction] (to simulate) or [observations] (to identify)")
+    uncertainty = {}
+    for (section, key), name in UNCERTAIN_KEYS.items():
+        value = values.get(f"{section}.{key}")
+        if isinstance(value, Distribution):
+            uncertainty[name] = value
+            values[f"{section}.{key}"] = value.nominal
     alpha0 = values["test.alpha0"]
     aF = values.get("observations.alpha_final")
     if aF is not None and aF <= alpha0:
@@ -281,7 +351,7 @@ def case_from_mapping(data: dict[str, Any], source: str = "<case>", base: Path |
         mass_model=values.get("test.mass_model", "distributed"),
         F1=values.get("friction.F1"), F2=values.get("friction.F2"),
         alpha_final=aF, stop_time=values.get("observations.stop_time"),
-        energy_given=has_energy,
+        energy_given=has_energy, uncertainty=uncertainty,
         title=values.get("title", Path(source).stem), notes=values.get("notes", ""), source=source,
         **sim,
     )

@@ -289,6 +289,49 @@ def demo(
     typer.echo(f"Figures and report of the paper case: {out / 'report.html'} ({len(paths)} files in {out}/)")
 
 
+@app.command()
+@_guard
+def uq(
+    case_file: Annotated[Path, typer.Argument(help="Case file with [observations] and at least one scatter.")],
+    samples: Annotated[int, typer.Option("--samples", "-n", help="Monte Carlo samples.")] = 100_000,
+    seed: Annotated[int, typer.Option("--seed", help="Seed (results depend on seed and chunk size only).")] = 0,
+    chunk: Annotated[int, typer.Option("--chunk", help="Samples per chunk (bounds memory).")] = 1_000_000,
+    backend: Annotated[str, typer.Option("--backend", help="numpy (default) or dask.")] = "numpy",
+    scheduler: Annotated[str | None, typer.Option("--scheduler", help="Dask scheduler address; default: a LocalCluster.")] = None,
+    workers: Annotated[int, typer.Option("--workers", help="Workers of the LocalCluster.")] = 2,
+    out: Annotated[Path | None, typer.Option("--out", "-o", help="Folder for chunks, uq.json and the corner figure.")] = None,
+    resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted run in --out.")] = False,
+    as_json: JsonOpt = False,
+) -> None:
+    """Uncertainty of the identified F1, F2 from the scatter of the observations (Monte Carlo)."""
+    from .case import load_case
+    from .uq import run_uq
+
+    case = load_case(case_file)
+    result = run_uq(case, samples, seed=seed, chunk=chunk, backend=backend, scheduler=scheduler, workers=workers,
+                    out=out, resume=resume, progress=not as_json and sys.stderr.isatty())
+    if out is not None:
+        from .plots import save_figure
+        from .uq import corner_figure
+
+        save_figure(corner_figure(result), out, "uq_corner")
+    if as_json:
+        _print_json(result.summary())
+        return
+    rows = [(k, v) for k, v in result.inputs.items()]
+    _table("Uncertain inputs", rows, ("input", "distribution"))
+    p = result.percentiles
+    _table(f"Identified friction over {result.samples:,} samples (seed {result.seed})", [
+        (name, f"{result.nominal[name]:.2f}", f"{p[name]['p2.5']:.2f}", f"{p[name]['p50']:.2f}",
+         f"{p[name]['p97.5']:.2f}", f"{result.std[name]:.2f}") for name in ("F1", "F2")],
+        ("force [N]", "nominal", "2.5%", "50%", "97.5%", "std"))
+    typer.echo(f"correlation(F1, F2) = {result.correlation:.4f}; infeasible samples: "
+               f"{100 * result.infeasible_share:.2f}%; percentile resolution {result.resolution['F1']:.3g} N")
+    sens = [(f"d{f}/d{x}", f"{v:.6g}", f"{result.sensitivities_fd[f][x]:.6g}")
+            for f in ("F1", "F2") for x, v in result.sensitivities[f].items()]
+    _table("Local sensitivities at the nominal point (SI units)", sens, ("derivative", "implicit function", "finite diff."))
+
+
 def main() -> None:
     """Entry point of the ``quickrelease`` script."""
     try:

@@ -30,6 +30,7 @@ __all__ = [
     "InternalForces",
     "strain_energy",
     "StrainEnergy",
+    "strain_energy_coefficient",
 ]
 
 
@@ -222,3 +223,17 @@ def strain_energy(push: float, alpha0: float, device: Device) -> StrainEnergy:
         shear_E2=2.0 * f.V2**2 * d.L2 / (2.0 * d.kappa * d.G * d.A2),
         forces=f,
     )
+
+
+def strain_energy_coefficient(alpha0, device: Device):
+    """E_S / P^2 as a function of alpha0 (Eq. 2 with Table 3), vectorized [J/N^2].
+
+    Every term of Eq. 2 is quadratic in P, so ``E_S(P, alpha0) = P^2 * strain_energy_coefficient(alpha0)``.
+    """
+    a = np.asarray(alpha0, dtype=float)
+    d = device
+    t = np.tan(a)
+    c = np.cos(a)
+    return (4.0 * (0.5 / c) ** 2 * d.L1 / (2.0 * d.E * d.A1) + 2.0 * (0.5 * t) ** 2 * d.L2 / (2.0 * d.E * d.A2)
+            + 2.0 * t**2 * d.L3 / (2.0 * d.E * d.A3) + t**2 * d.L4 / (2.0 * d.E * d.A4)
+            + 2.0 * (d.L2 / 4.0) ** 2 * d.L2 / (6.0 * d.E * d.I2) + 2.0 * 0.25 * d.L2 / (2.0 * d.kappa * d.G * d.A2))

@@ -1,0 +1,62 @@
+"""Running chunks of work on a Dask cluster (optional: ``pip install quickrelease[dask]``).
+
+:func:`map_chunks` submits one task per chunk to a cluster (an existing scheduler, or a LocalCluster
+of single-threaded worker processes) and yields results as they finish, so the caller can store each
+one at once; no more than a few chunks are in flight beyond the workers' count, which bounds memory.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from typing import Any
+
+from .errors import QuickReleaseError
+
+__all__ = ["map_chunks"]
+
+
+def _client(scheduler: str | None, workers: int):
+    try:
+        from dask.distributed import Client, LocalCluster
+    except ImportError:
+        raise QuickReleaseError("the dask backend needs Dask: pip install 'quickrelease[dask]'") from None
+    if scheduler:
+        return Client(scheduler), None
+    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
+                           memory_limit="1.5GiB")
+    return Client(cluster), cluster
+
+
+def map_chunks(func: Callable[..., Any], arguments: list[tuple], scheduler: str | None = None,
+               workers: int = 2, in_flight: int | None = None) -> Iterator[Any]:
+    """Run ``func(*args)`` for each tuple of ``arguments`` on Dask; yield the results as they finish."""
+    if not arguments:
+        return
+    client, cluster = _client(scheduler, workers)
+    from dask.distributed import as_completed
+
+    try:
+        limit = in_flight or 2 * max(workers, len(client.scheduler_info().get("workers", {})) or 1)
+        pending = iter(arguments)
+        futures = [client.submit(func, *args, pure=False) for args in _take(pending, limit)]
+        queue = as_completed(futures)
+        for future in queue:
+            result = future.result()
+            future.release()
+            for args in _take(pending, 1):
+                queue.add(client.submit(func, *args, pure=False))
+            yield result
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def _take(iterator, n: int) -> list:
+    out = []
+    for _ in range(n):
+        try:
+            out.append(next(iterator))
+        except StopIteration:
+            break
+    return out

@@ -1,0 +1,471 @@
+"""Uncertainty of the identified friction: Monte Carlo over the observation scatter, and local
+sensitivities from the implicit function theorem.
+
+The inputs of a case file may carry a scatter (``alpha_final = {value = "0.7378 rad", std = "0.01 rad"}``,
+or ``{low, high}`` for a uniform one): the angle at release, the final angle, the stop time, and the push
+force (or the stored energy). Each sample is identified with the batch kernel (:func:`batch.identify`).
+
+Samples are drawn chunk by chunk, chunk ``j`` from ``SeedSequence([seed, j])``, so a result depends on
+the seed and the chunk size only, not on the backend, the number of workers or the order in which chunks
+finish. Each chunk is reduced to aggregates (status counts, 65,536-bin histograms of F1 and F2 on edges
+fixed before the run, a 128 x 128 joint histogram, moments combined with Chan's formulas); percentiles
+come from the histograms (resolution: one bin) and the aggregates are combined in chunk order, so
+memory stays bounded by the chunk size and a resumed run gives exactly the result of an uninterrupted one.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from . import batch
+from .case import Case
+from .errors import ParameterError, QuickReleaseError
+from .statics import strain_energy_coefficient
+
+__all__ = ["UQResult", "run_uq", "sensitivities", "uq_chunk", "PERCENTILES", "N_BINS"]
+
+PERCENTILES = (2.5, 50.0, 97.5)
+N_BINS = 65536
+N_BINS_2D = 128
+DEFAULT_CHUNK = 1_000_000
+_UNITS = {"force": "N", "energy": "J", "alpha0": "rad", "alpha_final": "rad", "stop_time": "s"}
+
+
+def _check(case: Case) -> None:
+    if not case.has_observations:
+        raise QuickReleaseError(f"{case.source}: uq needs [observations] alpha_final and stop_time")
+    if case.energy_given and "force" in case.uncertainty:
+        raise QuickReleaseError(f"{case.source}: [test] force has a scatter but energy is given, and a given E_S "
+                                "drives the release: give the scatter to energy, or drop energy (E_S from Eq. 2)")
+    if not case.uncertainty:
+        raise QuickReleaseError(f"{case.source}: no uncertainty given: write an input as a table, e.g. "
+                                "alpha_final = {value = \"0.7378 rad\", std = \"0.01 rad\"}")
+
+
+def _inputs(case: Case, rng: np.random.Generator | None, n: int) -> dict[str, np.ndarray]:
+    """The (sampled, or nominal when rng is None) inputs of the identification, SI."""
+    def draw(name: str, nominal: float) -> np.ndarray:
+        dist = case.uncertainty.get(name)
+        if dist is None or rng is None:
+            return np.full(n, nominal)
+        return dist.sample(rng, n)
+
+    # a fixed order of draws: the samples depend only on the seed and the chunk
+    alpha0 = draw("alpha0", case.alpha0)
+    alpha_final = draw("alpha_final", case.alpha_final)
+    stop_time = draw("stop_time", case.stop_time)
+    if case.energy_given or case.push_force is None:
+        E_S = draw("energy", case.stored_energy)
+    else:
+        P = draw("force", case.push_force)
+        E_S = P * P * strain_energy_coefficient(np.clip(alpha0, 1e-9, 0.5 * np.pi - 1e-9), case.device)
+    return {"alpha0": alpha0, "alpha_final": alpha_final, "stop_time": stop_time, "E_S": E_S}
+
+
+def _identify(case: Case, x: dict[str, np.ndarray]) -> batch.BatchIdentification:
+    d = case.device
+    return batch.identify(x["alpha0"], x["alpha_final"], x["stop_time"], x["E_S"], case.mass_factor, d.m1, d.m2,
+                          d.L1)
+
+
+def _edges(case: Case, seed: int) -> dict[str, np.ndarray]:
+    """Histogram edges fixed before the run, from F1* and F2* of a deterministic pilot sample."""
+    rng = np.random.default_rng(np.random.SeedSequence([seed, 2**31 - 1]))
+    x = _inputs(case, rng, 100_000)
+    ident = _identify(case, x)
+    ok = np.isfinite(ident.F1_max) & np.isfinite(ident.F2_max) & (ident.F1_max > 0)
+    top1 = 1.25 * float(np.max(ident.F1_max[ok])) if np.any(ok) else 1.0
+    top2 = 1.25 * float(np.max(ident.F2_max[ok])) if np.any(ok) else 1.0
+    return {"F1": np.linspace(0.0, top1, N_BINS + 1), "F2": np.linspace(0.0, top2, N_BINS + 1)}
+
+
+def uq_chunk(case: Case, seed: int, index: int, size: int, edges: dict[str, np.ndarray]) -> dict[str, Any]:
+    """Draw chunk ``index`` (``size`` samples), identify every sample, reduce to aggregates."""
+    rng = np.random.default_rng(np.random.SeedSequence([seed, index]))
+    ident = _identify(case, _inputs(case, rng, size))
+    ok = ident.status == 0
+    F1, F2 = ident.F1[ok], ident.F2[ok]
+    h1, _ = np.histogram(F1, edges["F1"])
+    h2, _ = np.histogram(F2, edges["F2"])
+    h12, _, _ = np.histogram2d(F1, F2, [edges["F1"][:: N_BINS // N_BINS_2D], edges["F2"][:: N_BINS // N_BINS_2D]])
+    n_ok = int(ok.sum())
+    m1 = float(F1.mean()) if n_ok else 0.0
+    m2 = float(F2.mean()) if n_ok else 0.0
+    d1, d2 = F1 - m1, F2 - m2
+    return {
+        "index": index, "n": size, "n_ok": n_ok,
+        "status": np.bincount(ident.status.astype(np.int64), minlength=len(batch.IDENTIFY_STATUS)),
+        "hist_F1": h1.astype(np.int64), "hist_F2": h2.astype(np.int64), "hist_2d": h12.astype(np.int64),
+        "over_F1": int(np.sum(F1 > edges["F1"][-1])), "over_F2": int(np.sum(F2 > edges["F2"][-1])),
+        "mean": np.array([m1, m2]),
+        "comoment": np.array([float(d1 @ d1), float(d2 @ d2), float(d1 @ d2)]),
+    }
+
+
+def _combine(parts: list[dict[str, Any]]) -> dict[str, Any]:
+    """Combine chunk aggregates in chunk order (Chan et al. for the moments)."""
+    total: dict[str, Any] = {}
+    n = 0
+    mean = np.zeros(2)
+    com = np.zeros(3)
+    for p in sorted(parts, key=lambda p: p["index"]):
+        for key in ("n", "status", "hist_F1", "hist_F2", "hist_2d", "over_F1", "over_F2"):
+            total[key] = total[key] + p[key] if key in total else p[key]
+        nb = p["n_ok"]
+        if nb:
+            delta = p["mean"] - mean
+            new_n = n + nb
+            com = com + p["comoment"] + np.array([delta[0] ** 2, delta[1] ** 2, delta[0] * delta[1]]) * n * nb / new_n
+            mean = mean + delta * nb / new_n
+            n = new_n
+    total["n_ok"] = n
+    total["mean"] = mean
+    total["comoment"] = com
+    return total
+
+
+def _percentiles(hist: np.ndarray, edges: np.ndarray, qs=PERCENTILES) -> list[float]:
+    cum = np.cumsum(hist)
+    total = cum[-1]
+    out = []
+    for q in qs:
+        target = q / 100.0 * total
+        i = int(np.searchsorted(cum, target))
+        i = min(i, hist.size - 1)
+        before = cum[i - 1] if i else 0
+        frac = (target - before) / hist[i] if hist[i] else 0.0
+        out.append(float(edges[i] + frac * (edges[i + 1] - edges[i])))
+    return out
+
+
+@dataclass(frozen=True)
+class UQResult:
+    """Monte Carlo distribution of the identified friction, with local sensitivities."""
+
+    samples: int
+    seed: int
+    chunk: int
+    inputs: dict[str, str]
+    """Each uncertain input and its distribution, in words."""
+    nominal: dict[str, float]
+    """F1, F2 identified at the nominal inputs [N]."""
+    percentiles: dict[str, dict[str, float]]
+    """F1 and F2 at the 2.5, 50 and 97.5 percentiles [N]."""
+    mean: dict[str, float]
+    std: dict[str, float]
+    correlation: float
+    """Pearson correlation of F1 and F2 over the feasible samples."""
+    infeasible_share: float
+    """Share of samples the line of Eq. 13 cannot explain."""
+    status_counts: dict[str, int]
+    resolution: dict[str, float]
+    """Histogram bin width, the resolution of the percentiles [N]."""
+    overflow: dict[str, int]
+    sensitivities: dict[str, dict[str, float]]
+    """dF/d(input) at the nominal point, implicit function theorem [N per SI unit of the input]."""
+    sensitivities_fd: dict[str, dict[str, float]]
+    """The same by finite differences of the whole identification (a check)."""
+    histograms: dict[str, np.ndarray] = field(repr=False, default_factory=dict)
+
+    def summary(self) -> dict[str, Any]:
+        """JSON-ready summary (no histograms)."""
+        return {
+            "samples": self.samples, "seed": self.seed, "chunk": self.chunk, "inputs": self.inputs,
+            "nominal_N": self.nominal, "percentiles_N": self.percentiles, "mean_N": self.mean, "std_N": self.std,
+            "correlation_F1_F2": self.correlation, "infeasible_share": self.infeasible_share,
+            "status_counts": self.status_counts, "resolution_N": self.resolution, "overflow": self.overflow,
+            "sensitivities": self.sensitivities, "sensitivities_fd": self.sensitivities_fd,
+        }
+
+
+def sensitivities(case: Case, h: float = 1e-6) -> tuple[dict[str, dict[str, float]], dict[str, dict[str, float]]]:
+    """dF1/dx and dF2/dx at the nominal inputs, by the implicit function theorem, and by finite differences.
+
+    On the line of Eq. 13, ``F1 = lambda F1*(x)`` and ``F2 = (1 - lambda) F2*(x)`` with lambda fixed by
+    ``t(lambda, x) = t_F``: ``dlambda/dx = -(dt/dx) / (dt/dlambda)`` (partials of the line's stop time at
+    fixed lambda, by central differences of the smooth quadrature); F1* and F2* (Eq. 11-12) are
+    differentiated analytically. The check re-identifies at perturbed inputs (central differences).
+    Inputs x: alpha0, alpha_final, stop_time and the push force (or the stored energy).
+    """
+    from ._kernels import Releases
+
+    d = case.device
+    k = case.mass_factor * d.m1 / d.m2
+    base = _inputs(case, None, 1)
+    ident = _identify(case, base)
+    if ident.status[0] != 0:
+        raise QuickReleaseError(f"{case.source}: the nominal observations are infeasible: "
+                                f"{batch.IDENTIFY_STATUS[int(ident.status[0])]}")
+    lam = float(ident.F1[0] / ident.F1_max[0])
+    force_driven = not (case.energy_given or case.push_force is None)
+    names = ["alpha0", "alpha_final", "stop_time", "force" if force_driven else "energy"]
+    nominal = {"alpha0": case.alpha0, "alpha_final": case.alpha_final, "stop_time": case.stop_time,
+               "force": case.push_force, "energy": case.stored_energy}
+
+    def energy(v: dict[str, float]) -> float:
+        if force_driven:
+            return float(v["force"] ** 2 * strain_energy_coefficient(v["alpha0"], d))
+        return float(v["energy"])
+
+    def line_time(lam_: float, v: dict[str, float]) -> float:
+        E = energy(v)
+        a0, aF = v["alpha0"], v["alpha_final"]
+        F1s = E / (2 * d.L1 * (math.sin(aF) - math.sin(a0)))
+        F2s = E / (4 * d.L1 * (math.cos(a0) - math.cos(aF)))
+        rel = Releases.build(*(np.array([x]) for x in (E, a0, lam_ * F1s, (1 - lam_) * F2s, k, d.m2, d.L1)))
+        return float(rel.stop_time()[0])
+
+    def stars(v: dict[str, float]) -> tuple[float, float]:
+        E = energy(v)
+        a0, aF = v["alpha0"], v["alpha_final"]
+        return E / (2 * d.L1 * (math.sin(aF) - math.sin(a0))), E / (4 * d.L1 * (math.cos(a0) - math.cos(aF)))
+
+    F1s, F2s = stars(nominal)
+    dl = h
+    t_lam = (line_time(lam + dl, nominal) - line_time(lam - dl, nominal)) / (2 * dl)
+    ift: dict[str, dict[str, float]] = {"F1": {}, "F2": {}}
+    fd: dict[str, dict[str, float]] = {"F1": {}, "F2": {}}
+    for name in names:
+        step = h * max(abs(nominal[name]), 1e-3)
+        up, dn = dict(nominal), dict(nominal)
+        up[name] += step
+        dn[name] -= step
+        if name == "stop_time":
+            t_x = -1.0  # t(lambda, x) - t_F: the observed time enters with a minus sign
+            dF1s = dF2s = 0.0
+        else:
+            t_x = (line_time(lam, up) - line_time(lam, dn)) / (2 * step)
+            (a1, a2), (b1, b2) = stars(up), stars(dn)
+            dF1s, dF2s = (a1 - b1) / (2 * step), (a2 - b2) / (2 * step)
+        dlam = -t_x / t_lam
+        ift["F1"][name] = lam * dF1s + F1s * dlam
+        ift["F2"][name] = (1 - lam) * dF2s - F2s * dlam
+        iu = _identify(case.replace(**_as_case(name, up[name], case)), _inputs(case.replace(
+            **_as_case(name, up[name], case)), None, 1))
+        idn = _identify(case.replace(**_as_case(name, dn[name], case)), _inputs(case.replace(
+            **_as_case(name, dn[name], case)), None, 1))
+        fd["F1"][name] = float((iu.F1[0] - idn.F1[0]) / (2 * step))
+        fd["F2"][name] = float((iu.F2[0] - idn.F2[0]) / (2 * step))
+    return ift, fd
+
+
+def _as_case(name: str, value: float, case: Case) -> dict[str, Any]:
+    if name == "force":
+        return {"push_force": value}
+    if name == "energy":
+        return {"stored_energy": value}
+    return {name: value}
+
+
+def run_uq(case: Case, samples: int, *, seed: int = 0, chunk: int = DEFAULT_CHUNK, backend: str = "numpy",
+           scheduler: str | None = None, workers: int = 2, out: str | Path | None = None, resume: bool = False,
+           progress: bool = False) -> UQResult:
+    """Monte Carlo over the case's input scatter: the distribution of the identified F1 and F2.
+
+    Parameters
+    ----------
+    case : Case
+        With observations and at least one uncertain input.
+    samples : int
+        Number of samples (any size: memory is bounded by ``chunk``).
+    seed : int
+        Seed of the run (chunk j draws from ``SeedSequence([seed, j])``).
+    chunk : int
+        Samples per chunk.
+    backend : {"numpy", "dask"}
+        ``dask`` runs the chunks on a Dask cluster: ``scheduler`` (an address) or a LocalCluster of
+        ``workers`` single-threaded processes.
+    out : path, optional
+        Folder for the run: ``chunks/`` (one aggregate file per finished chunk, written atomically) and
+        ``uq.json`` (the result). Required with ``resume``.
+    resume : bool
+        Reuse the finished chunks in ``out`` (same seed, samples and chunk size) and compute the rest.
+    progress : bool
+        Show a progress bar (rich).
+    """
+    _check(case)
+    if not isinstance(samples, int | np.integer) or samples < 1:
+        raise ParameterError("samples", samples, "integers >= 1")
+    if not isinstance(chunk, int | np.integer) or chunk < 1:
+        raise ParameterError("chunk", chunk, "integers >= 1")
+    if backend not in ("numpy", "dask"):
+        raise ParameterError("backend", backend, "'numpy' or 'dask'")
+    if resume and out is None:
+        raise ParameterError("resume", True, "runs with an output folder (out)")
+    sizes = [min(chunk, samples - i) for i in range(0, samples, chunk)]
+    edges = _edges(case, seed)
+    store = _ChunkStore(Path(out), {"samples": int(samples), "seed": int(seed), "chunk": int(chunk),
+                                    "case": case.source}, resume) if out is not None else None
+    done = store.load() if store else {}
+    todo = [i for i in range(len(sizes)) if i not in done]
+    parts = list(done.values())
+    bar = _progress(progress, len(sizes), len(done))
+    if backend == "numpy":
+        for i in todo:
+            part = uq_chunk(case, seed, i, sizes[i], edges)
+            if store:
+                store.save(part)
+            parts.append(part)
+            bar.advance()
+    else:
+        from .distributed import map_chunks
+
+        for part in map_chunks(uq_chunk, [(case, seed, i, sizes[i], edges) for i in todo], scheduler, workers):
+            if store:
+                store.save(part)
+            parts.append(part)
+            bar.advance()
+    bar.close()
+    total = _combine(parts)
+    result = _result(case, samples, seed, chunk, total, edges)
+    if store:
+        from .export import write_json
+
+        write_json(result.summary(), Path(out) / "uq.json")
+    return result
+
+
+def _result(case, samples, seed, chunk, total, edges) -> UQResult:
+    n_ok = total["n_ok"]
+    mean = total["mean"]
+    com = total["comoment"]
+    var = com / max(n_ok - 1, 1)
+    corr = float(com[2] / math.sqrt(com[0] * com[1])) if com[0] > 0 and com[1] > 0 else float("nan")
+    pct = {name: dict(zip([f"p{q:g}" for q in PERCENTILES], _percentiles(total[f"hist_{name}"], edges[name]),
+                          strict=True)) for name in ("F1", "F2")}
+    counts = {batch.IDENTIFY_STATUS[i]: int(c) for i, c in enumerate(total["status"]) if c}
+    nominal_ident = _identify(case, _inputs(case, None, 1))
+    ift, fd = sensitivities(case)
+    units = {k: (_UNITS[k] if case.uncertainty.get(k) else "") for k in case.uncertainty}
+    return UQResult(
+        samples=int(samples), seed=int(seed), chunk=int(chunk),
+        inputs={k: v.describe(_UNITS[k]) for k, v in case.uncertainty.items()} if units else {},
+        nominal={"F1": float(nominal_ident.F1[0]), "F2": float(nominal_ident.F2[0])},
+        percentiles=pct, mean={"F1": float(mean[0]), "F2": float(mean[1])},
+        std={"F1": float(math.sqrt(var[0])), "F2": float(math.sqrt(var[1]))},
+        correlation=corr, infeasible_share=float(1.0 - n_ok / total["n"]), status_counts=counts,
+        resolution={name: float(edges[name][1] - edges[name][0]) for name in ("F1", "F2")},
+        overflow={"F1": int(total["over_F1"]), "F2": int(total["over_F2"])},
+        sensitivities=ift, sensitivities_fd=fd,
+        histograms={"F1": total["hist_F1"], "F2": total["hist_F2"], "2d": total["hist_2d"],
+                    "edges_F1": edges["F1"], "edges_F2": edges["F2"]},
+    )
+
+
+class _ChunkStore:
+    """Finished chunks of a run, one ``.npz`` per chunk, written atomically; a manifest guards resume."""
+
+    def __init__(self, folder: Path, manifest: dict[str, Any], resume: bool) -> None:
+        from .export import write_json
+
+        self.folder = folder
+        self.chunks = folder / "chunks"
+        path = folder / "manifest.json"
+        if path.exists():
+            old = json.loads(path.read_text())
+            if not resume:
+                raise QuickReleaseError(f"{folder}: holds a run already; pass --resume to continue it, or choose "
+                                        "another --out")
+            if old != manifest:
+                raise QuickReleaseError(f"{folder}: the run there has {old}, not {manifest}: cannot resume it")
+        self.chunks.mkdir(parents=True, exist_ok=True)
+        write_json(manifest, path)
+
+    def load(self) -> dict[int, dict[str, Any]]:
+        done = {}
+        for path in sorted(self.chunks.glob("chunk-*.npz")):
+            with np.load(path) as z:
+                part = {k: z[k] for k in z.files}
+            part = {k: (v.item() if v.ndim == 0 else v) for k, v in part.items()}
+            done[int(part["index"])] = part
+        return done
+
+    def save(self, part: dict[str, Any]) -> None:
+        from .export import atomic_path
+
+        with atomic_path(self.chunks / f"chunk-{part['index']:06d}.npz") as tmp:
+            with open(tmp, "wb") as fh:
+                np.savez(fh, **{k: np.asarray(v) for k, v in part.items()})
+
+
+class _NoBar:
+    def advance(self) -> None:
+        pass
+
+    def close(self) -> None:
+        pass
+
+
+class _Bar:
+    def __init__(self, total: int, done: int) -> None:
+        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+        self.progress = Progress(TextColumn("uq chunks"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(),
+                                 transient=True)
+        self.progress.start()
+        self.task = self.progress.add_task("uq", total=total, completed=done)
+
+    def advance(self) -> None:
+        self.progress.advance(self.task)
+
+    def close(self) -> None:
+        self.progress.stop()
+
+
+def _progress(enabled: bool, total: int, done: int):
+    return _Bar(total, done) if enabled else _NoBar()
+
+
+def corner_figure(result: UQResult):
+    """Histograms of F1 and F2 and their joint distribution (a corner plot) with the 95% intervals."""
+    from .plots import _figure
+
+    fig = _figure(6.0, 5.8, left=0.12, right=0.97, bottom=0.1, top=0.88, wspace=0.08, hspace=0.12)
+    axes = fig.subplots(2, 2)
+    h = result.histograms
+    coarse = N_BINS // 512
+    for ax, name in ((axes[0, 0], "F1"), (axes[1, 1], "F2")):
+        counts = h[name].reshape(-1, coarse).sum(axis=1)
+        edges = h[f"edges_{name}"][::coarse]
+        centers = 0.5 * (edges[1:] + edges[:-1])
+        nz = counts > 0
+        lo, hi = np.nonzero(nz)[0][[0, -1]] if np.any(nz) else (0, counts.size - 1)
+        ax.fill_between(centers[lo:hi + 1], counts[lo:hi + 1], step="mid", color="#1f4e79", alpha=0.7)
+        for key in ("p2.5", "p50", "p97.5"):
+            ax.axvline(result.percentiles[name][key], color="#c0504d", lw=0.9, ls="--" if key != "p50" else "-")
+        ax.set_yticks([])
+        ax.set_xlim(edges[lo], edges[hi + 1])
+    axes[0, 0].set_title("$F_1$: median and 95% interval", fontsize=8)
+    axes[1, 1].set_title("$F_2$: median and 95% interval", fontsize=8)
+    axes[1, 1].set_xlabel("$F_2$ [N]")
+    axes[0, 1].axis("off")
+    axes[0, 1].text(0.0, 0.5, "\n".join([
+        f"{result.samples:,} samples, seed {result.seed}",
+        f"F1: {result.percentiles['F1']['p50']:.1f} N [{result.percentiles['F1']['p2.5']:.1f}, "
+        f"{result.percentiles['F1']['p97.5']:.1f}]",
+        f"F2: {result.percentiles['F2']['p50']:.1f} N [{result.percentiles['F2']['p2.5']:.1f}, "
+        f"{result.percentiles['F2']['p97.5']:.1f}]",
+        f"correlation {result.correlation:.3f}",
+        f"infeasible {100 * result.infeasible_share:.2f}%"]), fontsize=8, va="center")
+    ax = axes[1, 0]
+    h2 = h["2d"]
+    e1 = h["edges_F1"][:: N_BINS // N_BINS_2D]
+    e2 = h["edges_F2"][:: N_BINS // N_BINS_2D]
+    ax.pcolormesh(e1, e2, np.ma.masked_equal(h2.T, 0), cmap="Blues", shading="flat")
+    nz1 = np.nonzero(h2.sum(axis=1))[0]
+    nz2 = np.nonzero(h2.sum(axis=0))[0]
+    if nz1.size and nz2.size:
+        ax.set_xlim(e1[nz1[0]], e1[nz1[-1] + 1])
+        ax.set_ylim(e2[nz2[0]], e2[nz2[-1] + 1])
+        axes[0, 0].set_xlim(e1[nz1[0]], e1[nz1[-1] + 1])
+        axes[1, 1].set_xlim(e2[nz2[0]], e2[nz2[-1] + 1])
+    ax.set_xlabel("$F_1$ [N]")
+    ax.set_ylabel("$F_2$ [N]")
+    fig.suptitle("Identified friction under observation uncertainty")
+    return fig
