@@ -332,6 +332,22 @@ def uq(
     _table("Local sensitivities at the nominal point (SI units)", sens, ("derivative", "implicit function", "finite diff."))
 
 
+@app.command()
+@_guard
+def bench(
+    quick: Annotated[bool, typer.Option("--quick", help="Smaller samples; skip the 1e8-sample Dask run.")] = False,
+    as_json: JsonOpt = False,
+) -> None:
+    """Benchmarks: kernel throughput on one core vs scipy (same run), accuracy vs mpmath, uq 1e8 on Dask."""
+    from .bench import run_bench
+
+    result = run_bench(quick=quick, log=(lambda line: None) if as_json else (lambda line: typer.echo(line, err=True)))
+    if as_json:
+        _print_json(result)
+        return
+    _table("quickrelease bench", [(k, _fmt(v)) for k, v in result.items()], ("quantity", "value"))
+
+
 def main() -> None:
     """Entry point of the ``quickrelease`` script."""
     try:

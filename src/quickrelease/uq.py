@@ -104,7 +104,8 @@ def uq_chunk(case: Case, seed: int, index: int, size: int, edges: dict[str, np.n
         "hist_F1": h1.astype(np.int64), "hist_F2": h2.astype(np.int64), "hist_2d": h12.astype(np.int64),
         "over_F1": int(np.sum(F1 > edges["F1"][-1])), "over_F2": int(np.sum(F2 > edges["F2"][-1])),
         "mean": np.array([m1, m2]),
-        "comoment": np.array([float(d1 @ d1), float(d2 @ d2), float(d1 @ d2)]),
+        # numpy pairwise sums, not BLAS dot products: the same bits in every process, threaded or not
+        "comoment": np.array([float(np.sum(d1 * d1)), float(np.sum(d2 * d2)), float(np.sum(d1 * d2))]),
     }
 
 
