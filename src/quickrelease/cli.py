@@ -332,6 +332,41 @@ def uq(
     _table("Local sensitivities at the nominal point (SI units)", sens, ("derivative", "implicit function", "finite diff."))
 
 
+@app.command("sweep")
+@_guard
+def sweep_command(
+    case_file: Annotated[Path, typer.Argument(help="Case file: the inputs not swept, and the device.")],
+    grid: Annotated[list[str], typer.Option("--grid", "-g", help="NAME=start:stop:count (with units), e.g. 'force=500 kN:3000 kN:26'; repeat for more dimensions.")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output .nc (NetCDF) or .zarr; heat maps beside it.")] = Path("sweep.nc"),
+    backend: Annotated[str, typer.Option("--backend", help="numpy (default) or dask (needs --out *.zarr).")] = "numpy",
+    scheduler: Annotated[str | None, typer.Option("--scheduler", help="Dask scheduler address; default: a LocalCluster.")] = None,
+    workers: Annotated[int, typer.Option("--workers", help="Workers of the LocalCluster.")] = 2,
+    resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted dask sweep in --out.")] = False,
+    as_json: JsonOpt = False,
+) -> None:
+    """Release envelope (t_F, alpha_F, u_F, v_F, peak velocities) over a grid of inputs."""
+    from .case import load_case
+    from .plots import save_figure
+    from .sweep import heatmap_figure, parse_grid, sweep
+
+    grids = dict(parse_grid(g) for g in grid)
+    ds = sweep(load_case(case_file), grids, backend=backend, out=out, scheduler=scheduler, workers=workers,
+               resume=resume)
+    figs = save_figure(heatmap_figure(ds), out.parent, out.name.rsplit(".", 1)[0] + "_heatmaps")
+    summary = {"file": str(out), "dims": {k: int(v) for k, v in ds.sizes.items()},
+               "stop_time_s": [float(ds.stop_time.min()), float(ds.stop_time.max())],
+               "u_final_m": [float(ds.u_final.min()), float(ds.u_final.max())],
+               "v_final_m": [float(ds.v_final.min()), float(ds.v_final.max())],
+               "peak_v_dot_m_s": [float(ds.peak_v_dot.min()), float(ds.peak_v_dot.max())],
+               "geometric_limit_share": float(ds.stopped_by.mean()),
+               "figures": [str(p) for p in figs.values()]}
+    if as_json:
+        _print_json(summary)
+        return
+    _table(f"Sweep over {' x '.join(f'{k} ({v})' for k, v in summary['dims'].items())}",
+           [(k, _fmt(v)) for k, v in summary.items() if k not in ("dims",)], ("quantity", "value (min, max)"))
+
+
 @app.command()
 @_guard
 def bench(

@@ -1,0 +1,257 @@
+"""Parameter sweeps: the release envelope over a grid of inputs, as an xarray Dataset.
+
+Any of the case's inputs may be swept (``force``, ``energy``, ``alpha0``, ``F1``, ``F2``, ``c``, ``m1``,
+``m2``, ``L1``); the others keep the case's values (friction from ``[friction]``, or identified from
+``[observations]``). Outputs per grid point: t_F, alpha_F, the stop reason, u_F, v_F, the initial
+angular velocity, the peak head and hinge velocities, and E_S. All computed by :func:`batch.release`.
+
+Backends: ``numpy`` computes the grid in memory; ``dask`` computes it in blocks along the first grid
+dimension on a Dask cluster, writing each finished block into a Zarr store (xarray region writes, then
+a marker file per block), so memory stays bounded by the block and ``resume`` skips finished blocks.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from . import batch
+from .case import Case
+from .errors import ParameterError, QuickReleaseError
+from .statics import strain_energy_coefficient
+from .units import parse_quantity
+
+__all__ = ["SWEEP_PARAMETERS", "OUTPUTS", "parse_grid", "sweep", "heatmap_figure"]
+
+#: Sweepable inputs: quantity kind and unit.
+SWEEP_PARAMETERS = {
+    "force": ("force", "N"), "energy": ("energy", "J"), "alpha0": ("angle", "rad"), "F1": ("force", "N"),
+    "F2": ("force", "N"), "c": ("dimensionless", "1"), "m1": ("mass", "kg"), "m2": ("mass", "kg"),
+    "L1": ("length", "m"),
+}
+#: Outputs: (long name, unit).
+OUTPUTS = {
+    "stop_time": ("time from release to the end of the motion t_F", "s"),
+    "alpha_final": ("final angle alpha_F", "rad"),
+    "stopped_by": ("0: friction stop, 1: geometric limit (flat rhombus)", "1"),
+    "u_final": ("head stroke u_F", "m"),
+    "v_final": ("central hinge opening v_F", "m"),
+    "alpha_dot0": ("initial angular velocity (Eq. 6)", "rad/s"),
+    "peak_u_dot": ("peak head velocity", "m/s"),
+    "peak_v_dot": ("peak central hinge velocity", "m/s"),
+    "stored_energy": ("stored strain energy E_S", "J"),
+}
+
+
+def parse_grid(text: str) -> tuple[str, np.ndarray]:
+    """``"force=500 kN:3000 kN:26"`` (start:stop:count, ends included) or ``"F1=100,200,400 N"``."""
+    name, sep, spec = text.partition("=")
+    name = name.strip()
+    if not sep or name not in SWEEP_PARAMETERS:
+        raise ParameterError("--grid", text, f"NAME=start:stop:count with NAME one of {', '.join(SWEEP_PARAMETERS)}")
+    kind, _ = SWEEP_PARAMETERS[name]
+    parts = [p.strip() for p in spec.split(":")]
+    if len(parts) == 3:
+        try:
+            count = int(parts[2])
+        except ValueError:
+            raise ParameterError("--grid count", parts[2], "integers >= 1") from None
+        if count < 1:
+            raise ParameterError("--grid count", count, "integers >= 1")
+        lo = parse_quantity(parts[0], kind, name)
+        hi = parse_quantity(parts[1], kind, name)
+        return name, np.linspace(lo, hi, count)
+    items = [p.strip() for p in spec.split(",")]
+    unit = items[-1].partition(" ")[2] if " " in items[-1] else ""
+    values = [parse_quantity(f"{p} {unit}".strip() if " " not in p else p, kind, name) for p in items]
+    if not values:
+        raise ParameterError("--grid", text, "NAME=start:stop:count or NAME=v1,v2,... [unit]")
+    return name, np.array(values)
+
+
+def _base(case: Case) -> dict[str, float]:
+    d = case.device
+    if case.has_friction:
+        F1, F2 = case.F1 or 0.0, case.F2 or 0.0
+    elif case.has_observations:
+        from .identify import identify_friction
+
+        ident = identify_friction(case.alpha0, case.alpha_final, case.stop_time, stored_energy=case.stored_energy,
+                                  device=d, mass_model=case.mass_model)
+        F1, F2 = ident.F1, ident.F2
+    else:  # pragma: no cover - load_case requires one of the two
+        raise QuickReleaseError(f"{case.source}: a sweep needs [friction] or [observations]")
+    return {"force": case.push_force if case.push_force is not None else math.nan, "energy": case.stored_energy,
+            "alpha0": case.alpha0, "F1": F1, "F2": F2, "c": case.mass_factor, "m1": d.m1, "m2": d.m2, "L1": d.L1}
+
+
+def _validate(grids: dict[str, np.ndarray], case: Case) -> None:
+    if not grids:
+        raise ParameterError("--grid", "none", "at least one grid, e.g. --grid 'alpha0=0.1:0.5:41'")
+    if "force" in grids and "energy" in grids:
+        raise ParameterError("--grid", "force and energy", "one of the two (E_S follows from P by Eq. 2)")
+    if "force" in grids and case.energy_given:
+        raise ParameterError("--grid force", "with a given energy", "cases without [test] energy (E_S from Eq. 2)")
+    checks = {"alpha0": (lambda v: (v > 0) & (v < 0.5 * np.pi), "(0, pi/2)"),
+              "F1": (lambda v: v >= 0, "[0, inf)"), "F2": (lambda v: v >= 0, "[0, inf)")}
+    for name, values in grids.items():
+        test, valid = checks.get(name, (lambda v: v > 0, "(0, inf)"))
+        bad = ~(np.isfinite(values) & test(values))
+        if np.any(bad):
+            raise ParameterError(name, float(values[bad][0]), valid, SWEEP_PARAMETERS[name][1])
+
+
+def _compute(case: Case, grids: dict[str, np.ndarray], base: dict[str, float], block: slice | None = None):
+    """Outputs on the grid (or on rows ``block`` of its first dimension), shaped like the grid."""
+    names = list(grids)
+    axes = [grids[n] if (i or block is None) else grids[n][block] for i, n in enumerate(names)]
+    mesh = np.meshgrid(*axes, indexing="ij", sparse=True)
+    x = {name: base[name] for name in base}
+    x.update(dict(zip(names, mesh, strict=True)))
+    shape = tuple(a.size for a in axes)
+    if "force" in grids or (case.push_force is not None and not case.energy_given and "alpha0" in grids):
+        E_S = x["force"] ** 2 * strain_energy_coefficient(x["alpha0"], case.device)
+    else:
+        E_S = x["energy"]
+    r = batch.release(E_S, x["alpha0"], x["F1"], x["F2"], x["c"], x["m1"], x["m2"], x["L1"])
+    out = {k: np.broadcast_to(v, shape) for k, v in r.to_dict().items()}
+    out["stored_energy"] = np.broadcast_to(E_S, shape)
+    return out
+
+
+def _dataset(case: Case, grids: dict[str, np.ndarray], data: dict[str, np.ndarray] | None, base: dict[str, float]):
+    import xarray as xr
+
+    names = list(grids)
+    coords = {n: (n, grids[n], {"units": SWEEP_PARAMETERS[n][1]}) for n in names}
+    shape = tuple(grids[n].size for n in names)
+    variables = {}
+    for key, (long, unit) in OUTPUTS.items():
+        values = data[key] if data is not None else np.zeros(shape, dtype=np.int8 if key == "stopped_by" else float)
+        variables[key] = (names, np.asarray(values, dtype=np.int8 if key == "stopped_by" else float),
+                          {"long_name": long, "units": unit})
+    attrs = {"title": f"quickrelease sweep: {case.title}", "case": case.source, "device": case.device.name}
+    attrs.update({f"fixed_{k}": float(v) for k, v in base.items() if k not in grids and np.isfinite(v)})
+    return xr.Dataset(variables, coords=coords, attrs=attrs)
+
+
+def sweep(case: Case, grids: dict[str, np.ndarray], *, backend: str = "numpy", out: str | Path | None = None,
+          scheduler: str | None = None, workers: int = 2, block_rows: int | None = None, resume: bool = False):
+    """Release envelope over a grid of inputs; returns an xarray Dataset (dims: the grid names, in order).
+
+    Parameters
+    ----------
+    case : Case
+        Supplies the inputs not swept (and the device).
+    grids : dict of str to array
+        Swept inputs (see :data:`SWEEP_PARAMETERS`), SI units.
+    backend : {"numpy", "dask"}
+        ``dask`` needs ``out`` ending in ``.zarr``.
+    out : path, optional
+        ``.nc`` (NetCDF) or ``.zarr`` (Zarr) file to write.
+    block_rows : int, optional
+        Rows of the first grid dimension per Dask block (default: about 10^6 points per block).
+    resume : bool
+        Dask backend: keep the finished blocks of ``out`` and compute the rest.
+    """
+    grids = {k: np.asarray(v, dtype=float) for k, v in grids.items()}
+    _validate(grids, case)
+    base = _base(case)
+    if backend == "numpy":
+        ds = _dataset(case, grids, _compute(case, grids, base), base)
+        if out is not None:
+            _write(ds, Path(out))
+        return ds
+    if backend != "dask":
+        raise ParameterError("backend", backend, "'numpy' or 'dask'")
+    if out is None or not str(out).endswith(".zarr"):
+        raise ParameterError("out", out, "a path ending in .zarr (the dask backend streams blocks into Zarr)")
+    return _sweep_dask(case, grids, base, Path(out), scheduler, workers, block_rows, resume)
+
+
+def _write(ds, path: Path) -> None:
+    if path.suffix == ".zarr":
+        ds.to_zarr(path, mode="w")
+        return
+    if path.suffix != ".nc":
+        raise ParameterError("out", str(path), "a path ending in .nc (NetCDF) or .zarr (Zarr)")
+    from .export import atomic_path
+
+    with atomic_path(path) as tmp:
+        ds.to_netcdf(tmp, engine="scipy")
+
+
+def _block(case: Case, grids, base, path: str, rows: slice, index: int) -> int:
+    """Compute rows of the first dimension and write them into the Zarr store; then mark the block done."""
+    data = _compute(case, grids, base, rows)
+    first = list(grids)[0]
+    sub = {**grids, first: grids[first][rows]}
+    ds = _dataset(case, sub, data, base).drop_vars(list(grids))
+    ds.attrs = {}
+    ds.to_zarr(path, region={first: rows}, mode="r+")
+    Path(path, "_quickrelease_done", f"{index:06d}").touch()
+    return index
+
+
+def _sweep_dask(case, grids, base, path: Path, scheduler, workers, block_rows, resume):
+    import xarray as xr
+
+    from .distributed import map_chunks
+
+    first = list(grids)[0]
+    per_row = int(np.prod([g.size for n, g in grids.items() if n != first]))
+    rows_total = grids[first].size
+    block_rows = block_rows or max(1, 1_000_000 // max(per_row, 1))
+    blocks = [slice(i, min(i + block_rows, rows_total)) for i in range(0, rows_total, block_rows)]
+    done_dir = path / "_quickrelease_done"
+    if path.exists() and not resume:
+        raise QuickReleaseError(f"{path}: exists; pass --resume to continue it, or choose another --out")
+    if not path.exists():
+        template = _dataset(case, grids, None, base)
+        encoding = {v: {"chunks": (block_rows, *template[v].shape[1:])} for v in OUTPUTS}
+        template.to_zarr(path, mode="w", compute=False, encoding=encoding)
+        done_dir.mkdir(parents=True, exist_ok=True)
+    finished = {int(p.name) for p in done_dir.iterdir()} if done_dir.exists() else set()
+    todo = [(case, grids, base, str(path), rows, i) for i, rows in enumerate(blocks) if i not in finished]
+    for _ in map_chunks(_block, todo, scheduler, workers):
+        pass
+    return xr.open_zarr(path)
+
+
+_TITLES = {"stop_time": "stop time $t_F$", "alpha_final": r"final angle $\alpha_F$", "u_final": "head stroke $u_F$",
+           "v_final": "hinge opening $v_F$", "peak_u_dot": "peak head velocity", "peak_v_dot": "peak hinge velocity"}
+
+
+def heatmap_figure(ds) -> Any:
+    """Heat maps of t_F, alpha_F, u_F, v_F and the peak velocities over the first two grid dimensions
+    (other dimensions at their first value); line plots for a one-dimensional sweep."""
+    from .plots import _figure
+
+    names = list(ds.dims)
+    keys = ["stop_time", "alpha_final", "u_final", "v_final", "peak_u_dot", "peak_v_dot"]
+    fig = _figure(9.0, 5.6, left=0.08, right=0.97, bottom=0.1, top=0.9, wspace=0.45, hspace=0.45)
+    axes = fig.subplots(2, 3)
+    sel = {n: 0 for n in names[2:]}
+    for ax, key in zip(axes.flat, keys, strict=True):
+        da = ds[key].isel(sel) if sel else ds[key]
+        long, unit = OUTPUTS[key]
+        if len(names) == 1:
+            ax.plot(ds[names[0]].values, da.values, color="#1f4e79")
+            ax.set_xlabel(f"{names[0]} [{SWEEP_PARAMETERS[names[0]][1]}]")
+            ax.set_ylabel(f"[{unit}]")
+        else:
+            x, y = ds[names[1]].values, ds[names[0]].values
+            mesh = ax.pcolormesh(x, y, np.asarray(da.values, dtype=float), shading="auto", cmap="viridis")
+            fig.colorbar(mesh, ax=ax, label=f"[{unit}]")
+            limit = np.asarray(ds["stopped_by"].isel(sel).values if sel else ds["stopped_by"].values)
+            if limit.any() and not limit.all():
+                ax.contour(x, y, limit, levels=[0.5], colors="w", linewidths=0.8)
+            ax.set_xlabel(f"{names[1]} [{SWEEP_PARAMETERS[names[1]][1]}]")
+            ax.set_ylabel(f"{names[0]} [{SWEEP_PARAMETERS[names[0]][1]}]")
+        ax.set_title(_TITLES[key], fontsize=8)
+    extra = f" ({', '.join(f'{n} = {float(ds[n][0]):.4g}' for n in names[2:])})" if names[2:] else ""
+    fig.suptitle(f"Release envelope over the sweep{extra}; white line: the geometric limit")
+    return fig

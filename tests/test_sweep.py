@@ -1,0 +1,97 @@
+"""Sweeps: grid parsing, values against the single-release solver, Dask blocks and resume."""
+
+import importlib.util
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from quickrelease import ParameterError, simulate, strain_energy
+from quickrelease.case import load_case
+from quickrelease.sweep import heatmap_figure, parse_grid, sweep
+
+EXAMPLES = Path(__file__).parent.parent / "examples"
+HAS_DASK = importlib.util.find_spec("dask") is not None and importlib.util.find_spec("zarr") is not None
+
+
+def test_parse_grid():
+    name, v = parse_grid("force=500 kN:3000 kN:26")
+    assert name == "force" and v.size == 26 and v[0] == 500e3 and v[-1] == 3000e3
+    assert parse_grid("alpha0=0.1:0.5:41")[1][20] == pytest.approx(0.3)
+    assert parse_grid("F1=100,200,400 N")[1].tolist() == [100.0, 200.0, 400.0]
+    assert parse_grid("alpha0=5 deg:10 deg:2")[1][1] == pytest.approx(np.radians(10))
+
+
+@pytest.mark.parametrize("text,match", [("P=1:2:3", "NAME=start:stop:count"), ("force=1 m:2 m:3", "expected a force"),
+                                        ("alpha0=0.1:0.5:0", "count = 0")])
+def test_bad_grids(text, match):
+    with pytest.raises(ValueError, match=match):
+        parse_grid(text)
+
+
+def test_values_match_single_releases():
+    case = load_case(EXAMPLES / "larger_push.toml")
+    grids = {"force": np.array([1000e3, 2200e3]), "alpha0": np.array([0.2, 0.3])}
+    ds = sweep(case, grids)
+    assert ds.stop_time.dims == ("force", "alpha0") and ds.stop_time.attrs["units"] == "s"
+    for i, P in enumerate(grids["force"]):
+        for j, a0 in enumerate(grids["alpha0"]):
+            E = strain_energy(P, a0, case.device).total
+            r = simulate(E, a0, case.F1, case.F2, device=case.device)
+            assert float(ds.stored_energy[i, j]) == pytest.approx(E, rel=1e-13)
+            assert float(ds.stop_time[i, j]) == pytest.approx(r.stop_time, rel=1e-12)
+            assert float(ds.u_final[i, j]) == pytest.approx(r.u_final, rel=1e-12)
+            assert int(ds.stopped_by[i, j]) == (r.stopped_by == "geometric_limit")
+
+
+def test_identified_friction_is_used_without_friction_table(tmp_path):
+    ds = sweep(load_case(EXAMPLES / "paper.toml"), {"alpha0": np.array([0.2])})
+    # the paper case with its identified friction stops at the observed alpha_F and t_F
+    assert float(ds.alpha_final[0]) == pytest.approx(0.7378, abs=1e-12)
+    assert float(ds.stop_time[0]) == pytest.approx(1.05, abs=1e-12)
+
+
+def test_bad_sweeps():
+    case = load_case(EXAMPLES / "larger_push.toml")
+    with pytest.raises(ParameterError, match="alpha0 = 2 rad is outside"):
+        sweep(case, {"alpha0": np.array([0.2, 2.0])})
+    with pytest.raises(ParameterError, match="force and energy"):
+        sweep(case, {"force": np.array([1e6]), "energy": np.array([1e3])})
+    with pytest.raises(ParameterError, match="ending in .zarr"):
+        sweep(case, {"F1": np.array([100.0])}, backend="dask", out="x.nc")
+
+
+def test_netcdf_output_and_heatmaps(tmp_path):
+    import xarray as xr
+
+    case = load_case(EXAMPLES / "larger_push.toml")
+    ds = sweep(case, {"force": np.linspace(5e5, 3e6, 6), "alpha0": np.linspace(0.1, 0.5, 5)}, out=tmp_path / "s.nc")
+    back = xr.open_dataset(tmp_path / "s.nc")
+    np.testing.assert_array_equal(back.stop_time.values, ds.stop_time.values)
+    assert 0 < float(ds.stopped_by.mean()) < 1  # the grid crosses the geometric limit
+    fig = heatmap_figure(ds)
+    assert len(fig.axes) == 12  # six panels and their colour bars
+
+
+@pytest.mark.skipif(not HAS_DASK, reason="dask/zarr not installed")
+def test_dask_blocks_resume_and_match_numpy(tmp_path):
+    import xarray as xr
+
+    case = load_case(EXAMPLES / "larger_push.toml")
+    grids = {"force": np.linspace(5e5, 3e6, 12), "alpha0": np.linspace(0.1, 0.5, 7)}
+    ref = sweep(case, grids)
+    path = tmp_path / "s.zarr"
+    sweep(case, grids, backend="dask", out=path, block_rows=3)
+    np.testing.assert_array_equal(xr.open_zarr(path).stop_time.values, ref.stop_time.values)
+    # lose two blocks (as an interrupted run would), then resume: they are recomputed, the rest kept
+    done = sorted((path / "_quickrelease_done").iterdir())
+    assert len(done) == 4
+    for marker in done[1:3]:
+        marker.unlink()
+    with pytest.raises(Exception, match="pass --resume"):
+        sweep(case, grids, backend="dask", out=path, block_rows=3)
+    ds = sweep(case, grids, backend="dask", out=path, block_rows=3, resume=True)
+    np.testing.assert_array_equal(ds.u_final.values, ref.u_final.values)
+    assert len(list((path / "_quickrelease_done").iterdir())) == 4
+    shutil.rmtree(path)
