@@ -324,7 +324,7 @@ def uq(
     _table(f"Identified friction over {result.samples:,} samples (seed {result.seed})", [
         (name, f"{result.nominal[name]:.2f}", f"{p[name]['p2.5']:.2f}", f"{p[name]['p50']:.2f}",
          f"{p[name]['p97.5']:.2f}", f"{result.std[name]:.2f}") for name in ("F1", "F2")],
-        ("force [N]", "nominal", "2.5%", "50%", "97.5%", "std"))
+        ("friction [N]", "nominal", "2.5%", "50%", "97.5%", "std"))
     typer.echo(f"correlation(F1, F2) = {result.correlation:.4f}; infeasible samples: "
                f"{100 * result.infeasible_share:.2f}%; percentile resolution {result.resolution['F1']:.3g} N")
     sens = [(f"d{f}/d{x}", f"{v:.6g}", f"{result.sensitivities_fd[f][x]:.6g}")

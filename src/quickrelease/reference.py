@@ -42,7 +42,7 @@ def stop_time_mp(E_S, alpha0, F1, F2, k, m2, L1, dps: int = 30) -> tuple[float, 
 
 
 def identify_mp(alpha0, alpha_final, stop_time, E_S, k, m2, L1, dps: int = 30) -> tuple[float, float]:
-    """(F1, F2) on the line of Eq. 13 with the stop time t_F, to about ``dps`` digits (secant on F1/F1*)."""
+    """(F1, F2) on the line of Eq. 13 with the stop time t_F, to about ``dps`` digits (bracketed on F1/F1*)."""
     mp = _setup(dps)
     a0, aF, tF, E, k_, m2_, L1_ = (mp.mpf(float(v)) for v in (alpha0, alpha_final, stop_time, E_S, k, m2, L1))
     F1s = E / (2 * L1_ * (mp.sin(aF) - mp.sin(a0)))
@@ -58,6 +58,6 @@ def identify_mp(alpha0, alpha_final, stop_time, E_S, k, m2, L1, dps: int = 30) -
         d = aF - a0
         return mp.quad(f, [a0, a0 + d / 2, aF - d / 10, aF]) - tF
 
-    lam = mp.findroot(t_of, (mp.mpf("0.3"), mp.mpf("0.7")), solver="secant", tol=mp.mpf(10) ** (-2 * dps + 16),
-                      verify=False)
+    lam = mp.findroot(t_of, (mp.mpf(0), mp.mpf(1)), solver="anderson", tol=mp.mpf(10) ** (-2 * dps + 16),
+                      verify=False)  # bracketing: t(lambda) - t_F changes sign on [0, 1]
     return float(lam * F1s), float((1 - lam) * F2s)
