@@ -28,6 +28,16 @@ def rules() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
 
 
 @njit(cache=True, nogil=True)
+def _tier(ratio, msq, near, hard, mass_sq):
+    """The rule of a case, as in ``_kernels``: 2 graded (left to numpy), 1 the 24-node rule, 0 the 16-node rule."""
+    if ratio < hard:
+        return 2
+    if ratio < near or msq < mass_sq:
+        return 1
+    return 0
+
+
+@njit(cache=True, nogil=True)
 def stop_kernel(E, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, near, hard, mass_sq, t_out, aF_out, code_out):
     """t_F, alpha_F and the regime code (0 friction, 1 limit, -1: graded tier, left to numpy)."""
     for i in range(E.size):
@@ -44,13 +54,11 @@ def stop_kernel(E, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, near, hard, mass_s
             ratio = Kl / (Kl + 2.0 * A * sm * sm + 2.0 * B * sm * qm)
             msq = (k[i] + sa0 * sa0) / (_HALF_PI - a0[i]) ** 2
             aF_out[i] = _HALF_PI
-            if ratio < hard:
+            tier = _tier(ratio, msq, near, hard, mass_sq)
+            if tier == 2:
                 code_out[i] = -1
                 continue
-            if ratio < near or msq < mass_sq:
-                x, w = x24, w24
-            else:
-                x, w = x16, w16
+            x, w = (x24, w24) if tier == 1 else (x16, w16)
             acc = 0.0
             for j in range(x.size):
                 s = sm * x[j] * x[j]
@@ -72,13 +80,11 @@ def stop_kernel(E, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, near, hard, mass_s
             qm = math.sqrt(1.0 - sm * sm)
             ratio = cb / (cb * qm + s * sm)
             msq = (k[i] + sa0 * sa0) / (aF - a0[i]) ** 2
-            if ratio < hard:
+            tier = _tier(ratio, msq, near, hard, mass_sq)
+            if tier == 2:
                 code_out[i] = -1
                 continue
-            if ratio < near or msq < mass_sq:
-                x, w = x24, w24
-            else:
-                x, w = x16, w16
+            x, w = (x24, w24) if tier == 1 else (x16, w16)
             acc = 0.0
             for j in range(x.size):
                 sg = sm * x[j] * x[j]
@@ -114,13 +120,11 @@ def identify_kernel(a0, aF, tF, E, k, m2, L1, x16, w16, x24, w24, near, hard, ma
         ratio = cA / c1
         sa0 = math.sin(a0[i])
         msq = (k[i] + sa0 * sa0) / (aF[i] - a0[i]) ** 2
-        if ratio < hard:
+        tier = _tier(ratio, msq, near, hard, mass_sq)
+        if tier == 2:
             status_out[i] = -1
             continue
-        if ratio < near or msq < mass_sq:
-            x, w = x24, w24
-        else:
-            x, w = x16, w16
+        x, w = (x24, w24) if tier == 1 else (x16, w16)
         n = x.size
         pref = 4.0 * sm * L1[i] * math.sqrt(m2[i] / E[i])
         lo = 0.0

@@ -35,12 +35,11 @@ the key, the value and what was expected, on one line; unknown keys are errors.
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from .device import Device, load_device, preset
+from .device import Device, load_device, preset, read_toml
 from .dynamics import mass_factor
 from .errors import QuickReleaseError
 from .statics import StrainEnergy, strain_energy
@@ -279,14 +278,7 @@ def load_case(path: str | Path) -> Case:
     """
     path = Path(path)
     source = str(path)
-    try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise CaseFileError(f"{source}: cannot read the case file ({exc.strerror})") from None
-    try:
-        data = tomllib.loads(raw.decode("utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise CaseFileError(f"{source}: not valid TOML ({exc})") from None
+    data = read_toml(path, "case file", CaseFileError)
     return case_from_mapping(data, source=source, base=path.parent)
 
 

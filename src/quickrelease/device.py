@@ -160,6 +160,18 @@ class Device:
         return cls(**values, name=name)
 
 
+def read_toml(path: Path, what: str, error: type[Exception]) -> dict[str, Any]:
+    """Parse a TOML file; ``error`` (naming the file) when it cannot be read or is not valid TOML."""
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise error(f"{path}: cannot read the {what} ({exc.strerror})") from None
+    try:
+        return tomllib.loads(raw.decode("utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise error(f"{path}: not valid TOML ({exc})") from None
+
+
 def load_device(path: str | Path) -> Device:
     """Load a device from a TOML file whose keys are Table 2's symbols.
 
@@ -170,14 +182,7 @@ def load_device(path: str | Path) -> Device:
         unknown or not positive.
     """
     path = Path(path)
-    try:
-        text = path.read_bytes()
-    except OSError as exc:
-        raise DeviceFileError(f"{path}: cannot read the device file ({exc.strerror})") from None
-    try:
-        mapping = tomllib.loads(text.decode("utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise DeviceFileError(f"{path}: not valid TOML ({exc})") from None
+    mapping = read_toml(path, "device file", DeviceFileError)
     return Device.from_mapping(mapping, source=str(path))
 
 
