@@ -186,3 +186,39 @@ def test_bad_input(kwargs, match):
     args.update(kwargs)
     with pytest.raises(ParameterError, match=match):
         simulate(**args)
+
+
+def test_time_map_against_mpmath_on_random_cases():
+    """The Chebyshev time map t(w) of the energy solution: t(0) = t_F to ~1e-15 against mpmath, hard cases included."""
+    from quickrelease.reference import stop_time_mp
+    from quickrelease.sampling import random_releases
+    from quickrelease.solvers import FirstIntegral
+
+    cases = random_releases(16, seed=11, limit_share=0.4)
+    worst = 0.0
+    for i in range(16):
+        a = {k: float(v[i]) for k, v in cases.items()}
+        fi = FirstIntegral(a["E_S"], a["alpha0"], a["F1"], a["F2"], a["m1"], a["m2"], a["L1"], a["c"])
+        t_ref, _ = stop_time_mp(a["E_S"], a["alpha0"], a["F1"], a["F2"], a["c"] * a["m1"] / a["m2"], a["m2"], a["L1"])
+        worst = max(worst, abs(fi.time_map.total / t_ref - 1.0))
+        w = np.linspace(0.0, 1.0, 7)
+        np.testing.assert_allclose(fi.time_map.time(w), fi.elapsed(w), rtol=0, atol=1e-11 * t_ref)
+    assert worst < 1e-13
+
+
+def test_state_at_uneven_times_matches_rk_with_rest_before_and_after():
+    from quickrelease.solvers import FirstIntegral
+
+    d = simulate(**PAPER_CASE).device
+    fi = FirstIntegral(*PAPER_CASE.values(), d.m1, d.m2, d.L1, 2.0 / 3.0)
+    rng = np.random.default_rng(1)
+    t = np.sort(rng.uniform(-0.3, 1.6, 400))
+    alpha, alpha_dot = fi.state_at(t)
+    rk = simulate(**PAPER_CASE, method="rk", n_points=20001)
+    inside = (t > 0) & (t < rk.stop_time)
+    np.testing.assert_allclose(alpha[inside], np.interp(t[inside], rk.t, rk.alpha), atol=2e-8)
+    # the inverse of the time map reproduces the times to rounding
+    np.testing.assert_allclose(fi.time_map.time(fi.w_at_times(t[inside])), t[inside], rtol=0, atol=1e-15)
+    assert np.all(alpha[t <= 0] == 0.2) and np.all(alpha_dot[t <= 0] == 0.0)
+    assert np.all(alpha[t > fi.stop_time()] == fi.alpha_final) and np.all(alpha_dot[t > fi.stop_time()] == 0.0)
+    assert np.all(alpha_dot[inside] > 0)

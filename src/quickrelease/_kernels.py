@@ -289,6 +289,23 @@ class Releases:
         sigma = self.sigma_m[case] * np.asarray(w) ** 2
         return self.anchor[case] - 2.0 * np.arcsin(sigma)
 
+    def rate_at(self, w: np.ndarray, case: int = 0) -> np.ndarray:
+        """alpha_dot = sqrt((E_S - W_F) / M) at w for one case (Eq. 10) [rad/s].
+
+        Computed from sigma = sigma_m w^2 directly (``K = 2 R C sigma``, or ``K_lim + 2 A sigma^2 +
+        2 B sigma q`` at the geometric limit), so it stays accurate to rounding as the stop is approached.
+        """
+        sigma = self.sigma_m[case] * np.asarray(w, dtype=float) ** 2
+        q = np.sqrt(1.0 - sigma * sigma)
+        sin_alpha = self.sin_a[case] * (1.0 - 2.0 * sigma * sigma) - self.cos_a[case] * 2.0 * sigma * q
+        if self.regime[case] == REGIME_LIMIT:
+            K = (self.E_S[case] - self.W_limit[case]) + 2.0 * self.A[case] * sigma * sigma \
+                + 2.0 * self.B[case] * sigma * q
+        else:
+            K = 2.0 * self.R[case] * (self.cos_p[case] * q + self.sin_p[case] * sigma) * sigma
+        M = self.m2[case] * self.L1[case] ** 2 * (self.k[case] + sin_alpha * sin_alpha)
+        return np.sqrt(np.maximum(K, 0.0) / M)
+
     def remaining_energy(self, alpha: np.ndarray, case: int = 0) -> np.ndarray:
         """E_S - W_F(alpha) without cancellation, for one case [J] (Eq. 9)."""
         alpha = np.asarray(alpha, dtype=float)

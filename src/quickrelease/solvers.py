@@ -31,6 +31,7 @@ import numpy as np
 from . import dynamics
 from ._kernels import Releases
 from ._roots import brent
+from ._timemap import TimeMap
 from ._validate import HALF_PI, check_angle, check_nonnegative, check_positive
 from .device import Device, preset
 from .errors import ParameterError
@@ -60,6 +61,7 @@ class FirstIntegral:
         self.anchor = float(self._rel.anchor[0])
         self.alpha_final = float(self._rel.alpha_final[0])
         self.stopped_by = "geometric_limit" if self.geometric_limit else "friction"
+        self._time_map: TimeMap | None = None
 
     def alpha(self, w):
         """Angle at the integration variable w [rad]."""
@@ -89,24 +91,32 @@ class FirstIntegral:
         """Time from release to the angle alpha(w), for an array of w in [0, 1] [s]."""
         return self._rel.elapsed(np.asarray(w, dtype=float))
 
-    def w_at_times(self, t, t_stop: float) -> np.ndarray:
-        """The integration variable w reached at times t in [0, t_stop] (Newton on the time map)."""
+    @property
+    def time_map(self) -> TimeMap:
+        """t(w) as a piecewise Chebyshev series (built on first use)."""
+        if self._time_map is None:
+            self._time_map = TimeMap(self.integrand)
+        return self._time_map
+
+    def w_at_times(self, t) -> np.ndarray:
+        """The integration variable w reached at times t since release (clipped to the motion) [-]."""
+        return self.time_map.invert(t)
+
+    def state_at(self, t) -> tuple[np.ndarray, np.ndarray]:
+        """alpha and alpha_dot at times t since release [rad, rad/s], at rest before 0 and after the stop.
+
+        Before release the device rests at alpha0; after the end of the motion at alpha_F (a friction
+        stop, Eq. 8) or at pi/2 (the flat rhombus, where the motion ends).
+        """
         t = np.asarray(t, dtype=float)
-        table_w = np.linspace(0.0, 1.0, 257)
-        table_t = self.elapsed(table_w)
-        w = np.interp(t, table_t[::-1], table_w[::-1])
-        for _ in range(12):
-            inner = (t > 0.0) & (t < t_stop)
-            if not np.any(inner):
-                break
-            residual = self.elapsed(w[inner]) - t[inner]
-            step = residual / self.integrand(w[inner])
-            w[inner] = np.clip(w[inner] + step, 0.0, 1.0)
-            if np.max(np.abs(residual)) <= 1e-14 * max(t_stop, 1e-300):
-                break
-        w[t <= 0.0] = 1.0
-        w[t >= t_stop] = 0.0
-        return w
+        t_stop = self.stop_time()
+        w = self.w_at_times(t)
+        alpha = self.alpha(w)
+        alpha_dot = self._rel.rate_at(w)
+        before, after = t <= 0.0, t > t_stop
+        alpha[before], alpha_dot[before] = self.alpha0, 0.0
+        alpha[after], alpha_dot[after] = self.alpha_final, 0.0
+        return alpha, alpha_dot
 
 
 def stop_time(E_S: float, alpha0: float, F1: float, F2: float, *,
@@ -144,11 +154,12 @@ def _check_release(E_S, alpha0, F1, F2) -> None:
 def _solve_energy(fi: FirstIntegral, n_points: int, **_: Any) -> dict[str, Any]:
     t_stop = fi.stop_time()
     t = np.linspace(0.0, t_stop, n_points)
-    w = fi.w_at_times(t, t_stop)
+    w = fi.w_at_times(t)
+    w[0], w[-1] = 1.0, 0.0
     alpha = fi.alpha(w)
     alpha[0] = fi.alpha0
     alpha[-1] = fi.alpha_final
-    alpha_dot = fi.rate(alpha)
+    alpha_dot = fi._rel.rate_at(w)
     return {"t": t, "alpha": alpha, "alpha_dot": alpha_dot, "stop_time": t_stop,
             "alpha_final": fi.alpha_final, "stats": {"n_points": n_points}}
 
