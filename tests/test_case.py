@@ -87,7 +87,7 @@ def test_device_file_relative_to_case(tmp_path):
     (BASE.replace("[friction]", "[simulation]\nmethod = \"euler\"\n[friction]"),
      r"case.toml: \[simulation\] method = 'euler': expected 'energy', 'rk' or 'explicit'$"),
     (BASE.replace('force = "1598 kN"\n', ""), r"case.toml: missing key \[test\] force or energy"),
-    ('[test]\nforce = 1\nalpha0 = 0.2\n', r"missing table \[friction\] \(to simulate\) or \[observations\]"),
+    ('[test]\nforce = 1\nalpha0 = 0.2\n', r"missing table \[friction\] \(to simulate\), \[observations\] \(to identify\) or \[record\] \(to fit\)"),
     (BASE + '[observations]\nalpha_final = "0.1 rad"\nstop_time = "1 s"\n',
      r"\[observations\] alpha_final = '0.1 rad': expected an angle greater than alpha0 = 0.2 rad$"),
     (BASE + '[device]\npreset = "other"\n', r"case.toml \[device\]: preset = other is outside the presets paper"),

@@ -60,8 +60,11 @@ def _paper_defaults(m1, m2, L1):
 
 
 def _flat(*arrays) -> tuple[tuple[int, ...], list[np.ndarray]]:
-    b = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in arrays))
-    return b[0].shape, [np.ascontiguousarray(x).ravel() for x in b]
+    arrays = [np.asarray(a, dtype=float) for a in arrays]
+    shape = np.broadcast_shapes(*(a.shape for a in arrays))
+    # the compiled kernels take writeable contiguous arrays: broadcast inputs are copied out
+    return shape, [np.ascontiguousarray(a).ravel() if a.shape == shape else np.array(np.broadcast_to(a, shape)).ravel()
+                   for a in arrays]
 
 
 class _Result:

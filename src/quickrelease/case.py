@@ -42,10 +42,11 @@ from typing import Any
 from .device import Device, load_device, preset, read_toml
 from .dynamics import mass_factor
 from .errors import QuickReleaseError
+from .records import RecordSpec, parse_record_spec
 from .statics import StrainEnergy, strain_energy
 from .units import parse_quantity
 
-__all__ = ["Case", "CaseFileError", "Distribution", "load_case", "CASE_SCHEMA", "UNCERTAIN_KEYS"]
+__all__ = ["Case", "CaseFileError", "Distribution", "FitOptions", "load_case", "CASE_SCHEMA", "UNCERTAIN_KEYS"]
 
 #: Entries that may be given with an uncertainty (a table with std, or low and high), and their
 #: names in :attr:`Case.uncertainty`.
@@ -77,6 +78,22 @@ class Distribution:
         return f"uniform({self.loc:.6g} {unit}, {self.loc + self.scale:.6g} {unit})"
 
 
+@dataclass(frozen=True)
+class FitOptions:
+    """The ``[fit]`` table: what a fit to a measured record estimates besides F1 and F2."""
+
+    estimate_energy: bool = False
+    """Estimate E_S (else fixed at the case's value)."""
+    estimate_mass_factor: bool = False
+    """Estimate the mass factor c (else fixed by the mass model)."""
+    estimate_release_time: bool = True
+    """Estimate the release instant (else fixed at ``[record] release_time``)."""
+    absolute_sigma: bool = False
+    """Take the channels' noise levels as exact (no scaling of the covariance by the reduced chi-square)."""
+    use_observations: bool = True
+    """Use ``[observations]`` given with a scatter as two more data (alpha_F, t_F)."""
+
+
 class CaseFileError(QuickReleaseError):
     """A case file is malformed or one of its entries is missing, unknown or invalid."""
 
@@ -98,6 +115,13 @@ CASE_SCHEMA: dict[str, dict[str, tuple[str, str]]] = {
     "observations": {
         "alpha_final": ("angle", "an angle in (alpha0, pi/2), e.g. '0.7378 rad'"),
         "stop_time": ("time", "a positive time, e.g. '1.05 s'"),
+    },
+    "fit": {
+        "estimate_energy": ("bool", "true or false (estimate E_S from the record)"),
+        "estimate_mass_factor": ("bool", "true or false (estimate the mass factor c)"),
+        "estimate_release_time": ("bool", "true or false (estimate the release instant; default true)"),
+        "absolute_sigma": ("bool", "true or false (take the noise levels as exact: no chi-square scaling)"),
+        "use_observations": ("bool", "true or false (use [observations] with a scatter as data; default true)"),
     },
     "simulation": {
         "method": ("method", "'energy', 'rk' or 'explicit'"),
@@ -134,6 +158,10 @@ class Case:
     n_points: int = 1001
     t_end: float | None = None
     rk_method: str = "DOP853"
+    record: RecordSpec | None = None
+    """The measured record to fit (``[record]``), read by :func:`quickrelease.records.load_record`."""
+    fit: FitOptions = field(default_factory=FitOptions)
+    """Options of the fit to the record (``[fit]``)."""
     uncertainty: dict[str, Distribution] = field(default_factory=dict)
     """Inputs with a scatter (force, energy, alpha0, alpha_final, stop_time) and their distributions."""
     energy_given: bool = False
@@ -194,6 +222,10 @@ def _entry(source: str, section: str, key: str, value: Any) -> Any:
     where = f"[{section}] {key}" if section else key
     if kind == "str":
         if not isinstance(value, str):
+            raise _fail(source, where, value, expected)
+        return value
+    if kind == "bool":
+        if not isinstance(value, bool):
             raise _fail(source, where, value, expected)
         return value
     if kind == "int":
@@ -285,7 +317,7 @@ def load_case(path: str | Path) -> Case:
 def case_from_mapping(data: dict[str, Any], source: str = "<case>", base: Path | None = None) -> Case:
     """Build a Case from the parsed TOML mapping (see :func:`load_case`)."""
     base = base or Path.cwd()
-    sections = [s for s in CASE_SCHEMA if s]
+    sections = [s for s in CASE_SCHEMA if s] + ["record"]
     values: dict[str, Any] = {}
     for key, value in data.items():
         if isinstance(value, dict) and key in sections:
@@ -298,7 +330,7 @@ def case_from_mapping(data: dict[str, Any], source: str = "<case>", base: Path |
         table = data.get(section, {})
         if not isinstance(table, dict):
             raise _fail(source, section, table, f"a table [{section}]")
-        if section == "device":
+        if section in ("device", "record"):
             continue
         for key, value in table.items():
             if key not in CASE_SCHEMA[section]:
@@ -322,8 +354,15 @@ def case_from_mapping(data: dict[str, Any], source: str = "<case>", base: Path |
     if observations is not None and set(observations) != {"alpha_final", "stop_time"}:
         missing = sorted({"alpha_final", "stop_time"} - set(observations))
         raise CaseFileError(f"{source}: missing key [observations] {missing[0]} (give alpha_final and stop_time)")
-    if friction is None and observations is None:
-        raise CaseFileError(f"{source}: missing table [friction] (to simulate) or [observations] (to identify)")
+    record = None
+    if "record" in data:
+        try:
+            record = parse_record_spec(data["record"], source, base)
+        except QuickReleaseError as exc:
+            raise CaseFileError(str(exc)) from None
+    if friction is None and observations is None and record is None:
+        raise CaseFileError(f"{source}: missing table [friction] (to simulate), [observations] (to identify) "
+                            "or [record] (to fit)")
     uncertainty = {}
     for (section, key), name in UNCERTAIN_KEYS.items():
         value = values.get(f"{section}.{key}")
@@ -338,12 +377,13 @@ def case_from_mapping(data: dict[str, Any], source: str = "<case>", base: Path |
     P = values.get("test.force")
     E_S = values["test.energy"] if has_energy else strain_energy(P, alpha0, device).total
     sim = {k.split(".", 1)[1]: v for k, v in values.items() if k.startswith("simulation.")}
+    fit = FitOptions(**{k.split(".", 1)[1]: v for k, v in values.items() if k.startswith("fit.")})
     return Case(
         device=device, alpha0=alpha0, stored_energy=E_S, push_force=P,
         mass_model=values.get("test.mass_model", "distributed"),
         F1=values.get("friction.F1"), F2=values.get("friction.F2"),
         alpha_final=aF, stop_time=values.get("observations.stop_time"),
-        energy_given=has_energy, uncertainty=uncertainty,
+        energy_given=has_energy, uncertainty=uncertainty, record=record, fit=fit,
         title=values.get("title", Path(source).stem), notes=values.get("notes", ""), source=source,
         **sim,
     )

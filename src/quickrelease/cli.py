@@ -369,6 +369,158 @@ def sweep_command(
 
 @app.command()
 @_guard
+def synth(
+    case_file: Annotated[Path, typer.Argument(help="Case file: device, test set-up, and [friction] or [observations].")],
+    channels: Annotated[str, typer.Option("--channels", "-c", help="Comma list of alpha, alpha_dot, u, v, u_dot, v_dot, a_head, a_hinge.")] = "u,v,a_head",
+    rate: Annotated[str, typer.Option("--rate", help="Sampling rate, e.g. '500 Hz'.")] = "500 Hz",
+    noise: Annotated[list[str] | None, typer.Option("--noise", help="Noise std per channel, e.g. 'u=0.5 mm,a_head=0.05 m/s^2' (repeatable); defaults: alpha 0.002 rad, u and v 0.5 mm, velocities 5 mm/s, accelerations 0.05 m/s^2.")] = None,
+    offset: Annotated[list[str] | None, typer.Option("--offset", help="Constant offset per channel, e.g. 'u=2 mm,v=-3 mm' (repeatable).")] = None,
+    release_time: Annotated[str, typer.Option("--release-time", help="Release instant from the start of the record.")] = "0.5 s",
+    duration: Annotated[str | None, typer.Option("--duration", help="Record length (default: release + t_F + max(0.5 s, t_F/4)).")] = None,
+    seed: Annotated[int, typer.Option("--seed", help="Seed of the noise.")] = 0,
+    jitter: Annotated[float, typer.Option("--jitter", help="Uneven sampling: instants shifted by up to +-jitter/2 intervals, in [0, 1).")] = 0.0,
+    missing: Annotated[float, typer.Option("--missing", help="Share of missing samples per channel, in [0, 1).")] = 0.0,
+    out: Annotated[Path, typer.Option("--out", "-o", help="Record file to write (CSV).")] = Path("record.csv"),
+    case_out: Annotated[Path | None, typer.Option("--case-out", help="Also write a case file that fits this record.")] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """A synthetic record of the case's release (offsets, noise), and the precision a fit to it would have."""
+    import os
+
+    from .case import load_case
+    from .export import write_text
+    from .synth import case_toml, parse_channel_values, predicted_errors, synthesize
+    from .units import parse_quantity
+
+    case = load_case(case_file)
+    names = [c.strip() for c in channels.split(",") if c.strip()]
+    syn = synthesize(case, names, rate=parse_quantity(rate, "frequency", "--rate"),
+                     noise=parse_channel_values(noise or [], "--noise"),
+                     offsets=parse_channel_values(offset or [], "--offset"),
+                     release_time=parse_quantity(release_time, "time", "--release-time"),
+                     duration=None if duration is None else parse_quantity(duration, "time", "--duration"),
+                     seed=seed, jitter=jitter, missing=missing)
+    syn.write_csv(out)
+    pred = predicted_errors(case, syn)
+    rel_file = out.name if case_out is None else os.path.relpath(out.resolve(), case_out.resolve().parent)
+    table = syn.record_table(rel_file)
+    if case_out is not None:
+        write_text(case_toml(case, table, f"Fit to {out.name}"), case_out)
+    summary = {"file": str(out), "rows": int(syn.t.size), "rate_Hz": syn.rate, "channels": names,
+               "truth": syn.truth, "noise": syn.noise, "offsets": syn.offsets, "seed": seed,
+               "predicted": pred, "case_file": None if case_out is None else str(case_out)}
+    if as_json:
+        _print_json(summary)
+        return
+    t = syn.truth
+    typer.echo(f"Wrote {out} ({syn.t.size} rows at {syn.rate:g} Hz, channels {', '.join(names)}); friction "
+               f"{syn.notes[0].removeprefix('friction ')}: F1 = {t['F1']:.6g} N, F2 = {t['F2']:.6g} N; release at "
+               f"{t['release_time']:g} s, stop {t['stop_time']:.6g} s later at alpha_F = {t['alpha_final']:.6g} rad")
+    _table("Precision of a fit to such a record (Cramer-Rao bound at the truth)", [
+        ("F1", f"{pred['F1_se_N']:.4g} N", f"{100 * pred['F1_rel_se']:.3g}%"),
+        ("F2", f"{pred['F2_se_N']:.4g} N", f"{100 * pred['F2_rel_se']:.3g}%"),
+        ("correlation(F1, F2)", f"{pred['correlation_F1_F2']:+.4f}", ""),
+    ], ("", "standard error", "relative"))
+    if case_out is not None:
+        typer.echo(f"Wrote {case_out}: quickrelease fit {case_out}")
+    else:
+        typer.echo("To fit it, add to a case file:\n" + table)
+
+
+@app.command("fit")
+@_guard
+def fit_command(
+    case_file: Annotated[Path, typer.Argument(help="Case file with [record] (and/or [observations] with a scatter).")],
+    out: Annotated[Path | None, typer.Option("--out", "-o", help="Also write fit.json, figures and report.html here.")] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Fit F1 and F2 (with 95% intervals) to a measured record by weighted least squares."""
+    from .case import load_case
+    from .fit import fit_record
+
+    case = load_case(case_file)
+    if case.record is not None:
+        from .workflow import run_case, write_results
+
+        result = run_case(case)
+        fit = result.fit
+        paths = write_results(result, out) if out is not None else {}
+    else:
+        fit = fit_record(case)
+        paths = {}
+        if out is not None:
+            from .export import write_json
+
+            paths = {"fit": write_json(fit.summary(), out / "fit.json")}
+    summary = fit.summary()
+    if as_json:
+        _print_json(summary)
+        return
+    rows = []
+    for name in fit.names:
+        lo, hi = fit.ci95[name]
+        rows.append((name, f"{fit.estimates[name]:.6g}", f"{fit.std_errors[name]:.3g}", f"[{lo:.6g}, {hi:.6g}]"))
+    title = f"Fit of {case.title}: {'converged' if fit.converged else 'NOT converged'}, " \
+            f"reduced chi-square {fit.chi2_reduced:.4g}, start values from {fit.start_source}"
+    _table(title, rows, ("parameter (SI)", "estimate", "std. error", "95% interval"))
+    if fit.residual_rms:
+        _table("Channels", [(n, str(fit.samples[n]), f"{fit.noise[n]:.3g}", fit.noise_source[n],
+                             f"{fit.residual_rms[n]:.3g}") for n in fit.residual_rms],
+               ("channel", "samples", "noise (SI)", "from", "rms residual"))
+    i1, i2 = fit.names.index("F1"), fit.names.index("F2")
+    typer.echo(f"correlation(F1, F2) = {fit.correlation[i1, i2]:+.4f}; model stop t_F = {fit.stop_time:.6g} s at "
+               f"alpha_F = {fit.alpha_final:.6g} rad")
+    for text in (*fit.notes, *fit.warnings):
+        typer.echo(f"note: {text}" if text in fit.notes else f"warning: {text}")
+    if paths:
+        _listing(paths, out)
+
+
+@app.command()
+@_guard
+def campaign(
+    campaign_file: Annotated[Path, typer.Argument(help="Campaign file (TOML): shared device and record mapping, [[tests]].")],
+    out: Annotated[Path | None, typer.Option("--out", "-o", help="Also write campaign.json, the figure and report.html here.")] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Friction of every test of a campaign, and its laws in the load and the angle (F = a + b x)."""
+    from .campaign import VARIABLES, run_campaign
+
+    result = run_campaign(campaign_file)
+    paths = {}
+    if out is not None:
+        from .workflow import write_campaign_results
+
+        paths = write_campaign_results(result, out)
+    if as_json:
+        _print_json(result.summary())
+        return
+
+    def pm(value, se):
+        return f"{value:.2f}" + ("" if se is None else f" ± {se:.2g}")
+
+    _table(f"{result.title}: friction per test", [
+        (t.name, f"{(t.case.push_force or float('nan')) / 1e3:.0f}", f"{t.case.alpha0:.4g}", pm(t.F1, t.F1_se),
+         pm(t.F2, t.F2_se), t.method) for t in result.tests],
+        ("test", "P [kN]", "alpha0 [rad]", "F1 [N]", "F2 [N]", "from"))
+    rows = []
+    for law in result.laws.values():
+        _, _, _, scale, unit = VARIABLES[law.variable]
+        rows.append((f"{law.friction} = a + b {law.variable}", f"{law.intercept:.4g} ± {law.intercept_se:.2g}",
+                     f"{law.slope / scale:.4g} ± {law.slope_se / scale:.2g} N/{unit}", f"{law.p_value:.2g}",
+                     "yes" if law.significant else "no"))
+    _table("Friction laws (weighted least squares; p of slope = 0)", rows,
+           ("law", "a [N]", "b", "p", "significant at 5%"))
+    for friction, joint in result.joint.items():
+        terms = joint.summary()["terms"]
+        typer.echo(f"joint law {friction}: " + ", ".join(
+            f"{n} {v['value']:.4g} ± {v['se']:.2g} (p = {v['p_value']:.2g})" for n, v in terms.items()))
+    if paths:
+        _listing(paths, out)
+
+
+@app.command()
+@_guard
 def bench(
     quick: Annotated[bool, typer.Option("--quick", help="Smaller samples; skip the 1e8-sample Dask run.")] = False,
     as_json: JsonOpt = False,

@@ -19,7 +19,7 @@ from .response import Response
 from .statics import StrainEnergy
 
 __all__ = [
-    "fig13", "fig14", "fig15", "identification_figure", "strain_energy_figure", "save_figure",
+    "fig13", "fig14", "fig15", "identification_figure", "strain_energy_figure", "fit_figure", "save_figure",
     "state_diagram_data", "identification_curve_data",
 ]
 
@@ -202,6 +202,49 @@ def strain_energy_figure(strain: StrainEnergy):
     ax.set_xlim(0, max(values) * 1.35)
     ax.set_title(f"Stored strain energy (Eq. 2): $E_S$ = {strain.total:.1f} J\n"
                  f"at P = {strain.forces.P / 1e3:.0f} kN, $\\alpha_0$ = {strain.forces.alpha0:.4g} rad")
+    return fig
+
+
+def fit_figure(result):
+    """Measured and fitted channels of a fit to a record, each with its residuals (the +-2 sigma band shaded).
+
+    ``result`` is a :class:`quickrelease.fit.FitResult` with a record.
+    """
+    from .records import CHANNELS
+
+    names = list(result.record.channels)
+    n = len(names)
+    height = 1.0 + 2.6 * n
+    fig = _figure(7.0, height, left=0.11, right=0.98, bottom=0.5 / height, top=1.0 - 0.55 / height)
+    grid = fig.add_gridspec(3 * n - 1, 1, height_ratios=([3, 1.2, 0.5] * n)[:-1], hspace=0.1)
+    t_fine, curves = result.model_curves()
+    share = None
+    t_rel = result.release_time
+    for k, name in enumerate(names):
+        ch = result.record.channels[name]
+        unit = CHANNELS[name][1]
+        top = fig.add_subplot(grid[3 * k], sharex=share)
+        share = share or top
+        bottom = fig.add_subplot(grid[3 * k + 1], sharex=share)
+        top.plot(ch.t, ch.values, ".", ms=1.6, color=_COLORS["d"], alpha=0.6, label="measured")
+        top.plot(t_fine, curves[name], color=_COLORS["a"], lw=1.2, label="fitted model")
+        top.set_ylabel(f"{name} [{unit}]")
+        top.legend(loc="best", fontsize=7)
+        sigma = result.noise[name]
+        resid = ch.values - result.fitted[name]
+        bottom.axhspan(-2 * sigma, 2 * sigma, color=_COLORS["c"], alpha=0.15, lw=0)
+        bottom.plot(ch.t, resid, ".", ms=1.4, color=_COLORS["b"])
+        bottom.set_ylabel("resid.")
+        for ax in (top, bottom):
+            ax.axvline(t_rel, color=_COLORS["d"], lw=0.8, ls=":")
+            ax.axvline(t_rel + result.stop_time, color=_COLORS["d"], lw=0.8, ls="--")
+            if ax is not bottom or k < n - 1:
+                ax.tick_params(labelbottom=False)
+        top.set_title(f"{name}: rms residual {result.residual_rms[name]:.3g} {unit}, noise {sigma:.3g} {unit} "
+                      f"({result.noise_source[name]})", fontsize=8)
+    bottom.set_xlabel("record time [s] (dotted: release, dashed: stop)")
+    fig.suptitle(f"Fit to the record: $F_1$ = {result.F1:.1f} ± {result.std_errors['F1']:.2g} N, "
+                 f"$F_2$ = {result.F2:.1f} ± {result.std_errors['F2']:.2g} N")
     return fig
 
 

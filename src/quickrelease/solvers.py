@@ -92,6 +92,11 @@ class FirstIntegral:
         return self._rel.elapsed(np.asarray(w, dtype=float))
 
     @property
+    def alpha_dot0(self) -> float:
+        """Angular velocity just after release (Eq. 6) [rad/s]."""
+        return float(self._rel.rate_at(np.array([1.0]))[0])
+
+    @property
     def time_map(self) -> TimeMap:
         """t(w) as a piecewise Chebyshev series (built on first use)."""
         if self._time_map is None:

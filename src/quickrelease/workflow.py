@@ -15,12 +15,13 @@ from typing import Any
 
 from .case import Case
 from .errors import QuickReleaseError
+from .fit import FitResult, fit_record
 from .identify import Identification, identify_friction
 from .response import Response
 from .solvers import simulate
 from .statics import StrainEnergy
 
-__all__ = ["CaseResult", "run_case", "write_results", "render_figures", "FIGURES"]
+__all__ = ["CaseResult", "run_case", "write_results", "write_campaign_results", "render_figures", "FIGURES"]
 
 #: Figure stems and what they show.
 FIGURES = {
@@ -29,6 +30,7 @@ FIGURES = {
     "fig15_state_diagram": "Fig. 15: state diagram, numerical solutions over the analytic curve (Eq. 10)",
     "identification": "Stop time along the line of Eq. 13, with the measured t_F and the identified point",
     "strain_energy": "Strain energy stored before release by term (Eq. 2)",
+    "fit_channels": "Fit to the measured record: each channel measured and fitted, with its residuals",
 }
 
 
@@ -45,6 +47,8 @@ class CaseResult:
     """The identified friction (when the case has observations)."""
     state_responses: list[Response] = field(default_factory=list)
     """Numerical solutions checked against Eq. 10 in Fig. 15 (Runge-Kutta and Table 6)."""
+    fit: FitResult | None = None
+    """The fit to the measured record (when the case has a ``[record]``)."""
 
     def summary(self) -> dict[str, Any]:
         """The release summary: the keys of ``quickrelease simulate --json``."""
@@ -59,32 +63,37 @@ class CaseResult:
 
 
 def run_case(case: Case, *, state_diagram: bool = True) -> CaseResult:
-    """Do what the case asks: identify F1, F2 when observations are given, then simulate the release.
+    """Do what the case asks: fit a measured record, identify F1, F2 from stop observations, then simulate.
 
-    With observations, the identified friction is used for the simulation (a [friction] table, if
-    also present, is then only reported in the inputs).
+    With a ``[record]``, the fitted friction (and E_S, c when estimated) drives the simulation; else with
+    observations, the identified friction; a ``[friction]`` table, if also present, is then only
+    reported in the inputs.
     """
-    ident = None
+    ident = fit = None
+    E_S, mass_model = case.stored_energy, case.mass_model
     if case.has_observations:
         ident = identify_friction(case.alpha0, case.alpha_final, case.stop_time, stored_energy=case.stored_energy,
                                   device=case.device, mass_model=case.mass_model)
         F1, F2 = ident.F1, ident.F2
-    elif case.has_friction:
+    if case.record is not None:
+        fit = fit_record(case)
+        F1, F2, E_S, mass_model = fit.F1, fit.F2, fit.energy, fit.mass_factor
+    elif ident is None:
+        if not case.has_friction:
+            raise QuickReleaseError(f"{case.source}: nothing to do: give [friction] to simulate, [observations] "
+                                    "to identify or [record] to fit")
         F1, F2 = case.F1 or 0.0, case.F2 or 0.0
-    else:
-        raise QuickReleaseError(f"{case.source}: nothing to do: give [friction] to simulate or [observations] "
-                                "to identify")
-    common = dict(device=case.device, mass_model=case.mass_model)
-    response = simulate(case.stored_energy, case.alpha0, F1, F2, method=case.method, dt=case.dt,
+    common = dict(device=case.device, mass_model=mass_model)
+    response = simulate(E_S, case.alpha0, F1, F2, method=case.method, dt=case.dt,
                         n_points=case.n_points, t_end=case.t_end, rk_method=case.rk_method, **common)
     states: list[Response] = []
     if state_diagram:
         states.append(response if case.method == "rk" else
-                      simulate(case.stored_energy, case.alpha0, F1, F2, method="rk", **common))
+                      simulate(E_S, case.alpha0, F1, F2, method="rk", **common))
         states.append(response if case.method == "explicit" else
-                      simulate(case.stored_energy, case.alpha0, F1, F2, method="explicit", dt=case.dt, **common))
+                      simulate(E_S, case.alpha0, F1, F2, method="explicit", dt=case.dt, **common))
     return CaseResult(case=case, response=response, strain=case.strain(), identification=ident,
-                      state_responses=states)
+                      state_responses=states, fit=fit)
 
 
 def render_figures(result: CaseResult) -> dict[str, Any]:
@@ -100,6 +109,8 @@ def render_figures(result: CaseResult) -> dict[str, Any]:
         figs["identification"] = plots.identification_figure(result.identification)
     if result.strain is not None:
         figs["strain_energy"] = plots.strain_energy_figure(result.strain)
+    if result.fit is not None and result.fit.record is not None:
+        figs["fit_channels"] = plots.fit_figure(result.fit)
     return figs
 
 
@@ -151,6 +162,8 @@ def write_results(result: CaseResult, out: str | Path, *, figures: bool = True, 
         ident = result.identification_summary()
         if ident is not None:
             paths["identification"] = write_json(ident, out / "identification.json")
+        if result.fit is not None:
+            paths["fit"] = write_json(result.fit.summary(), out / "fit.json")
         paths["timeseries_csv"] = write_csv(result.response, out / "timeseries.csv")
         paths["timeseries_nc"] = write_netcdf(result.response, out / "timeseries.nc",
                                               attrs={"case": result.case.title})
@@ -178,4 +191,22 @@ def write_results(result: CaseResult, out: str | Path, *, figures: bool = True, 
         from .report import render_report
 
         paths["report"] = write_text(render_report(result, svgs), out / "report.html")
+    return paths
+
+
+def write_campaign_results(result, out: str | Path) -> dict[str, Path]:
+    """Write a campaign's results into ``out``: ``campaign.json``, ``figures/campaign_friction.png``/``.svg``
+    and the self-contained ``report.html``; returns the paths by name."""
+    from .campaign import campaign_figure
+    from .export import write_json, write_text
+    from .plots import save_figure
+    from .report import render_campaign_report
+
+    out = Path(out)
+    paths = {"campaign": write_json(result.summary(), out / "campaign.json")}
+    fig = campaign_figure(result)
+    for fmt, path in save_figure(fig, out / "figures", "campaign_friction").items():
+        paths[f"campaign_friction.{fmt}"] = path
+    svg = paths["campaign_friction.svg"].read_text(encoding="utf-8")
+    paths["report"] = write_text(render_campaign_report(result, {"campaign_friction": svg}), out / "report.html")
     return paths

@@ -1,0 +1,53 @@
+"""Regenerate the synthetic records of the examples (examples/records/*.csv) with quickrelease.synth.
+
+    python examples/make_records.py
+
+* ``paper_500Hz.csv`` (for ``fit.toml``): the paper's test (``paper.toml``: E_S = 2.90 kJ, alpha0 = 0.2 rad,
+  friction identified from Table 7's stop observations), head retraction u and opening v (draw-wire
+  sensors, 0.5 mm noise) and the head acceleration (0.05 m/s^2 noise) at 500 Hz, with 1 % jitter of the
+  sampling instants, 0.4 % missing samples, offsets of +1.5 mm on u and -2.0 mm on v, released 0.62 s
+  after the record starts. The same as
+  ``quickrelease synth paper.toml --channels u,v,a_head --rate 500Hz --offset "u=1.5 mm,v=-2 mm"
+  --release-time 0.62s --jitter 0.01 --missing 0.004 --seed 2024 --out records/paper_500Hz.csv``.
+* ``campaign_T*.csv`` (for ``campaign.toml``): six tests of the paper's device at different push forces
+  and angles, u and v at 200 Hz. The friction of these synthetic tests follows a law chosen for the
+  demonstration, not measured: F1 = 150 N + 0.17 N/kN * P at the hinges, F2 = 805 N on the rail
+  (independent of the load). ``quickrelease campaign campaign.toml`` recovers it.
+"""
+
+from pathlib import Path
+
+from quickrelease.case import load_case
+from quickrelease.statics import strain_energy
+from quickrelease.synth import synthesize
+
+HERE = Path(__file__).parent
+RECORDS = HERE / "records"
+
+#: The synthetic campaign: name, push force [kN], alpha0 [rad], release instant [s].
+CAMPAIGN = [("T1", 1000, 0.22, 0.41), ("T2", 1300, 0.18, 0.55), ("T3", 1600, 0.26, 0.47),
+            ("T4", 1900, 0.20, 0.62), ("T5", 2200, 0.24, 0.38), ("T6", 1450, 0.28, 0.50)]
+F1_LAW = (150.0, 0.17e-3)  # F1 = a + b P [N, N/N]
+F2_CONSTANT = 805.0
+
+
+def main() -> None:
+    RECORDS.mkdir(exist_ok=True)
+    paper = load_case(HERE / "paper.toml")
+    syn = synthesize(paper, ["u", "v", "a_head"], rate=500.0, offsets={"u": 1.5e-3, "v": -2.0e-3}, release_time=0.62,
+                     jitter=0.01, missing=0.004, seed=2024)
+    syn.write_csv(RECORDS / "paper_500Hz.csv")
+    print("paper_500Hz.csv", syn.truth)
+    for k, (name, force_kN, alpha0, release) in enumerate(CAMPAIGN):
+        P = force_kN * 1e3
+        case = paper.replace(push_force=P, alpha0=alpha0, energy_given=False, alpha_final=None, stop_time=None,
+                             stored_energy=strain_energy(P, alpha0, paper.device).total,
+                             F1=F1_LAW[0] + F1_LAW[1] * P, F2=F2_CONSTANT)
+        syn = synthesize(case, ["u", "v"], rate=200.0, offsets={"u": 1e-3 * (k - 2), "v": -1e-3 * k},
+                         release_time=release, seed=100 + k)
+        syn.write_csv(RECORDS / f"campaign_{name}.csv")
+        print(f"campaign_{name}.csv", {key: round(v, 6) for key, v in syn.truth.items()})
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,493 @@
+"""Measured records of a release: channels, their model values, and reading them from files.
+
+A record is a table of time and one or more channels measured on the device during a test:
+
+========== ===================================================== ==========
+channel    what                                                  SI unit
+========== ===================================================== ==========
+alpha      bar angle (e.g. from video)                           rad
+alpha_dot  bar angular velocity (e.g. a gyroscope on a bar)      rad/s
+u          retraction of a head along the rail (Table 4)         m
+v          outward opening of a central hinge (Table 4)          m
+u_dot      head velocity                                         m/s
+v_dot      central hinge velocity                                m/s
+a_head     head acceleration along the rail, u_ddot (Table 4)    m/s^2
+a_hinge    central hinge acceleration, v_ddot (Table 4)          m/s^2
+========== ===================================================== ==========
+
+The case file maps columns to channels and gives each channel's unit (``[record]``, see
+:func:`parse_record_spec`); :func:`load_record` reads the file (CSV, or any table pandas reads:
+Parquet, Feather, Excel, JSON), converts every channel to SI, drops rows without a time (reported),
+keeps missing samples out of each channel (reported, never interpolated over), and checks the time
+is increasing. Errors name the file and the column.
+
+Before the release the device rests at alpha0 (u = v = 0, no motion); :func:`channel_model` gives the
+model value of each channel from the state (alpha, alpha_dot, alpha_ddot).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from . import kinematics
+from .errors import QuickReleaseError
+from .units import parse_quantity
+
+__all__ = [
+    "CHANNELS", "DISPLACEMENT_CHANNELS", "RecordError", "ChannelSpec", "RecordSpec", "Channel", "Record",
+    "RATE_OF", "channel_model", "release_channels", "parse_record_spec", "load_record", "read_table", "detect_release",
+]
+
+#: Channel name -> (quantity kind, SI unit, description).
+CHANNELS: dict[str, tuple[str, str, str]] = {
+    "alpha": ("angle", "rad", "bar angle alpha (e.g. from video)"),
+    "alpha_dot": ("angular_velocity", "rad/s", "bar angular velocity"),
+    "u": ("length", "m", "head retraction u along the rail (Table 4)"),
+    "v": ("length", "m", "central hinge opening v (Table 4)"),
+    "u_dot": ("velocity", "m/s", "head velocity"),
+    "v_dot": ("velocity", "m/s", "central hinge velocity"),
+    "a_head": ("acceleration", "m/s^2", "head acceleration along the rail, u_ddot (Table 4)"),
+    "a_hinge": ("acceleration", "m/s^2", "central hinge acceleration, v_ddot (Table 4)"),
+}
+#: Channels that carry a constant offset by default (a sensor zero is never exactly zero).
+DISPLACEMENT_CHANNELS = ("alpha", "u", "v")
+
+
+class RecordError(QuickReleaseError):
+    """A record file or its channel mapping is unusable; the message names the file and the column."""
+
+
+def channel_model(name: str, alpha, alpha_dot, alpha_ddot, alpha0: float, L1: float) -> np.ndarray:
+    """Model value of channel ``name`` from the state (Tables 4-5) [SI unit of the channel].
+
+    Parameters
+    ----------
+    alpha, alpha_dot, alpha_ddot : array
+        Angle [rad], angular velocity [rad/s] and acceleration [rad/s^2] at the sample times.
+    alpha0 : float
+        Angle at release [rad] (u and v are measured from it).
+    L1 : float
+        Bar length [m].
+    """
+    if name == "alpha":
+        return np.asarray(alpha, dtype=float)
+    if name == "alpha_dot":
+        return np.asarray(alpha_dot, dtype=float)
+    if name == "u":
+        return kinematics.retraction(alpha, alpha0, L1)
+    if name == "v":
+        return kinematics.opening(alpha, alpha0, L1)
+    if name == "u_dot":
+        return kinematics.retraction_rate(alpha, alpha_dot, L1)
+    if name == "v_dot":
+        return kinematics.opening_rate(alpha, alpha_dot, L1)
+    if name == "a_head":
+        return kinematics.retraction_acceleration(alpha, alpha_dot, alpha_ddot, L1)
+    if name == "a_hinge":
+        return kinematics.opening_acceleration(alpha, alpha_dot, alpha_ddot, L1)
+    raise QuickReleaseError(f"unknown channel {name!r}; valid: {', '.join(CHANNELS)}")
+
+
+#: Rate channels and the displacement channel they are the first (velocities) or second (accelerations)
+#: derivative of (see :func:`release_channels` on sampling windows).
+RATE_OF = {"alpha_dot": "alpha", "u_dot": "u", "v_dot": "v", "a_head": "u", "a_hinge": "v"}
+_ACCELERATIONS = ("a_head", "a_hinge")
+#: Gauss-Legendre nodes and weights on [0, 1] for the window averages of velocities.
+_GL_Y, _GL_W = (lambda x, w: (0.5 * (x + 1.0), 0.5 * w))(*np.polynomial.legendre.leggauss(4))
+
+
+def _accelerations(fi, alpha, alpha_dot):
+    from .dynamics import angular_acceleration
+
+    return angular_acceleration(alpha, alpha_dot, fi.F1, fi.F2, fi.m1, fi.m2, fi.L1, fi.c)
+
+
+def release_channels(names, t, release_time: float, release, window: float = 0.0) -> dict[str, np.ndarray]:
+    """Model values of the channels ``names`` at record times ``t`` for a release at ``release_time``.
+
+    ``release`` is the energy solution of the release (:class:`quickrelease.solvers.FirstIntegral`). The
+    device rests at alpha0 before the release and at the end angle after the motion; in between the
+    state comes from the first integral (Eq. 9-10) and the angular acceleration from the equation of
+    motion (Eq. 3/4), which is 0 at rest (friction balances inertia). SI units throughout.
+
+    With ``window`` > 0 (the sampling interval Delta [s]), rate channels are the average of the quantity
+    over a triangular window of +-Delta about each sample, the simplest model of an anti-aliased
+    acquisition: a velocity is ``(1/Delta^2) int_0^Delta (x(t + tau) - x(t - tau)) dtau`` (4-point Gauss)
+    and an acceleration ``(x(t + Delta) - 2 x(t) + x(t - Delta)) / Delta^2``, both exact for the window,
+    with x the displacement it derives from. For accelerations x has the velocity jump of the model's
+    instantaneous release removed (before it, x continues with the initial velocity): a real release takes
+    milliseconds and no accelerometer records a Dirac impulse. The model's jumps (the velocity at the
+    release, the acceleration at the release and at the stop) then reach the samples continuously and
+    always through a sample in transition, so a fit can move the release and the stop across samples.
+    Displacement channels are point values.
+    """
+    s = np.asarray(t, dtype=float) - release_time
+    fi = release
+    n = s.size
+    point = [name for name in names if window <= 0.0 or name not in RATE_OF]
+    velocities = [name for name in names if name not in point and name not in _ACCELERATIONS]
+    accelerations = [name for name in names if name not in point and name in _ACCELERATIONS]
+    # one inversion of the time map for every time needed
+    parts = [s] if point or accelerations else []
+    if accelerations:
+        parts += [s - window, s + window]
+    if velocities:
+        parts += [s + window * y for y in _GL_Y] + [s - window * y for y in _GL_Y]
+    times = np.concatenate(parts)
+    alpha, alpha_dot = fi.state_at(times)
+    out: dict[str, np.ndarray] = {}
+    if point:
+        a, ad = alpha[:n], alpha_dot[:n]
+        add = _accelerations(fi, a, ad)
+        for name in point:
+            out[name] = channel_model(name, a, ad, add, fi.alpha0, fi.L1)
+    k = 1 if point or accelerations else 0
+    if accelerations:
+        rate0 = fi.alpha_dot0
+        x = {}
+        for j, part in enumerate((slice(0, n), slice(n, 2 * n), slice(2 * n, 3 * n))):
+            for name in accelerations:
+                base = RATE_OF[name]
+                # the velocity jump removed: before the release the displacement continues at the initial rate
+                rest = times[part] <= 0.0
+                value = channel_model(base, alpha[part], alpha_dot[part], 0.0, fi.alpha0, fi.L1)
+                slope = channel_model(base + "_dot", np.full(1, fi.alpha0), np.full(1, rate0), 0.0, fi.alpha0,
+                                      fi.L1)[0]
+                x[(name, j)] = np.where(rest, slope * times[part], value)
+        for name in accelerations:
+            out[name] = (x[(name, 2)] - 2.0 * x[(name, 0)] + x[(name, 1)]) / window**2
+        k = 3
+    if velocities:
+        m = _GL_Y.size
+        plus = [slice((k + j) * n, (k + j + 1) * n) for j in range(m)]
+        minus = [slice((k + m + j) * n, (k + m + j + 1) * n) for j in range(m)]
+        for name in velocities:
+            base = RATE_OF[name]
+            acc = np.zeros(n)
+            for w, sp, sm in zip(_GL_W, plus, minus, strict=True):
+                acc += w * (channel_model(base, alpha[sp], alpha_dot[sp], 0.0, fi.alpha0, fi.L1)
+                            - channel_model(base, alpha[sm], alpha_dot[sm], 0.0, fi.alpha0, fi.L1))
+            out[name] = acc / window
+    return {name: out[name] for name in names}
+
+
+# -- the mapping in the case file --------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class ChannelSpec:
+    """How one channel is read: its column, unit, scale, noise level and whether it has an offset."""
+
+    name: str
+    column: str
+    unit: str
+    """Unit of the column's numbers (pint syntax); the channel's SI unit when not given."""
+    factor: float
+    """SI value of one ``unit`` times ``scale``."""
+    noise: float | None = None
+    """Noise standard deviation [SI]; None: estimated from the pre-release segment."""
+    offset: bool = False
+    """Estimate a constant offset of this channel."""
+    file: Path | None = None
+    """A file of its own (time in the same column name), else the record's file."""
+
+
+@dataclass(frozen=True)
+class RecordSpec:
+    """The ``[record]`` table of a case file, validated (the data are read by :func:`load_record`)."""
+
+    file: Path
+    time_column: str
+    time_factor: float
+    """SI value of one unit of the time column [s]."""
+    channels: dict[str, ChannelSpec]
+    release_time: float | None = None
+    """Start value of the release instant [s, record time], else detected."""
+    source: str = "<record>"
+    """The case file the mapping came from (for messages)."""
+
+
+_CHANNEL_KEYS = ("column", "unit", "noise", "offset", "scale", "file")
+_RECORD_KEYS = ("file", "time", "release_time", "channels")
+
+
+def _unit_factor(unit: str, kind: str, where: str) -> float:
+    try:
+        return parse_quantity(f"1 {unit}", kind, where)
+    except QuickReleaseError as exc:
+        raise RecordError(str(exc)) from None
+
+
+def parse_record_spec(table: Any, source: str, base: Path) -> RecordSpec:
+    """Validate the ``[record]`` table of a case file.
+
+    ``file`` (relative to the case file), ``time`` (a column name in seconds, or a table
+    ``{column, unit}``), optional ``release_time`` (a start value), and ``[record.channels]``: for each
+    channel of :data:`CHANNELS` a column name (SI unit) or a table with ``column`` and optionally
+    ``unit``, ``noise`` (standard deviation, with units), ``offset`` (bool: estimate a constant offset;
+    default true for alpha, u, v), ``scale`` (a factor, e.g. -1 for a reversed sensor axis) and ``file``
+    (a separate file with the same time column).
+    """
+    where = f"{source} [record]"
+    if not isinstance(table, dict):
+        raise RecordError(f"{where}: expected a table")
+    unknown = sorted(set(table) - set(_RECORD_KEYS))
+    if unknown:
+        raise RecordError(f"{where}: unknown key {unknown[0]!r}; valid: {', '.join(_RECORD_KEYS)}")
+    for key in ("file", "time", "channels"):
+        if key not in table:
+            raise RecordError(f"{where}: missing key {key!r}")
+    if not isinstance(table["file"], str):
+        raise RecordError(f"{where}: file = {table['file']!r}: expected a path")
+    file = Path(table["file"])
+    file = file if file.is_absolute() else base / file
+    time = table["time"]
+    if isinstance(time, str):
+        time_column, time_factor = time, 1.0
+    elif isinstance(time, dict) and set(time) <= {"column", "unit"} and isinstance(time.get("column"), str):
+        time_column = time["column"]
+        time_factor = _unit_factor(str(time.get("unit", "s")), "time", f"{where} time.unit")
+    else:
+        raise RecordError(f"{where}: time = {time!r}: expected a column name or {{column = ..., unit = ...}}")
+    release = None
+    if "release_time" in table:
+        try:
+            release = parse_quantity(table["release_time"], "time", "release_time")
+        except QuickReleaseError as exc:
+            raise RecordError(f"{where}: {exc}") from None
+    channels_table = table["channels"]
+    if not isinstance(channels_table, dict) or not channels_table:
+        raise RecordError(f"{where}: channels: expected a table mapping channels ({', '.join(CHANNELS)}) to columns")
+    channels = {}
+    for name, entry in channels_table.items():
+        channels[name] = _channel_spec(name, entry, f"{where} channels.{name}", base)
+    return RecordSpec(file=file, time_column=time_column, time_factor=time_factor, channels=channels,
+                      release_time=release, source=source)
+
+
+def _channel_spec(name: str, entry: Any, where: str, base: Path) -> ChannelSpec:
+    if name not in CHANNELS:
+        raise RecordError(f"{where}: unknown channel {name!r}; valid: {', '.join(CHANNELS)}")
+    kind, si_unit, _ = CHANNELS[name]
+    if isinstance(entry, str):
+        entry = {"column": entry}
+    if not isinstance(entry, dict):
+        raise RecordError(f"{where}: expected a column name or a table {{column = ..., unit = ...}}")
+    unknown = sorted(set(entry) - set(_CHANNEL_KEYS))
+    if unknown:
+        raise RecordError(f"{where}: unknown key {unknown[0]!r}; valid: {', '.join(_CHANNEL_KEYS)}")
+    if not isinstance(entry.get("column"), str):
+        raise RecordError(f"{where}: missing key 'column' (the column holding channel {name})")
+    unit = str(entry.get("unit", si_unit))
+    factor = _unit_factor(unit, kind, f"{where}.unit")
+    scale = entry.get("scale", 1.0)
+    if isinstance(scale, bool) or not isinstance(scale, int | float) or not math.isfinite(scale) or scale == 0:
+        raise RecordError(f"{where}: scale = {scale!r}: expected a nonzero number (e.g. -1 for a reversed axis)")
+    noise = None
+    if "noise" in entry:
+        try:
+            noise = parse_quantity(entry["noise"], kind, "noise")
+        except QuickReleaseError as exc:
+            raise RecordError(f"{where}: {exc}") from None
+        if not (math.isfinite(noise) and noise > 0):
+            raise RecordError(f"{where}: noise = {entry['noise']!r}: expected a positive standard deviation")
+    offset = entry.get("offset", name in DISPLACEMENT_CHANNELS)
+    if not isinstance(offset, bool):
+        raise RecordError(f"{where}: offset = {offset!r}: expected true or false")
+    file = None
+    if "file" in entry:
+        file = Path(str(entry["file"]))
+        file = file if file.is_absolute() else base / file
+    return ChannelSpec(name=name, column=entry["column"], unit=unit, factor=factor * float(scale), noise=noise,
+                       offset=offset, file=file)
+
+
+# -- the data ------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True, eq=False)
+class Channel:
+    """One channel's valid samples, SI units (missing samples removed)."""
+
+    spec: ChannelSpec
+    t: np.ndarray
+    """Sample times [s, record time]."""
+    values: np.ndarray
+    """Measured values [SI unit of the channel]."""
+    index: np.ndarray
+    """Row of each sample in the record's time axis."""
+    missing: int
+    """Samples missing (NaN or empty) in this channel, skipped."""
+
+    @property
+    def name(self) -> str:
+        return self.spec.name
+
+    @property
+    def unit(self) -> str:
+        return CHANNELS[self.spec.name][1]
+
+
+@dataclass(frozen=True, eq=False)
+class Record:
+    """A measured record: a time axis and channels on it (SI)."""
+
+    file: Path
+    t: np.ndarray
+    """The time axis (rows with a time) [s]."""
+    channels: dict[str, Channel]
+    dropped_rows: int = 0
+    """Rows without a time value, dropped."""
+    release_time: float | None = None
+    """Start value of the release instant from the case file [s]."""
+    notes: list[str] = field(default_factory=list)
+    """What was found and done while reading (missing samples, dropped rows)."""
+
+    @property
+    def end(self) -> float:
+        """Time of the last valid sample of any channel [s]."""
+        return max(float(ch.t[-1]) for ch in self.channels.values())
+
+    def sampling_interval(self) -> float:
+        """Median time step [s]."""
+        return float(np.median(np.diff(self.t))) if self.t.size > 1 else float("nan")
+
+
+_READERS = {".csv": "read_csv", ".txt": "read_csv", ".tsv": "read_csv", ".parquet": "read_parquet",
+            ".feather": "read_feather", ".xlsx": "read_excel", ".xls": "read_excel", ".json": "read_json",
+            ".h5": "read_hdf", ".hdf5": "read_hdf"}
+
+
+def read_table(path: Path):
+    """Read a table with pandas, by extension (CSV for anything unknown); RecordError naming the file."""
+    import pandas as pd
+
+    reader = _READERS.get(path.suffix.lower(), "read_csv")
+    kwargs: dict[str, Any] = {"sep": "\t"} if path.suffix.lower() == ".tsv" else {}
+    if not path.exists():
+        raise RecordError(f"{path}: record file not found")
+    try:
+        return getattr(pd, reader)(path, **kwargs)
+    except ImportError as exc:
+        raise RecordError(f"{path}: reading {path.suffix} files needs an extra package ({exc})") from None
+    except Exception as exc:  # pandas raises many kinds: parser errors, bad files
+        raise RecordError(f"{path}: cannot read the table ({type(exc).__name__}: {str(exc).splitlines()[0]})") \
+            from None
+
+
+def _numeric(frame, column: str, path: Path) -> np.ndarray:
+    import pandas as pd
+
+    values = pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=float)
+    raw = frame[column]
+    bad = np.isnan(values) & raw.notna().to_numpy() & (raw.astype(str).str.strip() != "").to_numpy()
+    if np.any(bad):
+        row = int(np.nonzero(bad)[0][0])
+        raise RecordError(f"{path}: column {column!r}: non-numeric value {raw.iloc[row]!r} at row {row + 1}")
+    return values
+
+
+def _time_axis(frame, spec: RecordSpec, path: Path) -> tuple[np.ndarray, np.ndarray]:
+    if spec.time_column not in frame.columns:
+        columns = ", ".join(map(str, frame.columns))
+        raise RecordError(f"{path}: no time column {spec.time_column!r} (columns: {columns})")
+    t = _numeric(frame, spec.time_column, path) * spec.time_factor
+    rows = np.nonzero(np.isfinite(t))[0]
+    if rows.size < 2:
+        raise RecordError(f"{path}: column {spec.time_column!r}: fewer than two time values")
+    tt = t[rows]
+    steps = np.diff(tt)
+    if np.any(steps <= 0):
+        k = int(np.nonzero(steps <= 0)[0][0])
+        raise RecordError(f"{path}: column {spec.time_column!r}: time is not increasing at row {rows[k + 1] + 1} "
+                          f"({tt[k + 1]:.6g} s after {tt[k]:.6g} s)")
+    return tt, rows
+
+
+def load_record(spec: RecordSpec) -> Record:
+    """Read the record a case file points to, as SI channels on one time axis.
+
+    Raises
+    ------
+    RecordError
+        No time column, time not increasing, a column missing or not numeric, a unit of the wrong
+        dimension, a channel file of another length, an all-missing channel; the message names the file
+        and the column.
+    """
+    frames: dict[Path, Any] = {}
+
+    def frame_of(path: Path):
+        if path not in frames:
+            frames[path] = read_table(path)
+        return frames[path]
+
+    main = frame_of(spec.file)
+    t, rows = _time_axis(main, spec, spec.file)
+    notes = []
+    dropped = int(len(main) - rows.size)
+    if dropped:
+        notes.append(f"{spec.file.name}: {dropped} row(s) without a time value dropped")
+    channels = {}
+    for name, cs in spec.channels.items():
+        path = cs.file or spec.file
+        frame = frame_of(path)
+        if cs.column not in frame.columns:
+            raise RecordError(f"{path}: no column {cs.column!r} for channel {name} "
+                              f"(columns: {', '.join(map(str, frame.columns))})")
+        if cs.file is not None and len(frame) != len(main):
+            raise RecordError(f"{path}: column {cs.column!r} has {len(frame)} rows, the time column "
+                              f"{spec.time_column!r} of {spec.file.name} has {len(main)}")
+        values = _numeric(frame, cs.column, path)[rows] * cs.factor
+        ok = np.isfinite(values)
+        if not np.any(ok):
+            raise RecordError(f"{path}: column {cs.column!r} (channel {name}): all values missing")
+        missing = int(values.size - ok.sum())
+        if missing:
+            notes.append(f"{path.name}: column {cs.column!r}: {missing} missing sample(s) skipped (not interpolated)")
+        idx = np.nonzero(ok)[0]
+        channels[name] = Channel(spec=cs, t=t[idx], values=values[idx], index=idx, missing=missing)
+    return Record(file=spec.file, t=t, channels=channels, dropped_rows=dropped, release_time=spec.release_time,
+                  notes=notes)
+
+
+def detect_release(record: Record) -> float:
+    """A start value of the release instant: where the record first leaves its initial rest [s].
+
+    For each channel: the level and scatter of the first tenth of the record (median, MAD), and the
+    first of four consecutive samples more than eight scatters away; for displacement channels the
+    departure is extrapolated back to the rest level along the first samples' slope. The earliest
+    channel wins.
+    """
+    best = math.inf
+    for ch in record.channels.values():
+        n0 = max(10, ch.values.size // 10)
+        if ch.values.size < n0 + 5:
+            continue
+        head = ch.values[:n0]
+        level = float(np.median(head))
+        spread = 1.4826 * float(np.median(np.abs(head - level)))
+        spread = max(spread, 1e-12 * max(1.0, float(np.max(np.abs(ch.values)))))
+        away = np.abs(ch.values - level) > 8.0 * spread
+        run = away[:-3] & away[1:-2] & away[2:-1] & away[3:]
+        hits = np.nonzero(run)[0]
+        if not hits.size:
+            continue
+        i = int(hits[0])
+        t_hit = float(ch.t[i])
+        if ch.name in DISPLACEMENT_CHANNELS and i + 3 < ch.t.size:
+            slope = (ch.values[i + 3] - ch.values[i]) / (ch.t[i + 3] - ch.t[i])
+            if slope != 0:
+                back = (ch.values[i] - level) / slope
+                if 0 <= back <= t_hit - float(ch.t[0]):
+                    t_hit -= back
+        else:
+            t_hit = float(ch.t[max(i - 1, 0)])
+        best = min(best, t_hit)
+    if not math.isfinite(best):
+        raise RecordError(f"{record.file}: no release found: no channel leaves its initial level "
+                          "(give [record] release_time)")
+    return best
+

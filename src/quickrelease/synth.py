@@ -1,0 +1,254 @@
+"""Synthetic records: what the instruments would have recorded, from the model, to plan a test.
+
+:func:`synthesize` samples the release of a case (friction from ``[friction]``, or identified from
+``[observations]``) on a chosen set of channels at a chosen rate, from a record start at rest through a
+release instant to well after the stop, and adds what real records have: a constant offset per channel,
+Gaussian noise, optionally jitter of the sampling instants (uneven sampling) and missing samples.
+:func:`predicted_errors` answers the planning question directly: the standard errors of F1 and F2 a fit
+to such a record would have (the Cramer-Rao bound: the fit's covariance at the truth, noise-free).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .case import Case, FitOptions
+from .errors import ParameterError, QuickReleaseError
+from .records import CHANNELS, DISPLACEMENT_CHANNELS, Channel, ChannelSpec, Record, release_channels
+from .solvers import FirstIntegral
+
+__all__ = ["DEFAULT_NOISE", "SyntheticRecord", "synthesize", "predicted_errors", "case_friction",
+           "parse_channel_values", "case_toml"]
+
+#: Default noise standard deviations [SI]: video angle, gyroscope, draw-wire or LVDT displacements,
+#: velocity transducers, accelerometers (about 5 mg).
+DEFAULT_NOISE = {"alpha": 0.002, "alpha_dot": 0.01, "u": 0.5e-3, "v": 0.5e-3, "u_dot": 5e-3, "v_dot": 5e-3,
+                 "a_head": 0.05, "a_hinge": 0.05}
+
+
+def case_friction(case: Case) -> tuple[float, float, str]:
+    """F1, F2 of a case: ``[friction]``, else identified from ``[observations]`` (Eq. 11-13) [N]."""
+    if case.has_friction:
+        return case.F1 or 0.0, case.F2 or 0.0, "[friction]"
+    if case.has_observations:
+        from .identify import identify_friction
+
+        ident = identify_friction(case.alpha0, case.alpha_final, case.stop_time, stored_energy=case.stored_energy,
+                                  device=case.device, mass_model=case.mass_model)
+        return ident.F1, ident.F2, "identified from [observations]"
+    raise QuickReleaseError(f"{case.source}: no friction to synthesize a record with: give [friction] or "
+                            "[observations]")
+
+
+def _column(name: str) -> str:
+    return f"{name}_{CHANNELS[name][1].replace('/', '_').replace('^', '')}"
+
+
+@dataclass(frozen=True, eq=False)
+class SyntheticRecord:
+    """A synthetic record and the truth behind it (SI units)."""
+
+    t: np.ndarray
+    """Sample times from the start of the record [s]."""
+    data: dict[str, np.ndarray]
+    """Channel -> recorded values (offset and noise added; NaN where a sample is missing)."""
+    clean: dict[str, np.ndarray]
+    """Channel -> model values without offset and noise."""
+    truth: dict[str, float]
+    """F1, F2 [N], energy [J], mass_factor, alpha0, release_time, stop_time [s], alpha_final [rad]."""
+    noise: dict[str, float]
+    offsets: dict[str, float]
+    rate: float
+    """Sampling rate [Hz]."""
+    seed: int
+    notes: list[str] = field(default_factory=list)
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """The table as written: ``t_s`` and one column per channel, SI units in the names."""
+        return {"t_s": self.t, **{_column(n): v for n, v in self.data.items()}}
+
+    def to_pandas(self):
+        import pandas as pd
+
+        return pd.DataFrame(self.columns())
+
+    def write_csv(self, path: str | Path) -> Path:
+        """Write the record as CSV (atomically); missing samples are empty fields."""
+        from .export import atomic_path
+
+        cols = self.columns()
+        names = list(cols)
+        with atomic_path(path) as tmp:
+            with open(tmp, "w", encoding="utf-8", newline="") as fh:
+                fh.write(",".join(names) + "\n")
+                for row in np.column_stack([cols[n] for n in names]):
+                    fh.write(",".join("" if not np.isfinite(v) else f"{v:.10g}" for v in row) + "\n")
+        return Path(path)
+
+    def record_table(self, file: str) -> str:
+        """The ``[record]`` table of a case file that reads this record (to paste into a case file)."""
+        lines = ["[record]", f'file = "{file}"', 'time = "t_s"', "", "[record.channels]"]
+        for name in self.data:
+            lines.append(f'{name} = {{ column = "{_column(name)}", unit = "{CHANNELS[name][1]}" }}')
+        return "\n".join(lines) + "\n"
+
+    def record(self, *, noise_free: bool = False) -> Record:
+        """The record as :func:`quickrelease.fit.fit_record` takes it (noise levels given, offsets estimated
+        on displacement channels)."""
+        channels = {}
+        for name, values in (self.clean if noise_free else self.data).items():
+            ok = np.nonzero(np.isfinite(values))[0]
+            spec = ChannelSpec(name=name, column=_column(name), unit=CHANNELS[name][1], factor=1.0,
+                               noise=self.noise[name], offset=name in DISPLACEMENT_CHANNELS)
+            channels[name] = Channel(spec=spec, t=self.t[ok], values=values[ok], index=ok,
+                                     missing=int(values.size - ok.size))
+        return Record(file=Path("<synthetic>"), t=self.t, channels=channels,
+                      release_time=self.truth["release_time"])
+
+
+def synthesize(case: Case, channels: list[str] | tuple[str, ...], *, rate: float, noise: dict[str, float] | None = None,
+               release_time: float = 0.5, duration: float | None = None, offsets: dict[str, float] | None = None,
+               seed: int = 0, jitter: float = 0.0, missing: float = 0.0) -> SyntheticRecord:
+    """A synthetic record of the case's release.
+
+    Parameters
+    ----------
+    case : Case
+        Device, E_S, alpha0, mass model, and friction (``[friction]`` or ``[observations]``).
+    channels : list of str
+        Channels of :data:`quickrelease.records.CHANNELS`.
+    rate : float
+        Sampling rate [Hz].
+    noise : dict, optional
+        Noise standard deviation per channel [SI]; :data:`DEFAULT_NOISE` for the others.
+    release_time : float
+        Release instant from the start of the record [s] (the record before it is at rest).
+    duration : float, optional
+        Record length [s]; default: release + t_F + max(0.5 s, t_F / 4).
+    offsets : dict, optional
+        Constant offset per channel [SI] (default 0).
+    seed : int
+        Seed of the noise, jitter and missing samples.
+    jitter : float
+        Sampling instants shifted by up to +-jitter/2 sampling intervals (uniform), in [0, 1).
+    missing : float
+        Share of samples missing (NaN) in each channel, in [0, 1).
+    """
+    unknown = [c for c in channels if c not in CHANNELS]
+    if unknown or not channels:
+        raise ParameterError("channels", ",".join(unknown) or "(none)", f"a list of {', '.join(CHANNELS)}")
+    if not (math.isfinite(rate) and rate > 0):
+        raise ParameterError("rate", rate, "(0, inf)", "Hz")
+    if not (math.isfinite(release_time) and release_time > 0):
+        raise ParameterError("release_time", release_time, "(0, inf)", "s")
+    if not 0.0 <= jitter < 1.0:
+        raise ParameterError("jitter", jitter, "[0, 1)")
+    if not 0.0 <= missing < 1.0:
+        raise ParameterError("missing", missing, "[0, 1)")
+    noise = {**DEFAULT_NOISE, **(noise or {})}
+    for name in channels:
+        if not (math.isfinite(noise[name]) and noise[name] >= 0):
+            raise ParameterError(f"noise of {name}", noise[name], "[0, inf)", CHANNELS[name][1])
+    offsets = {name: float((offsets or {}).get(name, 0.0)) for name in channels}
+    F1, F2, how = case_friction(case)
+    d = case.device
+    fi = FirstIntegral(case.stored_energy, case.alpha0, F1, F2, d.m1, d.m2, d.L1, case.mass_factor)
+    t_stop = fi.stop_time()
+    if duration is None:
+        duration = release_time + t_stop + max(0.5, 0.25 * t_stop)
+    if not (math.isfinite(duration) and duration > release_time):
+        raise ParameterError("duration", duration, f"(release_time, inf) = ({release_time:g}, inf)", "s")
+    rng = np.random.default_rng(seed)
+    n = int(math.floor(duration * rate)) + 1
+    t = np.arange(n) / rate
+    if jitter:
+        t = t + (rng.uniform(-0.5, 0.5, n) * jitter / rate)
+        t[0] = max(t[0], 0.0)
+    clean = release_channels(list(channels), t, release_time, fi, 1.0 / rate)
+    data = {}
+    for name in channels:
+        values = clean[name] + offsets[name] + rng.normal(0.0, 1.0, n) * noise[name]
+        if missing:
+            values[rng.uniform(0.0, 1.0, n) < missing] = np.nan
+        data[name] = values
+    truth = {"F1": float(F1), "F2": float(F2), "energy": float(case.stored_energy), "mass_factor": case.mass_factor,
+             "alpha0": case.alpha0, "release_time": float(release_time), "stop_time": float(t_stop),
+             "alpha_final": float(fi.alpha_final)}
+    return SyntheticRecord(t=t, data=data, clean=clean, truth=truth, noise={n_: noise[n_] for n_ in channels},
+                           offsets=offsets, rate=float(rate), seed=int(seed), notes=[f"friction {how}"])
+
+
+def predicted_errors(case: Case, synthetic: SyntheticRecord, options: FitOptions | None = None) -> dict[str, Any]:
+    """Standard errors a fit to such a record would have: the covariance at the truth (Cramer-Rao bound).
+
+    The fit of :func:`quickrelease.fit.fit_record` to the noise-free record, with the synthetic noise
+    levels as exact weights: ``sqrt(diag((J^T J)^-1))`` at the true parameters.
+
+    Returns
+    -------
+    dict
+        ``F1_se_N``, ``F2_se_N``, ``correlation_F1_F2``, and ``std_errors`` of every estimated parameter.
+    """
+    from dataclasses import replace
+
+    from .fit import fit_record
+
+    opts = replace(options or case.fit, absolute_sigma=True, use_observations=False)
+    res = fit_record(case, synthetic.record(noise_free=True), options=opts)
+    i1, i2 = res.names.index("F1"), res.names.index("F2")
+    return {"F1_se_N": res.std_errors["F1"], "F2_se_N": res.std_errors["F2"],
+            "F1_rel_se": res.std_errors["F1"] / synthetic.truth["F1"] if synthetic.truth["F1"] else float("nan"),
+            "F2_rel_se": res.std_errors["F2"] / synthetic.truth["F2"] if synthetic.truth["F2"] else float("nan"),
+            "correlation_F1_F2": float(res.correlation[i1, i2]), "std_errors": res.std_errors,
+            "warnings": list(res.warnings)}
+
+
+def parse_channel_values(items: list[str] | tuple[str, ...], what: str) -> dict[str, float]:
+    """``["u=0.5 mm", "a_head=0.05 m/s^2,v=1mm"]`` -> {channel: SI value}; units per the channel's kind."""
+    from .units import parse_quantity
+
+    out: dict[str, float] = {}
+    for item in items:
+        for part in item.split(","):
+            if not part.strip():
+                continue
+            name, sep, value = part.partition("=")
+            name = name.strip()
+            if not sep or name not in CHANNELS:
+                raise ParameterError(what, part.strip(), f"CHANNEL=VALUE with CHANNEL one of {', '.join(CHANNELS)}")
+            out[name] = parse_quantity(value.strip(), CHANNELS[name][0], f"{what} {name}")
+    return out
+
+
+def _toml_value(value: Any) -> str:
+    if isinstance(value, str):
+        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    return repr(float(value)) if isinstance(value, float) else str(value)
+
+
+def case_toml(case: Case, record_table: str, title: str) -> str:
+    """A case file (TOML text) with the case's device and test set-up and the given ``[record]`` table."""
+    from .device import DEVICE_KEYS, preset, preset_names
+
+    notes = _toml_value(f"Made by quickrelease synth from {case.source}")
+    lines = [f"title = {_toml_value(title)}", f"notes = {notes}", "", "[device]"]
+    d = case.device
+    if d.name in preset_names() and preset(d.name) == d:
+        lines.append(f"preset = {_toml_value(d.name)}")
+    else:
+        lines.append(f"name = {_toml_value(d.name)}")
+        lines += [f"{k} = {_toml_value(getattr(d, k))}" for k in DEVICE_KEYS]
+    lines += ["", "[test]"]
+    if case.push_force is not None:
+        lines.append(f'force = "{case.push_force!r} N"')
+    if case.energy_given or case.push_force is None:
+        lines.append(f'energy = "{case.stored_energy!r} J"')
+    lines.append(f'alpha0 = "{case.alpha0!r} rad"')
+    mm = case.mass_model
+    lines.append(f"mass_model = {_toml_value(mm if isinstance(mm, str) else float(mm))}")
+    return "\n".join(lines) + "\n\n" + record_table

@@ -1,0 +1,383 @@
+"""Friction from measured time histories: records, synthetic records, the fit, campaigns (issue: records)."""
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from quickrelease.case import FitOptions, load_case
+from quickrelease.cli import app
+from quickrelease.fit import fit_record
+from quickrelease.records import RecordError, detect_release, load_record, release_channels
+from quickrelease.solvers import FirstIntegral
+from quickrelease.synth import predicted_errors, synthesize
+
+EXAMPLES = Path(__file__).parent.parent / "examples"
+runner = CliRunner()
+
+
+@pytest.fixture(scope="module")
+def paper():
+    return load_case(EXAMPLES / "paper.toml")
+
+
+def realistic(case, seed, release_time=0.43, **kw):
+    """Paper case, 500 Hz, u and v (0.5 mm) and head acceleration (0.05 m/s^2), offsets, unknown release."""
+    return synthesize(case, ["u", "v", "a_head"], rate=500.0, offsets={"u": 1.2e-3, "v": -2.5e-3},
+                      release_time=release_time, seed=seed, **kw)
+
+
+def write_case(tmp_path, record_file, channels, extra="", test=None):
+    test = test or 'energy = "2900 J"\nalpha0 = 0.2'
+    lines = ["[device]", 'preset = "paper"', "[test]", test, "[record]", f'file = "{record_file}"', 'time = "t_s"',
+             "[record.channels]"] + [f"{k} = {v}" for k, v in channels.items()]
+    path = tmp_path / "case.toml"
+    path.write_text("\n".join(lines) + "\n" + extra)
+    return path
+
+
+SI_CHANNELS = {"u": '{ column = "u_m" }', "v": '{ column = "v_m" }', "a_head": '{ column = "a_head_m_s2" }'}
+
+
+# -- the model of the channels --------------------------------------------------------------------------
+
+def test_channels_follow_the_release_and_rest_before_and_after(paper):
+    d = paper.device
+    fi = FirstIntegral(2900.0, 0.2, 419.85, 804.57, d.m1, d.m2, d.L1, 2 / 3)
+    t = np.array([0.0, 0.29, 0.3 + 0.5, 0.3 + fi.stop_time() + 0.01, 5.0])
+    ch = release_channels(["alpha", "u", "v", "u_dot", "a_head"], t, 0.3, fi)
+    assert ch["alpha"][0] == 0.2 and ch["u"][0] == 0.0 and ch["a_head"][1] == 0.0
+    assert ch["alpha"][-1] == pytest.approx(fi.alpha_final, abs=1e-15) and ch["u_dot"][-1] == 0.0
+    assert ch["a_head"][-2] == 0.0  # friction balances inertia at rest
+    alpha, alpha_dot = fi.state_at(np.array([0.5]))
+    assert ch["u"][2] == pytest.approx(d.L1 * (math.cos(0.2) - math.cos(alpha[0])), rel=1e-13)
+    assert ch["u_dot"][2] == pytest.approx(d.L1 * math.sin(alpha[0]) * alpha_dot[0], rel=1e-13)
+
+
+def test_window_averaged_rates_are_continuous_and_agree_with_point_values_away_from_jumps(paper):
+    d = paper.device
+    fi = FirstIntegral(2900.0, 0.2, 419.85, 804.57, d.m1, d.m2, d.L1, 2 / 3)
+    t = np.linspace(0.35, 1.2, 40)
+    point = release_channels(["u_dot", "a_head"], t, 0.3, fi)
+    avg = release_channels(["u_dot", "a_head"], t, 0.3, fi, window=1e-4)
+    np.testing.assert_allclose(avg["u_dot"], point["u_dot"], rtol=1e-6)
+    np.testing.assert_allclose(avg["a_head"], point["a_head"], rtol=1e-5, atol=1e-6)
+    # a sample straddling the stop moves continuously as the stop moves (the point value jumps)
+    t_stop = 0.3 + fi.stop_time()
+    shifted = [release_channels(["a_head"], np.array([t_stop]), 0.3 + dt, fi, window=2e-3)["a_head"][0]
+               for dt in (-1e-7, 0.0, 1e-7)]
+    assert abs(shifted[0] - shifted[2]) < 1e-3
+
+
+# -- round trips -------------------------------------------------------------------------------------------
+
+def test_round_trip_through_a_csv_file_within_one_percent(paper, tmp_path):
+    syn = realistic(paper, seed=3, jitter=0.02, missing=0.01)
+    syn.write_csv(tmp_path / "rec.csv")
+    case = load_case(write_case(tmp_path, "rec.csv", SI_CHANNELS))
+    fit = fit_record(case)
+    assert fit.converged
+    for name in ("F1", "F2"):
+        assert fit.estimates[name] == pytest.approx(syn.truth[name], rel=0.01)
+        lo, hi = fit.ci95[name]
+        assert lo < fit.estimates[name] < hi
+    assert fit.release_time == pytest.approx(0.43, abs=2e-4)  # unknown instant, a tenth of a sample
+    assert fit.offsets()["u"] == pytest.approx(1.2e-3, abs=2e-4)
+    assert fit.noise_source["u"] == "pre-release segment" and fit.noise["u"] == pytest.approx(5e-4, rel=0.2)
+    assert fit.chi2_reduced == pytest.approx(1.0, abs=0.15)
+    # missing samples are reported and skipped, never interpolated
+    assert sum(fit.samples.values()) + sum(int(n.split(": ")[2].split()[0]) for n in fit.notes) == 3 * syn.t.size
+
+
+def test_coverage_of_the_95_percent_intervals_over_200_seeds(paper):
+    """Over 200 noise seeds the 95% intervals contain the truth in 90-99% of them, and the standardized
+    errors (estimate - truth) / standard error scatter with a standard deviation near 1."""
+    hits = {"F1": 0, "F2": 0, "release_time": 0}
+    z = {name: [] for name in hits}
+    for seed in range(200):
+        syn = realistic(paper, seed=seed, release_time=0.4 + 0.29e-3 * (seed % 7))
+        fit = fit_record(paper, syn.record())
+        assert fit.converged
+        for name in hits:
+            lo, hi = fit.ci95[name]
+            hits[name] += lo <= syn.truth[name] <= hi
+            z[name].append((fit.estimates[name] - syn.truth[name]) / fit.std_errors[name])
+        assert abs(fit.F1 / syn.truth["F1"] - 1) < 0.01 and abs(fit.F2 / syn.truth["F2"] - 1) < 0.01
+    for name, n in hits.items():
+        assert 180 <= n <= 198, (name, n)
+        assert 0.8 < np.std(z[name]) < 1.2, name
+        assert abs(np.mean(z[name])) < 0.25, name  # no bias beyond the sampling error of the mean (0.07)
+
+
+def test_predicted_errors_are_the_fit_errors_at_the_truth(paper):
+    syn = realistic(paper, seed=0, release_time=0.4011)
+    pred = predicted_errors(paper, syn)
+    fit = fit_record(paper, syn.record())
+    assert pred["F1_se_N"] == pytest.approx(fit.std_errors["F1"], rel=0.1)
+    assert pred["correlation_F1_F2"] == pytest.approx(fit.correlation[0, 1], abs=0.01)
+
+
+def test_energy_and_mass_factor_can_be_estimated(paper):
+    case = paper.replace(mass_model=0.7, stored_energy=3100.0)  # the truth the record is made with
+    syn = realistic(case, seed=5)
+    fit = fit_record(paper, syn.record(), options=FitOptions(estimate_energy=True, estimate_mass_factor=True))
+    assert fit.converged and set(fit.names) >= {"energy", "mass_factor"}
+    truth = {"energy": 3100.0, "mass_factor": 0.7, "F1": syn.truth["F1"], "F2": syn.truth["F2"]}
+    for name, value in truth.items():
+        assert abs(fit.estimates[name] - value) < 3 * fit.std_errors[name], name
+    # four unknowns that trade off (E_S and c against the friction) cost precision: F1 is known far less well
+    fixed = fit_record(case, syn.record())
+    assert fit.std_errors["F1"] > 10 * fixed.std_errors["F1"]
+    assert abs(fixed.F1 - syn.truth["F1"]) < 3 * fixed.std_errors["F1"]
+
+
+def test_units_and_scale_of_the_columns(paper, tmp_path):
+    syn = realistic(paper, seed=7)
+    cols = syn.columns()
+    lines = ["time_ms,u_mm,v_mm,acc_g"]
+    for k in range(syn.t.size):
+        lines.append(f"{float(1e3 * cols['t_s'][k])!r},{float(1e3 * cols['u_m'][k])!r},"
+                     f"{float(1e3 * cols['v_m'][k])!r},{float(-cols['a_head_m_s2'][k] / 9.80665)!r}")
+    (tmp_path / "rec.csv").write_text("\n".join(lines) + "\n")
+    path = write_case(tmp_path, "rec.csv", {"u": '{ column = "u_mm", unit = "mm" }',
+                                            "v": '{ column = "v_mm", unit = "mm" }',
+                                            "a_head": '{ column = "acc_g", unit = "g0", scale = -1 }'})
+    path.write_text(path.read_text().replace('time = "t_s"', 'time = { column = "time_ms", unit = "ms" }'))
+    fit = fit_record(load_case(path))
+    reference = fit_record(paper, syn.record())
+    assert fit.F1 == pytest.approx(reference.F1, rel=2e-3) and fit.F2 == pytest.approx(reference.F2, rel=2e-3)
+
+
+def test_parquet_records(paper, tmp_path):
+    pytest.importorskip("pyarrow")
+    syn = realistic(paper, seed=8)
+    syn.to_pandas().to_parquet(tmp_path / "rec.parquet")
+    fit = fit_record(load_case(write_case(tmp_path, "rec.parquet", SI_CHANNELS)))
+    assert fit.F1 == pytest.approx(syn.truth["F1"], rel=0.01)
+
+
+def test_video_angle_alone_and_acceleration_alone(paper):
+    video = synthesize(paper, ["alpha"], rate=25.0, release_time=0.5, seed=1)
+    fit = fit_record(paper, video.record())
+    assert fit.F1 == pytest.approx(video.truth["F1"], rel=0.2) and fit.converged
+    accel = synthesize(paper, ["a_head"], rate=500.0, release_time=0.5, seed=1)
+    fit = fit_record(paper, accel.record())
+    assert fit.start_source.startswith("stop observations")  # the case's [observations] give the start
+    assert fit.F2 == pytest.approx(accel.truth["F2"], rel=0.05)
+
+
+def test_start_without_stop_observations_scans_the_final_angle(paper):
+    case = paper.replace(alpha_final=None, stop_time=None, F1=419.85, F2=804.57)
+    syn = synthesize(case, ["a_head"], rate=500.0, release_time=0.5, seed=2)
+    fit = fit_record(case, syn.record())
+    assert fit.start_source == "scan over alpha_F with t_F read off the record"
+    assert fit.F1 == pytest.approx(419.85, rel=0.05) and fit.F2 == pytest.approx(804.57, rel=0.02)
+
+
+def test_release_detection_within_a_few_samples(paper):
+    syn = realistic(paper, seed=9, release_time=0.777)
+    assert detect_release(syn.record()) == pytest.approx(0.777, abs=3 / 500)
+
+
+# -- stop observations only: the delta method, checked against the uq sensitivities -------------------------
+
+def test_stop_observations_with_scatter_give_delta_method_errors(tmp_path):
+    from quickrelease.uq import sensitivities
+
+    text = (EXAMPLES / "paper.toml").read_text().replace(
+        'alpha_final = "0.7378 rad"', 'alpha_final = { value = "0.7378 rad", std = "0.01 rad" }').replace(
+        'stop_time = "1.05 s"', 'stop_time = { value = "1.05 s", std = "0.006 s" }')
+    path = tmp_path / "stop.toml"
+    path.write_text(text)
+    case = load_case(path)
+    fit = fit_record(case)
+    ift, _ = sensitivities(case)
+    for name in ("F1", "F2"):
+        expected = math.hypot(ift[name]["alpha_final"] * 0.01, ift[name]["stop_time"] * 0.006)
+        assert fit.std_errors[name] == pytest.approx(expected, rel=1e-3)
+    assert fit.F1 == pytest.approx(419.8499, rel=1e-6)
+    assert any("only the stop observations" in w for w in fit.warnings)
+    assert any("poorly determined" in w for w in fit.warnings)
+
+
+# -- bad records --------------------------------------------------------------------------------------------
+
+def _csv(tmp_path, text, name="rec.csv"):
+    (tmp_path / name).write_text(text)
+    return name
+
+
+@pytest.fixture()
+def good_rows(paper):
+    syn = realistic(paper, seed=11)
+    return syn
+
+
+def _rows(syn, cols=("t_s", "u_m"), t=None):
+    c = syn.columns()
+    t = c["t_s"] if t is None else t
+    lines = [",".join(cols)] + [",".join(repr(float(x)) for x in row)
+                                for row in zip(t, *(c[k] for k in cols[1:]), strict=True)]
+    return "\n".join(lines) + "\n"
+
+
+def test_no_time_column(tmp_path, good_rows):
+    name = _csv(tmp_path, _rows(good_rows).replace("t_s,", "time,", 1))
+    with pytest.raises(RecordError, match=r"rec.csv: no time column 't_s' \(columns: time, u_m\)"):
+        load_record(load_case(write_case(tmp_path, name, {"u": '"u_m"'})).record)
+
+
+def test_time_not_increasing(tmp_path, good_rows):
+    t = good_rows.t.copy()
+    t[50], t[51] = t[51], t[50]
+    name = _csv(tmp_path, _rows(good_rows, t=t))
+    with pytest.raises(RecordError, match=r"rec.csv: column 't_s': time is not increasing at row 52"):
+        load_record(load_case(write_case(tmp_path, name, {"u": '"u_m"'})).record)
+
+
+def test_channel_of_the_wrong_length(tmp_path, good_rows):
+    name = _csv(tmp_path, _rows(good_rows))
+    short = _csv(tmp_path, _rows(good_rows, cols=("t_s", "v_m")).rsplit("\n", 50)[0] + "\n", "v.csv")
+    path = write_case(tmp_path, name, {"u": '"u_m"', "v": f'{{ column = "v_m", file = "{short}" }}'})
+    with pytest.raises(RecordError, match=r"v.csv: column 'v_m' has \d+ rows, the time column 't_s' of rec.csv has"):
+        load_record(load_case(path).record)
+
+
+def test_channel_with_the_wrong_units(tmp_path, good_rows):
+    name = _csv(tmp_path, _rows(good_rows))
+    from quickrelease.case import CaseFileError
+
+    with pytest.raises(CaseFileError, match=r"channels.u.unit = '1 mm/s' has dimension \[length\] / \[time\]; "
+                                            r"expected a length"):
+        load_case(write_case(tmp_path, name, {"u": '{ column = "u_m", unit = "mm/s" }'}))
+
+
+def test_all_missing_channel(tmp_path, good_rows):
+    text = _rows(good_rows, cols=("t_s", "u_m", "v_m"))
+    lines = text.splitlines()
+    lines = [lines[0]] + [",".join(line.split(",")[:2]) + "," for line in lines[1:]]
+    name = _csv(tmp_path, "\n".join(lines) + "\n")
+    with pytest.raises(RecordError, match=r"rec.csv: column 'v_m' \(channel v\): all values missing"):
+        load_record(load_case(write_case(tmp_path, name, {"u": '"u_m"', "v": '"v_m"'})).record)
+
+
+def test_non_numeric_values(tmp_path, good_rows):
+    name = _csv(tmp_path, _rows(good_rows).replace("\n0.02,", "\nabc,", 1))
+    with pytest.raises(RecordError, match=r"rec.csv: column 't_s': non-numeric value 'abc' at row 11"):
+        load_record(load_case(write_case(tmp_path, name, {"u": '"u_m"'})).record)
+
+
+def test_record_that_ends_before_the_stop(tmp_path, good_rows):
+    keep = good_rows.t < 0.43 + 0.8  # the device stops 1.05 s after the release
+    name = _csv(tmp_path, _rows(good_rows, cols=("t_s", "u_m", "v_m")).splitlines()[0] + "\n" + "\n".join(
+        _rows(good_rows, cols=("t_s", "u_m", "v_m")).splitlines()[1:][: int(keep.sum())]) + "\n")
+    with pytest.raises(RecordError, match=r"rec.csv: the record ends at 1.228 s, before the device stops"):
+        fit_record(load_case(write_case(tmp_path, name, {"u": '"u_m"', "v": '"v_m"'})))
+
+
+def test_rows_without_time_are_dropped_and_reported(tmp_path, good_rows):
+    text = _rows(good_rows).splitlines()
+    text[20] = "," + text[20].split(",")[1]
+    record = load_record(load_case(write_case(tmp_path, _csv(tmp_path, "\n".join(text) + "\n"), {"u": '"u_m"'})).record)
+    assert record.dropped_rows == 1 and record.t.size == good_rows.t.size - 1
+    assert "1 row(s) without a time value dropped" in record.notes[0]
+
+
+def test_bad_record_on_the_command_line_is_one_line_exit_2(tmp_path, good_rows):
+    name = _csv(tmp_path, _rows(good_rows).replace("t_s,", "time,", 1))
+    result = runner.invoke(app, ["fit", str(write_case(tmp_path, name, {"u": '"u_m"'}))])
+    assert result.exit_code == 2
+    assert result.output.count("\n") == 1 and "no time column 't_s'" in result.output
+
+
+# -- the command line and the shipped example ---------------------------------------------------------------
+
+def test_fit_example_json_keys_and_truth():
+    result = runner.invoke(app, ["fit", str(EXAMPLES / "fit.toml"), "--json"])
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.stdout)
+    for key in ("F1_N", "F2_N", "F1_ci95_N", "F2_ci95_N", "release_time_s", "residual_rms", "converged"):
+        assert key in data
+    assert data["converged"] is True
+    assert set(data["residual_rms"]) == {"u", "v", "a_head"}
+    # the record was made with the friction identified from Table 7's inputs (examples/make_records.py)
+    for key, truth in (("F1", 419.8499), ("F2", 804.568)):
+        lo, hi = data[f"{key}_ci95_N"]
+        assert lo < truth < hi
+    assert data["release_time_s"] == pytest.approx(0.62, abs=2e-4)
+
+
+def test_synth_then_fit_on_the_command_line(tmp_path):
+    rec, case = tmp_path / "rec.csv", tmp_path / "fit_case.toml"
+    result = runner.invoke(app, ["synth", str(EXAMPLES / "paper.toml"), "--channels", "u,v", "--rate", "200 Hz",
+                                 "--noise", "u=1 mm,v=1 mm", "--offset", "u=2 mm", "--release-time", "0.3 s",
+                                 "--out", str(rec), "--case-out", str(case), "--json"])
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.stdout)
+    assert data["noise"] == {"u": 1e-3, "v": 1e-3} and data["offsets"]["u"] == 2e-3
+    assert data["predicted"]["F1_se_N"] > 0
+    out = tmp_path / "out"
+    result = runner.invoke(app, ["fit", str(case), "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    fit = json.loads((out / "fit.json").read_text())
+    assert abs(fit["F1_N"] - 419.8499) < 4 * fit["F1_se_N"]
+    report = (out / "report.html").read_text()
+    assert 'id="fit-F1"' in report and '<figure id="fit_channels"><svg' in report
+    assert (out / "figures" / "fit_channels.png").stat().st_size > 20_000
+
+
+# -- campaigns ------------------------------------------------------------------------------------------------
+
+def test_campaign_recovers_the_load_law(tmp_path):
+    result = runner.invoke(app, ["campaign", str(EXAMPLES / "campaign.toml"), "--json", "--out", str(tmp_path)])
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.stdout)
+    laws = {(law["friction"], law["variable"]): law for law in data["laws"]}
+    f1p = laws[("F1", "force")]
+    # the synthetic records follow F1 = 150 N + 0.17 N/kN P, F2 = 805 N (examples/make_records.py)
+    assert abs(f1p["b_N_per_N"] - 0.17e-3) < 3 * f1p["b_se_N_per_N"] and f1p["significant_5pct"]
+    assert abs(f1p["a_N"] - 150.0) < 3 * f1p["a_se_N"]
+    assert not laws[("F2", "force")]["significant_5pct"]
+    joint = data["joint"]["F1"]["terms"]
+    assert joint["force"]["significant_5pct"] and not joint["alpha0"]["significant_5pct"]
+    assert len(data["tests"]) == 6 and all(t["method"] == "fit to record" for t in data["tests"])
+    report = (tmp_path / "report.html").read_text()
+    assert '<figure id="campaign_friction"><svg' in report and "T6" in report
+
+
+def test_campaign_law_arithmetic():
+    from quickrelease.campaign import CampaignTest, fit_law
+
+    class FakeCase:
+        def __init__(self, P):
+            self.push_force, self.alpha0, self.stored_energy, self.source = P, 0.2, 1.0, "x"
+
+    xs = np.array([1.0, 2.0, 3.0, 4.0])
+    ys = 2.0 + 0.5 * xs + np.array([0.1, -0.1, -0.1, 0.1])
+    tests = [CampaignTest(name=f"T{i}", case=FakeCase(x), F1=y, F2=1.0, F1_se=None, F2_se=None, method="x")
+             for i, (x, y) in enumerate(zip(xs, ys, strict=True))]
+    law = fit_law(tests, "F1", "force")
+    slope, intercept = np.polyfit(xs, ys, 1)
+    assert law.slope == pytest.approx(slope) and law.intercept == pytest.approx(intercept)
+    resid = ys - (intercept + slope * xs)
+    s2 = resid @ resid / 2
+    assert law.slope_se == pytest.approx(math.sqrt(s2 / np.sum((xs - xs.mean()) ** 2)))
+    mean, lo, hi = law.band(xs.mean())
+    assert mean == pytest.approx(ys.mean()) and hi - mean == pytest.approx(4.302652729749464 * math.sqrt(s2 / 4))
+
+
+def test_campaign_errors(tmp_path):
+    from quickrelease.campaign import run_campaign
+    from quickrelease.case import CaseFileError
+
+    path = tmp_path / "c.toml"
+    path.write_text('[[tests]]\nname = "A"\nforce = "1 MN"\nalpha0 = 0.2\nalpha_final = 0.6\nstop_time = 1\n'
+                    '[[tests]]\nname = "B"\nforce = "1 MN"\nalpha0 = 0.2\nalpha_final = 0.6\nstop_time = 1\n')
+    with pytest.raises(Exception, match="2 test\\(s\\): a friction law needs at least 3"):
+        run_campaign(path)
+    path.write_text('[[tests]]\nname = "A"\nforse = "1 MN"\n')
+    with pytest.raises(CaseFileError, match="test A: unknown key 'forse'"):
+        run_campaign(path)
