@@ -26,6 +26,15 @@ TOL = 1e-14
 MAX_PANELS = 256
 
 
+def _newton_step(x, g, c, h, target) -> tuple[np.ndarray, float]:
+    """One Newton step on G(x) = target within a panel; returns the new x and the largest step."""
+    slope = h * C.chebval(x, c)
+    # f = dt/dw vanishes at w = 0 when the motion ends at the flat rhombus with speed left: no step there
+    with np.errstate(divide="ignore", invalid="ignore"):
+        step = np.where(slope > 0.0, (C.chebval(x, g) - target) / slope, 0.0)
+    return np.clip(x - step, -1.0, 1.0), float(np.max(np.abs(step))) if step.size else 0.0
+
+
 class TimeMap:
     """t(w) for w in [0, 1] from the smooth integrand f = dt/dw (positive on the interval).
 
@@ -116,10 +125,9 @@ class TimeMap:
             x_table = np.linspace(-1.0, 1.0, 65)
             x = np.interp(target, C.chebval(x_table, g), x_table)
             for _ in range(20):
-                step = (C.chebval(x, g) - target) / (h * C.chebval(x, c))
-                x = np.clip(x - step, -1.0, 1.0)
-                if np.max(np.abs(step)) <= 1e-9:
-                    x = np.clip(x - (C.chebval(x, g) - target) / (h * C.chebval(x, c)), -1.0, 1.0)
+                x, size = _newton_step(x, g, c, h, target)
+                if size <= 1e-9:
+                    x, _ = _newton_step(x, g, c, h, target)
                     break
             w[m] = self.edges[i] + h * (x + 1.0)
         return w
