@@ -250,8 +250,8 @@ def test_channel_with_the_wrong_units(tmp_path, good_rows):
     name = _csv(tmp_path, _rows(good_rows))
     from quickrelease.case import CaseFileError
 
-    with pytest.raises(CaseFileError, match=r"channels.u.unit = '1 mm/s' has dimension \[length\] / \[time\]; "
-                                            r"expected a length"):
+    with pytest.raises(CaseFileError, match=r"case.toml \[record\] channels.u.unit = 'mm/s': has dimension "
+                                            r"\[length\] / \[time\]; expected a length \(e.g. in m\)"):
         load_case(write_case(tmp_path, name, {"u": '{ column = "u_m", unit = "mm/s" }'}))
 
 

@@ -76,13 +76,14 @@ def _print_json(data: dict[str, Any]) -> None:
 
 def _table(title: str, rows: list[tuple[str, ...]], headers: tuple[str, ...]) -> None:
     from rich.console import Console
+    from rich.markup import escape
     from rich.table import Table
 
-    table = Table(title=title, title_justify="left")
+    table = Table(title=escape(title), title_justify="left")
     for h in headers:
-        table.add_column(h)
+        table.add_column(escape(h))
     for row in rows:
-        table.add_row(*row)
+        table.add_row(*(escape(str(cell)) for cell in row))
     Console(width=140).print(table)
 
 
@@ -460,8 +461,9 @@ def fit_command(
     for name in fit.names:
         lo, hi = fit.ci95[name]
         rows.append((name, f"{fit.estimates[name]:.6g}", f"{fit.std_errors[name]:.3g}", f"[{lo:.6g}, {hi:.6g}]"))
+    chi2 = "n/a (no degrees of freedom)" if fit.chi2_reduced is None else f"{fit.chi2_reduced:.4g}"
     title = f"Fit of {case.title}: {'converged' if fit.converged else 'NOT converged'}, " \
-            f"reduced chi-square {fit.chi2_reduced:.4g}, start values from {fit.start_source}"
+            f"reduced chi-square {chi2}, start values from {fit.start_source}"
     _table(title, rows, ("parameter (SI)", "estimate", "std. error", "95% interval"))
     if fit.residual_rms:
         _table("Channels", [(n, str(fit.samples[n]), f"{fit.noise[n]:.3g}", fit.noise_source[n],
@@ -513,8 +515,10 @@ def campaign(
            ("law", "a [N]", "b", "p", "significant at 5%"))
     for friction, joint in result.joint.items():
         terms = joint.summary()["terms"]
-        typer.echo(f"joint law {friction}: " + ", ".join(
-            f"{n} {v['value']:.4g} ± {v['se']:.2g} (p = {v['p_value']:.2g})" for n, v in terms.items()))
+        units = {n: VARIABLES[n][3:] if n in VARIABLES else (1.0, "") for n in terms}
+        typer.echo(f"joint law {friction} = a + " + " + ".join(f"b_{v} {v}" for v in joint.variables) + ": " + ", ".join(
+            f"{'a' if n == 'intercept' else 'b_' + n} = {v['value'] / units[n][0]:.4g} ± {v['se'] / units[n][0]:.2g} "
+            f"N{'/' + units[n][1] if units[n][1] else ''} (p = {v['p_value']:.2g})" for n, v in terms.items()))
     if paths:
         _listing(paths, out)
 

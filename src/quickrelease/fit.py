@@ -78,7 +78,8 @@ class FitResult:
     """RMS of (model - measured) per channel [SI unit of the channel]."""
     samples: dict[str, int]
     """Samples used per channel."""
-    chi2_reduced: float
+    chi2_reduced: float | None
+    """Chi-square over the degrees of freedom (None without any: e.g. two stop observations, two unknowns)."""
     dof: int
     converged: bool
     message: str
@@ -464,10 +465,10 @@ def fit_record(case: Case, record: Record | None = None, *, options: FitOptions 
     m, p = J.shape
     dof = m - p
     chi2 = float(r @ r)
-    chi2_red = chi2 / dof if dof > 0 else float("nan")
+    chi2_red = chi2 / dof if dof > 0 else None
     JtJ = J.T @ J
     cov = np.linalg.pinv(JtJ, rcond=1e-15, hermitian=True)
-    if not options.absolute_sigma and dof > 0:
+    if not options.absolute_sigma and chi2_red is not None:
         cov = cov * chi2_red
     se = np.sqrt(np.maximum(np.diag(cov), 0.0))
     with np.errstate(divide="ignore", invalid="ignore"):

@@ -216,10 +216,13 @@ _RECORD_KEYS = ("file", "time", "release_time", "channels")
 
 
 def _unit_factor(unit: str, kind: str, where: str) -> float:
+    """SI value of one ``unit`` of a quantity of ``kind``; RecordError naming ``where`` if it is not one."""
     try:
         return parse_quantity(f"1 {unit}", kind, where)
     except QuickReleaseError as exc:
-        raise RecordError(str(exc)) from None
+        _, _, reason = str(exc).partition(" has dimension ")
+        reason = f"has dimension {reason}" if reason else f"not a unit ({exc})"
+        raise RecordError(f"{where} = {unit!r}: {reason}") from None
 
 
 def parse_record_spec(table: Any, source: str, base: Path) -> RecordSpec:

@@ -249,8 +249,10 @@ def render_campaign_report(result, svgs: dict[str, str]) -> str:
                  "scatter about the line than the standard errors explain) inflates the law's covariance.</p>")
     for friction, joint in result.joint.items():
         terms = joint.summary()["terms"]
-        text = ", ".join(f"{_e(n)} = {_num(v['value'], '.4g')} ± {_num(v['se'], '.2g')} "
-                         f"(p = {_num(v['p_value'], '.2g')})" for n, v in terms.items())
+        units = {n: VARIABLES[n][3:] if n in VARIABLES else (1.0, "") for n in terms}
+        text = ", ".join(f"{_e(n)}: {_num(v['value'] / units[n][0], '.4g')} ± {_num(v['se'] / units[n][0], '.2g')} "
+                         f"N{'/' + units[n][1] if units[n][1] else ''} (p = {_num(v['p_value'], '.2g')})"
+                         for n, v in terms.items())
         parts.append(f"<p>Joint law for {friction}: {text}.</p>")
     parts.append(_figure(svgs, "campaign_friction", "Friction against each variable: tests with 95% error bars, "
                                                     "the fitted law and its 95% confidence band"))
