@@ -1,0 +1,89 @@
+"""Cost of fitting a record, as ratios against scipy solve_ivp measured in the same run.
+
+Run: python benchmarks/bench_fit.py
+
+The fit evaluates the release model at every sample time of the record, many times. The baseline is
+what one would write without the energy solution's time map: ``solve_ivp`` (DOP853, rtol 1e-10, stop
+event, dense output) evaluated at the same sample times. Timed: one model evaluation at the ~1000 sample
+times of ``examples/records/paper_500Hz.csv`` (all three channels, as the fit needs them), a whole fit of
+``examples/fit.toml`` (start values, least squares, covariance), and the Cramer-Rao bound of a synthetic
+record (``quickrelease synth``'s precision table).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from quickrelease.case import load_case
+from quickrelease.fit import fit_record
+from quickrelease.records import load_record, release_channels
+from quickrelease.solvers import FirstIntegral
+from quickrelease.synth import predicted_errors, synthesize
+
+EXAMPLES = Path(__file__).parent.parent / "examples"
+F1, F2, E_S, ALPHA0, RELEASE = 419.85, 804.57, 2900.0, 0.2, 0.62
+
+
+def best_of(func, repeat=5, number=3):
+    best = math.inf
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        for _ in range(number):
+            func()
+        best = min(best, (time.perf_counter() - t0) / number)
+    return best
+
+
+def baseline(t, d):
+    """solve_ivp with dense output, evaluated at the record's times (alpha, alpha_dot)."""
+    k = 2 / 3 * d.m1 / d.m2
+    q = 1 / (d.m2 * d.L1)
+
+    def rhs(_t, y):
+        s, c = math.sin(y[0]), math.cos(y[0])
+        den = k + s * s
+        return [y[1], -y[1] ** 2 * s * c / den - (2 * F2 * s + F1 * c) * q / den]
+
+    def ev(_t, y):
+        return y[1]
+
+    ev.terminal, ev.direction = True, -1
+    ad0 = math.sqrt(E_S / (d.m2 * d.L1**2 * (k + math.sin(ALPHA0) ** 2)))
+    sol = solve_ivp(rhs, (0, 100), [ALPHA0, ad0], method="DOP853", rtol=1e-10, atol=1e-12, events=ev,
+                    dense_output=True)
+    s = np.clip(t - RELEASE, 0.0, sol.t[-1])
+    return sol.sol(s)
+
+
+def main() -> None:
+    case = load_case(EXAMPLES / "fit.toml")
+    record = load_record(case.record)
+    d = case.device
+    t = record.t
+    names = list(record.channels)
+    window = record.sampling_interval()
+    base = best_of(lambda: baseline(t, d))
+
+    def model():
+        fi = FirstIntegral(E_S, ALPHA0, F1, F2, d.m1, d.m2, d.L1, 2 / 3)
+        return release_channels(names, t, RELEASE, fi, window)
+
+    syn = synthesize(load_case(EXAMPLES / "paper.toml"), ["u", "v", "a_head"], rate=500.0, seed=1)
+    rows = [
+        (f"solve_ivp DOP853, dense output at {t.size} times (baseline)", base),
+        (f"model: {', '.join(names)} at {t.size} times", best_of(model)),
+        ("fit_record(examples/fit.toml)", best_of(lambda: fit_record(case, record), repeat=3, number=1)),
+        ("predicted_errors (synth precision table)", best_of(lambda: predicted_errors(case, syn), repeat=3, number=1)),
+    ]
+    print(f"{'task':58s} {'time [ms]':>10s} {'vs baseline':>12s}")
+    for name, seconds in rows:
+        print(f"{name:58s} {1e3 * seconds:10.3f} {seconds / base:11.2f}x")
+
+
+if __name__ == "__main__":
+    main()
