@@ -71,7 +71,7 @@ def test_device_file_relative_to_case(tmp_path):
      r"case.toml: missing key \[test\] alpha0 \(an angle in \(0, pi/2\), e.g. '0.2 rad' or '11.46 deg'\)$"),
     (BASE.replace('F2 = "0.8 kN"\n', ""), r"case.toml: missing key \[friction\] F2 \(give both F1 and F2\)$"),
     # unknown key
-    (BASE.replace("[friction]", "[friction]\nF3 = 1"), r"case.toml: unknown key \[friction\] 'F3'; valid: F1, F2$"),
+    (BASE.replace("[friction]", "[friction]\nF3 = 1"), r"case.toml: unknown key \[friction\] 'F3'; valid: F1, F2, correlation, case$"),
     (BASE.replace('title = "t"', 'titel = "t"'), r"case.toml: unknown key 'titel'; valid top-level entries: "),
     # wrong unit dimension
     (BASE.replace('"1598 kN"', '"1598 m"'),

@@ -46,12 +46,15 @@ from .records import RecordSpec, parse_record_spec
 from .statics import StrainEnergy, strain_energy
 from .units import parse_quantity
 
-__all__ = ["Case", "CaseFileError", "Distribution", "FitOptions", "load_case", "CASE_SCHEMA", "UNCERTAIN_KEYS"]
+__all__ = ["Case", "CaseFileError", "Distribution", "FitOptions", "FuseSpec", "BuildingSpec", "PlanOptions",
+           "STANDARD_GRAVITY", "load_case", "CASE_SCHEMA", "UNCERTAIN_KEYS"]
 
 #: Entries that may be given with an uncertainty (a table with std, or low and high), and their
 #: names in :attr:`Case.uncertainty`.
 UNCERTAIN_KEYS = {("test", "force"): "force", ("test", "energy"): "energy", ("test", "alpha0"): "alpha0",
-                  ("observations", "alpha_final"): "alpha_final", ("observations", "stop_time"): "stop_time"}
+                  ("observations", "alpha_final"): "alpha_final", ("observations", "stop_time"): "stop_time",
+                  ("friction", "F1"): "F1", ("friction", "F2"): "F2",
+                  ("fuse", "rupture_strength"): "rupture_strength", ("fuse", "target"): "target"}
 
 
 @dataclass(frozen=True)
@@ -79,6 +82,63 @@ class Distribution:
 
 
 @dataclass(frozen=True)
+class FuseSpec:
+    """The ``[fuse]`` table: the fuse material and the candidate diameters and angles (SI units)."""
+
+    rupture_strength: float
+    """Mean rupture strength of the fuse material, from sample tests [Pa]."""
+    rupture_strength_std: float = 0.0
+    """Its standard deviation [Pa]."""
+    diameters: tuple[float, ...] = ()
+    """Candidate diameters of the fuse's calibrated section [m]; the device's A4 when empty."""
+    angles: tuple[float, ...] = ()
+    """Candidate angles alpha0 [rad]; the case's alpha0 when empty."""
+    target: tuple[float, float] | None = None
+    """Target push force, (low, high) [N]; the case's P +- tolerance when not given."""
+    tolerance: float = 0.05
+    """Relative tolerance on a single target force [-]."""
+
+
+@dataclass(frozen=True)
+class BuildingSpec:
+    """The ``[building]`` table: a single-degree-of-freedom model of the isolated building (SI units)."""
+
+    period: float
+    """Isolation period T [s]."""
+    damping_ratio: float = 0.0
+    """Viscous damping ratio [-], in [0, 1)."""
+    mass: float | None = None
+    """Mass [kg] (or weight / g)."""
+    friction: float | None = None
+    """Coulomb friction of sliding isolators [N] (or friction_coefficient times the weight)."""
+    friction_coefficient: float | None = None
+    displacement: float | None = None
+    """Pushed displacement d0 [m]; else (P - friction) / k, k = mass (2 pi / T)^2."""
+
+    @property
+    def friction_force(self) -> float:
+        """Coulomb friction force of the isolators [N]."""
+        if self.friction is not None:
+            return self.friction
+        if self.friction_coefficient is not None:
+            return self.friction_coefficient * self.mass * STANDARD_GRAVITY
+        return 0.0
+
+
+@dataclass(frozen=True)
+class PlanOptions:
+    """The ``[plan]`` table."""
+
+    samples: int = 20_000
+    """Friction samples of the release envelope when friction has a scatter."""
+    seed: int = 0
+
+
+STANDARD_GRAVITY = 9.80665
+"""Standard gravity [m/s^2] (weight = mass g)."""
+
+
+@dataclass(frozen=True)
 class FitOptions:
     """The ``[fit]`` table: what a fit to a measured record estimates besides F1 and F2."""
 
@@ -98,6 +158,17 @@ class CaseFileError(QuickReleaseError):
     """A case file is malformed or one of its entries is missing, unknown or invalid."""
 
 
+#: Numbers whose valid range is not the default (> 0; an angle in (0, pi/2)).
+_VALID = {
+    ("friction", "F1"): lambda x: x >= 0.0,
+    ("friction", "F2"): lambda x: x >= 0.0,
+    ("friction", "correlation"): lambda x: -1.0 <= x <= 1.0,
+    ("fuse", "tolerance"): lambda x: 0.0 < x < 1.0,
+    ("building", "damping_ratio"): lambda x: 0.0 <= x < 1.0,
+    ("building", "friction"): lambda x: x >= 0.0,
+    ("building", "friction_coefficient"): lambda x: x >= 0.0,
+}
+
 #: section -> key -> (quantity kind or type, what is expected)
 CASE_SCHEMA: dict[str, dict[str, tuple[str, str]]] = {
     "": {"title": ("str", "a string"), "notes": ("str", "a string")},
@@ -111,6 +182,28 @@ CASE_SCHEMA: dict[str, dict[str, tuple[str, str]]] = {
     "friction": {
         "F1": ("force", "a force >= 0, e.g. '420 N'"),
         "F2": ("force", "a force >= 0, e.g. '0.8 kN'"),
+        "correlation": ("dimensionless", "a correlation of F1 and F2 in [-1, 1] (with F1, F2 given a scatter)"),
+        "case": ("str", "a case file whose identified friction (and its scatter) to use"),
+    },
+    "fuse": {
+        "rupture_strength": ("pressure", "a positive stress, e.g. '610 MPa' or {value = '610 MPa', std = '15 MPa'}"),
+        "diameters": ("list:length", "a list of positive lengths, e.g. ['24 mm', '26 mm']"),
+        "angles": ("list:angle", "a list of angles in (0, pi/2), e.g. ['0.15 rad', '0.2 rad']"),
+        "target": ("force", "a positive force, e.g. '1600 kN', or a range {low = '1500 kN', high = '1700 kN'}"),
+        "tolerance": ("dimensionless", "a fraction in (0, 1), e.g. 0.05"),
+    },
+    "building": {
+        "period": ("time", "a positive period, e.g. '2.5 s'"),
+        "damping_ratio": ("dimensionless", "a damping ratio in [0, 1), e.g. 0.1"),
+        "mass": ("mass", "a positive mass, e.g. '1500 t'"),
+        "weight": ("force", "a positive weight, e.g. '14700 kN'"),
+        "friction": ("force", "a force >= 0 (sliding isolators), e.g. '150 kN'"),
+        "friction_coefficient": ("dimensionless", "a friction coefficient >= 0 (times the weight), e.g. 0.01"),
+        "displacement": ("length", "a positive pushed displacement d0, e.g. '50 mm'"),
+    },
+    "plan": {
+        "samples": ("int", "an integer >= 2 (friction samples of the release envelope)"),
+        "seed": ("seed", "an integer >= 0"),
     },
     "observations": {
         "alpha_final": ("angle", "an angle in (alpha0, pi/2), e.g. '0.7378 rad'"),
@@ -162,6 +255,16 @@ class Case:
     """The measured record to fit (``[record]``), read by :func:`quickrelease.records.load_record`."""
     fit: FitOptions = field(default_factory=FitOptions)
     """Options of the fit to the record (``[fit]``)."""
+    fuse: FuseSpec | None = None
+    """Fuse material and candidates for the fuse and angle choice (``[fuse]``)."""
+    building: BuildingSpec | None = None
+    """The building, for the clearance check (``[building]``)."""
+    plan: PlanOptions = field(default_factory=lambda: PlanOptions())
+    """Options of test planning (``[plan]``)."""
+    friction_case: Case | None = None
+    """The case whose identified friction this one uses (``[friction] case``)."""
+    friction_correlation: float = 0.0
+    """Correlation of F1 and F2 when both are given a scatter (``[friction] correlation``)."""
     uncertainty: dict[str, Distribution] = field(default_factory=dict)
     """Inputs with a scatter (force, energy, alpha0, alpha_final, stop_time) and their distributions."""
     energy_given: bool = False
@@ -232,6 +335,14 @@ def _entry(source: str, section: str, key: str, value: Any) -> Any:
         if isinstance(value, bool) or not isinstance(value, int) or value < 2:
             raise _fail(source, where, value, expected)
         return value
+    if kind == "seed":
+        if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+            raise _fail(source, where, value, expected)
+        return value
+    if kind.startswith("list:"):
+        if not isinstance(value, list) or not value:
+            raise _fail(source, where, value, expected)
+        return tuple(_number(source, where, key, kind[5:], item, expected, section) for item in value)
     if kind == "mass_model":
         try:
             mass_factor(value)
@@ -250,12 +361,20 @@ def _entry(source: str, section: str, key: str, value: Any) -> Any:
         return _distribution(source, section, key, value)
     if isinstance(value, dict | list):
         raise _fail(source, where, value, expected)
+    return _number(source, where, key, kind, value, expected, section)
+
+
+def _number(source: str, where: str, key: str, kind: str, value: Any, expected: str, section: str) -> float:
+    """A quantity in SI units, checked against its valid range."""
+    if isinstance(value, dict | list):
+        raise _fail(source, where, value, expected)
     try:
         number = parse_quantity(value, kind, key)
     except QuickReleaseError as exc:
         reason = str(exc)
         raise CaseFileError(f"{source}: {where} = {value!r}: {_strip_name(reason, key, value)}") from None
-    ok = math.isfinite(number) and (number >= 0.0 if section == "friction" else number > 0.0)
+    valid = _VALID.get((section, key))
+    ok = math.isfinite(number) and (valid(number) if valid else number > 0.0)
     if kind == "angle" and number >= 0.5 * math.pi:
         ok = False
     if not ok:
@@ -347,7 +466,16 @@ def case_from_mapping(data: dict[str, Any], source: str = "<case>", base: Path |
         raise CaseFileError(f"{source}: missing key [test] force or energy (a push force, e.g. '1598 kN', "
                             "or a stored energy, e.g. '2.90 kJ')")
     friction = data.get("friction")
-    if friction is not None and set(friction) != {"F1", "F2"}:
+    friction_case = None
+    if friction is not None and "case" in friction:
+        if "F1" in friction or "F2" in friction:
+            raise CaseFileError(f"{source}: [friction] case beside F1, F2: give one or the other")
+        file = Path(values["friction.case"])
+        try:
+            friction_case = load_case(file if file.is_absolute() else base / file)
+        except RecursionError:
+            raise CaseFileError(f"{source}: [friction] case refers back to itself") from None
+    elif friction is not None and not {"F1", "F2"} <= set(friction):
         missing = sorted({"F1", "F2"} - set(friction))
         raise CaseFileError(f"{source}: missing key [friction] {missing[0]} (give both F1 and F2)")
     observations = data.get("observations")
@@ -378,12 +506,16 @@ def case_from_mapping(data: dict[str, Any], source: str = "<case>", base: Path |
     E_S = values["test.energy"] if has_energy else strain_energy(P, alpha0, device).total
     sim = {k.split(".", 1)[1]: v for k, v in values.items() if k.startswith("simulation.")}
     fit = FitOptions(**{k.split(".", 1)[1]: v for k, v in values.items() if k.startswith("fit.")})
+    fuse = _fuse(values, data.get("fuse"), source)
+    building = _building(values, data.get("building"), source)
+    plan = PlanOptions(**{k.split(".", 1)[1]: v for k, v in values.items() if k.startswith("plan.")})
     return Case(
         device=device, alpha0=alpha0, stored_energy=E_S, push_force=P,
         mass_model=values.get("test.mass_model", "distributed"),
         F1=values.get("friction.F1"), F2=values.get("friction.F2"),
         alpha_final=aF, stop_time=values.get("observations.stop_time"),
-        energy_given=has_energy, uncertainty=uncertainty, record=record, fit=fit,
+        energy_given=has_energy, uncertainty=uncertainty, record=record, fit=fit, fuse=fuse, building=building,
+        plan=plan, friction_case=friction_case, friction_correlation=values.get("friction.correlation", 0.0),
         title=values.get("title", Path(source).stem), notes=values.get("notes", ""), source=source,
         **sim,
     )
@@ -408,3 +540,46 @@ def _device(table: dict[str, Any], source: str, base: Path) -> Device:
         file = Path(_entry(source, "device", "file", table["file"]))
         return load_device(file if file.is_absolute() else base / file)
     return Device.from_mapping(table, source=where)
+
+
+def _fuse(values: dict[str, Any], table: Any, source: str) -> FuseSpec | None:
+    if table is None:
+        return None
+    if "fuse.rupture_strength" not in values:
+        raise CaseFileError(f"{source}: missing key [fuse] rupture_strength (the fuse material's, e.g. '610 MPa')")
+    strength = values["fuse.rupture_strength"]
+    mean, std = (strength.loc, strength.scale) if isinstance(strength, Distribution) else (strength, 0.0)
+    if isinstance(strength, Distribution) and strength.kind != "normal":
+        mean, std = strength.nominal, strength.scale / math.sqrt(12.0)
+    target = values.get("fuse.target")
+    if isinstance(target, Distribution):
+        if target.kind != "uniform":
+            raise CaseFileError(f"{source}: [fuse] target: give a force or a range {{low = ..., high = ...}}")
+        target = (target.loc, target.loc + target.scale)
+    elif target is not None:
+        tol = values.get("fuse.tolerance", 0.05)
+        target = (target * (1.0 - tol), target * (1.0 + tol))
+    return FuseSpec(rupture_strength=mean, rupture_strength_std=std, diameters=values.get("fuse.diameters", ()),
+                    angles=values.get("fuse.angles", ()), target=target, tolerance=values.get("fuse.tolerance", 0.05))
+
+
+def _building(values: dict[str, Any], table: Any, source: str) -> BuildingSpec | None:
+    if table is None:
+        return None
+    if "building.period" not in values:
+        raise CaseFileError(f"{source}: missing key [building] period (the isolation period, e.g. '2.5 s')")
+    mass = values.get("building.mass")
+    if "building.weight" in values:
+        if mass is not None:
+            raise CaseFileError(f"{source}: [building] mass and weight: give one of the two")
+        mass = values["building.weight"] / STANDARD_GRAVITY
+    if "building.friction" in values and "building.friction_coefficient" in values:
+        raise CaseFileError(f"{source}: [building] friction and friction_coefficient: give one of the two")
+    if "building.friction_coefficient" in values and mass is None:
+        raise CaseFileError(f"{source}: [building] friction_coefficient needs the mass or the weight")
+    if "building.displacement" not in values and mass is None:
+        raise CaseFileError(f"{source}: [building] needs displacement (d0) or the mass or weight (d0 = P / k)")
+    return BuildingSpec(period=values["building.period"], damping_ratio=values.get("building.damping_ratio", 0.0),
+                        mass=mass, friction=values.get("building.friction"),
+                        friction_coefficient=values.get("building.friction_coefficient"),
+                        displacement=values.get("building.displacement"))

@@ -161,9 +161,14 @@ def simulate(
     step = None if dt is None else parse_quantity(dt, "time", "--dt")
     case = _case_with_flags(case_file, device, force, energy, alpha0, mass_model, F1=F1, F2=F2, method=method,
                             dt=step)
-    if case_file is not None and not case.has_friction:
+    if case_file is not None and not case.has_friction and case.friction_case is None:
         raise ParameterError("friction", "missing", "[friction] in the case file or --f1/--f2 "
                              "(to identify first, use 'quickrelease run')")
+    if not case.has_friction and case.friction_case is not None:
+        from .identify import case_friction
+
+        F1_case, F2_case, _ = case_friction(case)
+        case = case.replace(F1=F1_case, F2=F2_case)
     response = run(case.stored_energy, case.alpha0, case.F1 or 0.0, case.F2 or 0.0, device=case.device,
                    mass_model=case.mass_model, method=case.method, dt=case.dt, n_points=case.n_points,
                    rk_method=case.rk_method)

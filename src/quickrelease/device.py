@@ -24,7 +24,7 @@ from typing import Any
 from .errors import DeviceFileError, ParameterError
 from .units import parse_quantity
 
-__all__ = ["Device", "DEVICE_KEYS", "load_device", "preset", "preset_names"]
+__all__ = ["Device", "DEVICE_KEYS", "CHECK_KEYS", "load_device", "preset", "preset_names", "read_toml"]
 
 #: Table 2 key -> (quantity kind, description with unit).
 DEVICE_KEYS: dict[str, tuple[str, str]] = {
@@ -42,6 +42,19 @@ DEVICE_KEYS: dict[str, tuple[str, str]] = {
     "E": ("pressure", "elastic modulus [Pa]"),
     "G": ("pressure", "shear modulus [Pa]"),
     "kappa": ("dimensionless", "shear correction factor of E2 [-]"),
+}
+
+#: Optional keys for the member checks of test planning (:mod:`quickrelease.planning`): key -> (quantity
+#: kind, description with unit). Where absent, the check that needs it is skipped with a note.
+CHECK_KEYS: dict[str, tuple[str, str]] = {
+    "fy": ("pressure", "yield strength of the steel of every member, unless fy1, fy2 or fy3 is given [Pa]"),
+    "fy1": ("pressure", "yield strength of the bars E1 [Pa]"),
+    "fy2": ("pressure", "yield strength of the heads E2 [Pa]"),
+    "fy3": ("pressure", "yield strength of the fuse lodgings E3 [Pa]"),
+    "I1": ("second_moment", "smallest second moment of area of a bar E1, for flexural buckling [m^4]"),
+    "Lcr1": ("length", "buckling (effective) length of a bar E1; L1 when not given [m]"),
+    "W2": ("section_modulus", "elastic section modulus of a head E2 for bending [m^3]"),
+    "h2": ("length", "depth of a head E2 (W2 = I2 / (h2 / 2) when W2 is not given) [m]"),
 }
 
 _METADATA_KEYS = ("name", "description")
@@ -85,6 +98,22 @@ class Device:
     """Shear correction factor of E2 [-]."""
     name: str = "custom"
     """A short name for reports."""
+    fy: float | None = None
+    """Yield strength of every member unless fy1, fy2 or fy3 is given [Pa] (member checks)."""
+    fy1: float | None = None
+    """Yield strength of the bars E1 [Pa]."""
+    fy2: float | None = None
+    """Yield strength of the heads E2 [Pa]."""
+    fy3: float | None = None
+    """Yield strength of the fuse lodgings E3 [Pa]."""
+    I1: float | None = None
+    """Smallest second moment of area of a bar E1 [m^4] (flexural buckling)."""
+    Lcr1: float | None = None
+    """Buckling length of a bar E1 [m]; L1 when not given."""
+    W2: float | None = None
+    """Elastic section modulus of a head E2 [m^3]."""
+    h2: float | None = None
+    """Depth of a head E2 [m] (gives W2 = I2 / (h2/2) when W2 is not given)."""
 
     def __post_init__(self) -> None:
         for key, (_kind, description) in DEVICE_KEYS.items():
@@ -95,6 +124,18 @@ class Device:
                 unit = description.rsplit("[", 1)[1].rstrip("]")
                 raise ParameterError(key, float(value), "(0, inf)", "" if unit == "-" else unit)
             object.__setattr__(self, key, float(value))
+        for key in CHECK_KEYS:
+            value = getattr(self, key)
+            if value is None:
+                continue
+            if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value) or value <= 0:
+                raise ParameterError(key, value, "(0, inf)")
+            object.__setattr__(self, key, float(value))
+
+    def yield_strength(self, member: int) -> float | None:
+        """Yield strength of member E1, E2 or E3 (1, 2, 3): fy<member>, else fy, else None [Pa]."""
+        value = getattr(self, f"fy{member}")
+        return value if value is not None else self.fy
 
     @property
     def mass_ratio(self) -> float:
@@ -132,11 +173,11 @@ class Device:
             For a missing, unknown or invalid entry; the message names ``source``
             and the key.
         """
-        unknown = [k for k in mapping if k not in DEVICE_KEYS and k not in _METADATA_KEYS]
+        unknown = [k for k in mapping if k not in DEVICE_KEYS and k not in CHECK_KEYS and k not in _METADATA_KEYS]
         if unknown:
             raise DeviceFileError(
                 f"{source}: unknown key {unknown[0]!r}; valid keys: {', '.join(DEVICE_KEYS)}, "
-                + ", ".join(_METADATA_KEYS)
+                + ", ".join(_METADATA_KEYS) + "; for member checks: " + ", ".join(CHECK_KEYS)
             )
         missing = [k for k in DEVICE_KEYS if k not in mapping]
         if missing:
@@ -153,6 +194,16 @@ class Device:
                 raise DeviceFileError(
                     f"{source}: {key} = {mapping[key]!r} must be positive ({description})"
                 )
+            values[key] = value
+        for key, (kind, description) in CHECK_KEYS.items():
+            if key not in mapping:
+                continue
+            try:
+                value = parse_quantity(mapping[key], kind, key)
+            except ValueError as exc:
+                raise DeviceFileError(f"{source}: {exc}") from None
+            if not math.isfinite(value) or value <= 0.0:
+                raise DeviceFileError(f"{source}: {key} = {mapping[key]!r} must be positive ({description})")
             values[key] = value
         name = mapping.get("name", Path(source).stem if source != "<mapping>" else "custom")
         if not isinstance(name, str):

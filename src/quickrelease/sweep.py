@@ -73,17 +73,10 @@ def parse_grid(text: str) -> tuple[str, np.ndarray]:
 
 
 def _base(case: Case) -> dict[str, float]:
-    d = case.device
-    if case.has_friction:
-        F1, F2 = case.F1 or 0.0, case.F2 or 0.0
-    elif case.has_observations:
-        from .identify import identify_friction
+    from .identify import case_friction
 
-        ident = identify_friction(case.alpha0, case.alpha_final, case.stop_time, stored_energy=case.stored_energy,
-                                  device=d, mass_model=case.mass_model)
-        F1, F2 = ident.F1, ident.F2
-    else:  # pragma: no cover - load_case requires one of the two
-        raise QuickReleaseError(f"{case.source}: a sweep needs [friction] or [observations]")
+    d = case.device
+    F1, F2, _ = case_friction(case)
     return {"force": case.push_force if case.push_force is not None else math.nan, "energy": case.stored_energy,
             "alpha0": case.alpha0, "F1": F1, "F2": F2, "c": case.mass_factor, "m1": d.m1, "m2": d.m2, "L1": d.L1}
 

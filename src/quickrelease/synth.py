@@ -18,31 +18,17 @@ from typing import Any
 import numpy as np
 
 from .case import Case, FitOptions
-from .errors import ParameterError, QuickReleaseError
+from .errors import ParameterError
+from .identify import case_friction
 from .records import CHANNELS, DISPLACEMENT_CHANNELS, Channel, ChannelSpec, Record, release_channels
 from .solvers import FirstIntegral
 
-__all__ = ["DEFAULT_NOISE", "SyntheticRecord", "synthesize", "predicted_errors", "case_friction",
-           "parse_channel_values", "case_toml"]
+__all__ = ["DEFAULT_NOISE", "SyntheticRecord", "synthesize", "predicted_errors", "parse_channel_values", "case_toml"]
 
 #: Default noise standard deviations [SI]: video angle, gyroscope, draw-wire or LVDT displacements,
 #: velocity transducers, accelerometers (about 5 mg).
 DEFAULT_NOISE = {"alpha": 0.002, "alpha_dot": 0.01, "u": 0.5e-3, "v": 0.5e-3, "u_dot": 5e-3, "v_dot": 5e-3,
                  "a_head": 0.05, "a_hinge": 0.05}
-
-
-def case_friction(case: Case) -> tuple[float, float, str]:
-    """F1, F2 of a case: ``[friction]``, else identified from ``[observations]`` (Eq. 11-13) [N]."""
-    if case.has_friction:
-        return case.F1 or 0.0, case.F2 or 0.0, "[friction]"
-    if case.has_observations:
-        from .identify import identify_friction
-
-        ident = identify_friction(case.alpha0, case.alpha_final, case.stop_time, stored_energy=case.stored_energy,
-                                  device=case.device, mass_model=case.mass_model)
-        return ident.F1, ident.F2, "identified from [observations]"
-    raise QuickReleaseError(f"{case.source}: no friction to synthesize a record with: give [friction] or "
-                            "[observations]")
 
 
 def _column(name: str) -> str:

@@ -43,7 +43,7 @@ def _check(case: Case) -> None:
     if case.energy_given and "force" in case.uncertainty:
         raise QuickReleaseError(f"{case.source}: [test] force has a scatter but energy is given, and a given E_S "
                                 "drives the release: give the scatter to energy, or drop energy (E_S from Eq. 2)")
-    if not case.uncertainty:
+    if not any(name in _UNITS for name in case.uncertainty):
         raise QuickReleaseError(f"{case.source}: no uncertainty given: write an input as a table, e.g. "
                                 "alpha_final = {value = \"0.7378 rad\", std = \"0.01 rad\"}")
 
@@ -343,10 +343,9 @@ def _result(case, samples, seed, chunk, total, edges) -> UQResult:
     counts = {batch.IDENTIFY_STATUS[i]: int(c) for i, c in enumerate(total["status"]) if c}
     nominal_ident = _identify(case, _inputs(case, None, 1))
     ift, fd = sensitivities(case)
-    units = {k: (_UNITS[k] if case.uncertainty.get(k) else "") for k in case.uncertainty}
     return UQResult(
         samples=int(samples), seed=int(seed), chunk=int(chunk),
-        inputs={k: v.describe(_UNITS[k]) for k, v in case.uncertainty.items()} if units else {},
+        inputs={k: v.describe(_UNITS[k]) for k, v in case.uncertainty.items() if k in _UNITS},
         nominal={"F1": float(nominal_ident.F1[0]), "F2": float(nominal_ident.F2[0])},
         percentiles=pct, mean={"F1": float(mean[0]), "F2": float(mean[1])},
         std={"F1": float(math.sqrt(var[0])), "F2": float(math.sqrt(var[1]))},

@@ -14,9 +14,8 @@ from pathlib import Path
 from typing import Any
 
 from .case import Case
-from .errors import QuickReleaseError
 from .fit import FitResult, fit_record
-from .identify import Identification, identify_friction
+from .identify import Identification, case_friction, identify_friction
 from .response import Response
 from .solvers import simulate
 from .statics import StrainEnergy
@@ -79,10 +78,7 @@ def run_case(case: Case, *, state_diagram: bool = True) -> CaseResult:
         fit = fit_record(case)
         F1, F2, E_S, mass_model = fit.F1, fit.F2, fit.energy, fit.mass_factor
     elif ident is None:
-        if not case.has_friction:
-            raise QuickReleaseError(f"{case.source}: nothing to do: give [friction] to simulate, [observations] "
-                                    "to identify or [record] to fit")
-        F1, F2 = case.F1 or 0.0, case.F2 or 0.0
+        F1, F2, _ = case_friction(case)
     common = dict(device=case.device, mass_model=mass_model)
     response = simulate(E_S, case.alpha0, F1, F2, method=case.method, dt=case.dt,
                         n_points=case.n_points, t_end=case.t_end, rk_method=case.rk_method, **common)
