@@ -170,3 +170,50 @@ def identify_kernel(a0, aF, tF, E, k, m2, L1, x16, w16, x24, w24, near, hard, ma
                     break
         lam_out[i] = lam
         iter_out[i] = iterations
+
+
+@njit(cache=True, nogil=True)
+def _parabola_peak(y0, y1, y2):
+    """Largest value of the parabola through (-1, y0), (0, y1), (1, y2) when its vertex is a maximum."""
+    curv = y0 - 2.0 * y1 + y2
+    if curv < 0.0:
+        return y1 - 0.125 * (y2 - y0) * (y2 - y0) / curv
+    return y1
+
+
+@njit(cache=True, nogil=True)
+def peak_accel_kernel(E, a0, aE, F1, F2, k, m2, L1, n, pu_out, pv_out):
+    """Peaks of |u_ddot| and |v_ddot| over [alpha0, alpha_end] (the numpy ``batch._peak_accelerations``):
+    n equally spaced angles (sines and cosines by rotation, no trigonometric call per angle), then the
+    vertex of the parabola through the best three when the best is inside the interval."""
+    for i in range(E.size):
+        h = (aE[i] - a0[i]) / (n - 1)
+        ch, sh = math.cos(h), math.sin(h)
+        s0, c0 = math.sin(a0[i]), math.cos(a0[i])
+        s, c = s0, c0
+        A = 2.0 * F1[i] * L1[i]
+        B = 4.0 * F2[i] * L1[i]
+        ml = m2[i] * L1[i]
+        best_u = best_v = -1.0
+        ju = jv = 0
+        pu_prev = pv_prev = 0.0
+        pu_left = pv_left = pu_right = pv_right = 0.0
+        for j in range(n):
+            K = E[i] - A * (s - s0) - B * (c0 - c)
+            d = k[i] + s * s
+            rate2 = max(K, 0.0) / (ml * L1[i] * d)
+            acc = -rate2 * s * c / d - (2.0 * F2[i] * s + F1[i] * c) / (ml * d)
+            pu = abs(L1[i] * (c * rate2 + s * acc))
+            pv = abs(L1[i] * (-s * rate2 + c * acc))
+            if j == ju + 1:
+                pu_right = pu
+            if j == jv + 1:
+                pv_right = pv
+            if pu > best_u:
+                best_u, ju, pu_left = pu, j, pu_prev
+            if pv > best_v:
+                best_v, jv, pv_left = pv, j, pv_prev
+            pu_prev, pv_prev = pu, pv
+            s, c = s * ch + c * sh, c * ch - s * sh
+        pu_out[i] = _parabola_peak(pu_left, best_u, pu_right) if 0 < ju < n - 1 else best_u
+        pv_out[i] = _parabola_peak(pv_left, best_v, pv_right) if 0 < jv < n - 1 else best_v

@@ -118,6 +118,10 @@ class BatchRelease(_Result):
     """Peak head velocity [m/s]."""
     peak_v_dot: np.ndarray
     """Peak central hinge velocity [m/s] (at release)."""
+    peak_u_ddot: np.ndarray
+    """Peak |head acceleration| during the motion [m/s^2] (Table 4, alpha_ddot from Eq. 3/4)."""
+    peak_v_ddot: np.ndarray
+    """Peak |central hinge acceleration| during the motion [m/s^2]."""
 
 
 @dataclass(frozen=True)
@@ -234,8 +238,41 @@ def _peak_head_velocity(E_S, alpha0, alpha_end, A, B, k, m2, n_samples: int = 8,
     return np.sqrt(best / m2)
 
 
+#: Angles sampled for the peak accelerations (then a parabola through the best three): ~4e-5 relative.
+N_PEAK = 65
+
+
+def _peak_accelerations(E_S, alpha0, alpha_end, F1, F2, k, m2, L1, n: int = N_PEAK):
+    """Peaks of |u_ddot| and |v_ddot| over [alpha0, alpha_end]: n angles, then a parabola through the best
+    three (the accelerations are smooth in alpha; the end point is the state just before the stop).
+
+    The numpy reference of the compiled ``_fast.peak_accel_kernel`` used by :func:`release` (a test checks
+    they agree)."""
+    x = np.linspace(0.0, 1.0, n)
+    a = alpha0[:, None] + (alpha_end - alpha0)[:, None] * x
+    s, co = np.sin(a), np.cos(a)
+    sa0, ca0 = np.sin(alpha0)[:, None], np.cos(alpha0)[:, None]
+    K = E_S[:, None] - 2.0 * F1[:, None] * L1[:, None] * (s - sa0) - 4.0 * F2[:, None] * L1[:, None] * (ca0 - co)
+    d = k[:, None] + s * s
+    rate2 = np.maximum(K, 0.0) / (m2[:, None] * L1[:, None] ** 2 * d)  # Eq. 10, squared
+    acc = -rate2 * s * co / d - (2.0 * F2[:, None] * s + F1[:, None] * co) / (m2[:, None] * L1[:, None] * d)
+    out = []
+    for values in (L1[:, None] * (co * rate2 + s * acc), L1[:, None] * (-s * rate2 + co * acc)):
+        mag = np.abs(values)
+        best = np.argmax(mag, axis=1)
+        j = np.clip(best, 1, n - 2)
+        rows = np.arange(mag.shape[0])
+        y0, y1, y2 = mag[rows, j - 1], mag[rows, j], mag[rows, j + 1]
+        curv = y0 - 2.0 * y1 + y2
+        interior = (best == j) & (curv < 0.0)  # a maximum inside the interval: the parabola's vertex
+        with np.errstate(divide="ignore", invalid="ignore"):
+            vertex = np.where(interior, y1 - 0.125 * (y2 - y0) ** 2 / curv, y1)
+        out.append(np.maximum(mag[rows, best], vertex))
+    return out
+
+
 def release(E_S, alpha0, F1, F2, c=2.0 / 3.0, m1=None, m2=None, L1=None, *, chunk: int = CHUNK) -> BatchRelease:
-    """Release envelope of many cases: t_F, alpha_F, u_F, v_F, initial and peak velocities.
+    """Release envelope of many cases: t_F, alpha_F, u_F, v_F, initial and peak velocities and accelerations.
 
     Same inputs as :func:`stop_time`.
     """
@@ -243,7 +280,7 @@ def release(E_S, alpha0, F1, F2, c=2.0 / 3.0, m1=None, m2=None, L1=None, *, chun
     shape, (E_S, alpha0, F1, F2, c, m1, m2, L1) = _flat(E_S, alpha0, F1, F2, c, m1, m2, L1)
     n = E_S.size
     out = {name: np.empty(n) for name in ("stop_time", "alpha_final", "u_final", "v_final", "alpha_dot0",
-                                          "peak_u_dot", "peak_v_dot")}
+                                          "peak_u_dot", "peak_v_dot", "peak_u_ddot", "peak_v_ddot")}
     code = np.empty(n, dtype=np.int8)
     k = c * m1 / m2
     t, aF_all, code[:] = _stop_arrays(E_S, alpha0, F1, F2, k, m2, L1, chunk)
@@ -261,6 +298,9 @@ def release(E_S, alpha0, F1, F2, c=2.0 / 3.0, m1=None, m2=None, L1=None, *, chun
         out["peak_v_dot"][sl] = L1[sl] * np.cos(alpha0[sl]) * ad0  # v_dot decreases from release on
         out["peak_u_dot"][sl] = _peak_head_velocity(E_S[sl], alpha0[sl], aF, 2.0 * F1[sl] * L1[sl],
                                                     4.0 * F2[sl] * L1[sl], k[sl], m2[sl])
+    from . import _fast
+
+    _fast.peak_accel_kernel(E_S, alpha0, aF_all, F1, F2, k, m2, L1, N_PEAK, out["peak_u_ddot"], out["peak_v_ddot"])
     res = {key: v.reshape(shape) for key, v in out.items()}
     return BatchRelease(stopped_by=code.reshape(shape), **res)
 

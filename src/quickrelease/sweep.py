@@ -42,6 +42,8 @@ OUTPUTS = {
     "alpha_dot0": ("initial angular velocity (Eq. 6)", "rad/s"),
     "peak_u_dot": ("peak head velocity", "m/s"),
     "peak_v_dot": ("peak central hinge velocity", "m/s"),
+    "peak_u_ddot": ("peak head acceleration", "m/s^2"),
+    "peak_v_ddot": ("peak central hinge acceleration", "m/s^2"),
     "stored_energy": ("stored strain energy E_S", "J"),
 }
 
