@@ -17,8 +17,8 @@ from quickrelease.export import atomic_path, read_csv, read_netcdf, write_csv, w
 from quickrelease.workflow import FIGURES, run_case, write_results
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
-#: The figures of the paper case (it has no record, so no fit figure: see test_fit.py).
-PAPER_FIGURES = [stem for stem in FIGURES if stem != "fit_channels"]
+#: The figures of the paper case (no record, no plan: see test_fit.py and test_planning.py for those).
+PAPER_FIGURES = [stem for stem in FIGURES if stem != "fit_channels" and not stem.startswith("plan_")]
 
 
 @pytest.fixture(scope="module")

@@ -506,7 +506,7 @@ def case_from_mapping(data: dict[str, Any], source: str = "<case>", base: Path |
     E_S = values["test.energy"] if has_energy else strain_energy(P, alpha0, device).total
     sim = {k.split(".", 1)[1]: v for k, v in values.items() if k.startswith("simulation.")}
     fit = FitOptions(**{k.split(".", 1)[1]: v for k, v in values.items() if k.startswith("fit.")})
-    fuse = _fuse(values, data.get("fuse"), source)
+    fuse = _fuse(values, uncertainty, data.get("fuse"), source)
     building = _building(values, data.get("building"), source)
     plan = PlanOptions(**{k.split(".", 1)[1]: v for k, v in values.items() if k.startswith("plan.")})
     return Case(
@@ -542,16 +542,16 @@ def _device(table: dict[str, Any], source: str, base: Path) -> Device:
     return Device.from_mapping(table, source=where)
 
 
-def _fuse(values: dict[str, Any], table: Any, source: str) -> FuseSpec | None:
+def _fuse(values: dict[str, Any], uncertainty: dict[str, Distribution], table: Any, source: str) -> FuseSpec | None:
     if table is None:
         return None
     if "fuse.rupture_strength" not in values:
         raise CaseFileError(f"{source}: missing key [fuse] rupture_strength (the fuse material's, e.g. '610 MPa')")
-    strength = values["fuse.rupture_strength"]
+    strength = uncertainty.pop("rupture_strength", values["fuse.rupture_strength"])
     mean, std = (strength.loc, strength.scale) if isinstance(strength, Distribution) else (strength, 0.0)
     if isinstance(strength, Distribution) and strength.kind != "normal":
         mean, std = strength.nominal, strength.scale / math.sqrt(12.0)
-    target = values.get("fuse.target")
+    target = uncertainty.pop("target", values.get("fuse.target"))
     if isinstance(target, Distribution):
         if target.kind != "uniform":
             raise CaseFileError(f"{source}: [fuse] target: give a force or a range {{low = ..., high = ...}}")

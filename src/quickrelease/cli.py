@@ -530,6 +530,65 @@ def campaign(
 
 @app.command()
 @_guard
+def plan(
+    case_file: Annotated[Path, typer.Argument(help="Case file: the planned push ([test] force, alpha0), the friction estimate, and optionally [fuse], [building], [plan].")],
+    out: Annotated[Path | None, typer.Option("--out", "-o", help="Also write plan.json, the figures and report.html here.")] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Plan a test: fuse and angle, member checks, release envelope, clearance with the building."""
+    from .case import load_case
+    from .workflow import run_case, write_results
+
+    result = run_case(load_case(case_file), plan=True)
+    plan_result = result.plan
+    paths = write_results(result, out) if out is not None else {}
+    summary = plan_result.summary()
+    if as_json:
+        _print_json(summary)
+        return
+    typer.echo(f"{result.case.title}: P = {plan_result.push_force / 1e3:.6g} kN at alpha0 = {plan_result.alpha0:.4g} "
+               f"rad, E_S = {plan_result.stored_energy:.6g} J")
+    if plan_result.fuse is not None:
+        ft = plan_result.fuse
+        _table(f"Fuse and angle choices inside the target {ft.target[0] / 1e3:.6g} to {ft.target[1] / 1e3:.6g} kN "
+               f"(rupture strength {ft.rupture_strength / 1e6:.4g} ± {ft.rupture_strength_std / 1e6:.3g} MPa)",
+               [(f"{1e3 * c.diameter:.4g}", f"{c.alpha0:.4g}", f"{c.push_force / 1e3:.5g} ± {c.push_force_std / 1e3:.3g}",
+                 f"{c.stored_energy:.5g}", f"{100 * c.probability_within:.3g}%" + (" <- best" if c is ft.best else ""))
+                for c in ft.choices if c.within],
+               ("d [mm]", "alpha0 [rad]", "P [kN]", "E_S [J]", "P inside the target"))
+        for text in ft.warnings:
+            typer.echo(f"warning: {text}")
+    m = plan_result.members
+    _table(f"Member checks (fuse stress N4/A4 = {m.fuse_stress / 1e6:.4g} MPa)", [
+        (c.member, c.check, f"{c.demand / (1e6 if c.unit == 'Pa' else 1e3):.4g}",
+         "-" if c.capacity is None else f"{c.capacity / (1e6 if c.unit == 'Pa' else 1e3):.4g}",
+         "MPa" if c.unit == "Pa" else "kN", "skipped" if c.utilisation is None else f"{c.utilisation:.3f}")
+        for c in m.checks], ("member", "check", "demand", "capacity", "unit", "utilisation"))
+    from .planning import ENVELOPE_QUANTITIES
+
+    env = plan_result.envelope
+    _table(f"Release envelope: {env.friction} ({env.samples:,} sample(s))", [
+        (label, unit, f"{env.nominal[k]:.4g}", f"{env.ranges[k]['p5']:.4g}", f"{env.ranges[k]['p95']:.4g}",
+         f"{env.ranges[k]['max']:.4g}") for k, (unit, label) in ENVELOPE_QUANTITIES.items()],
+        ("quantity", "unit", "nominal", "5%", "95%", "max"))
+    if plan_result.clearance is not None:
+        c = plan_result.clearance
+        verdict = (f"CONTACT at {c.first_contact_time:.3g} s: {1e3 * c.margin_needed:.4g} mm more room needed"
+                   if c.contact else "no contact")
+        typer.echo(f"Clearance: d0 = {1e3 * c.d0:.4g} mm, largest approach {1e3 * c.max_approach:.4g} mm, minimum gap "
+                   f"{1e3 * c.min_gap:.4g} mm at {c.min_gap_time:.4g} s: {verdict}")
+        if plan_result.clearance_spread is not None:
+            sp = plan_result.clearance_spread
+            typer.echo(f"  over {sp['clearance_samples']} friction samples: 5% of minimum gaps below "
+                       f"{1e3 * sp['min_gap_p5_m']:.4g} mm, contact in {100 * sp['contact_share']:.3g}%")
+    for text in plan_result.notes:
+        typer.echo(f"note: {text}")
+    if paths:
+        _listing(paths, out)
+
+
+@app.command()
+@_guard
 def bench(
     quick: Annotated[bool, typer.Option("--quick", help="Smaller samples; skip the 1e8-sample Dask run.")] = False,
     as_json: JsonOpt = False,

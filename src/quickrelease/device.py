@@ -47,7 +47,7 @@ DEVICE_KEYS: dict[str, tuple[str, str]] = {
 #: Optional keys for the member checks of test planning (:mod:`quickrelease.planning`): key -> (quantity
 #: kind, description with unit). Where absent, the check that needs it is skipped with a note.
 CHECK_KEYS: dict[str, tuple[str, str]] = {
-    "fy": ("pressure", "yield strength of the steel of every member, unless fy1, fy2 or fy3 is given [Pa]"),
+    "fy": ("pressure", "yield strength of the steel beams E1 and E2, unless fy1 or fy2 is given [Pa]"),
     "fy1": ("pressure", "yield strength of the bars E1 [Pa]"),
     "fy2": ("pressure", "yield strength of the heads E2 [Pa]"),
     "fy3": ("pressure", "yield strength of the fuse lodgings E3 [Pa]"),
@@ -99,7 +99,7 @@ class Device:
     name: str = "custom"
     """A short name for reports."""
     fy: float | None = None
-    """Yield strength of every member unless fy1, fy2 or fy3 is given [Pa] (member checks)."""
+    """Yield strength of the beams E1 and E2 unless fy1 or fy2 is given [Pa] (member checks)."""
     fy1: float | None = None
     """Yield strength of the bars E1 [Pa]."""
     fy2: float | None = None
@@ -133,9 +133,10 @@ class Device:
             object.__setattr__(self, key, float(value))
 
     def yield_strength(self, member: int) -> float | None:
-        """Yield strength of member E1, E2 or E3 (1, 2, 3): fy<member>, else fy, else None [Pa]."""
+        """Yield strength of member E1, E2 or E3 (1, 2, 3) [Pa]: fy<member>, else (for the beams E1 and E2)
+        fy, else None. The fuse lodgings E3 are bar stock of the fuse's own steel: only fy3 applies."""
         value = getattr(self, f"fy{member}")
-        return value if value is not None else self.fy
+        return value if value is not None or member == 3 else self.fy
 
     @property
     def mass_ratio(self) -> float:

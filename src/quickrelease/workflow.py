@@ -16,6 +16,7 @@ from typing import Any
 from .case import Case
 from .fit import FitResult, fit_record
 from .identify import Identification, case_friction, identify_friction
+from .planning import PlanResult, plan_case, plan_figures
 from .response import Response
 from .solvers import simulate
 from .statics import StrainEnergy
@@ -30,6 +31,10 @@ FIGURES = {
     "identification": "Stop time along the line of Eq. 13, with the measured t_F and the identified point",
     "strain_energy": "Strain energy stored before release by term (Eq. 2)",
     "fit_channels": "Fit to the measured record: each channel measured and fitted, with its residuals",
+    "plan_choices": "Fuse and angle choices: push force at rupture (Eq. 1), the target range outlined",
+    "plan_utilisation": "Member checks at the planned push (Table 3's internal forces)",
+    "plan_envelope": "Release envelope over the friction estimate: stroke, opening, time to stop, peak head velocity",
+    "plan_gap": "Clearance: head retraction, the building's approach and the gap between them",
 }
 
 
@@ -48,6 +53,8 @@ class CaseResult:
     """Numerical solutions checked against Eq. 10 in Fig. 15 (Runge-Kutta and Table 6)."""
     fit: FitResult | None = None
     """The fit to the measured record (when the case has a ``[record]``)."""
+    plan: PlanResult | None = None
+    """The test plan (when the case has ``[fuse]`` or ``[building]``, or it was asked for)."""
 
     def summary(self) -> dict[str, Any]:
         """The release summary: the keys of ``quickrelease simulate --json``."""
@@ -61,12 +68,13 @@ class CaseResult:
                 "device": self.case.device.name}
 
 
-def run_case(case: Case, *, state_diagram: bool = True) -> CaseResult:
+def run_case(case: Case, *, state_diagram: bool = True, plan: bool | None = None) -> CaseResult:
     """Do what the case asks: fit a measured record, identify F1, F2 from stop observations, then simulate.
 
     With a ``[record]``, the fitted friction (and E_S, c when estimated) drives the simulation; else with
     observations, the identified friction; a ``[friction]`` table, if also present, is then only
-    reported in the inputs.
+    reported in the inputs. The test plan (:func:`quickrelease.planning.plan_case`) is made when ``plan``
+    is true, or by default when the case has a ``[fuse]`` or ``[building]`` table.
     """
     ident = fit = None
     E_S, mass_model = case.stored_energy, case.mass_model
@@ -88,8 +96,11 @@ def run_case(case: Case, *, state_diagram: bool = True) -> CaseResult:
                       simulate(E_S, case.alpha0, F1, F2, method="rk", **common))
         states.append(response if case.method == "explicit" else
                       simulate(E_S, case.alpha0, F1, F2, method="explicit", dt=case.dt, **common))
+    if plan is None:
+        plan = case.fuse is not None or case.building is not None
+    planned = plan_case(case) if plan else None
     return CaseResult(case=case, response=response, strain=case.strain(), identification=ident,
-                      state_responses=states, fit=fit)
+                      state_responses=states, fit=fit, plan=planned)
 
 
 def render_figures(result: CaseResult) -> dict[str, Any]:
@@ -107,6 +118,8 @@ def render_figures(result: CaseResult) -> dict[str, Any]:
         figs["strain_energy"] = plots.strain_energy_figure(result.strain)
     if result.fit is not None and result.fit.record is not None:
         figs["fit_channels"] = plots.fit_figure(result.fit)
+    if result.plan is not None:
+        figs.update(plan_figures(result.plan))
     return figs
 
 
@@ -160,6 +173,8 @@ def write_results(result: CaseResult, out: str | Path, *, figures: bool = True, 
             paths["identification"] = write_json(ident, out / "identification.json")
         if result.fit is not None:
             paths["fit"] = write_json(result.fit.summary(), out / "fit.json")
+        if result.plan is not None:
+            paths["plan"] = write_json(result.plan.summary(), out / "plan.json")
         paths["timeseries_csv"] = write_csv(result.response, out / "timeseries.csv")
         paths["timeseries_nc"] = write_netcdf(result.response, out / "timeseries.nc",
                                               attrs={"case": result.case.title})
