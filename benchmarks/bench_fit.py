@@ -12,12 +12,10 @@ record (``quickrelease synth``'s precision table).
 
 from __future__ import annotations
 
-import math
-import time
 from pathlib import Path
 
 import numpy as np
-from scipy.integrate import solve_ivp
+from common import best_of, solve_ivp_release
 
 from quickrelease.case import load_case
 from quickrelease.fit import fit_record
@@ -29,35 +27,10 @@ EXAMPLES = Path(__file__).parent.parent / "examples"
 F1, F2, E_S, ALPHA0, RELEASE = 419.85, 804.57, 2900.0, 0.2, 0.62
 
 
-def best_of(func, repeat=5, number=3):
-    best = math.inf
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        for _ in range(number):
-            func()
-        best = min(best, (time.perf_counter() - t0) / number)
-    return best
-
-
-def baseline(t, d):
+def baseline(t):
     """solve_ivp with dense output, evaluated at the record's times (alpha, alpha_dot)."""
-    k = 2 / 3 * d.m1 / d.m2
-    q = 1 / (d.m2 * d.L1)
-
-    def rhs(_t, y):
-        s, c = math.sin(y[0]), math.cos(y[0])
-        den = k + s * s
-        return [y[1], -y[1] ** 2 * s * c / den - (2 * F2 * s + F1 * c) * q / den]
-
-    def ev(_t, y):
-        return y[1]
-
-    ev.terminal, ev.direction = True, -1
-    ad0 = math.sqrt(E_S / (d.m2 * d.L1**2 * (k + math.sin(ALPHA0) ** 2)))
-    sol = solve_ivp(rhs, (0, 100), [ALPHA0, ad0], method="DOP853", rtol=1e-10, atol=1e-12, events=ev,
-                    dense_output=True)
-    s = np.clip(t - RELEASE, 0.0, sol.t[-1])
-    return sol.sol(s)
+    sol = solve_ivp_release(E_S, ALPHA0, F1, F2, dense_output=True)
+    return sol.sol(np.clip(t - RELEASE, 0.0, sol.t[-1]))
 
 
 def main() -> None:
@@ -67,7 +40,7 @@ def main() -> None:
     t = record.t
     names = list(record.channels)
     window = record.sampling_interval()
-    base = best_of(lambda: baseline(t, d))
+    base = best_of(lambda: baseline(t))
 
     def model():
         fi = FirstIntegral(E_S, ALPHA0, F1, F2, d.m1, d.m2, d.L1, 2 / 3)

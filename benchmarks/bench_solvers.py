@@ -7,44 +7,16 @@ is timed on the same machine in the same process, so the ratios do not depend on
 
 from __future__ import annotations
 
-import math
-import time
+from common import best_of, solve_ivp_release
 
-from scipy.integrate import solve_ivp
-
-from quickrelease import preset, simulate, stop_time
+from quickrelease import simulate, stop_time
 from quickrelease.identify import identify_friction
 
 CASE = dict(E_S=2900.0, alpha0=0.2, F1=419.85, F2=804.57)
 
 
-def best_of(func, repeat=5, number=3):
-    best = math.inf
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        for _ in range(number):
-            func()
-        best = min(best, (time.perf_counter() - t0) / number)
-    return best
-
-
 def baseline():
-    d = preset("paper")
-    k = 2 / 3 * d.m1 / d.m2
-    q = 1 / (d.m2 * d.L1)
-    F1, F2 = CASE["F1"], CASE["F2"]
-
-    def rhs(t, y):
-        s, c = math.sin(y[0]), math.cos(y[0])
-        den = k + s * s
-        return [y[1], -y[1] ** 2 * s * c / den - (2 * F2 * s + F1 * c) * q / den]
-
-    def ev(t, y):
-        return y[1]
-
-    ev.terminal, ev.direction = True, -1
-    ad0 = math.sqrt(CASE["E_S"] / (d.m2 * d.L1**2 * (k + math.sin(0.2) ** 2)))
-    return solve_ivp(rhs, (0, 100), [0.2, ad0], method="DOP853", rtol=1e-10, atol=1e-12, events=ev)
+    return solve_ivp_release(**CASE)
 
 
 def main() -> None:

@@ -99,16 +99,6 @@ class TimeMap:
             out[m] = self.edge_times[i + 1] - C.chebval(x, self.integral_coef[i])
         return out
 
-    def rate(self, w) -> np.ndarray:
-        """f(w) = dt/dw from the series [s]."""
-        w = np.asarray(w, dtype=float)
-        out = np.empty(w.shape)
-        idx = self._panel_of_w(w)
-        for i in np.unique(idx):
-            m = idx == i
-            out[m] = C.chebval((w[m] - self.edges[i]) / self.half[i] - 1.0, self.coef[i])
-        return out
-
     def invert(self, t) -> np.ndarray:
         """w at the times t (clipped to [0, t(0)]): Newton's method on each panel's series."""
         t = np.clip(np.asarray(t, dtype=float), 0.0, self.total)
