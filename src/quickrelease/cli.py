@@ -113,7 +113,7 @@ def _case_with_flags(case_file: Path | None, device: Path | None, force: str | N
         changes["alpha0"] = parse_quantity(alpha0, "angle", "--alpha0")
         check_angle("alpha0", changes["alpha0"])
     elif case is None:
-        raise ParameterError("--alpha0", "missing", "an angle (give --alpha0 or a case file)")
+        raise QuickReleaseError("--alpha0 is missing: give --alpha0 (an angle in (0, pi/2)) or a case file")
     a0 = changes.get("alpha0", case.alpha0 if case else None)
     if force is not None and energy is not None:
         raise ParameterError("--force/--energy", "both", "exactly one of the two")
@@ -162,8 +162,8 @@ def simulate(
     case = _case_with_flags(case_file, device, force, energy, alpha0, mass_model, F1=F1, F2=F2, method=method,
                             dt=step)
     if case_file is not None and not case.has_friction and case.friction_case is None:
-        raise ParameterError("friction", "missing", "[friction] in the case file or --f1/--f2 "
-                             "(to identify first, use 'quickrelease run')")
+        raise QuickReleaseError("friction is missing: give [friction] in the case file or --f1/--f2 "
+                                "(to identify or fit first, use 'quickrelease run')")
     if not case.has_friction and case.friction_case is not None:
         from .identify import case_friction
 
@@ -201,7 +201,7 @@ def identify(
     case = _case_with_flags(case_file, device, force, energy, alpha0, mass_model, alpha_final=aF, stop_time=tF)
     if case.alpha_final is None or case.stop_time is None:
         missing = "--alpha-final" if case.alpha_final is None else "--stop-time"
-        raise ParameterError(missing, "missing", "a value (flag or [observations] in the case file)")
+        raise QuickReleaseError(f"{missing} is missing: give the flag or [observations] in the case file")
     result = identify_friction(case.alpha0, case.alpha_final, case.stop_time, stored_energy=case.stored_energy,
                                device=case.device, mass_model=case.mass_model)
     summary = {**result.summary(), "push_force_N": case.push_force, "device": case.device.name}
