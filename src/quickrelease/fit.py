@@ -32,7 +32,6 @@ from .case import Case, FitOptions
 from .device import Device
 from .errors import InfeasibleObservationError, QuickReleaseError
 from .records import (
-    CHANNELS,
     DISPLACEMENT_CHANNELS,
     Record,
     RecordError,
@@ -532,7 +531,3 @@ def _warnings(names, est, ses, corr, cond, x, lower, upper, problem) -> list[str
                    "their stated scatter alone and no misfit can show")
     return out
 
-
-def channel_label(name: str) -> str:
-    """'u [m]' and so on, for tables and figures."""
-    return f"{name} [{CHANNELS[name][1]}]"
