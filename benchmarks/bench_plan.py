@@ -26,7 +26,8 @@ EXAMPLES = Path(__file__).parent.parent / "examples"
 
 def main() -> None:
     case = load_case(EXAMPLES / "plan.toml")
-    F1, F2, _, _ = friction_samples(case, case.plan.samples, case.plan.seed)
+    samples = friction_samples(case, case.plan.samples, case.plan.seed)
+    F1, F2 = samples.F1, samples.F2
     d = case.device
     n = F1.size
     t0 = time.perf_counter()

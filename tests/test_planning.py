@@ -143,7 +143,9 @@ def test_friction_with_a_correlated_scatter(tmp_path):
     path = tmp_path / "c.toml"
     path.write_text(text)
     case = load_case(path)
-    F1, F2, how, clipped = friction_samples(case, 50_000, seed=3)
+    fs = friction_samples(case, 50_000, seed=3)
+    F1, F2, how, clipped = fs.F1, fs.F2, fs.description, fs.dropped_share
+    assert fs.nominal == (420.0, 800.0)
     assert F1.mean() == pytest.approx(420, abs=1) and F1.std() == pytest.approx(40, rel=0.02)
     assert F2.min() >= 700 and F2.max() <= 900 and F2.mean() == pytest.approx(800, abs=1)
     assert np.corrcoef(F1, F2)[0, 1] == pytest.approx(-0.78, abs=0.03)  # the copula's -0.8 on uniform marginals

@@ -28,7 +28,8 @@ from .statics import InternalForces, internal_forces, strain_energy
 
 __all__ = [
     "FuseChoice", "FuseTable", "fuse_choices", "MemberCheck", "MemberChecks", "member_checks", "Envelope",
-    "release_envelope", "friction_samples", "building_motion", "pushed_displacement", "Clearance", "clearance",
+    "release_envelope", "FrictionSamples", "friction_samples", "building_motion", "pushed_displacement",
+    "Clearance", "clearance",
     "PlanResult", "plan_case", "ENVELOPE_QUANTITIES", "plan_figures", "choices_figure", "utilisation_figure",
     "envelope_figure", "gap_figure",
 ]
@@ -325,7 +326,23 @@ def _from_normal(z: np.ndarray, dist: Distribution) -> np.ndarray:
     return dist.loc + dist.scale * _normal_cdf(z)  # uniform marginal, Gaussian copula
 
 
-def friction_samples(case: Case, n: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray, str, float]:
+@dataclass(frozen=True, eq=False)
+class FrictionSamples:
+    """Friction pairs to plan with, and the nominal pair they scatter about (SI units)."""
+
+    F1: np.ndarray
+    """Hinge friction of each sample [N]."""
+    F2: np.ndarray
+    """Rail friction of each sample [N]."""
+    nominal: tuple[float, float]
+    """(F1, F2) of :func:`quickrelease.identify.case_friction` [N]."""
+    description: str
+    """Where they come from."""
+    dropped_share: float = 0.0
+    """Share of the draws set to 0 (negative) or dropped (infeasible identification)."""
+
+
+def friction_samples(case: Case, n: int, seed: int = 0) -> FrictionSamples:
     """Friction pairs (F1, F2) [N] to plan with: the case's scatter, or that of the case it takes its friction from.
 
     * ``[friction]`` F1, F2 with a scatter (``{value, std}`` or ``{low, high}``) and ``correlation``: drawn jointly
@@ -334,9 +351,9 @@ def friction_samples(case: Case, n: int, seed: int = 0) -> tuple[np.ndarray, np.
       identified (Eq. 11-13, the batch kernel); infeasible draws are dropped.
     * otherwise the single friction pair of :func:`quickrelease.identify.case_friction`.
 
-    Returns (F1, F2, description, share of draws clipped or dropped).
     """
     F1_nom, F2_nom, how = case_friction(case)
+    nominal = (F1_nom, F2_nom)
     rng = np.random.default_rng(seed)
     d1, d2 = case.uncertainty.get("F1"), case.uncertainty.get("F2")
     if d1 is not None or d2 is not None:
@@ -346,7 +363,7 @@ def friction_samples(case: Case, n: int, seed: int = 0) -> tuple[np.ndarray, np.
         clipped = float(np.mean((F1 < 0) | (F2 < 0)))
         words = ", ".join(f"{k} {v.describe('N')}" for k, v in (("F1", d1), ("F2", d2)) if v is not None)
         rho = f", correlation {case.friction_correlation:g}" if case.friction_correlation else ""
-        return np.maximum(F1, 0.0), np.maximum(F2, 0.0), f"[friction] {words}{rho}", clipped
+        return FrictionSamples(np.maximum(F1, 0.0), np.maximum(F2, 0.0), nominal, f"[friction] {words}{rho}", clipped)
     source = case.friction_case
     if source is not None and source.has_observations and any(
             k in source.uncertainty for k in ("alpha0", "alpha_final", "stop_time", "force", "energy")):
@@ -356,9 +373,10 @@ def friction_samples(case: Case, n: int, seed: int = 0) -> tuple[np.ndarray, np.
         ok = ident.status == 0
         if not np.any(ok):
             raise QuickReleaseError(f"{source.source}: no draw of its observations is feasible")
-        return (ident.F1[ok], ident.F2[ok], f"identified from {n:,} draws of the observations of {source.source}",
-                float(1.0 - ok.mean()))
-    return np.array([F1_nom]), np.array([F2_nom]), how, 0.0
+        return FrictionSamples(ident.F1[ok], ident.F2[ok], nominal,
+                               f"identified from {n:,} draws of the observations of {source.source}",
+                               float(1.0 - ok.mean()))
+    return FrictionSamples(np.array([F1_nom]), np.array([F2_nom]), nominal, how)
 
 
 def _percentiles(values: np.ndarray) -> dict[str, float]:
@@ -372,8 +390,8 @@ def release_envelope(case: Case, E_S: float | None = None, alpha0: float | None 
     E_S = case.stored_energy if E_S is None else E_S
     alpha0 = case.alpha0 if alpha0 is None else alpha0
     n = case.plan.samples if samples is None else samples
-    F1s, F2s, how, clipped = friction_samples(case, n, case.plan.seed if seed is None else seed)
-    F1, F2, _ = case_friction(case)
+    fs = friction_samples(case, n, case.plan.seed if seed is None else seed)
+    F1, F2 = fs.nominal
     d = case.device
     c = case.mass_factor
 
@@ -385,12 +403,12 @@ def release_envelope(case: Case, E_S: float | None = None, alpha0: float | None 
         return out, np.atleast_1d(r.stopped_by)
 
     nominal, _ = run(np.array([F1]), np.array([F2]))
-    values, stopped = run(F1s, F2s)
-    values["F1"], values["F2"] = F1s, F2s
-    return Envelope(friction=how, F1=float(F1), F2=float(F2), samples=int(F1s.size),
+    values, stopped = run(fs.F1, fs.F2)
+    values["F1"], values["F2"] = fs.F1, fs.F2
+    return Envelope(friction=fs.description, F1=float(F1), F2=float(F2), samples=int(fs.F1.size),
                     nominal={k: float(v[0]) for k, v in nominal.items()},
                     ranges={k: _percentiles(v) for k, v in values.items()},
-                    geometric_limit_share=float(np.mean(stopped == 1)), clipped_share=clipped, values=values)
+                    geometric_limit_share=float(np.mean(stopped == 1)), clipped_share=fs.dropped_share, values=values)
 
 
 # -- the building and the clearance -----------------------------------------------------------------------------
