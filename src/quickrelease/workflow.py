@@ -98,7 +98,10 @@ def run_case(case: Case, *, state_diagram: bool = True, plan: bool | None = None
                       simulate(E_S, case.alpha0, F1, F2, method="explicit", dt=case.dt, **common))
     if plan is None:
         plan = case.fuse is not None or case.building is not None
-    planned = plan_case(case) if plan else None
+    planned = None
+    if plan:  # the friction found above (fitted or identified) is not searched for again
+        planned = plan_case(case if case.has_friction or case.friction_case is not None
+                            else case.replace(F1=F1, F2=F2))
     return CaseResult(case=case, response=response, strain=case.strain(), identification=ident,
                       state_responses=states, fit=fit, plan=planned)
 
