@@ -21,8 +21,10 @@ import numpy as np
 from . import batch
 from .case import BuildingSpec, Case, Distribution
 from .device import Device
+from .dynamics import angular_acceleration
 from .errors import ParameterError, QuickReleaseError
 from .identify import case_friction
+from .kinematics import retraction
 from .solvers import FirstIntegral
 from .statics import InternalForces, internal_forces, strain_energy
 
@@ -37,7 +39,9 @@ __all__ = [
 # -- fuse and angle --------------------------------------------------------------------------------------------
 
 def _normal_cdf(x):
-    return 0.5 * (1.0 + np.vectorize(math.erf)(np.asarray(x, dtype=float) / math.sqrt(2.0)))
+    from scipy.special import ndtr
+
+    return ndtr(np.asarray(x, dtype=float))
 
 
 @dataclass(frozen=True)
@@ -522,8 +526,6 @@ def clearance(release: FirstIntegral, building: BuildingSpec, d0: float, n: int 
     t = np.linspace(0.0, horizon, n)
     alpha, alpha_dot = release.state_at(t)
     L1 = release.L1
-    from .kinematics import retraction
-
     head = retraction(alpha, release.alpha0, L1)
     x, _, _ = building_motion(t, d0, period, building.damping_ratio, a_f)
     approach = d0 - x
@@ -544,8 +546,6 @@ def clearance(release: FirstIntegral, building: BuildingSpec, d0: float, n: int 
     alpha0 = release.alpha0
     s0, c0 = math.sin(alpha0), math.cos(alpha0)
     rate0 = release.alpha_dot0
-    from .dynamics import angular_acceleration
-
     acc0 = float(angular_acceleration(alpha0, rate0, release.F1, release.F2, release.m1, release.m2, L1, release.c))
     w = 2.0 * math.pi / period
     a_b0 = w * w * d0 - a_f  # the building's initial acceleration towards the device
@@ -559,8 +559,6 @@ def clearance(release: FirstIntegral, building: BuildingSpec, d0: float, n: int 
 
 
 def _gap_at(s: float, release: FirstIntegral, building: BuildingSpec, d0: float, a_f: float) -> float:
-    from .kinematics import retraction
-
     alpha, _ = release.state_at(np.array([s]))
     x, _, _ = building_motion(np.array([s]), d0, building.period, building.damping_ratio, a_f)
     return float(retraction(alpha[0], release.alpha0, release.L1) - (d0 - x[0]))

@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 
 from . import kinematics
+from .dynamics import angular_acceleration
 from .errors import QuickReleaseError
 from .units import parse_quantity
 
@@ -102,8 +103,6 @@ _GL_Y, _GL_W = (lambda x, w: (0.5 * (x + 1.0), 0.5 * w))(*np.polynomial.legendre
 
 
 def _accelerations(fi, alpha, alpha_dot):
-    from .dynamics import angular_acceleration
-
     return angular_acceleration(alpha, alpha_dot, fi.F1, fi.F2, fi.m1, fi.m2, fi.L1, fi.c)
 
 
@@ -148,17 +147,15 @@ def release_channels(names, t, release_time: float, release, window: float = 0.0
             out[name] = channel_model(name, a, ad, add, fi.alpha0, fi.L1)
     k = 1 if point or accelerations else 0
     if accelerations:
-        rate0 = fi.alpha_dot0
+        # the velocity jump removed: before the release the displacement continues at the initial rate
+        slopes = {name: channel_model(RATE_OF[name] + "_dot", np.full(1, fi.alpha0), np.full(1, fi.alpha_dot0), 0.0,
+                                      fi.alpha0, fi.L1)[0] for name in accelerations}
         x = {}
         for j, part in enumerate((slice(0, n), slice(n, 2 * n), slice(2 * n, 3 * n))):
+            rest = times[part] <= 0.0
             for name in accelerations:
-                base = RATE_OF[name]
-                # the velocity jump removed: before the release the displacement continues at the initial rate
-                rest = times[part] <= 0.0
-                value = channel_model(base, alpha[part], alpha_dot[part], 0.0, fi.alpha0, fi.L1)
-                slope = channel_model(base + "_dot", np.full(1, fi.alpha0), np.full(1, rate0), 0.0, fi.alpha0,
-                                      fi.L1)[0]
-                x[(name, j)] = np.where(rest, slope * times[part], value)
+                value = channel_model(RATE_OF[name], alpha[part], alpha_dot[part], 0.0, fi.alpha0, fi.L1)
+                x[(name, j)] = np.where(rest, slopes[name] * times[part], value)
         for name in accelerations:
             out[name] = (x[(name, 2)] - 2.0 * x[(name, 0)] + x[(name, 1)]) / window**2
         k = 3
