@@ -76,8 +76,8 @@ def test_compiled_and_numpy_kernels_agree(cases):
     t_np = rel.stop_time()
     n = k.size
     t, aF, code = np.empty(n), np.empty(n), np.empty(n, dtype=np.int8)
-    _fast.stop_kernel(sub["E_S"], sub["alpha0"], sub["F1"], sub["F2"], k, sub["m2"], sub["L1"], *_fast.rules(),
-                      _kernels.NEAR_RATIO, _kernels.HARD_RATIO, _kernels.MASS_RATIO**2, t, aF, code)
+    _fast.stop_kernel(sub["E_S"], np.sin(sub["alpha0"]), np.cos(sub["alpha0"]), sub["alpha0"], sub["F1"], sub["F2"], k,
+                      sub["m2"], sub["L1"], *_fast.rules(), *_fast.tier_constants(), t, aF, code)
     fast = code >= 0
     assert np.all(code[fast] == rel.regime[fast]) and np.all((code < 0) == (rel.tier == 2))
     assert np.max(np.abs(t[fast] / t_np[fast] - 1)) < 1e-14

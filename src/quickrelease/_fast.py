@@ -15,7 +15,7 @@ import math
 import numpy as np
 from numba import njit
 
-from . import _kernels
+from . import _kernels, dynamics
 
 _HALF_PI = 0.5 * math.pi
 
@@ -27,34 +27,49 @@ def rules() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     return x16, w16, x24, w24
 
 
+#: The classifier of the stop and the cancellation-free sweep of Eq. 8, compiled from the very functions
+#: the numpy path calls (:mod:`quickrelease.dynamics`): one definition, the same rounding.
+_limit_margin = njit(cache=True, nogil=True)(dynamics.limit_margin_terms)
+_sweep = njit(cache=True, nogil=True)(dynamics.sweep_terms)
+
+
 @njit(cache=True, nogil=True)
-def _tier(ratio, msq, near, hard, mass_sq):
-    """The rule of a case, as in ``_kernels``: 2 graded (left to numpy), 1 the 24-node rule, 0 the 16-node rule."""
-    if ratio < hard:
+def _tier(ratio, msq, near, hard, mass_sq, mass_hard_sq):
+    """The rule of a case, as ``_kernels.tier_of``: 2 graded (left to numpy), 1 the 24-node rule, 0 16 nodes."""
+    if ratio < hard or msq < mass_hard_sq:
         return 2
     if ratio < near or msq < mass_sq:
         return 1
     return 0
 
 
+def tier_constants() -> tuple[float, float, float, float]:
+    """(NEAR_RATIO, HARD_RATIO, MASS_RATIO^2, MASS_HARD^2) of ``_kernels``, in the kernels' argument order."""
+    return _kernels.NEAR_RATIO, _kernels.HARD_RATIO, _kernels.MASS_RATIO**2, _kernels.MASS_HARD**2
+
+
 @njit(cache=True, nogil=True)
-def stop_kernel(E, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, near, hard, mass_sq, t_out, aF_out, code_out):
-    """t_F, alpha_F and the regime code (0 friction, 1 limit, -1: graded tier, left to numpy)."""
+def stop_kernel(E, sa0_in, ca0_in, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq,
+                t_out, aF_out, code_out):
+    """t_F, alpha_F and the regime code (0 friction, 1 limit, -1: graded tier, left to numpy).
+
+    sin and cos of alpha0 come in computed by numpy, as the numpy kernels compute them, so the classifier
+    sees the same numbers on both paths."""
     for i in range(E.size):
-        sa0 = math.sin(a0[i])
-        ca0 = math.cos(a0[i])
+        sa0 = sa0_in[i]
+        ca0 = ca0_in[i]
         A = 2.0 * F1[i] * L1[i]
         B = 4.0 * F2[i] * L1[i]
         R = math.hypot(A, B)
-        Wl = A * (1.0 - sa0) + B * ca0
-        if E[i] > Wl:  # the rhombus becomes flat first: anchor pi/2
-            sm = math.sin(0.5 * (_HALF_PI - a0[i]))
+        Kl = _limit_margin(E[i], A, B, sa0, ca0)
+        if Kl > 0.0:  # the rhombus becomes flat first: anchor pi/2
+            delta = _HALF_PI - a0[i]
+            sm = math.sin(0.5 * delta)
             qm = math.sqrt(1.0 - sm * sm)
-            Kl = E[i] - Wl
             ratio = Kl / (Kl + 2.0 * A * sm * sm + 2.0 * B * sm * qm)
-            msq = (k[i] + sa0 * sa0) / (_HALF_PI - a0[i]) ** 2
+            msq = (k[i] + sa0 * sa0) / (delta * delta)
             aF_out[i] = _HALF_PI
-            tier = _tier(ratio, msq, near, hard, mass_sq)
+            tier = _tier(ratio, msq, near, hard, mass_sq, mass_hard_sq)
             if tier == 2:
                 code_out[i] = -1
                 continue
@@ -66,7 +81,7 @@ def stop_kernel(E, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, near, hard, mass_s
                 q2 = 1.0 - s2
                 sal = 1.0 - 2.0 * s2
                 K = Kl + 2.0 * A * s2 + 2.0 * B * s * math.sqrt(q2)
-                acc += w[j] * x[j] * math.sqrt((k[i] + sal * sal) / (K * q2))
+                acc += w[j] * x[j] * math.sqrt(k[i] + sal * sal) / math.sqrt(K * q2)
             t_out[i] = 4.0 * sm * L1[i] * math.sqrt(m2[i]) * acc
             code_out[i] = 1
         else:  # friction stop at alpha_F (Eq. 8)
@@ -74,13 +89,13 @@ def stop_kernel(E, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, near, hard, mass_s
             cb = math.sqrt((1.0 - s) * (1.0 + s))
             sA = (B * cb + A * s) / R
             cA = (A * cb - B * s) / R
-            aF = min(math.atan2(sA, cA), _HALF_PI)
-            aF_out[i] = aF
-            sm = math.sin(0.5 * (aF - a0[i]))
+            delta = min(max(_sweep(E[i], A, B, R, sa0, ca0), 0.0), _HALF_PI - a0[i])
+            aF_out[i] = min(a0[i] + delta, _HALF_PI)
+            sm = math.sin(0.5 * delta)
             qm = math.sqrt(1.0 - sm * sm)
             ratio = cb / (cb * qm + s * sm)
-            msq = (k[i] + sa0 * sa0) / (aF - a0[i]) ** 2
-            tier = _tier(ratio, msq, near, hard, mass_sq)
+            msq = (k[i] + sa0 * sa0) / (delta * delta) if delta > 0.0 else math.inf
+            tier = _tier(ratio, msq, near, hard, mass_sq, mass_hard_sq)
             if tier == 2:
                 code_out[i] = -1
                 continue
@@ -94,12 +109,12 @@ def stop_kernel(E, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, near, hard, mass_s
                 sal = sA * (1.0 - 2.0 * s2) - cA * 2.0 * sg * q
                 C = cb * q + s * sg
                 acc += w[j] * math.sqrt((k[i] + sal * sal) / (C * q2))
-            t_out[i] = 4.0 * L1[i] * math.sqrt(sm * m2[i] / (2.0 * R)) * acc
+            t_out[i] = 4.0 * L1[i] * math.sqrt(sm) * math.sqrt(m2[i]) / math.sqrt(2.0 * R) * acc
             code_out[i] = 0
 
 
 @njit(cache=True, nogil=True)
-def identify_kernel(a0, aF, tF, E, k, m2, L1, x16, w16, x24, w24, near, hard, mass_sq, tol, max_iter,
+def identify_kernel(a0, aF, tF, E, k, m2, L1, x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq, tol, max_iter,
                     lam_out, F1max_out, F2max_out, tlo_out, thi_out, status_out, iter_out):
     """Newton in lambda = F1/F1* on the line of Eq. 13 (status -1: graded tier, left to numpy)."""
     P = np.empty(24)
@@ -120,7 +135,7 @@ def identify_kernel(a0, aF, tF, E, k, m2, L1, x16, w16, x24, w24, near, hard, ma
         ratio = cA / c1
         sa0 = math.sin(a0[i])
         msq = (k[i] + sa0 * sa0) / (aF[i] - a0[i]) ** 2
-        tier = _tier(ratio, msq, near, hard, mass_sq)
+        tier = _tier(ratio, msq, near, hard, mass_sq, mass_hard_sq)
         if tier == 2:
             status_out[i] = -1
             continue

@@ -23,7 +23,18 @@ quadrature node: only square roots and arithmetic.
 Smooth cases take a 16-node Gauss-Legendre rule. Cases whose integrand has a near-singularity close
 to the end of the interval (C or K nearly vanishing there: a stop close to the flat rhombus with
 little rail friction, or barely reaching it) are detected per case from the ratio of that factor at
-the two ends, and integrated with Gauss-Legendre on geometrically graded panels instead.
+the two ends; cases whose mass factor ``k + sin^2 alpha`` has a complex zero close to the start (a small
+``k = c m1/m2`` with a small alpha0: the zero sits at about ``sin(alpha) = +-i sqrt(k)``) from
+``sqrt(k + sin^2 alpha0)`` over the sweep. Both criteria hold on both regimes (friction stop and
+geometric limit). Nearly singular cases take 24 nodes, or Gauss-Legendre on panels graded
+geometrically towards both ends of [0, 1]. Every tier keeps the relative error below 1e-12
+(calibrated against mpmath; the tests check 1e-10 on grids of the hard corners).
+
+The sweep ``delta = alpha_F - alpha0`` comes from the cancellation-free closed form of Eq. 8
+(:func:`quickrelease.dynamics.sweep_terms`), never from a rounded alpha_F, and the classification
+friction / geometric limit from :func:`quickrelease.dynamics.limit_margin_terms` (the one classifier).
+Scale factors are taken as products of square roots so that extreme inputs (1e-300 J, 1e300 N) do
+not underflow or overflow in an intermediate.
 """
 
 from __future__ import annotations
@@ -34,6 +45,8 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
+
+from .dynamics import limit_margin_terms, sweep_terms
 
 HALF_PI = 0.5 * math.pi
 
@@ -51,6 +64,9 @@ NEAR_RATIO = 0.3
 #: Cases whose sqrt(k + sin^2 alpha0) is below this share of the angle swept take the 24-node rule
 #: (a complex zero of the mass factor k + sin^2 alpha near the start of a long sweep).
 MASS_RATIO = 0.5
+#: ... and below this share the graded rule (24 nodes leave ~1e-12 at 0.25, 1e-7 at 0.01; calibrated
+#: against mpmath on both regimes).
+MASS_HARD = 0.25
 
 REGIME_FRICTION, REGIME_LIMIT = 0, 1
 
@@ -76,14 +92,29 @@ def gauss_unit(n: int) -> tuple[np.ndarray, np.ndarray]:
 
 @lru_cache(maxsize=4)
 def graded_unit(n: int = N_NODES, panels: int = N_PANELS, r: float = GRADING) -> tuple[np.ndarray, np.ndarray]:
-    """Composite Gauss-Legendre on [0, 1] with panels [r^(j+1), r^j] graded towards 0 (plus [0, r^panels])."""
+    """Composite Gauss-Legendre on [0, 1] graded geometrically towards both ends.
+
+    [0, 1/2] is split into panels [r^(j+1)/2, r^j/2] (plus [0, r^panels/2]) towards 0, where C or K may
+    nearly vanish (the end of the motion), and [1/2, 1] mirrored towards 1, where the mass factor may
+    nearly vanish (the start).
+    """
     x, w = gauss_unit(n)
-    edges = np.concatenate([r ** np.arange(panels + 1), [0.0]])
+    edges = 0.5 * np.concatenate([r ** np.arange(panels + 1), [0.0]])
     nodes, weights = [], []
     for hi, lo in zip(edges[:-1], edges[1:], strict=True):
         nodes.append(lo + (hi - lo) * x)
         weights.append((hi - lo) * w)
-    return np.concatenate(nodes), np.concatenate(weights)
+    left, wl = np.concatenate(nodes), np.concatenate(weights)
+    return np.concatenate([left, 1.0 - left[::-1]]), np.concatenate([wl, wl[::-1]])
+
+
+def tier_of(end_ratio, mass_ratio_sq):
+    """The quadrature tier of each case: 0 (16 nodes), 1 (24 nodes) or 2 (graded), from the ratio of the
+    factor that may vanish at the end and ``(k + sin^2 alpha0) / delta^2`` (see the module notes).
+    The one criterion: used by the numpy kernels, the identification and (compiled) :mod:`._fast`."""
+    hard = (end_ratio < HARD_RATIO) | (mass_ratio_sq < MASS_HARD**2)
+    near = (end_ratio < NEAR_RATIO) | (mass_ratio_sq < MASS_RATIO**2)
+    return np.where(hard, 2, np.where(near, 1, 0)).astype(np.int8)
 
 
 @dataclass
@@ -106,6 +137,8 @@ class Releases:
     B: np.ndarray
     R: np.ndarray
     W_limit: np.ndarray
+    K_lim: np.ndarray
+    """E_S - W_F(pi/2) from the classifier (> 0 exactly for the geometric limit) [J]."""
     regime: np.ndarray
     anchor: np.ndarray
     sin_a: np.ndarray
@@ -114,6 +147,8 @@ class Releases:
     sin_p: np.ndarray
     sigma_m: np.ndarray
     """sigma at alpha0 (w = 1)."""
+    delta: np.ndarray
+    """The sweep alpha_F - alpha0, cancellation-free [rad]."""
     alpha_final: np.ndarray
     tier: np.ndarray
     """0: smooth (16-node rule), 1: nearly singular mass factor (24 nodes), 2: nearly singular end (graded)."""
@@ -134,10 +169,12 @@ class Releases:
         B = 4.0 * F2 * L1
         R = np.hypot(A, B)
         W_limit = A * (1.0 - sa0) + B * ca0
-        geo = E_S > W_limit
-        with np.errstate(divide="ignore", invalid="ignore"):
+        K_lim = limit_margin_terms(E_S, A, B, sa0, ca0)
+        geo = K_lim > 0.0
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             # Eq. 8: sin(alpha_F - phi) = sin(alpha0 - phi) + E_S/R, with cos(phi) = A/R, sin(phi) = B/R
             s = (A * sa0 - B * ca0 + E_S) / R
+            delta = sweep_terms(E_S, A, B, R, sa0, ca0)
             if np.any(geo):
                 s = np.where(geo, 1.0, s)
             cb = np.sqrt((1.0 - s) * (1.0 + s))  # cos(alpha_F - phi)
@@ -148,17 +185,14 @@ class Releases:
                 cos_a = np.where(geo, 0.0, cos_a)
                 cb = np.where(geo, 0.0, cb)
         regime = geo.astype(np.int8)
-        anchor = np.minimum(np.arctan2(sin_a, cos_a), HALF_PI)
-        if np.any(geo):
-            anchor = np.where(geo, HALF_PI, anchor)
-        sigma_m = np.sin(0.5 * (anchor - alpha0))
-        rel = cls(E_S, alpha0, F1, F2, k, m2, L1, A, B, R, W_limit, regime, anchor, sin_a, cos_a,
-                  cb, s, sigma_m, anchor, np.zeros(E_S.shape, dtype=np.int8))
-        # tiers: nearly singular end (graded rule), or near-singular factors close to the interval (24 nodes)
-        end = rel._end_ratio()
-        mass_ratio_sq = (k + sa0 * sa0) / (anchor - alpha0) ** 2
-        rel.tier = (end < NEAR_RATIO) | (mass_ratio_sq < MASS_RATIO**2)
-        rel.tier = rel.tier.astype(np.int8) + (end < HARD_RATIO)
+        delta = np.where(geo, HALF_PI - alpha0, np.clip(delta, 0.0, HALF_PI - alpha0))
+        anchor = np.minimum(alpha0 + delta, HALF_PI)
+        sigma_m = np.sin(0.5 * delta)
+        rel = cls(E_S, alpha0, F1, F2, k, m2, L1, A, B, R, W_limit, K_lim, regime, anchor, sin_a, cos_a,
+                  cb, s, sigma_m, delta, anchor, np.zeros(E_S.shape, dtype=np.int8))
+        # tiers: a nearly singular end, or a near-singular mass factor close to the start
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rel.tier = tier_of(rel._end_ratio(), (k + sa0 * sa0) / (delta * delta))
         return rel
 
     def _end_ratio(self) -> np.ndarray:
@@ -168,7 +202,7 @@ class Releases:
         with np.errstate(divide="ignore", invalid="ignore"):
             ratio = self.cos_p / (self.cos_p * q_m + self.sin_p * sm)
             if np.any(self.regime):
-                K_lim = self.E_S - self.W_limit
+                K_lim = self.K_lim
                 K_start = K_lim + 2.0 * self.A * sm * sm + 2.0 * self.B * sm * q_m
                 ratio = np.where(self.regime == REGIME_LIMIT, K_lim / K_start, ratio)
         return ratio
@@ -188,12 +222,17 @@ class Releases:
         mass = self.k[col] + sin_alpha * sin_alpha
         with np.errstate(divide="ignore", invalid="ignore"):
             C = self.cos_p[col] * q + self.sin_p[col] * sigma
-            f_stop = (4.0 * self.L1 * np.sqrt(self.sigma_m * self.m2 / (2.0 * self.R)))[col] * np.sqrt(mass / C) / q
+            f_stop = self._stop_prefactor()[col] * np.sqrt(mass / C) / q
             if np.any(free):
-                K = (self.E_S - self.W_limit)[col] + 2.0 * self.A[col] * sigma * sigma + 2.0 * self.B[col] * sigma * q
-                f_free = (4.0 * self.L1 * np.sqrt(self.m2))[col] * sm * w * np.sqrt(mass / K) / q
+                K = self.K_lim[col] + 2.0 * self.A[col] * sigma * sigma + 2.0 * self.B[col] * sigma * q
+                f_free = (4.0 * self.L1 * np.sqrt(self.m2))[col] * sm * w * (np.sqrt(mass) / np.sqrt(K)) / q
                 return np.where(free, f_free, f_stop)
         return f_stop
+
+    def _stop_prefactor(self) -> np.ndarray:
+        """``4 L1 sqrt(sigma_m m2 / (2 R))`` as a product of square roots (no underflow for tiny sweeps) [s]."""
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return 4.0 * self.L1 * np.sqrt(self.sigma_m) * np.sqrt(self.m2) / np.sqrt(2.0 * self.R)
 
     def _smooth_stop_time(self, n: int) -> np.ndarray:
         """The n-node rule for friction-regime cases: the hot path.
@@ -221,8 +260,7 @@ class Releases:
         T *= Q2
         S2 /= T
         np.sqrt(S2, out=S2)  # sqrt((k + sin^2 alpha) / C) / q
-        pref = 4.0 * self.L1 * np.sqrt(self.sigma_m * self.m2 / (2.0 * self.R))
-        return pref * (wt @ S2)
+        return self._stop_prefactor() * (wt @ S2)
 
     def _limit_stop_time(self, n: int) -> np.ndarray:
         """The n-node rule for cases that reach the flat rhombus (anchor pi/2), in place.
@@ -239,7 +277,7 @@ class Releases:
         np.sqrt(Q2, out=Q)
         np.multiply(S, Q, out=T)
         T *= 2.0 * self.B
-        T += self.E_S - self.W_limit
+        T += self.K_lim
         np.multiply(S2, 2.0 * self.A, out=S)
         T += S  # K
         np.multiply(S2, -2.0, out=S)
@@ -247,8 +285,9 @@ class Releases:
         np.multiply(S, S, out=S)
         S += self.k  # k + sin^2(alpha)
         T *= Q2
-        S /= T
         np.sqrt(S, out=S)
+        np.sqrt(T, out=T)  # square roots apart: K may be as small as 1e-320 J
+        S /= T
         pref = 4.0 * self.sigma_m * self.L1 * np.sqrt(self.m2)
         return pref * ((wt * x) @ S)
 
@@ -299,19 +338,19 @@ class Releases:
         q = np.sqrt(1.0 - sigma * sigma)
         sin_alpha = self.sin_a[case] * (1.0 - 2.0 * sigma * sigma) - self.cos_a[case] * 2.0 * sigma * q
         if self.regime[case] == REGIME_LIMIT:
-            K = (self.E_S[case] - self.W_limit[case]) + 2.0 * self.A[case] * sigma * sigma \
+            K = self.K_lim[case] + 2.0 * self.A[case] * sigma * sigma \
                 + 2.0 * self.B[case] * sigma * q
         else:
             K = 2.0 * self.R[case] * (self.cos_p[case] * q + self.sin_p[case] * sigma) * sigma
         M = self.m2[case] * self.L1[case] ** 2 * (self.k[case] + sin_alpha * sin_alpha)
-        return np.sqrt(np.maximum(K, 0.0) / M)
+        return np.sqrt(np.maximum(K, 0.0)) / np.sqrt(M)
 
     def remaining_energy(self, alpha: np.ndarray, case: int = 0) -> np.ndarray:
         """E_S - W_F(alpha) without cancellation, for one case [J] (Eq. 9)."""
         alpha = np.asarray(alpha, dtype=float)
         if self.regime[case] == REGIME_LIMIT:
             x = HALF_PI - alpha
-            return (self.E_S[case] - self.W_limit[case]) + 2.0 * self.A[case] * np.sin(0.5 * x) ** 2 \
+            return self.K_lim[case] + 2.0 * self.A[case] * np.sin(0.5 * x) ** 2 \
                 + self.B[case] * np.sin(x)
         half = 0.5 * (self.anchor[case] - alpha)
         # K = 2 R C sigma with C = cos(anchor - phi - half)

@@ -183,8 +183,8 @@ def _stop_arrays(E_S, alpha0, F1, F2, k, m2, L1, chunk):
     code = np.empty(n, dtype=np.int8)
     x16, w16, x24, w24 = _fast.rules()
     for sl in _chunks(n, max(chunk, 65536)):
-        _fast.stop_kernel(E_S[sl], alpha0[sl], F1[sl], F2[sl], k[sl], m2[sl], L1[sl], x16, w16, x24, w24,
-                          _kernels.NEAR_RATIO, _kernels.HARD_RATIO, _kernels.MASS_RATIO**2, t[sl], aF[sl], code[sl])
+        _fast.stop_kernel(E_S[sl], np.sin(alpha0[sl]), np.cos(alpha0[sl]), alpha0[sl], F1[sl], F2[sl], k[sl], m2[sl],
+                          L1[sl], x16, w16, x24, w24, *_fast.tier_constants(), t[sl], aF[sl], code[sl])
     graded = np.nonzero(code < 0)[0]
     if graded.size:
         rel = Releases.build(E_S[graded], alpha0[graded], F1[graded], F2[graded], k[graded], m2[graded], L1[graded])
@@ -338,9 +338,9 @@ def identify(alpha0, alpha_final, stop_time, E_S, c=2.0 / 3.0, m1=None, m2=None,
 
     lam = np.full(n, np.nan)
     x16, w16, x24, w24 = _fast.rules()
-    _fast.identify_kernel(alpha0, aF, tF, E_S, k, m2, L1, x16, w16, x24, w24, _kernels.NEAR_RATIO,
-                          _kernels.HARD_RATIO, _kernels.MASS_RATIO**2, tol, max_iter, lam, out["F1_max"],
-                          out["F2_max"], out["stop_time_min"], out["stop_time_max"], status, iters)
+    _fast.identify_kernel(alpha0, aF, tF, E_S, k, m2, L1, x16, w16, x24, w24, *_fast.tier_constants(), tol,
+                          max_iter, lam, out["F1_max"], out["F2_max"], out["stop_time_min"], out["stop_time_max"],
+                          status, iters)
     graded = np.nonzero(status < 0)[0]
     if graded.size:
         res = _identify_chunk(alpha0[graded], aF[graded], tF[graded], E_S[graded], k[graded], m2[graded],
@@ -411,8 +411,7 @@ def _identify_chunk(alpha0, aF, tF, E_S, k, m2, L1, tol, max_iter) -> dict[str, 
     # alpha_F -> pi/2 (a(0) = cos aF / c1_0); a small mass factor near the start needs more nodes
     end_ratio = cA / c1_0
     mass_sq = (k + np.sin(alpha0) ** 2) / (aF - alpha0) ** 2
-    tier = np.where(end_ratio < _kernels.HARD_RATIO, 2,
-                    np.where((end_ratio < _kernels.NEAR_RATIO) | (mass_sq < _kernels.MASS_RATIO**2), 1, 0))
+    tier = _kernels.tier_of(end_ratio, mass_sq)
     pref = 4.0 * sigma_m * L1 * np.sqrt(m2 / E_S)
     lam = np.empty(alpha0.size)
     t_lo = np.empty(alpha0.size)

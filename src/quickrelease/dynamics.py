@@ -30,7 +30,9 @@ __all__ = [
     "dissipation_at_limit",
     "remaining_energy",
     "final_angle",
+    "sweep_angle",
     "reaches_geometric_limit",
+    "limit_margin",
     "friction_limits",
 ]
 
@@ -116,18 +118,45 @@ def dissipated_energy(alpha, alpha0, F1, F2, L1):
     return 4.0 * L1 * h * (F1 * np.cos(m) + 2.0 * F2 * np.sin(m))
 
 
+def _limit_dissipation(A, B, sin_alpha0, cos_alpha0):
+    """W_F(pi/2) from ``A = 2 F1 L1``, ``B = 4 F2 L1`` and sin, cos of alpha0 (Eq. 7) [J].
+
+    Pure arithmetic (no call), so the compiled kernels (:mod:`quickrelease._fast`) compile this very
+    function: every method rounds W_F(pi/2) the same way.
+    """
+    return A * (1.0 - sin_alpha0) + B * cos_alpha0
+
+
+def limit_margin_terms(E_S, A, B, sin_alpha0, cos_alpha0):
+    """``E_S - W_F(pi/2)`` from the terms of :func:`_limit_dissipation` [J]: THE classifier of the stop.
+
+    The motion ends at the geometric limit (the flat rhombus) exactly where this is > 0, and by friction
+    (alpha_F <= pi/2, Eq. 8) where it is <= 0. Every method (``energy``, ``rk``, ``explicit``, the batch
+    kernels, compiled or not) takes ``stopped_by`` from this one expression, evaluated on the same
+    floating-point inputs, so they cannot disagree on a stop within rounding of pi/2: there the
+    classification is a convention (both answers describe a device that comes to rest at the flat
+    rhombus), and this is the one place it is made.
+    """
+    return E_S - (A * (1.0 - sin_alpha0) + B * cos_alpha0)  # W_F(pi/2) as in _limit_dissipation
+
+
 def dissipation_at_limit(alpha0, F1, F2, L1):
     """Energy dissipated on the way from alpha0 to the flat rhombus alpha = pi/2 (Eq. 7) [J]."""
-    return 2.0 * F1 * L1 * (1.0 - np.sin(alpha0)) + 4.0 * F2 * L1 * np.cos(alpha0)
+    return _limit_dissipation(2.0 * F1 * L1, 4.0 * F2 * L1, np.sin(alpha0), np.cos(alpha0))
+
+
+def limit_margin(E_S, alpha0, F1, F2, L1):
+    """``E_S - W_F(pi/2)`` [J]: > 0 where the device reaches the flat rhombus with kinetic energy left."""
+    return limit_margin_terms(E_S, 2.0 * F1 * L1, 4.0 * F2 * L1, np.sin(alpha0), np.cos(alpha0))
 
 
 def reaches_geometric_limit(E_S, alpha0, F1, F2, L1):
     """True where friction cannot dissipate E_S before the rhombus is flat (alpha = pi/2).
 
-    That is ``E_S > W_F(pi/2)`` (Eq. 7); there the device reaches the geometric limit
-    with kinetic energy left.
+    That is ``E_S > W_F(pi/2)`` (Eq. 7), decided by :func:`limit_margin_terms` (the single classifier
+    used by every solver); there the device reaches the geometric limit with kinetic energy left.
     """
-    return E_S > dissipation_at_limit(alpha0, F1, F2, L1)
+    return limit_margin(E_S, alpha0, F1, F2, L1) > 0.0
 
 
 def _phase(F1, F2, L1):
@@ -137,24 +166,62 @@ def _phase(F1, F2, L1):
     return np.hypot(A, B), np.arctan2(B, A)
 
 
+def sweep_terms(E_S, A, B, R, sin_alpha0, cos_alpha0):
+    """The friction-stop sweep ``delta = alpha_F - alpha0`` of Eq. 8 without cancellation [rad].
+
+    With ``s = sin(alpha0 - phi)``, ``cv = cos(alpha0 - phi)`` (both from A, B, R: no call) and
+    ``e = E_S / R``, Eq. 8 reads ``sin(alpha_F - phi) = u = s + e``; then
+    ``delta = arcsin(u) - arcsin(s) = atan2(N, D)`` with ``D = cos(delta) = cu cv + u s``,
+    ``cu = sqrt((1 - u)(1 + u))`` and ``N = sin(delta) = u cv - s cu = e (cv + s (u + s) / (cu + cv))``
+    (using ``cv - cu = (u^2 - s^2) / (cu + cv)``): for a small sweep ``N ~ e / cv``, every term of the
+    same sign, so delta keeps full relative accuracy however small it is (alpha_F - alpha0 computed from a
+    rounded alpha_F would carry an absolute error of about 1e-16 rad). Pure arithmetic and one square
+    root and atan2 (compiled as is by :mod:`quickrelease._fast`). Meaningful for the friction regime
+    (``limit_margin_terms <= 0``); the geometric limit's sweep is ``pi/2 - alpha0``.
+    """
+    s = (A * sin_alpha0 - B * cos_alpha0) / R
+    cv = (A * cos_alpha0 + B * sin_alpha0) / R
+    e = E_S / R
+    u = s + e
+    cu = np.sqrt(np.maximum((1.0 - u) * (1.0 + u), 0.0))
+    N = e * (cv + s * (u + s) / (cu + cv))
+    D = cu * cv + u * s
+    return np.arctan2(N, D)
+
+
+def sweep_angle(E_S, alpha0, F1, F2, L1):
+    """The angle swept from release to the end of the motion, ``alpha_F - alpha0`` [rad] (Eq. 8).
+
+    Cancellation-free (see :func:`sweep_terms`): accurate to a few ulps of itself even for sweeps of
+    1e-12 rad and below; ``pi/2 - alpha0`` where the device reaches the geometric limit; never negative.
+    """
+    A = 2.0 * F1 * L1
+    B = 4.0 * F2 * L1
+    R = np.hypot(A, B)
+    sa0, ca0 = np.sin(alpha0), np.cos(alpha0)
+    limit = limit_margin_terms(E_S, A, B, sa0, ca0) > 0.0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        delta = sweep_terms(E_S, A, B, R, sa0, ca0)
+    delta = np.where(limit, HALF_PI - alpha0, np.clip(delta, 0.0, HALF_PI - alpha0))
+    return float(delta) if np.ndim(delta) == 0 else delta
+
+
 def final_angle(E_S, alpha0, F1, F2, L1):
     """Angle at which the device stops, alpha_F, from Eq. 8 in closed form [rad].
 
     W_F(alpha) of Eq. 7 is a sinusoid: ``W_F = R (sin(alpha - phi) - sin(alpha0 - phi))``
     with ``R = hypot(2 F1 L1, 4 F2 L1)`` and ``phi = atan2(4 F2 L1, 2 F1 L1)``, so Eq. 8
-    gives ``alpha_F = phi + arcsin(sin(alpha0 - phi) + E_S / R)``.
+    gives ``alpha_F = phi + arcsin(sin(alpha0 - phi) + E_S / R)``; it is computed as
+    ``alpha0 + delta`` with the cancellation-free sweep of :func:`sweep_angle`, so alpha_F >= alpha0
+    always (and > alpha0 unless the sweep is below half an ulp of alpha0).
 
     Where friction cannot stop the device before the rhombus is flat (see
     :func:`reaches_geometric_limit`), the motion ends at the geometric limit and
     pi/2 is returned.
     """
-    R, phi = _phase(F1, F2, L1)
+    delta = sweep_angle(E_S, alpha0, F1, F2, L1)
     limit = reaches_geometric_limit(E_S, alpha0, F1, F2, L1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        s = np.sin(alpha0 - phi) + E_S / R
-        s = np.minimum(s, 1.0)
-        alpha_F = phi + np.arctan2(s, np.sqrt((1.0 - s) * (1.0 + s)))
-    alpha_F = np.where(limit, HALF_PI, np.minimum(alpha_F, HALF_PI))
+    alpha_F = np.where(limit, HALF_PI, np.minimum(np.asarray(alpha0, dtype=float) + delta, HALF_PI))
     return float(alpha_F) if np.ndim(alpha_F) == 0 else alpha_F
 
 
