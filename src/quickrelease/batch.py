@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from . import _kernels
+from . import _kernels, dynamics
 from ._kernels import HALF_PI, Releases, gauss_unit, graded_unit
 
 __all__ = [
@@ -288,8 +288,10 @@ def release(E_S, alpha0, F1, F2, c=2.0 / 3.0, m1=None, m2=None, L1=None, *, chun
     out["alpha_final"][:] = aF_all
     for sl in _chunks(n, chunk):
         aF = aF_all[sl]
-        half_sum = 0.5 * (aF + alpha0[sl])
-        sigma_m = np.sin(0.5 * (aF - alpha0[sl]))
+        # the sweep from the cancellation-free closed form of Eq. 8 (not aF - alpha0: aF is rounded)
+        delta = dynamics.sweep_angle(E_S[sl], alpha0[sl], F1[sl], F2[sl], L1[sl])
+        half_sum = alpha0[sl] + 0.5 * delta
+        sigma_m = np.sin(0.5 * delta)
         out["u_final"][sl] = 2.0 * L1[sl] * np.sin(half_sum) * sigma_m  # Table 4, cancellation-free
         out["v_final"][sl] = 2.0 * L1[sl] * np.cos(half_sum) * sigma_m
         sa0 = np.sin(alpha0[sl])

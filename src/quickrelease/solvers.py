@@ -8,8 +8,10 @@
     within a step) vanishes, so sign(alpha_dot) never chatters at rest.
 ``rk``
     scipy ``solve_ivp`` (DOP853 by default, or RK45) on the first-order system
-    (alpha, alpha_dot) with terminal events at alpha_dot = 0 (friction stop) and
-    alpha = pi/2 (geometric limit).
+    (alpha, alpha_dot) with a terminal event at alpha_dot = 0 (friction stop) or, where the
+    one classifier of the stop (:func:`quickrelease.dynamics.limit_margin_terms`) says the rhombus
+    becomes flat first, at alpha = pi/2 (geometric limit). Every method takes ``stopped_by`` from
+    that classifier, so they agree on it even for a stop within rounding of pi/2.
 ``energy``
     The first integral, Eq. 9-10: ``alpha_dot = sqrt((E_S - W_F(alpha)) / M(alpha))``
     and the time map ``t(alpha) = int dalpha / alpha_dot`` by Gauss quadrature (see ``_kernels``).
@@ -30,7 +32,6 @@ import numpy as np
 
 from . import dynamics
 from ._kernels import Releases
-from ._roots import brent
 from ._timemap import TimeMap
 from ._validate import HALF_PI, check_angle, check_nonnegative, check_positive
 from .device import Device, preset
@@ -203,26 +204,29 @@ def _solve_rk(fi: FirstIntegral, n_points: int, rtol: float = 1e-10, atol: float
         max_time = 1e3 * (HALF_PI - fi.alpha0) / alpha_dot0 + 10.0
     atol = 1e-12 * max(1.0, alpha_dot0) if atol is None else atol
     sol = solve_ivp(rhs, (0.0, max_time), [fi.alpha0, alpha_dot0], method=rk_method,
-                    rtol=rtol, atol=atol, events=(stopped, flat), dense_output=True)
+                    rtol=rtol, atol=atol, events=(stopped, flat) if fi.geometric_limit else (stopped,),
+                    dense_output=True)
     if sol.status != 1:
         raise RuntimeError(f"solve_ivp ended without reaching a stop: {sol.message}")
-    if sol.t_events[1].size:
-        t_stop = float(sol.t_events[1][0])
+    t_zero = float(sol.t_events[0][0]) if sol.t_events[0].size else math.inf
+    t_flat = float(sol.t_events[1][0]) if len(sol.t_events) > 1 and sol.t_events[1].size else math.inf
+    if fi.geometric_limit:
+        # The one classifier (dynamics.limit_margin_terms) says the rhombus becomes flat with kinetic energy
+        # left. Within rounding of the boundary the integrated alpha_dot may vanish a hair before pi/2: that
+        # instant (the closest approach) is then the arrival at the flat rhombus.
+        if t_flat <= t_zero:
+            t_stop, end_rate = t_flat, float(sol.y_events[1][0][1])
+        else:
+            t_stop, end_rate = t_zero, 0.0
         alpha_final = HALF_PI
         stopped_by = "geometric_limit"
-        end_rate = float(sol.y_events[1][0][1])
-    elif float(sol.y_events[0][0][0]) > HALF_PI:
-        # The step that crossed pi/2 also passed the stop, and alpha had fallen back below pi/2 by its end
-        # (the smooth branch runs on past the stop), so the sign check at the step ends saw no crossing:
-        # find it on the dense output of that step.
-        t_lo = float(sol.t[-2]) if sol.t.size > 1 else 0.0
-        t_stop = brent(lambda t: float(sol.sol(t)[0]) - HALF_PI, t_lo, float(sol.t_events[0][0]), xtol=1e-15)
-        alpha_final = HALF_PI
-        stopped_by = "geometric_limit"
-        end_rate = float(sol.sol(t_stop)[1])
     else:
-        t_stop = float(sol.t_events[0][0])
-        alpha_final = float(sol.y_events[0][0][0])
+        # A friction stop (alpha_F <= pi/2 by Eq. 8): alpha_dot = 0 is crossed transversally, so its event
+        # is well conditioned; alpha = pi/2 would be approached tangentially (an error of e in alpha moves
+        # that event by ~sqrt(e)) and is not used. The step that holds the stop may have run past pi/2 and
+        # back (the smooth branch goes on past pi/2): the event of alpha_dot = 0 is found all the same.
+        t_stop = t_zero
+        alpha_final = min(float(sol.sol(t_stop)[0]), HALF_PI)
         stopped_by = "friction"
         end_rate = 0.0
     t = np.linspace(0.0, t_stop, n_points)
@@ -292,9 +296,11 @@ def _solve_explicit(fi: FirstIntegral, dt: float | None = None, max_steps: int =
         ads.append(ad)
     else:
         raise ParameterError("dt", dt, f"values that reach the stop within max_steps = {max_steps}", "s")
+    # stopped_by is the one classifier's (as for every method); the first-order trajectory may end the other
+    # way within its O(dt) error of a stop at pi/2: its own ending is kept in the stats.
     return {"t": np.array(ts), "alpha": np.array(als), "alpha_dot": np.array(ads),
-            "stop_time": t, "alpha_final": als[-1], "stopped_by": stopped_by,
-            "stats": {"dt": dt, "steps": len(ts) - 1}}
+            "stop_time": t, "alpha_final": als[-1], "stopped_by": fi.stopped_by,
+            "stats": {"dt": dt, "steps": len(ts) - 1, "scheme_end": stopped_by}}
 
 
 _SOLVERS = {"energy": _solve_energy, "rk": _solve_rk, "explicit": _solve_explicit}

@@ -1,0 +1,178 @@
+"""The physics at its edges (issue 9, items 12, 14, 15, 16, 18) against independent 30-digit references.
+
+The reference integrates Eq. 10 with mpmath (mp.dps = 30) straight from Eq. 7-9 of the paper:
+``t_F = int_{alpha0}^{alpha_F} sqrt(M(alpha) / (E_S - W_F(alpha))) dalpha`` with alpha_F from Eq. 8
+(pi/2 where E_S > W_F(pi/2), the geometric limit). Near a friction stop the remaining energy is written
+with the product formulas ``sin a - sin b = 2 cos((a+b)/2) sin((a-b)/2)`` (a hand step, no code of the
+package), so 30 digits hold at the stop itself; tanh-sinh takes the inverse square root there.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import mpmath as mp
+import numpy as np
+import pytest
+
+import quickrelease as qr
+from quickrelease import batch, dynamics
+
+PAPER = qr.preset("paper")
+
+
+def mp_reference(E_S, alpha0, F1, F2, m1, m2, L1, c):
+    """(t_F, alpha_F, stopped_by, E_S - W_F(pi/2)) of the exact float inputs, to 30 digits."""
+    with mp.workdps(30):
+        E, a0, F1, F2, m1, m2, L1, c = (mp.mpf(float(v)) for v in (E_S, alpha0, F1, F2, m1, m2, L1, c))
+        A, B = 2 * F1 * L1, 4 * F2 * L1
+        hp = mp.pi / 2
+
+        def W(a):  # Eq. 7
+            return A * (mp.sin(a) - mp.sin(a0)) + B * (mp.cos(a0) - mp.cos(a))
+
+        def M(a):  # Eq. 9
+            return m2 * L1**2 * (c * m1 / m2 + mp.sin(a) ** 2)
+
+        margin = E - W(hp)
+        if margin > 0:
+            t = mp.quad(lambda a: mp.sqrt(M(a) / (E - W(a))), [a0, hp - mp.mpf("1e-6"), hp])
+            return t, hp, "geometric_limit", margin
+        R, phi = mp.hypot(A, B), mp.atan2(B, A)
+        aF = phi + mp.asin(mp.sin(a0 - phi) + E / R)  # Eq. 8
+
+        def remaining(y):  # E_S - W_F(aF - y) = W_F(aF) - W_F(aF - y), by the product formulas
+            return 2 * mp.sin(y / 2) * (A * mp.cos(aF - y / 2) + B * mp.sin(aF - y / 2))
+
+        t = mp.quad(lambda y: mp.sqrt(M(aF - y) / remaining(y)), [0, aF - a0])
+        return t, aF, "friction", margin
+
+
+def _device(m1, m2, L1):
+    return dataclasses.replace(PAPER, m1=float(m1), m2=float(m2), L1=float(L1))
+
+
+# -- item 12: geometric limit with a small mass factor and a small alpha0 --------------------------------
+
+def _item12_cases(n=24, seed=12):
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(n):
+        k = 10 ** rng.uniform(-5, math.log10(0.075))  # c m1/m2
+        a0 = 10 ** rng.uniform(-4, math.log10(0.05))
+        F1, F2 = rng.uniform(0, 400), rng.uniform(0, 400)
+        W_lim = 2 * F1 * PAPER.L1 * (1 - math.sin(a0)) + 4 * F2 * PAPER.L1 * math.cos(a0)
+        out.append((W_lim * 10 ** rng.uniform(1e-4, 0.7) + 1e-3, a0, F1, F2, k * PAPER.m2 / PAPER.m1))
+    return out
+
+
+def test_item12_geometric_limit_small_mass_factor_batch_and_energy_to_1e10():
+    cases = _item12_cases()
+    E, a0, F1, F2, c = (np.array(v) for v in zip(*cases, strict=True))
+    b = batch.stop_time(E, a0, F1, F2, c=c)
+    assert np.all(b.stopped_by == 1)
+    for i, case in enumerate(cases):
+        t_ref, _, how, _ = mp_reference(*case[:4], PAPER.m1, PAPER.m2, PAPER.L1, case[4])
+        assert how == "geometric_limit"
+        t_single = qr.simulate(*case[:4], mass_model=case[4], n_points=2).stop_time
+        assert abs(b.stop_time[i] / float(t_ref) - 1) < 1e-10, case
+        assert abs(t_single / float(t_ref) - 1) < 1e-10, case
+
+
+def test_item12_small_mass_factor_friction_stop_too():
+    rng = np.random.default_rng(121)
+    for _ in range(12):
+        c = 10 ** rng.uniform(-5, math.log10(0.075)) * PAPER.m2 / PAPER.m1
+        a0 = 10 ** rng.uniform(-4, math.log10(0.05))
+        F1, F2 = rng.uniform(1, 400), rng.uniform(1, 400)
+        W_lim = 2 * F1 * PAPER.L1 * (1 - math.sin(a0)) + 4 * F2 * PAPER.L1 * math.cos(a0)
+        E = W_lim * rng.uniform(0.05, 0.95)
+        t_ref, _, how, _ = mp_reference(E, a0, F1, F2, PAPER.m1, PAPER.m2, PAPER.L1, c)
+        assert how == "friction"
+        t = float(batch.stop_time(E, a0, F1, F2, c=c).stop_time)
+        assert abs(t / float(t_ref) - 1) < 1e-10
+
+
+# -- item 14: tiny sweeps alpha_F - alpha0 ---------------------------------------------------------------
+
+@pytest.mark.parametrize("log_sweep", [-6, -8, -10, -12, -14])
+def test_item14_tiny_sweep_t_F_u_F_and_sweep_angle(log_sweep):
+    rng = np.random.default_rng(1400 - log_sweep)
+    for _ in range(4):
+        a0 = rng.uniform(0.02, 1.5)
+        F1, F2 = rng.uniform(0, 300), rng.uniform(1, 300)
+        R = math.hypot(2 * F1 * PAPER.L1, 4 * F2 * PAPER.L1)
+        E = R * 10 ** (log_sweep + rng.uniform(-0.5, 0.5))  # sweep ~ E_S / (R cos(alpha0 - phi))
+        t_ref, aF_ref, how, _ = mp_reference(E, a0, F1, F2, PAPER.m1, PAPER.m2, PAPER.L1, 2 / 3)
+        assert how == "friction"
+        with mp.workdps(30):
+            sweep_ref = aF_ref - mp.mpf(a0)
+            u_ref = 2 * PAPER.L1 * mp.sin((aF_ref + a0) / 2) * mp.sin(sweep_ref / 2)  # cos a0 - cos aF, Table 4
+            u_ref2 = PAPER.L1 * (mp.cos(mp.mpf(a0)) - mp.cos(aF_ref))
+            assert abs(u_ref / u_ref2 - 1) < 1e-12  # the two forms of the reference agree
+        sweep = dynamics.sweep_angle(E, a0, F1, F2, PAPER.L1)
+        assert abs(sweep / float(sweep_ref) - 1) < 1e-14
+        assert dynamics.final_angle(E, a0, F1, F2, PAPER.L1) >= a0
+        rel = batch.release(E, a0, F1, F2)
+        assert abs(float(rel.stop_time) / float(t_ref) - 1) < 1e-10
+        assert abs(float(rel.u_final) / float(u_ref) - 1) < 1e-10
+        assert abs(qr.simulate(E, a0, F1, F2, n_points=2).stop_time / float(t_ref) - 1) < 1e-10
+
+
+# -- item 16: stops at or within rounding of pi/2 ----------------------------------------------------------
+
+def _boundary_cases():
+    """F1 = 0 (the issue's case) and F1 > 0: F2 set so that W_F(pi/2) = E_S in floating point, +-4 ulps."""
+    out = []
+    for E, a0, F1, m1, m2, L1 in ((148.413, 1.0, 0.0, 100.0, 100.0, 1.0), (2000.0, 0.3, 150.0, 576.78, 531.69, 2.477),
+                                  (50.0, 1.4, 0.0, 576.78, 531.69, 2.477)):
+        F2b = (E - 2 * F1 * L1 * (1 - math.sin(a0))) / (4 * L1 * math.cos(a0))
+        for k in (-4, -1, 0, 1, 4):
+            out.append((E, a0, F1, F2b + k * math.ulp(F2b), m1, m2, L1))
+    return out
+
+
+def _backward_band(E, a0, F1, F2, m1, m2, L1, c=2 / 3):
+    """The reference t_F over E_S +- 8 ulps: the margin E_S - W_F(pi/2) is itself rounded by a few ulps of E_S,
+    and t_F has a square-root kink at the boundary (dt/dmargin -> inf), so a method is right when it is exact
+    for inputs within that rounding (backward stable); 1e-10 relative on top."""
+    d = 8 * math.ulp(E)
+    ts = [float(mp_reference(E + s * d, a0, F1, F2, m1, m2, L1, c)[0]) for s in (-1, 0, 1)]
+    return min(ts) * (1 - 1e-10), max(ts) * (1 + 1e-10)
+
+
+@pytest.mark.parametrize("case", _boundary_cases())
+def test_item16_every_method_agrees_on_stopped_by_and_t_F_at_the_boundary(case):
+    E, a0, F1, F2, m1, m2, L1 = case
+    dev = _device(m1, m2, L1)
+    runs = {m: qr.simulate(E, a0, F1, F2, device=dev, method=m, n_points=3, dt=1e-4) for m in qr.METHODS}
+    b = batch.stop_time(E, a0, F1, F2, m1=m1, m2=m2, L1=L1)
+    b_rel = batch.release(E, a0, F1, F2, m1=m1, m2=m2, L1=L1)
+    by = {r.stopped_by for r in runs.values()}
+    assert len(by) == 1
+    code = {"friction": 0, "geometric_limit": 1}[by.pop()]
+    assert int(b.stopped_by) == code and int(b_rel.stopped_by) == code
+    assert dynamics.reaches_geometric_limit(E, a0, F1, F2, L1) == bool(code)
+    lo, hi = _backward_band(E, a0, F1, F2, m1, m2, L1)
+    for t in (runs["energy"].stop_time, float(b.stop_time), float(b_rel.stop_time)):
+        assert lo <= t <= hi
+    # rk: its tolerance (rtol 1e-10) on top of the band; a friction stop's event is well conditioned
+    assert lo * (1 - 1e-8) <= runs["rk"].stop_time <= hi * (1 + 1e-8)
+    for r in runs.values():
+        assert r.alpha_final <= math.pi / 2
+    if code:  # the explicit scheme's own trajectory may end within its O(dt) error of pi/2 (see its stats)
+        assert runs["energy"].alpha_final == runs["rk"].alpha_final == math.pi / 2
+    assert runs["explicit"].stats["scheme_end"] in ("friction", "geometric_limit")
+
+
+def test_item16_clear_of_the_boundary_the_classification_is_the_exact_one():
+    """Where |E_S - W_F(pi/2)| is well above rounding, stopped_by is the sign of the 30-digit margin."""
+    rng = np.random.default_rng(16)
+    for _ in range(20):
+        a0, F1, F2 = rng.uniform(0.05, 1.5), rng.uniform(0, 300), rng.uniform(0, 300)
+        W_lim = 2 * F1 * PAPER.L1 * (1 - math.sin(a0)) + 4 * F2 * PAPER.L1 * math.cos(a0)
+        E = W_lim * (1 + rng.choice([-1, 1]) * 10 ** rng.uniform(-12, -2))
+        how = mp_reference(E, a0, F1, F2, PAPER.m1, PAPER.m2, PAPER.L1, 2 / 3)[2]
+        assert qr.simulate(E, a0, F1, F2, n_points=2).stopped_by == how
+        assert int(batch.stop_time(E, a0, F1, F2).stopped_by) == (how == "geometric_limit")
