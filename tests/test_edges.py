@@ -113,7 +113,8 @@ def test_item14_tiny_sweep_t_F_u_F_and_sweep_angle(log_sweep):
             assert abs(u_ref / u_ref2 - 1) < 1e-12  # the two forms of the reference agree
         sweep = dynamics.sweep_angle(E, a0, F1, F2, PAPER.L1)
         assert abs(sweep / float(sweep_ref) - 1) < 1e-14
-        assert dynamics.final_angle(E, a0, F1, F2, PAPER.L1) >= a0
+        aF = dynamics.final_angle(E, a0, F1, F2, PAPER.L1)
+        assert aF >= a0 and abs(aF - float(aF_ref)) <= math.ulp(float(aF_ref))  # item 18: never below alpha0
         rel = batch.release(E, a0, F1, F2)
         assert abs(float(rel.stop_time) / float(t_ref) - 1) < 1e-10
         assert abs(float(rel.u_final) / float(u_ref) - 1) < 1e-10
@@ -176,3 +177,61 @@ def test_item16_clear_of_the_boundary_the_classification_is_the_exact_one():
         how = mp_reference(E, a0, F1, F2, PAPER.m1, PAPER.m2, PAPER.L1, 2 / 3)[2]
         assert qr.simulate(E, a0, F1, F2, n_points=2).stopped_by == how
         assert int(batch.stop_time(E, a0, F1, F2).stopped_by) == (how == "geometric_limit")
+
+
+# -- item 15: the ends of the feasible interval of the identification ----------------------------------------
+
+@pytest.mark.parametrize("which", ["F1 = 0", "F2 = 0"])
+def test_item15_identify_accepts_simulate_output_on_either_boundary(which):
+    """simulate with F1 = 0 (or F2 = 0) lands on an end of the feasible interval: identify returns that end."""
+    E, a0 = 500.0, 0.6
+    forces = np.linspace(5.0, 400.0, 100)
+    obs = []
+    for F in forces:
+        F1, F2 = (0.0, F) if which == "F1 = 0" else (F, 0.0)
+        r = qr.simulate(E, a0, F1, F2, n_points=2)
+        if r.stopped_by == "friction":
+            obs.append((F, r.alpha_final, r.stop_time))
+    assert len(obs) >= 40  # the weaker forces reach the flat rhombus
+    F, aF, tF = (np.array(v) for v in zip(*obs, strict=True))
+    b = batch.identify(a0, aF, tF, E)
+    assert np.all(b.status == 0), b.reasons()
+    zero, other = (b.F1, b.F2) if which == "F1 = 0" else (b.F2, b.F1)
+    assert np.all(zero == 0.0)
+    np.testing.assert_allclose(other, F, rtol=1e-9)
+    for Fi, aFi, tFi in obs[::7]:
+        ident = qr.identify_friction(a0, aFi, tFi, stored_energy=E)
+        assert ident.boundary == which
+        assert (ident.F1 if which == "F1 = 0" else ident.F2) == 0.0
+        assert abs((ident.F2 if which == "F1 = 0" else ident.F1) / Fi - 1) < 1e-9
+
+
+@pytest.mark.parametrize("side", [-1, 1])
+def test_item15_observations_clearly_outside_are_still_rejected(side):
+    E, a0, aF = 500.0, 0.6, 1.2
+    b = batch.identify(a0, aF, 1.0, E)
+    end = float(b.stop_time_min if side < 0 else b.stop_time_max)
+    t_obs = end * (1 + side * 1e-9)  # 250 times the rounding allowance
+    out = batch.identify(a0, aF, t_obs, E)
+    assert int(out.status) == (1 if side < 0 else 2) and np.isnan(out.F1)
+    with pytest.raises(qr.InfeasibleObservationError):
+        qr.identify_friction(a0, aF, t_obs, stored_energy=E)
+    inside = batch.identify(a0, aF, end * (1 - side * 1e-9), E)
+    assert int(inside.status) == 0 and 0.0 < float(inside.F1) < float(inside.F1_max)
+
+
+@pytest.mark.parametrize("lam", [0.05, 0.31, 0.7])
+def test_item15_batch_identify_one_ulp_below_half_pi(lam):
+    """alpha_F one ulp below pi/2: the identified F1/F1* is the true one (30-digit forward reference)."""
+    E, a0, L1 = 500.0, 0.6, PAPER.L1
+    aF = math.nextafter(math.pi / 2, 0.0)
+    with mp.workdps(30):
+        F1s = mp.mpf(E) / (2 * L1 * (mp.sin(mp.mpf(aF)) - mp.sin(mp.mpf(a0))))  # Eq. 11
+        F2s = mp.mpf(E) / (4 * L1 * (mp.cos(mp.mpf(a0)) - mp.cos(mp.mpf(aF))))  # Eq. 12
+        F1, F2 = float(lam * F1s), float((1 - lam) * F2s)
+    t_ref = float(mp_reference(E, a0, F1, F2, PAPER.m1, PAPER.m2, L1, 2 / 3)[0])
+    b = batch.identify(a0, aF, t_ref, E)
+    assert int(b.status) == 0
+    assert abs(float(b.F1 / b.F1_max) - lam) < 1e-6
+    ident = qr.identify_friction(a0, aF, t_ref, stored_energy=E)
+    assert abs(ident.F1 / ident.F1_max - lam) < 1e-6

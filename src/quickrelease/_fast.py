@@ -31,6 +31,7 @@ def rules() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
 #: the numpy path calls (:mod:`quickrelease.dynamics`): one definition, the same rounding.
 _limit_margin = njit(cache=True, nogil=True)(dynamics.limit_margin_terms)
 _sweep = njit(cache=True, nogil=True)(dynamics.sweep_terms)
+_slack = njit(cache=True, nogil=True)(_kernels.feasible_slack)
 
 
 @njit(cache=True, nogil=True)
@@ -157,6 +158,16 @@ def identify_kernel(a0, aF, tF, E, k, m2, L1, x16, w16, x24, w24, near, hard, ma
         hi *= pref
         tlo_out[i] = lo
         thi_out[i] = hi
+        # an observation within rounding of an end of the feasible interval is that end (F1 = 0 or F2 = 0)
+        # (on either side of it: the end is the solution there, to within what rounding can tell)
+        if abs(tF[i] - lo) <= _slack(lo, a0[i], aF[i]):
+            lam_out[i] = 0.0
+            iter_out[i] = 0
+            continue
+        if abs(tF[i] - hi) <= _slack(hi, a0[i], aF[i]):
+            lam_out[i] = 1.0
+            iter_out[i] = 0
+            continue
         if tF[i] < lo:
             status_out[i] = 1
             continue

@@ -70,6 +70,23 @@ MASS_HARD = 0.25
 
 REGIME_FRICTION, REGIME_LIMIT = 0, 1
 
+#: Relative rounding allowance of a stop time at an end of the feasible interval of the identification:
+#: each of the two evaluations that meet there (the observation, when it comes from a model, and the
+#: endpoint t_F(F1 = 0) or t_F(F1 = F1*)) carries up to 1e-12 of quadrature error (see above) and a few
+#: ulps of arithmetic; 4e-12 covers both with room.
+FEASIBLE_RTOL = 4e-12
+
+
+def feasible_slack(t_end, alpha0, alpha_final):
+    """How far [s] an observed t_F may lie outside an end ``t_end`` of the feasible interval and still be that end.
+
+    ``t_end (FEASIBLE_RTOL + eps alpha_F / (alpha_F - alpha0))``: the quadrature allowance, plus the effect of
+    alpha_F being known only to its rounding (half an ulp, at most ``eps alpha_F / 2``): t_F grows at most in
+    proportion to the sweep alpha_F - alpha0 for a small sweep, so a relative error ``ulp / sweep`` of the sweep
+    moves an end by as much, relatively. Pure arithmetic (compiled as is by :mod:`quickrelease._fast`).
+    """
+    return t_end * (FEASIBLE_RTOL + 2.220446049250313e-16 * alpha_final / (alpha_final - alpha0))
+
 
 _local = threading.local()
 

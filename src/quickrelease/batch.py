@@ -375,6 +375,7 @@ def _newton_on_line(x, wt, sigma_m, sA, cA, c1_0, c2_0, k, pref, target, tol, ma
     t_hi = pref * np.einsum("ij,ij->j", P, 1.0 / np.sqrt(a))  # lambda = 1: F1 = F1*
     feasible = (target >= t_lo) & (target <= t_hi)
     lam = np.ones(sigma_m.size)
+    lam[target < t_lo] = 0.0  # within rounding of F1 = 0: that end (the caller decides what is within rounding)
     iters = np.zeros(sigma_m.size, dtype=np.int16)
     active = feasible & (t_hi > target)
     H = np.empty_like(P)
@@ -396,7 +397,6 @@ def _newton_on_line(x, wt, sigma_m, sA, cA, c1_0, c2_0, k, pref, target, tol, ma
         lam = np.where(active, new, lam)
         iters += active
         active &= ~done
-    lam = np.where(feasible, lam, np.nan)
     return lam, t_lo, t_hi, iters
 
 
@@ -428,6 +428,12 @@ def _identify_chunk(alpha0, aF, tF, E_S, k, m2, L1, tol, max_iter) -> dict[str, 
         lm, lo, hi, it = _newton_on_line(x, wt, sigma_m[sub], sA[sub], cA[sub], c1_0[sub], c2_0[sub], k[sub],
                                          pref[sub], tF[sub], tol, max_iter)
         lam[sub], t_lo[sub], t_hi[sub], iters[sub] = lm, lo, hi, it
-    status = np.where(tF < t_lo, 1, np.where(tF > t_hi, 2, 0)).astype(np.int8)
+    # an observation within rounding of an end of the feasible interval is that end (lam 0 or 1, set above)
+    # (on either side of it: the end is the solution there, to within what rounding can tell)
+    slack_lo = _kernels.feasible_slack(t_lo, alpha0, aF)
+    slack_hi = _kernels.feasible_slack(t_hi, alpha0, aF)
+    lam = np.where(np.abs(tF - t_lo) <= slack_lo, 0.0, np.where(np.abs(tF - t_hi) <= slack_hi, 1.0, lam))
+    status = np.where(tF < t_lo - slack_lo, 1, np.where(tF > t_hi + slack_hi, 2, 0)).astype(np.int8)
+    lam = np.where(status == 0, lam, np.nan)
     return {"F1": lam * F1_max, "F2": (1.0 - lam) * F2_max, "F1_max": F1_max, "F2_max": F2_max,
             "stop_time_min": t_lo, "stop_time_max": t_hi, "status": status, "iterations": iters}

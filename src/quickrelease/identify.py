@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from . import dynamics
+from ._kernels import feasible_slack
 from ._roots import brent
 from ._validate import check_angle, check_positive
 from .device import Device, preset
@@ -58,6 +59,9 @@ class Identification:
     """P, when E_S was computed from it by Eq. 2 [N]."""
     iterations: int = 0
     """Function evaluations of the root find."""
+    boundary: str | None = None
+    """``"F1 = 0"`` or ``"F2 = 0"`` when t_F is an end of the feasible interval (within rounding, see
+    :func:`quickrelease._kernels.feasible_slack`): the solution lies on that boundary of Eq. 13."""
 
     @property
     def F2_ratio(self) -> float:
@@ -167,16 +171,25 @@ def identify_friction(alpha0: float, alpha_final: float, stop_time: float, *,
 
     lo, hi = residual(0.0), residual(F1_max)
     feasible = (lo + stop_time, hi + stop_time)
-    if lo > 0.0 or hi < 0.0:
+    # The ends of the feasible interval are feasible: an observation within rounding of one of them (see
+    # _kernels.feasible_slack) is that end, returned as such (F1 = 0 or F2 = 0 exactly, ``boundary`` set).
+    # (on either side of it: the end is the solution there, to within what rounding can tell)
+    boundary = None
+    if abs(lo) <= feasible_slack(feasible[0], alpha0, alpha_final):
+        F1, F2, res, boundary = 0.0, F2_max, lo, "F1 = 0"
+    elif abs(hi) <= feasible_slack(feasible[1], alpha0, alpha_final):
+        F1, F2, res, boundary = F1_max, 0.0, hi, "F2 = 0"
+    elif lo > 0.0 or hi < 0.0:
         raise InfeasibleObservationError(float(stop_time), feasible)
-    F1 = brent(residual, 0.0, F1_max, lo, hi, xtol=1e-14 * F1_max)
-    F2 = F2_max * (1.0 - F1 / F1_max)
-    res = residual(F1)
+    else:
+        F1 = brent(residual, 0.0, F1_max, lo, hi, xtol=1e-14 * F1_max)
+        F2 = F2_max * (1.0 - F1 / F1_max)
+        res = residual(F1)
     return Identification(
         F1=float(F1), F2=float(F2), F1_max=F1_max, F2_max=F2_max, stored_energy=E_S,
         alpha0=float(alpha0), alpha_final=float(alpha_final), stop_time=float(stop_time),
         mass_factor=c, device=device, stop_time_residual=float(res), feasible_stop_times=feasible,
-        push_force=None if push_force is None else float(push_force), iterations=count,
+        push_force=None if push_force is None else float(push_force), iterations=count, boundary=boundary,
     )
 
 
