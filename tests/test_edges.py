@@ -22,9 +22,10 @@ from quickrelease import batch, dynamics
 PAPER = qr.preset("paper")
 
 
-def mp_reference(E_S, alpha0, F1, F2, m1, m2, L1, c):
-    """(t_F, alpha_F, stopped_by, E_S - W_F(pi/2)) of the exact float inputs, to 30 digits."""
-    with mp.workdps(30):
+def mp_reference(E_S, alpha0, F1, F2, m1, m2, L1, c, dps=30):
+    """(t_F, alpha_F, stopped_by, E_S - W_F(pi/2)) of the exact float inputs, to 30 digits (more working
+    digits, dps, where E_S / R is far below 1e-30)."""
+    with mp.workdps(dps):
         E, a0, F1, F2, m1, m2, L1, c = (mp.mpf(float(v)) for v in (E_S, alpha0, F1, F2, m1, m2, L1, c))
         A, B = 2 * F1 * L1, 4 * F2 * L1
         hp = mp.pi / 2
@@ -235,3 +236,24 @@ def test_item15_batch_identify_one_ulp_below_half_pi(lam):
     assert abs(float(b.F1 / b.F1_max) - lam) < 1e-6
     ident = qr.identify_friction(a0, aF, t_ref, stored_energy=E)
     assert abs(ident.F1 / ident.F1_max - lam) < 1e-6
+
+
+# -- item 18: extreme inputs give finite, correct answers ------------------------------------------------------
+
+def test_item18_extreme_energies_and_forces_are_finite_and_right():
+    # no friction: t_F ~ E_S^(-1/2), rates ~ E_S^(1/2), accelerations ~ E_S (Eq. 3/4 and 10 scale so)
+    one = batch.release(1.0, 0.2, 0.0, 0.0)
+    for E in (1e300, 1e-300):
+        b = batch.release(E, 0.2, 0.0, 0.0)
+        for name, p in (("stop_time", -0.5), ("alpha_dot0", 0.5), ("peak_u_dot", 0.5), ("peak_v_dot", 0.5),
+                        ("peak_u_ddot", 1.0), ("peak_v_ddot", 1.0)):
+            got, base = float(getattr(b, name)), float(getattr(one, name))
+            assert math.isfinite(got) and abs(got / (base * E**p) - 1) < 1e-12, name
+    r = qr.simulate(5e-324, 0.2, 0.0, 0.0, n_points=5)
+    assert math.isfinite(r.stop_time) and np.all(np.isfinite(r.alpha)) and np.all(np.isfinite(r.alpha_dot))
+    assert np.all(np.diff(r.alpha) > 0) and r.alpha_final == math.pi / 2
+    # a sweep of ~1e-297 rad: 400 working digits for the reference
+    t = qr.stop_time(2900.0, 0.2, 1e300, 0.0)
+    t_ref = mp_reference(2900.0, 0.2, 1e300, 0.0, PAPER.m1, PAPER.m2, PAPER.L1, 2 / 3, dps=400)[0]
+    assert abs(t / float(t_ref) - 1) < 1e-10
+    assert dynamics.final_angle(1e-17, 0.2, 100.0, 100.0, PAPER.L1) >= 0.2

@@ -203,7 +203,7 @@ def _parabola_peak(y0, y1, y2):
     """Largest value of the parabola through (-1, y0), (0, y1), (1, y2) when its vertex is a maximum."""
     curv = y0 - 2.0 * y1 + y2
     if curv < 0.0:
-        return y1 - 0.125 * (y2 - y0) * (y2 - y0) / curv
+        return y1 - 0.125 * (y2 - y0) * ((y2 - y0) / curv)  # no square: finite up to 1e308
     return y1
 
 

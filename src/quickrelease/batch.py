@@ -230,7 +230,7 @@ def _peak_head_velocity(E_S, alpha0, alpha_end, A, B, k, m2, n_samples: int = 8,
         Kpp = AA * s - BB * co
         with np.errstate(divide="ignore", invalid="ignore"):
             G = 2.0 * kk * co / (s * d) + Kp / K
-            Gp = 2.0 * kk * (-d - 2.0 * s * s * co * co) / (s * s * d * d) + (Kpp * K - Kp * Kp) / (K * K)
+            Gp = 2.0 * kk * (-d - 2.0 * s * s * co * co) / (s * s * d * d) + (Kpp / K - (Kp / K) ** 2)
             step = np.where(Gp < 0, G / Gp, 0.0)
         x = np.clip(x - np.nan_to_num(step), lo, hi)
     s, co = np.sin(x), np.cos(x)
@@ -266,7 +266,7 @@ def _peak_accelerations(E_S, alpha0, alpha_end, F1, F2, k, m2, L1, n: int = N_PE
         curv = y0 - 2.0 * y1 + y2
         interior = (best == j) & (curv < 0.0)  # a maximum inside the interval: the parabola's vertex
         with np.errstate(divide="ignore", invalid="ignore"):
-            vertex = np.where(interior, y1 - 0.125 * (y2 - y0) ** 2 / curv, y1)
+            vertex = np.where(interior, y1 - 0.125 * (y2 - y0) * ((y2 - y0) / curv), y1)
         out.append(np.maximum(mag[rows, best], vertex))
     return out
 
