@@ -86,11 +86,18 @@ def stop_kernel(E, sa0_in, ca0_in, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, ne
             t_out[i] = 4.0 * sm * L1[i] * math.sqrt(m2[i]) * acc
             code_out[i] = 1
         else:  # friction stop at alpha_F (Eq. 8)
-            s = (A * sa0 - B * ca0 + E[i]) / R
-            cb = math.sqrt((1.0 - s) * (1.0 + s))
+            s = (A * sa0 - B * ca0) / R + E[i] / R  # u of dynamics.sweep_terms, rounded the same way
+            delta = _sweep(E[i], A, B, R, sa0, ca0)
+            if delta >= _HALF_PI - a0[i] or s >= 1.0:
+                # a friction stop at pi/2 within rounding: sin, cos of alpha_F - phi there, as numpy does
+                delta = _HALF_PI - a0[i]
+                s = A / R
+                cb = B / R
+            else:
+                delta = max(delta, 0.0)
+                cb = math.sqrt((1.0 - s) * (1.0 + s))
             sA = (B * cb + A * s) / R
             cA = (A * cb - B * s) / R
-            delta = min(max(_sweep(E[i], A, B, R, sa0, ca0), 0.0), _HALF_PI - a0[i])
             aF_out[i] = min(a0[i] + delta, _HALF_PI)
             sm = math.sin(0.5 * delta)
             qm = math.sqrt(1.0 - sm * sm)
@@ -160,11 +167,11 @@ def identify_kernel(a0, aF, tF, E, k, m2, L1, x16, w16, x24, w24, near, hard, ma
         thi_out[i] = hi
         # an observation within rounding of an end of the feasible interval is that end (F1 = 0 or F2 = 0)
         # (on either side of it: the end is the solution there, to within what rounding can tell)
-        if abs(tF[i] - lo) <= _slack(lo, a0[i], aF[i]):
+        if abs(tF[i] - lo) <= _slack(lo, a0[i], aF[i], 0.0):
             lam_out[i] = 0.0
             iter_out[i] = 0
             continue
-        if abs(tF[i] - hi) <= _slack(hi, a0[i], aF[i]):
+        if abs(tF[i] - hi) <= _slack(hi, a0[i], aF[i], 1.0):
             lam_out[i] = 1.0
             iter_out[i] = 0
             continue

@@ -77,15 +77,20 @@ REGIME_FRICTION, REGIME_LIMIT = 0, 1
 FEASIBLE_RTOL = 4e-12
 
 
-def feasible_slack(t_end, alpha0, alpha_final):
-    """How far [s] an observed t_F may lie outside an end ``t_end`` of the feasible interval and still be that end.
+def feasible_slack(t_end, alpha0, alpha_final, hinge_end):
+    """How far [s] an observed t_F may lie from an end ``t_end`` of the feasible interval and still be that end.
 
-    ``t_end (FEASIBLE_RTOL + eps alpha_F / (alpha_F - alpha0))``: the quadrature allowance, plus the effect of
-    alpha_F being known only to its rounding (half an ulp, at most ``eps alpha_F / 2``): t_F grows at most in
-    proportion to the sweep alpha_F - alpha0 for a small sweep, so a relative error ``ulp / sweep`` of the sweep
-    moves an end by as much, relatively. Pure arithmetic (compiled as is by :mod:`quickrelease._fast`).
+    ``t_end (FEASIBLE_RTOL + eps alpha_F (1 / (alpha_F - alpha0) + hinge_end / cos(alpha_F)))``: the quadrature
+    allowance, plus the effect of alpha_F being known only to its rounding (half an ulp, at most
+    ``eps alpha_F / 2``). t_F grows at most in proportion to the sweep alpha_F - alpha0 for a small sweep, so a
+    relative error ``ulp / sweep`` of the sweep moves an end by as much, relatively. The end F1 = F1*
+    (``hinge_end = 1``: pure hinge friction, which does no work at pi/2) has t_F ~ ln(1 / cos alpha_F) as
+    alpha_F -> pi/2, so its relative sensitivity to alpha_F is bounded by ``1 / cos(alpha_F)``: within an ulp or
+    so of pi/2 that end is not determined by the rounded alpha_F at all, and any slower stop is that end.
+    Pure arithmetic and one cosine (compiled as is by :mod:`quickrelease._fast`).
     """
-    return t_end * (FEASIBLE_RTOL + 2.220446049250313e-16 * alpha_final / (alpha_final - alpha0))
+    return t_end * (FEASIBLE_RTOL + 2.220446049250313e-16 * alpha_final
+                    * (1.0 / (alpha_final - alpha0) + hinge_end / np.cos(alpha_final)))
 
 
 _local = threading.local()
@@ -190,11 +195,18 @@ class Releases:
         geo = K_lim > 0.0
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             # Eq. 8: sin(alpha_F - phi) = sin(alpha0 - phi) + E_S/R, with cos(phi) = A/R, sin(phi) = B/R
-            s = (A * sa0 - B * ca0 + E_S) / R
+            s = (A * sa0 - B * ca0) / R + E_S / R  # u of sweep_terms, rounded the same way: one alpha_F
             delta = sweep_terms(E_S, A, B, R, sa0, ca0)
+            at_flat = ~geo & ((delta >= HALF_PI - alpha0) | (s >= 1.0))
             if np.any(geo):
                 s = np.where(geo, 1.0, s)
-            cb = np.sqrt((1.0 - s) * (1.0 + s))  # cos(alpha_F - phi)
+            cb = np.sqrt(np.maximum((1.0 - s) * (1.0 + s), 0.0))  # cos(alpha_F - phi)
+            if np.any(at_flat):
+                # a friction stop at pi/2 within rounding: sin, cos of alpha_F - phi at alpha_F = pi/2
+                # (cos(phi), sin(phi)), consistent with the sweep pi/2 - alpha0 (cb from a rounded s
+                # would be ~1e-8 where it is 0)
+                s = np.where(at_flat, A / R, s)
+                cb = np.where(at_flat, B / R, cb)
             sin_a = (B * cb + A * s) / R
             cos_a = (A * cb - B * s) / R
             if np.any(geo):

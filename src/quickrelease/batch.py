@@ -430,8 +430,8 @@ def _identify_chunk(alpha0, aF, tF, E_S, k, m2, L1, tol, max_iter) -> dict[str, 
         lam[sub], t_lo[sub], t_hi[sub], iters[sub] = lm, lo, hi, it
     # an observation within rounding of an end of the feasible interval is that end (lam 0 or 1, set above)
     # (on either side of it: the end is the solution there, to within what rounding can tell)
-    slack_lo = _kernels.feasible_slack(t_lo, alpha0, aF)
-    slack_hi = _kernels.feasible_slack(t_hi, alpha0, aF)
+    slack_lo = _kernels.feasible_slack(t_lo, alpha0, aF, 0.0)
+    slack_hi = _kernels.feasible_slack(t_hi, alpha0, aF, 1.0)
     lam = np.where(np.abs(tF - t_lo) <= slack_lo, 0.0, np.where(np.abs(tF - t_hi) <= slack_hi, 1.0, lam))
     status = np.where(tF < t_lo - slack_lo, 1, np.where(tF > t_hi + slack_hi, 2, 0)).astype(np.int8)
     lam = np.where(status == 0, lam, np.nan)
