@@ -171,7 +171,8 @@ def identify_kernel(a0, aF, tF, E, k, m2, L1, x16, w16, x24, w24, near, hard, ma
             lam_out[i] = 0.0
             iter_out[i] = 0
             continue
-        if abs(tF[i] - hi) <= _slack(hi, a0[i], aF[i], 1.0):
+        # (the F1* end's sensitivity to alpha_F near pi/2 widens it outwards only)
+        if abs(tF[i] - hi) <= _slack(hi, a0[i], aF[i], 0.0) or hi < tF[i] <= hi + _slack(hi, a0[i], aF[i], 1.0):
             lam_out[i] = 1.0
             iter_out[i] = 0
             continue

@@ -431,8 +431,10 @@ def _identify_chunk(alpha0, aF, tF, E_S, k, m2, L1, tol, max_iter) -> dict[str, 
     # an observation within rounding of an end of the feasible interval is that end (lam 0 or 1, set above)
     # (on either side of it: the end is the solution there, to within what rounding can tell)
     slack_lo = _kernels.feasible_slack(t_lo, alpha0, aF, 0.0)
-    slack_hi = _kernels.feasible_slack(t_hi, alpha0, aF, 1.0)
-    lam = np.where(np.abs(tF - t_lo) <= slack_lo, 0.0, np.where(np.abs(tF - t_hi) <= slack_hi, 1.0, lam))
+    slack_hi = _kernels.feasible_slack(t_hi, alpha0, aF, 1.0)  # (the F1* end's sensitivity widens it outwards only)
+    at_hi = (np.abs(tF - t_hi) <= _kernels.feasible_slack(t_hi, alpha0, aF, 0.0)) \
+        | ((tF > t_hi) & (tF <= t_hi + slack_hi))
+    lam = np.where(np.abs(tF - t_lo) <= slack_lo, 0.0, np.where(at_hi, 1.0, lam))
     status = np.where(tF < t_lo - slack_lo, 1, np.where(tF > t_hi + slack_hi, 2, 0)).astype(np.int8)
     lam = np.where(status == 0, lam, np.nan)
     return {"F1": lam * F1_max, "F2": (1.0 - lam) * F2_max, "F1_max": F1_max, "F2_max": F2_max,

@@ -177,7 +177,8 @@ def identify_friction(alpha0: float, alpha_final: float, stop_time: float, *,
     boundary = None
     if abs(lo) <= feasible_slack(feasible[0], alpha0, alpha_final, 0.0):
         F1, F2, res, boundary = 0.0, F2_max, lo, "F1 = 0"
-    elif abs(hi) <= feasible_slack(feasible[1], alpha0, alpha_final, 1.0):
+    elif abs(hi) <= feasible_slack(feasible[1], alpha0, alpha_final, 0.0) or \
+            0.0 > hi >= -feasible_slack(feasible[1], alpha0, alpha_final, 1.0):  # the F1* end: widened outwards
         F1, F2, res, boundary = F1_max, 0.0, hi, "F2 = 0"
     elif lo > 0.0 or hi < 0.0:
         raise InfeasibleObservationError(float(stop_time), feasible)

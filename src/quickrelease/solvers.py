@@ -225,12 +225,22 @@ def _solve_rk(fi: FirstIntegral, n_points: int, rtol: float = RK_RTOL, atol: flo
         t_lo = float(sol.t[-2]) if sol.t.size > 1 else 0.0
         t_flat = brent(lambda t: float(sol.sol(t)[0]) - HALF_PI, t_lo, t_zero, xtol=1e-15)
     rate_flat = float(sol.sol(t_flat)[1]) if math.isfinite(t_flat) else 0.0
+
+    def arrival(rate_true: float) -> float:
+        # alpha = pi/2 is crossed nearly tangentially when the rate there is small (an error e in alpha moves the
+        # crossing by ~sqrt(e)); the first integral gives the rate there exactly (Eq. 10), so the arrival is
+        # where the integrated rate, linear in t there, has come down to it at the local deceleration
+        decel = -float(rhs(t_flat, [HALF_PI, rate_flat])[1])
+        extra = (rate_flat - rate_true) / decel if decel > 0.0 and rate_flat > rate_true else 0.0
+        return t_flat + (extra if extra < t_flat else 0.0)
+
     if fi.geometric_limit:
         # The one classifier (dynamics.limit_margin_terms) says the rhombus becomes flat with kinetic energy
         # left. Within rounding of the boundary the integrated alpha_dot may vanish a hair before pi/2: that
         # instant (the closest approach) is then the arrival at the flat rhombus.
         if t_flat <= t_zero:
-            t_stop, end_rate = t_flat, rate_flat
+            rate_true = math.sqrt(max(float(fi._rel.K_lim[0]), 0.0)) / math.sqrt(m2 * L1 * L1 * (k + 1.0))
+            t_stop, end_rate = arrival(rate_true), rate_flat
         else:
             t_stop, end_rate = t_zero, 0.0
         alpha_final = HALF_PI
@@ -247,9 +257,7 @@ def _solve_rk(fi: FirstIntegral, n_points: int, rtol: float = RK_RTOL, atol: flo
             t_stop = t_zero
             alpha_final = min(float(sol.y_events[0][0][0]), HALF_PI)
         else:
-            rate = rate_flat
-            decel = -float(rhs(t_flat, [HALF_PI, rate])[1])
-            t_stop = t_flat + (rate / decel if decel > 0.0 and rate < decel * t_flat else 0.0)
+            t_stop = arrival(0.0)
             alpha_final = HALF_PI
         stopped_by = "friction"
         end_rate = 0.0
