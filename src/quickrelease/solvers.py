@@ -230,6 +230,10 @@ def _solve_rk(fi: FirstIntegral, n_points: int, rtol: float = RK_RTOL, atol: flo
         # alpha = pi/2 is crossed nearly tangentially when the rate there is small (an error e in alpha moves the
         # crossing by ~sqrt(e)); the first integral gives the rate there exactly (Eq. 10), so the arrival is
         # where the integrated rate, linear in t there, has come down to it at the local deceleration
+        # (only for a nearly tangential crossing, rate_true < 1e-4 alpha_dot0: a transversal one is well
+        # conditioned, and a small deceleration would turn the rk error of the rate into a large shift)
+        if rate_true >= 1e-4 * alpha_dot0:
+            return t_flat
         decel = -float(rhs(t_flat, [HALF_PI, rate_flat])[1])
         extra = (rate_flat - rate_true) / decel if decel > 0.0 and rate_flat > rate_true else 0.0
         return t_flat + (extra if extra < t_flat else 0.0)
