@@ -84,8 +84,11 @@ def _guard(func: Callable[..., Any]) -> Callable[..., Any]:
 
     @wraps(func)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
-        try:
-            return func(*args, **kwargs)
+        import numpy as np
+
+        try:  # floating-point warnings are not for the terminal: results are checked for finiteness instead
+            with np.errstate(all="ignore"):
+                return func(*args, **kwargs)
         except QuickReleaseError as exc:
             _fail(str(exc))
 
@@ -447,12 +450,13 @@ def synth(
                      release_time=parse_quantity(release_time, "time", "--release-time"),
                      duration=None if duration is None else parse_quantity(duration, "time", "--duration"),
                      seed=seed, jitter=jitter, missing=missing)
-    syn.write_csv(out)
-    pred = predicted_errors(case, syn)
+    pred = predicted_errors(case, syn)  # everything that can fail comes before the first file is written
     rel_file = out.name if case_out is None else os.path.relpath(out.resolve(), case_out.resolve().parent)
     table = syn.record_table(rel_file)
+    case_text = None if case_out is None else case_toml(case, table, f"Fit to {out.name}")
+    syn.write_csv(out)
     if case_out is not None:
-        write_text(case_toml(case, table, f"Fit to {out.name}"), case_out)
+        write_text(case_text, case_out)
     summary = {"file": str(out), "rows": int(syn.t.size), "rate_Hz": syn.rate, "channels": names,
                "truth": syn.truth, "noise": syn.noise, "offsets": syn.offsets, "seed": seed,
                "predicted": pred, "case_file": None if case_out is None else str(case_out)}
