@@ -64,6 +64,15 @@ def test_release_not_resolvable_names_the_input(kwargs, culprit):
     assert str(info.value).startswith(culprit), str(info.value)
 
 
+def test_first_integral_checks_itself():
+    """The single-case release every path builds (fit, synth, identify) refuses what it cannot resolve."""
+    from quickrelease.solvers import FirstIntegral
+
+    d = preset("paper")
+    with np.errstate(all="ignore"), pytest.raises(ParameterError, match=r"^F2 = 1e\+308 N"):
+        FirstIntegral(2900.0, 0.2, 0.0, 1e308, d.m1, d.m2, d.L1, 2.0 / 3.0)
+
+
 def test_tiny_energy_gives_finite_times_by_scaling():
     """E_S = 1e-308 J, no friction: t_F scales as 1/sqrt(E_S) exactly (Eq. 10), so it is finite."""
     ref = simulate(2900.0, 0.2, 0.0, 0.0).stop_time
