@@ -217,3 +217,22 @@ def test_fit_noise_floor(tmp_path):
         'unit = "m" }', 'unit = "m", noise = "1e-300 m" }'))
     with pytest.raises(QuickReleaseError, match=r"channel u\): noise = 1e-300 \(given\) is below"):
         fit_record(load_case(path))
+
+
+@pytest.mark.parametrize("column,row,value", [("u_m", 300, "1e308"), ("a_head_m_s2", 400, "1e200"),
+                                              ("u_m", 10, "inf"), ("u_m", 20, "1e400")])
+def test_fit_names_a_glitched_sample(tmp_path, column, row, value):
+    """One absurd sample in a record: file, column and row named, no traceback (the clean record fits)."""
+    from quickrelease.fit import fit_record
+
+    syn = synthesize(load_case(PAPER), ["u", "a_head"], rate=200.0)
+    syn.write_csv(tmp_path / "r.csv")
+    lines = (tmp_path / "r.csv").read_text(encoding="utf-8").splitlines()
+    header = lines[0].split(",")
+    cells = lines[row].split(",")
+    cells[header.index(column)] = value
+    lines[row] = ",".join(cells)
+    (tmp_path / "g.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    path = _case_with(tmp_path, syn.record_table("g.csv"))
+    with pytest.raises(QuickReleaseError, match=rf"g\.csv: column '{column}' .*absurd value .* at row {row} "):
+        fit_record(load_case(path))
