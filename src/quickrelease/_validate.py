@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 
@@ -43,3 +44,56 @@ def check_angle(name: str, value):
     if np.any(bad):
         raise ParameterError(name, _first_bad(value, bad), "(0, pi/2)", "rad")
     return value
+
+
+#: Share of the available memory one computation may plan to use (the rest is for the writers, figures and
+#: whatever else runs on the machine).
+MEMORY_SHARE = 0.5
+#: Bytes per sample used in the size checks, measured with tracemalloc and rounded up about threefold for
+#: the writers: a time sample of a response (98 B energy, 144 B rk, 123 B explicit), a Monte Carlo sample
+#: of uq (141 B), a point of a sweep or of the release envelope (the batch kernels' inputs and outputs).
+BYTES_PER_SAMPLE = 400
+#: Most workers of a local Dask cluster per CPU core (more only queue for the cores and exhaust memory).
+WORKERS_PER_CPU = 4
+
+
+def available_memory() -> int:
+    """Memory available to new allocations [bytes]: MemAvailable of /proc/meminfo, else free pages."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return int(os.sysconf("SC_AVPHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
+    except (ValueError, OSError, AttributeError):  # pragma: no cover - non-POSIX
+        return 8 * 2**30
+
+
+def check_size(name: str, value, count: float, what: str = "samples", bytes_each: int = BYTES_PER_SAMPLE) -> None:
+    """Raise ParameterError (naming ``name`` and its ``value``) when ``count`` items of ``bytes_each`` bytes
+    would need more than :data:`MEMORY_SHARE` of the memory available now; said before any work starts."""
+    have = MEMORY_SHARE * available_memory()
+    need = float(count) * bytes_each
+    if not (math.isfinite(need) and need <= have):
+        raise ParameterError(name, value, f"what this machine can hold: {float(count):.3g} {what} need about "
+                                          f"{need / 2**30:.3g} GiB, and {have / 2**30:.3g} GiB (half the memory "
+                                          "available now) may be used")
+
+
+def check_workers(name: str, workers) -> int:
+    """Raise ParameterError unless ``workers`` is an integer in [1, WORKERS_PER_CPU x CPU cores]."""
+    cap = WORKERS_PER_CPU * (os.cpu_count() or 1)
+    if isinstance(workers, bool) or not isinstance(workers, int | np.integer) or not 1 <= workers <= cap:
+        raise ParameterError(name, workers, f"integers in [1, {cap}] ({WORKERS_PER_CPU} per CPU core)")
+    return int(workers)
+
+
+def check_seed(name: str, seed) -> int:
+    """Raise ParameterError unless ``seed`` is an integer in [0, 2^63) (numpy's SeedSequence takes any
+    integer >= 0; the bound keeps a seed storable as int64 in manifests, NetCDF and JSON readers)."""
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or not 0 <= seed < 2**63:
+        raise ParameterError(name, seed, "integers in [0, 2^63)")
+    return int(seed)

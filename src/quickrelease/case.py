@@ -39,6 +39,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+from ._validate import check_size
 from .device import Device, load_device, preset, read_toml
 from .dynamics import mass_factor
 from .errors import QuickReleaseError
@@ -203,7 +204,7 @@ CASE_SCHEMA: dict[str, dict[str, tuple[str, str]]] = {
     },
     "plan": {
         "samples": ("int", "an integer >= 2 (friction samples of the release envelope)"),
-        "seed": ("seed", "an integer >= 0"),
+        "seed": ("seed", "an integer in [0, 2^63)"),
     },
     "observations": {
         "alpha_final": ("angle", "an angle in (alpha0, pi/2), e.g. '0.7378 rad'"),
@@ -334,9 +335,13 @@ def _entry(source: str, section: str, key: str, value: Any) -> Any:
     if kind == "int":
         if isinstance(value, bool) or not isinstance(value, int) or value < 2:
             raise _fail(source, where, value, expected)
+        try:  # a size: bounded by what the machine can hold, said before any work
+            check_size(where, value, value)
+        except QuickReleaseError as exc:
+            raise CaseFileError(f"{source}: {exc}") from None
         return value
     if kind == "seed":
-        if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+        if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < 2**63:
             raise _fail(source, where, value, expected)
         return value
     if kind.startswith("list:"):

@@ -15,10 +15,51 @@ from pathlib import Path
 from typing import Annotated, Any
 
 import typer
+from typer.core import TyperGroup
 
 from .errors import ParameterError, QuickReleaseError
 
+try:  # Typer >= 0.25 carries its own click
+    from typer._click.exceptions import ClickException, NoArgsIsHelpError
+except ImportError:  # pragma: no cover - Typer on click
+    from click.exceptions import ClickException, NoArgsIsHelpError
+
+#: C0 and C1 control characters but newline and tab: what would let user text (a title, a file name, a
+#: value) drive the terminal (ANSI colour, OSC title or clipboard sequences) when printed.
+_CONTROL = dict.fromkeys([*range(0x00, 0x09), *range(0x0B, 0x20), *range(0x7F, 0xA0)], "?")
+
+
+def _clean(text: str) -> str:
+    """``text`` with every control character but newline and tab shown as '?' (safe to print)."""
+    return str(text).translate(_CONTROL)
+
+
+class _OneLineErrors(TyperGroup):
+    """Usage errors (a bad integer, an unknown option, a missing argument) as one line on stderr, exit 2.
+
+    Typer prints a usage box of six or more lines; the command line's rule for bad input is one line."""
+
+    def main(self, args: Any = None, prog_name: str | None = None, complete_var: str | None = None,
+             standalone_mode: bool = True, **extra: Any) -> Any:
+        if not standalone_mode:
+            return super().main(args, prog_name, complete_var, standalone_mode, **extra)
+        try:
+            code = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        except NoArgsIsHelpError as exc:  # the help text, as Typer prints it
+            typer.echo(exc.ctx.get_help())
+            sys.exit(2)
+        except ClickException as exc:
+            message = " ".join(exc.format_message().split())
+            typer.echo(f"error: {_clean(message)}", err=True)
+            sys.exit(exc.exit_code)
+        except typer.Abort:
+            typer.echo("Aborted.", err=True)
+            sys.exit(1)
+        sys.exit(code if isinstance(code, int) else 0)
+
+
 app = typer.Typer(
+    cls=_OneLineErrors,
     add_completion=False,
     no_args_is_help=True,
     pretty_exceptions_enable=False,
@@ -34,7 +75,7 @@ JsonOpt = Annotated[bool, typer.Option("--json", help="Print one JSON object ins
 
 
 def _fail(message: str) -> None:
-    typer.echo(f"error: {message}", err=True)
+    typer.echo(f"error: {_clean(' '.join(str(message).splitlines()))}", err=True)
     raise typer.Exit(code=2)
 
 
@@ -43,8 +84,11 @@ def _guard(func: Callable[..., Any]) -> Callable[..., Any]:
 
     @wraps(func)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
-        try:
-            return func(*args, **kwargs)
+        import numpy as np
+
+        try:  # floating-point warnings are not for the terminal: results are checked for finiteness instead
+            with np.errstate(all="ignore"):
+                return func(*args, **kwargs)
         except QuickReleaseError as exc:
             _fail(str(exc))
 
@@ -79,11 +123,11 @@ def _table(title: str, rows: list[tuple[str, ...]], headers: tuple[str, ...]) ->
     from rich.markup import escape
     from rich.table import Table
 
-    table = Table(title=escape(title), title_justify="left")
+    table = Table(title=escape(_clean(title)), title_justify="left")
     for h in headers:
-        table.add_column(escape(h))
+        table.add_column(escape(_clean(h)))
     for row in rows:
-        table.add_row(*(escape(str(cell)) for cell in row))
+        table.add_row(*(escape(_clean(str(cell))) for cell in row))
     Console(width=140).print(table)
 
 
@@ -406,12 +450,13 @@ def synth(
                      release_time=parse_quantity(release_time, "time", "--release-time"),
                      duration=None if duration is None else parse_quantity(duration, "time", "--duration"),
                      seed=seed, jitter=jitter, missing=missing)
-    syn.write_csv(out)
-    pred = predicted_errors(case, syn)
+    pred = predicted_errors(case, syn)  # everything that can fail comes before the first file is written
     rel_file = out.name if case_out is None else os.path.relpath(out.resolve(), case_out.resolve().parent)
     table = syn.record_table(rel_file)
+    case_text = None if case_out is None else case_toml(case, table, f"Fit to {out.name}")
+    syn.write_csv(out)
     if case_out is not None:
-        write_text(case_toml(case, table, f"Fit to {out.name}"), case_out)
+        write_text(case_text, case_out)
     summary = {"file": str(out), "rows": int(syn.t.size), "rate_Hz": syn.rate, "channels": names,
                "truth": syn.truth, "noise": syn.noise, "offsets": syn.offsets, "seed": seed,
                "predicted": pred, "case_file": None if case_out is None else str(case_out)}

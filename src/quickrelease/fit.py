@@ -267,8 +267,14 @@ def _rest_value(name: str, alpha0: float) -> float:
     return alpha0 if name == "alpha" else 0.0
 
 
+#: Smallest noise of a channel relative to its largest value: about 50 ulp of double precision. A smaller
+#: noise (e.g. 1e-300 m) would weight residuals that are rounding errors, and overflow the Jacobian.
+NOISE_FLOOR = 1e-14
+
+
 def _noise(problem: _Problem, t_release: float) -> None:
-    """Each channel's sigma: given, or the scatter of its pre-release samples (at rest)."""
+    """Each channel's sigma: given, or the scatter of its pre-release samples (at rest), and at least
+    :data:`NOISE_FLOOR` times the channel's largest value."""
     rec = problem.record
     dt = rec.sampling_interval()
     for name, ch in problem.channels.items():
@@ -285,6 +291,12 @@ def _noise(problem: _Problem, t_release: float) -> None:
             raise RecordError(f"{rec.file}: column {ch.spec.column!r} (channel {name}): no scatter before the "
                               "release, so no noise level to weight it by: give its noise in [record.channels]")
         problem.sigma[name], problem.sigma_source[name] = s, "pre-release segment"
+    for name, ch in problem.channels.items():
+        floor = max(NOISE_FLOOR * float(np.max(np.abs(ch.values))), 1e-150)
+        if not problem.sigma[name] >= floor:
+            raise RecordError(f"{rec.file}: column {ch.spec.column!r} (channel {name}): noise = "
+                              f"{problem.sigma[name]:.3g} ({problem.sigma_source[name]}) is below {floor:.3g}, "
+                              f"{NOISE_FLOOR:g} x the largest value: weights of 1/noise would be set by rounding")
 
 
 def _offset_starts(problem: _Problem, t_release: float) -> dict[str, float]:

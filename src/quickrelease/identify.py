@@ -12,6 +12,7 @@ measured t_F.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -169,8 +170,14 @@ def identify_friction(alpha0: float, alpha_final: float, stop_time: float, *,
         count += 1
         return _line_time(F1, E_S, alpha0, F1_max, F2_max, device, c) - stop_time
 
-    lo, hi = residual(0.0), residual(F1_max)
-    feasible = (lo + stop_time, hi + stop_time)
+    feasible = (_line_time(0.0, E_S, alpha0, F1_max, F2_max, device, c),
+                _line_time(F1_max, E_S, alpha0, F1_max, F2_max, device, c))  # not residual + t_F: exact
+    count += 2
+    if not all(math.isfinite(t) and t > 0.0 for t in feasible):
+        raise QuickReleaseError(f"E_S = {E_S:.6g} J (alpha0 = {alpha0:.6g} rad, alpha_F = {alpha_final:.6g} rad): "
+                                f"the feasible stop times are [{feasible[0]:.6g}, {feasible[1]:.6g}] s, not finite "
+                                "in floating point; E_S is outside the range the model resolves")
+    lo, hi = feasible[0] - stop_time, feasible[1] - stop_time
     # The ends of the feasible interval are feasible: an observation within rounding of one of them (see
     # _kernels.feasible_slack) is that end, returned as such (F1 = 0 or F2 = 0 exactly, ``boundary`` set).
     # (on either side of it: the end is the solution there, to within what rounding can tell)

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from . import batch
+from ._validate import check_size
 from .case import BuildingSpec, Case, Distribution
 from .device import Device
 from .dynamics import angular_acceleration
@@ -394,6 +395,7 @@ def release_envelope(case: Case, E_S: float | None = None, alpha0: float | None 
     E_S = case.stored_energy if E_S is None else E_S
     alpha0 = case.alpha0 if alpha0 is None else alpha0
     n = case.plan.samples if samples is None else samples
+    check_size("samples", n, n, "friction samples")
     fs = friction_samples(case, n, case.plan.seed if seed is None else seed)
     F1, F2 = fs.nominal
     d = case.device

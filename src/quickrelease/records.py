@@ -390,6 +390,35 @@ def _numeric(frame, column: str, path: Path) -> np.ndarray:
     return values
 
 
+#: A sample farther from its channel's median than this many times the channel's 1-99 percentile range
+#: is a glitch (a dropped bit, an overflowing logger: 1e308 in a displacement), not a measurement. A real
+#: record's extremes lie within a few ranges of the median, even a brief release in a long record.
+GLITCH_FACTOR = 1e6
+
+
+def _check_glitches(values: np.ndarray, empty: np.ndarray, rows: np.ndarray, path: Path, column: str,
+                    name: str) -> None:
+    """Raise RecordError naming file, column, row and value of the first absurd sample: infinite (an
+    overflowing number; empty cells are missing samples, not glitches) or :data:`GLITCH_FACTOR` ranges
+    away from the median."""
+    inf = ~np.isfinite(values) & ~empty
+    finite = values[np.isfinite(values)]
+    if finite.size >= 3:
+        p1, median, p99 = np.percentile(finite, [1.0, 50.0, 99.0])
+        scale = max(p99 - p1, abs(median) * 1e-9, np.finfo(float).tiny)
+        with np.errstate(over="ignore", invalid="ignore"):
+            far = np.isfinite(values) & (np.abs(values - median) > GLITCH_FACTOR * scale)
+    else:
+        far = np.zeros(values.shape, dtype=bool)
+    bad = np.nonzero(inf | far)[0]
+    if bad.size:
+        i = int(bad[0])
+        raise RecordError(f"{path}: column {column!r} (channel {name}): absurd value {values[i]:.6g} at row "
+                          f"{int(rows[i]) + 1} ({bad.size} such sample(s); more than {GLITCH_FACTOR:g} times the "
+                          "1-99 percentile range from the median, or not finite): correct it or empty the cell "
+                          "(an empty cell is a missing sample)")
+
+
 def _time_axis(frame, spec: RecordSpec, path: Path) -> tuple[np.ndarray, np.ndarray]:
     if spec.time_column not in frame.columns:
         columns = ", ".join(map(str, frame.columns))
@@ -440,7 +469,10 @@ def load_record(spec: RecordSpec) -> Record:
         if cs.file is not None and len(frame) != len(main):
             raise RecordError(f"{path}: column {cs.column!r} has {len(frame)} rows, the time column "
                               f"{spec.time_column!r} of {spec.file.name} has {len(main)}")
-        values = _numeric(frame, cs.column, path)[rows] * cs.factor
+        raw = _numeric(frame, cs.column, path)[rows]
+        with np.errstate(over="ignore", invalid="ignore"):
+            values = raw * cs.factor
+        _check_glitches(values, np.isnan(raw), rows, path, cs.column, name)
         ok = np.isfinite(values)
         if not np.any(ok):
             raise RecordError(f"{path}: column {cs.column!r} (channel {name}): all values missing")

@@ -34,7 +34,7 @@ from . import dynamics
 from ._kernels import Releases
 from ._roots import brent
 from ._timemap import TimeMap
-from ._validate import HALF_PI, check_angle, check_nonnegative, check_positive
+from ._validate import HALF_PI, check_angle, check_nonnegative, check_positive, check_size
 from .device import Device, preset
 from .errors import ParameterError
 from .response import Response
@@ -72,6 +72,8 @@ class FirstIntegral:
         self.alpha_final = float(self._rel.alpha_final[0])
         self.stopped_by = "geometric_limit" if self.geometric_limit else "friction"
         self._time_map: TimeMap | None = None
+        if not (math.isfinite(self.alpha_final) and 0.0 < self.alpha_dot0 < math.inf):
+            _unresolved(self, f"alpha_F = {self.alpha_final:.6g} rad, alpha_dot0 = {self.alpha_dot0:.6g} rad/s")
 
     def alpha(self, w):
         """Angle at the integration variable w [rad]."""
@@ -155,6 +157,17 @@ def stop_time(E_S: float, alpha0: float, F1: float, F2: float, *,
     c = dynamics.mass_factor(mass_model)
     _check_release(E_S, alpha0, F1, F2)
     return FirstIntegral(E_S, alpha0, F1, F2, device.m1, device.m2, device.L1, c).stop_time()
+
+
+def _unresolved(fi: FirstIntegral, derived: str) -> None:
+    """Raise the error for a release whose derived quantities are not finite floats, naming the inputs
+    (the one of most extreme magnitude first: that is the one to look at)."""
+    inputs = {"E_S": (fi.E_S, "J"), "F1": (fi.F1, "N"), "F2": (fi.F2, "N"), "c": (fi.c, ""),
+              "m1": (fi.m1, "kg"), "m2": (fi.m2, "kg"), "L1": (fi.L1, "m")}
+    worst = max(inputs, key=lambda k: abs(math.log10(inputs[k][0])) if inputs[k][0] > 0 else -1.0)
+    others = ", ".join(f"{k} = {v:.6g} {u}".rstrip() for k, (v, u) in inputs.items() if k != worst)
+    raise ParameterError(worst, inputs[worst][0], f"the range the release model resolves in floating point "
+                         f"(with {others}, alpha0 = {fi.alpha0:.6g} rad it gives {derived})", inputs[worst][1])
 
 
 def _check_release(E_S, alpha0, F1, F2) -> None:
@@ -281,6 +294,10 @@ def _solve_explicit(fi: FirstIntegral, dt: float | None = None, max_steps: int =
     """Table 6, step by step; the stop is found inside the last step."""
     dt = 1e-4 if dt is None else float(dt)
     check_positive("dt", dt, "s")
+    t_stop = fi.stop_time()  # the energy solution's t_F: the steps needed, known before stepping
+    if t_stop / dt > max_steps:
+        raise ParameterError("dt", dt, f"[t_F / {max_steps:,}, inf) = [{t_stop / max_steps:.3g}, inf) (t_F = "
+                             f"{t_stop:.6g} s; at most {max_steps:,} steps)", "s")
     m1, m2, L1, c, F1, F2 = fi.m1, fi.m2, fi.L1, fi.c, fi.F1, fi.F2
     k = c * m1 / m2
     q = 1.0 / (m2 * L1)
@@ -383,9 +400,13 @@ def simulate(E_S: float, alpha0: float, F1: float = 0.0, F2: float = 0.0, *,
         raise ParameterError("method", method, "'" + "', '".join(METHODS) + "'")
     if not isinstance(n_points, int | np.integer) or n_points < 2:
         raise ParameterError("n_points", n_points, "integers >= 2")
+    check_size("n_points", n_points, n_points, "time samples")
     device = device or preset("paper")
     c = dynamics.mass_factor(mass_model)
     fi = FirstIntegral(E_S, alpha0, F1, F2, device.m1, device.m2, device.L1, c)
+    t_stop = fi.stop_time()
+    if not 0.0 < t_stop < math.inf:
+        _unresolved(fi, f"t_F = {t_stop:.6g} s")
     out = _SOLVERS[method](fi, n_points=int(n_points), dt=dt, rtol=rtol, atol=atol, rk_method=rk_method)
     stopped_by = out.get("stopped_by", fi.stopped_by)
     alpha_dot = out["alpha_dot"]
@@ -402,5 +423,6 @@ def simulate(E_S: float, alpha0: float, F1: float = 0.0, F2: float = 0.0, *,
         check_positive("t_end", t_end, "s")
         spacing = float(np.min(np.diff(response.t))) if response.t.size > 1 else t_end
         spacing = max(spacing, response.stop_time / max(n_points - 1, 1)) if method == "explicit" else spacing
+        check_size("t_end", f"{t_end:.6g} s", (t_end - response.stop_time) / spacing, "rest samples")
         response = response.pad_to(float(t_end), spacing)
     return response

@@ -16,12 +16,15 @@ follow Table 3 throughout.
 
 from __future__ import annotations
 
+import math
+import sys
 from dataclasses import dataclass
 
 import numpy as np
 
 from ._validate import check_angle, check_positive
 from .device import Device
+from .errors import ParameterError
 
 __all__ = [
     "push_force",
@@ -31,6 +34,7 @@ __all__ = [
     "strain_energy",
     "StrainEnergy",
     "strain_energy_coefficient",
+    "strain_energy_limit",
 ]
 
 
@@ -214,6 +218,10 @@ def strain_energy(push: float, alpha0: float, device: Device) -> StrainEnergy:
     """
     f = internal_forces(push, alpha0, device)
     d = device
+    limit = strain_energy_limit(alpha0, d)
+    if float(push) > limit:
+        raise ParameterError("P", float(push), f"(0, {limit:.4g}] N, where the terms of E_S (Eq. 2) stay "
+                             f"finite at alpha0 = {float(alpha0):.6g} rad", "N")
     return StrainEnergy(
         axial_E1=4.0 * f.N1**2 * d.L1 / (2.0 * d.E * d.A1),
         axial_E2=2.0 * f.N2**2 * d.L2 / (2.0 * d.E * d.A2),
@@ -223,6 +231,23 @@ def strain_energy(push: float, alpha0: float, device: Device) -> StrainEnergy:
         shear_E2=2.0 * f.V2**2 * d.L2 / (2.0 * d.kappa * d.G * d.A2),
         forces=f,
     )
+
+
+def strain_energy_limit(alpha0, device: Device):
+    """Largest push force P for which Eq. 2 is finite in floating point [N] (scalar alpha0).
+
+    Every internal force is ``P`` times a factor r of alpha0 (Table 3), and each term of Eq. 2 is
+    evaluated as ``a N^2 L / (...)`` (a = 4, 2, 2, 1, 2, 2), so its product ``a N^2 L`` overflows above
+    ``sqrt(max float / (a L)) / |r|``, and ``E_S = P^2 k(alpha0)`` above ``sqrt(max float / k)``; the
+    smallest of these, against max float / 8 so that the sum of the six terms stays finite.
+    """
+    d = device
+    f = internal_forces(1.0, alpha0, d)
+    root = math.sqrt(sys.float_info.max / 8.0)
+    terms = [(f.N1, 4.0 * d.L1), (f.N2, 2.0 * d.L2), (f.N3, 2.0 * d.L3), (f.N4, d.L4), (f.M2, 2.0 * d.L2),
+             (f.V2, 2.0 * d.L2)]
+    limits = [root / (abs(r) * math.sqrt(aL)) for r, aL in terms if r != 0.0]
+    return min(*limits, root / math.sqrt(float(strain_energy_coefficient(alpha0, d))))
 
 
 def strain_energy_coefficient(alpha0, device: Device):

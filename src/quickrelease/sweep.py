@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from . import batch
+from ._validate import check_size, check_workers
 from .case import Case
 from .errors import ParameterError, QuickReleaseError
 from .statics import strain_energy_coefficient
@@ -63,9 +64,15 @@ def parse_grid(text: str) -> tuple[str, np.ndarray]:
             raise ParameterError("--grid count", parts[2], "integers >= 1") from None
         if count < 1:
             raise ParameterError("--grid count", count, "integers >= 1")
+        check_size(f"--grid {name} count", count, count, "grid values", bytes_each=8)
         lo = parse_quantity(parts[0], kind, name)
         hi = parse_quantity(parts[1], kind, name)
-        return name, np.linspace(lo, hi, count)
+        with np.errstate(over="ignore", invalid="ignore"):
+            values = np.linspace(lo, hi, count)
+        if not np.all(np.isfinite(values)):  # the span hi - lo overflows
+            raise ParameterError(f"--grid {name}", f"{lo:.6g}:{hi:.6g}", "spans whose length hi - lo is a finite "
+                                 "float (below 1.798e+308)")
+        return name, values
     items = [p.strip() for p in spec.split(",")]
     unit = items[-1].partition(" ")[2] if " " in items[-1] else ""
     values = [parse_quantity(f"{p} {unit}".strip() if " " not in p else p, kind, name) for p in items]
@@ -154,6 +161,10 @@ def sweep(case: Case, grids: dict[str, np.ndarray], *, backend: str = "numpy", o
     """
     grids = {k: np.asarray(v, dtype=float) for k, v in grids.items()}
     _validate(grids, case)
+    check_workers("workers", workers)
+    points = math.prod(g.size for g in grids.values())
+    if backend == "numpy":  # the whole grid is in memory (the dask backend streams blocks to disk)
+        check_size("--grid", " x ".join(str(g.size) for g in grids.values()), points, "grid points")
     base = _base(case)
     if backend == "numpy":
         ds = _dataset(case, grids, _compute(case, grids, base), base)

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from ._validate import BYTES_PER_SAMPLE, check_seed, check_size
 from .case import Case, FitOptions
 from .errors import ParameterError
 from .identify import case_friction
@@ -29,6 +30,10 @@ __all__ = ["DEFAULT_NOISE", "SyntheticRecord", "synthesize", "predicted_errors",
 #: velocity transducers, accelerometers (about 5 mg).
 DEFAULT_NOISE = {"alpha": 0.002, "alpha_dot": 0.01, "u": 0.5e-3, "v": 0.5e-3, "u_dot": 5e-3, "v_dot": 5e-3,
                  "a_head": 0.05, "a_hinge": 0.05}
+
+
+#: Fewest samples before the release and during the motion: a fit needs both (noise, then friction).
+MIN_SAMPLES = 10
 
 
 def _column(name: str) -> str:
@@ -78,7 +83,7 @@ class SyntheticRecord:
 
     def record_table(self, file: str) -> str:
         """The ``[record]`` table of a case file that reads this record (to paste into a case file)."""
-        lines = ["[record]", f'file = "{file}"', 'time = "t_s"', "", "[record.channels]"]
+        lines = ["[record]", f"file = {_toml_value(file)}", 'time = "t_s"', "", "[record.channels]"]
         for name in self.data:
             lines.append(f'{name} = {{ column = "{_column(name)}", unit = "{CHANNELS[name][1]}" }}')
         return "\n".join(lines) + "\n"
@@ -111,7 +116,7 @@ def synthesize(case: Case, channels: list[str] | tuple[str, ...], *, rate: float
     rate : float
         Sampling rate [Hz].
     noise : dict, optional
-        Noise standard deviation per channel [SI]; :data:`DEFAULT_NOISE` for the others.
+        Noise standard deviation per channel [SI], > 0; :data:`DEFAULT_NOISE` for the others.
     release_time : float
         Release instant from the start of the record [s] (the record before it is at rest).
     duration : float, optional
@@ -137,10 +142,14 @@ def synthesize(case: Case, channels: list[str] | tuple[str, ...], *, rate: float
     if not 0.0 <= missing < 1.0:
         raise ParameterError("missing", missing, "[0, 1)")
     noise = {**DEFAULT_NOISE, **(noise or {})}
-    for name in channels:
-        if not (math.isfinite(noise[name]) and noise[name] >= 0):
-            raise ParameterError(f"noise of {name}", noise[name], "[0, inf)", CHANNELS[name][1])
+    for name in channels:  # > 0: the noise weights the fit of the record and its predicted precision
+        if not (math.isfinite(noise[name]) and noise[name] > 0):
+            raise ParameterError(f"noise of {name}", noise[name], "(0, inf) (the noise weights a fit)",
+                                 CHANNELS[name][1])
     offsets = {name: float((offsets or {}).get(name, 0.0)) for name in channels}
+    for name, value in offsets.items():
+        if not math.isfinite(value):
+            raise ParameterError(f"offset of {name}", value, "finite values", CHANNELS[name][1])
     F1, F2, how = case_friction(case)
     d = case.device
     fi = FirstIntegral(case.stored_energy, case.alpha0, F1, F2, d.m1, d.m2, d.L1, case.mass_factor)
@@ -149,8 +158,15 @@ def synthesize(case: Case, channels: list[str] | tuple[str, ...], *, rate: float
         duration = release_time + t_stop + max(0.5, 0.25 * t_stop)
     if not (math.isfinite(duration) and duration > release_time):
         raise ParameterError("duration", duration, f"(release_time, inf) = ({release_time:g}, inf)", "s")
+    if not rate * min(t_stop, release_time) >= MIN_SAMPLES:  # noise from before the release, the motion after
+        raise ParameterError("rate", rate, f"[{MIN_SAMPLES} / min(t_F, release_time), inf) = "
+                             f"[{MIN_SAMPLES / min(t_stop, release_time):.4g}, inf) (t_F = {t_stop:.4g} s)", "Hz")
+    check_seed("seed", seed)
+    samples = math.floor(duration * rate) + 1 if math.isfinite(duration * rate) else math.inf
+    check_size("duration x rate", f"{duration:g} s x {rate:g} Hz", samples,
+               f"samples of {len(channels)} channel(s)", BYTES_PER_SAMPLE * (len(channels) + 1))
     rng = np.random.default_rng(seed)
-    n = int(math.floor(duration * rate)) + 1
+    n = int(samples)
     t = np.arange(n) / rate
     if jitter:
         t = t + (rng.uniform(-0.5, 0.5, n) * jitter / rate)
@@ -211,9 +227,16 @@ def parse_channel_values(items: list[str] | tuple[str, ...], what: str) -> dict[
     return out
 
 
+#: TOML basic-string escapes (TOML 1.0, "Strings"): backslash, quote, and every control character
+#: (U+0000-U+001F, U+007F), which a basic string must not hold literally.
+_TOML_ESCAPES = {0x5C: "\\\\", 0x22: '\\"', 0x08: "\\b", 0x09: "\\t", 0x0A: "\\n", 0x0C: "\\f", 0x0D: "\\r",
+                 **{c: f"\\u{c:04X}" for c in (*range(0x00, 0x08), 0x0B, *range(0x0E, 0x20), 0x7F)}}
+
+
 def _toml_value(value: Any) -> str:
+    """``value`` as a TOML value: a string as a basic string with every character TOML requires escaped."""
     if isinstance(value, str):
-        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+        return '"' + value.translate(_TOML_ESCAPES) + '"'
     return repr(float(value)) if isinstance(value, float) else str(value)
 
 

@@ -9,6 +9,8 @@ pint is imported on first use only.
 from __future__ import annotations
 
 import math
+import re
+import sys
 from functools import lru_cache
 from typing import Any
 
@@ -56,17 +58,39 @@ _FAST_UNITS: dict[str, tuple[str, float]] = {
 }
 
 
-def _fast(text: str, kind: str) -> float | None:
-    """SI value of '<number> <unit>' for a unit of :data:`_FAST_UNITS` of the right kind, else None."""
-    number, _, unit = text.partition(" ")
-    entry = _FAST_UNITS.get(unit.strip())
-    if entry is None or entry[0] != kind:
-        return None
-    try:
-        value = float(number)
-    except ValueError:
-        return None
-    return value * entry[1] if entry[1] != 1.0 else value
+#: Longest quantity string accepted (a number and a unit never need more); longer text is refused before
+#: any parsing, so no input can make pint's tokenizer work for long.
+MAX_LENGTH = 100
+
+#: A quantity: a finite decimal number (no nan, inf, hex or underscores), then optionally a unit.
+_QUANTITY = re.compile(r"(?P<number>[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?)\s*(?P<unit>.*)", re.DOTALL)
+#: A unit: names joined by '*', '/' or a space, each with an optional small integer power (^2, **-1);
+#: '1/s' style reciprocals too. No numbers elsewhere, no nested powers, no parentheses: nothing pint
+#: could spend long on, and nothing that is an expression rather than a unit.
+_NAME = r"(?:[A-Za-z_\u00b0\u00b5\u03bc\u03a9\u2126%][A-Za-z_0-9\u00b0\u00b5\u03bc\u03a9\u2126]*)"
+_POWER = r"(?:\s*(?:\^|\*\*)\s*[+-]?\d{1,2})?"
+_UNIT = re.compile(rf"(?:1\s*/\s*)?{_NAME}{_POWER}(?:\s*(?:\*|/|\s)\s*{_NAME}{_POWER})*")
+
+
+def _split(text: str, name: str) -> tuple[float, str]:
+    """``"1598 kN"`` -> (1598.0, "kN"): the number (finite) and the unit text ("" for a bare number).
+
+    Raises UnitError naming ``name`` for text that is not a number optionally followed by a unit.
+    """
+    if len(text) > MAX_LENGTH:
+        raise UnitError(f"{name} = {text[:20]!r}... is {len(text)} characters long; a quantity is a number and "
+                        f"a unit of at most {MAX_LENGTH} characters, e.g. '1598 kN'")
+    match = _QUANTITY.fullmatch(text)
+    if match is None:
+        what = "is not a finite number" if text.lower().lstrip("+-").startswith(("nan", "inf")) else "has no number"
+        raise UnitError(f"{name} = {text!r} {what}; expected a number optionally followed by a unit, e.g. '1598 kN'")
+    number, unit = float(match["number"]), match["unit"].strip()
+    if not math.isfinite(number):
+        raise UnitError(f"{name} = {text!r}: the number overflows (its magnitude is above {sys.float_info.max:.4g})")
+    if unit and _UNIT.fullmatch(unit) is None:
+        raise UnitError(f"{name} = {text!r}: {unit!r} is not a unit (a unit is a name such as kN, m/s^2 or "
+                        "kN*m, with small integer powers; no expressions)")
+    return number, unit
 
 
 @lru_cache(maxsize=1)
@@ -84,7 +108,10 @@ def parse_quantity(value: object, kind: str, name: str) -> float:
     value : float, int or str
         A bare number (taken as SI) or a string with units (``"1598 kN"``,
         ``"531 mm^2"``, ``"11.46 deg"``, ``"0.57678 t"``). A string without a unit
-        is a bare number.
+        is a bare number. The grammar is bounded: a finite decimal number, then
+        optionally a unit (names with small integer powers joined by ``*``, ``/`` or
+        a space), at most :data:`MAX_LENGTH` characters; a unit alone (``"kN"``), an
+        expression (``"9**9**9"``, ``"2*3 kN"``), NaN and infinity are refused.
     kind : str
         One of :data:`DIMENSIONS` (``"force"``, ``"angle"``, ...).
     name : str
@@ -98,8 +125,9 @@ def parse_quantity(value: object, kind: str, name: str) -> float:
     Raises
     ------
     UnitError
-        When the string is not a quantity, the unit is unknown, or the dimension
-        does not match ``kind``.
+        When the value is not a finite quantity in that grammar, the unit is
+        unknown, the dimension does not match ``kind``, or the value overflows
+        in SI units (``"1e308 MN"``).
     """
     if kind not in DIMENSIONS:
         raise UnitError(f"unknown quantity kind {kind!r} for {name}; valid: {sorted(DIMENSIONS)}")
@@ -107,28 +135,33 @@ def parse_quantity(value: object, kind: str, name: str) -> float:
     if isinstance(value, bool):
         raise UnitError(f"{name} = {value!r} is not a number or a quantity with units")
     if isinstance(value, int | float):
-        return float(value)
+        try:
+            number = float(value)
+        except OverflowError:  # an int beyond the float range
+            raise UnitError(f"{name} = an integer of {len(str(abs(value)))} digits is too large (above "
+                            f"{sys.float_info.max:.4g})") from None
+        if not math.isfinite(number):
+            raise UnitError(f"{name} = {value!r} is not a finite number")
+        return number
     if not isinstance(value, str):
         raise UnitError(f"{name} = {value!r} is not a number or a quantity with units")
     text = value.strip()
-    try:
-        return float(text)
-    except ValueError:
-        pass
-    fast = _fast(text, kind)
-    if fast is not None:
-        return fast
+    number, unit = _split(text, name)
+    if not unit:
+        return number
+    fast = _FAST_UNITS.get(unit)
+    if fast is not None and fast[0] == kind:
+        return _finite(number * fast[1], text, name)
     ureg = _registry()
     import pint
 
     try:
-        quantity = ureg.Quantity(text)
+        units = ureg.parse_units(unit)
     except (pint.errors.UndefinedUnitError, pint.errors.DefinitionSyntaxError) as exc:
         raise UnitError(f"{name} = {text!r}: unknown unit ({exc})") from None
     except Exception:  # tokenizer errors of all kinds
-        raise UnitError(f"{name} = {text!r} is not a number or a quantity with units") from None
-    if not isinstance(quantity, ureg.Quantity):  # e.g. "pi" parses to a plain number
-        return float(quantity)
+        raise UnitError(f"{name} = {text!r}: {unit!r} is not a unit") from None
+    quantity = ureg.Quantity(number, units)
     expected = ureg.Quantity(1.0, si_unit if si_unit else "dimensionless")
     if kind == "angle":
         expected = ureg.Quantity(1.0, "rad")
@@ -138,4 +171,15 @@ def parse_quantity(value: object, kind: str, name: str) -> float:
         noun = kind.replace("_", " ")
         article = "an" if noun[0] in "aeiou" else "a"
         raise UnitError(f"{name} = {text!r} has dimension {got}; expected {article} {noun} (e.g. in {want})")
-    return float(quantity.to(expected.units).magnitude)
+    try:
+        converted = float(quantity.to(expected.units).magnitude)
+    except OverflowError:
+        converted = math.inf
+    return _finite(converted, text, name)
+
+
+def _finite(value: float, text: str, name: str) -> float:
+    """``value`` if finite, else the UnitError saying that ``text`` overflows in SI units."""
+    if not math.isfinite(value):
+        raise UnitError(f"{name} = {text!r} overflows in SI units (above {sys.float_info.max:.4g})")
+    return value

@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from . import batch
+from ._validate import check_seed, check_size, check_workers
 from .case import Case
 from .errors import ParameterError, QuickReleaseError
 from .statics import strain_energy_coefficient
@@ -32,6 +33,8 @@ __all__ = ["UQResult", "run_uq", "sensitivities", "uq_chunk", "PERCENTILES", "N_
 
 PERCENTILES = (2.5, 50.0, 97.5)
 N_BINS = 65536
+#: Memory of one finished chunk's aggregates (two int64 histograms of N_BINS bins, and the moments) [bytes].
+_CHUNK_BYTES = 2 * 8 * N_BINS + 4096
 N_BINS_2D = 128
 DEFAULT_CHUNK = 1_000_000
 _UNITS = {"force": "N", "energy": "J", "alpha0": "rad", "alpha_final": "rad", "stop_time": "s"}
@@ -297,6 +300,10 @@ def run_uq(case: Case, samples: int, *, seed: int = 0, chunk: int = DEFAULT_CHUN
         raise ParameterError("chunk", chunk, "integers >= 1")
     if backend not in ("numpy", "dask"):
         raise ParameterError("backend", backend, "'numpy' or 'dask'")
+    check_seed("seed", seed)
+    check_workers("workers", workers)
+    check_size("chunk", chunk, chunk, "samples in a chunk")
+    check_size("samples", samples, -(-samples // chunk), f"chunks of {chunk}", bytes_each=_CHUNK_BYTES)
     if resume and out is None:
         raise ParameterError("resume", True, "runs with an output folder (out)")
     sizes = [min(chunk, samples - i) for i in range(0, samples, chunk)]
