@@ -37,6 +37,26 @@ def test_table_7_values(comparison):
     assert comparison.lumped_feasible_stop_times[0] > 1.15
 
 
+def test_comparison_notes_follow_the_numbers(comparison):
+    """The notes of the demo's table are derived from the computed numbers, not fixed strings: moving a number
+    across the boundary a note states flips the note."""
+    from dataclasses import replace
+
+    def note(c, quantity):
+        return {row[0]: row[3] for row in c.rows()}[quantity]
+
+    t_row, lumped_row = "t_F giving the paper's F1", "t_F range, lumped mass (c = 1)"
+    assert note(comparison, t_row).startswith("inside the rounding of 1.05 s")
+    assert note(replace(comparison, t_F_for_paper_F1=1.0556), t_row).startswith("outside the rounding of 1.05 s")
+    assert note(comparison, lumped_row).startswith("1.05 s is infeasible with c = 1; feasible with c = 0.6667")
+    assert note(replace(comparison, lumped_feasible_stop_times=(1.0, 1.2)), lumped_row).startswith(
+        "1.05 s is feasible with c = 1")
+    assert note(replace(comparison, lumped_feasible_stop_times=(1.05, 1.2)), lumped_row).startswith(
+        "part of the rounding of 1.05 s is feasible with c = 1")
+    assert note(replace(comparison, feasible_stop_times=(1.1, 1.3)), lumped_row).endswith(
+        "infeasible with c = 0.6667 too")
+
+
 def test_identification_result_fields():
     r = identify_friction(0.2, 0.7378, 1.05, stored_energy=2900.0)
     assert r.F1 + r.F2 * r.F1_max / r.F2_max == pytest.approx(r.F1_max, rel=1e-14)  # Eq. 13
