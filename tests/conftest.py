@@ -1,3 +1,5 @@
+from functools import cache
+
 import pytest
 
 from quickrelease import preset
@@ -11,3 +13,61 @@ def paper_device():
 #: The release identified from Table 7's printed inputs (E_S = 2900 J, t_F = 1.05 s), rounded to 0.01 N:
 #: a realistic friction pair for solver tests (the solvers do not depend on how it was found).
 PAPER_CASE = dict(E_S=2900.0, alpha0=0.2, F1=419.85, F2=804.57)
+
+
+#: Table 2 of the paper: bar and head masses [kg], bar length [m] (the paper device).
+TABLE2_M1, TABLE2_M2, TABLE2_L1 = "576.78", "531.69", "2.477"
+
+
+def mp_dissipated(a, alpha0, F1, F2, L1):
+    """W_F(alpha) of Eq. 7 in mpmath, written out: 2 F1 L1 (sin a - sin a0) + 4 F2 L1 (cos a0 - cos a) [J]."""
+    import mpmath
+
+    return 2 * F1 * L1 * (mpmath.sin(a) - mpmath.sin(alpha0)) + 4 * F2 * L1 * (mpmath.cos(alpha0) - mpmath.cos(a))
+
+
+def mp_alpha_final(E_S, alpha0, F1, F2, L1=TABLE2_L1):
+    """The stop angle of Eq. 8 (at least 20 digits), W_F(alpha_F) = E_S, by mpmath's root finder (bisection-safe Anderson) [rad]."""
+    import mpmath
+
+    with mpmath.workdps(max(mpmath.mp.dps, 20)):
+        E_S, alpha0, F1, F2, L1 = (mpmath.mpf(x) for x in (E_S, alpha0, F1, F2, L1))
+        return +mpmath.findroot(lambda a: mp_dissipated(a, alpha0, F1, F2, L1) - E_S, (alpha0, mpmath.pi / 2),
+                                solver="anderson")
+
+
+def mp_stop_time(E_S, alpha0, alpha_final, F1, F2, c=(2, 3), m1=TABLE2_M1, m2=TABLE2_M2, L1=TABLE2_L1):
+    """Eq. 10, t_F = int_alpha0^alpha_F sqrt(M(a) / (E_S - W_F(a))) da (M alpha_dot^2 the kinetic energy,
+    M = m2 L1^2 (c m1/m2 + sin^2 a), Eq. 5), by tanh-sinh quadrature. E_S - W_F near the stop is written
+    as W_F(alpha_F) - W_F(a) by sum-to-product so that it keeps its digits where tanh-sinh puts its nodes;
+    the caller's E_S only fixes alpha_F."""
+    import mpmath
+
+    with mpmath.workdps(max(mpmath.mp.dps, 20)):
+        a0, aF, F1, F2, m1, m2, L1 = (mpmath.mpf(x) for x in (alpha0, alpha_final, F1, F2, m1, m2, L1))
+        k = mpmath.mpf(c[0]) / c[1] * m1 / m2
+
+        def rest(a):
+            m = (aF + a) / 2
+            return 2 * mpmath.sin((aF - a) / 2) * (2 * F1 * L1 * mpmath.cos(m) + 4 * F2 * L1 * mpmath.sin(m))
+
+        return +mpmath.quad(lambda a: mpmath.sqrt(m2 * L1**2 * (k + mpmath.sin(a) ** 2) / rest(a)), [a0, aF])
+
+
+@cache
+def mp_identify(E_S, alpha0, alpha_final, stop_time, c=(2, 3), dps=20):
+    """(F1, F2) from the observations by mpmath: F2 from F1 by Eq. 8 at alpha_F, F1 the secant root of
+    Eq. 10 = t_F (tanh-sinh quadrature), on the paper device. Floats, accurate to ~1e-15 relative."""
+    import mpmath
+
+    with mpmath.workdps(dps):
+        E, a0, aF, tF, L1 = (mpmath.mpf(x) for x in (E_S, alpha0, alpha_final, stop_time, TABLE2_L1))
+        s, co = mpmath.sin(aF) - mpmath.sin(a0), mpmath.cos(a0) - mpmath.cos(aF)
+
+        def f2(F1):
+            return (E - 2 * F1 * L1 * s) / (4 * L1 * co)
+
+        F1_star = E / (2 * L1 * s)
+        F1 = mpmath.findroot(lambda F1: mp_stop_time(E, a0, aF, F1, f2(F1), c) - tF,
+                             (F1_star / 3, F1_star / 2), solver="secant")
+        return float(F1), float(f2(F1))

@@ -3,10 +3,9 @@
 import numpy as np
 import pytest
 
-from quickrelease import _fast, _kernels, batch, identify_friction, simulate, stop_time
+from quickrelease import _fast, _kernels, batch, simulate, stop_time
 from quickrelease.reference import identify_mp, stop_time_mp
 from quickrelease.sampling import random_releases
-from quickrelease.solvers import FirstIntegral
 
 
 @pytest.fixture(scope="module")
@@ -14,32 +13,41 @@ def cases():
     return random_releases(10_000, seed=11)
 
 
-def test_agrees_with_the_core_energy_method_on_10000_cases(cases):
+def _rk(cases, i, F1=None, F2=None):
+    """The release of case i by the rk method (solve_ivp on Eq. 3-4 with a stop event): it knows nothing of
+    the first integral and the Gauss time map the batch kernels share with FirstIntegral."""
+    from quickrelease import Device
+
+    dev = Device(m1=cases["m1"][i], m2=cases["m2"][i], L1=cases["L1"][i], L2=1, L3=1, L4=1, A1=1, A2=1, A3=1, A4=1,
+                 I2=1, E=1, G=1, kappa=1)
+    return simulate(cases["E_S"][i], cases["alpha0"][i], cases["F1"][i] if F1 is None else F1,
+                    cases["F2"][i] if F2 is None else F2, device=dev, mass_model=cases["c"][i], method="rk")
+
+
+def test_agrees_with_rk_on_200_of_10000_cases(cases):
+    """t_F, alpha_F and the stop's kind against the rk solver on every 50th case (41 of them reach pi/2); the
+    rk tolerances put its t_F within ~4e-10 of the truth (mpmath below checks the kernels to 1e-12)."""
     r = batch.stop_time(**cases)
     assert (r.stopped_by == 1).mean() == pytest.approx(0.15, abs=0.02)
-    k = cases["c"] * cases["m1"] / cases["m2"]
-    t_core = np.array([FirstIntegral(*(cases[n][i] for n in ("E_S", "alpha0", "F1", "F2", "m1", "m2", "L1")),
-                                     cases["c"][i]).stop_time() for i in range(10_000)])
-    assert np.max(np.abs(r.stop_time / t_core - 1)) < 1e-10
-    assert k.shape == (10_000,)
+    for i in range(0, 10_000, 50):
+        s = _rk(cases, i)
+        assert r.stop_time[i] == pytest.approx(s.stop_time, rel=2e-9), i
+        assert r.alpha_final[i] == pytest.approx(s.alpha_final, abs=1e-9), i
+        assert (r.stopped_by[i] == 1) == (s.stopped_by == "geometric_limit"), i
 
 
-def test_identification_agrees_with_the_core_method(cases):
+def test_identification_round_trip_through_rk(cases):
     sub = {key: v[:300] for key, v in cases.items()}
     st = batch.stop_time(**sub)
     fr = st.stopped_by == 0
     ident = batch.identify(sub["alpha0"][fr], st.alpha_final[fr], st.stop_time[fr], sub["E_S"][fr], sub["c"][fr],
                            sub["m1"][fr], sub["m2"][fr], sub["L1"][fr])
     assert np.all(ident.status == 0)
-    from quickrelease import Device
-
+    # the identified pair, released by rk, stops where and when the observations say
     for j, i in enumerate(np.nonzero(fr)[0][:60]):
-        dev = Device(m1=sub["m1"][i], m2=sub["m2"][i], L1=sub["L1"][i], L2=1, L3=1, L4=1, A1=1, A2=1, A3=1, A4=1,
-                     I2=1, E=1, G=1, kappa=1)
-        core = identify_friction(sub["alpha0"][i], st.alpha_final[i], st.stop_time[i], stored_energy=sub["E_S"][i],
-                                 device=dev, mass_model=sub["c"][i])
-        assert abs(ident.F1[j] - core.F1) <= 1e-10 * core.F1_max
-        assert abs(ident.F2[j] - core.F2) <= 1e-10 * core.F2_max
+        s = _rk(sub, i, ident.F1[j], ident.F2[j])
+        assert s.stop_time == pytest.approx(st.stop_time[i], rel=2e-9)
+        assert s.alpha_final == pytest.approx(st.alpha_final[i], abs=1e-9)
     # and the round trip: the friction that produced the stop comes back
     err = np.maximum(np.abs(ident.F1 - sub["F1"][fr]) / ident.F1_max, np.abs(ident.F2 - sub["F2"][fr]) / ident.F2_max)
     assert np.median(err) < 1e-13 and np.max(err) < 1e-9

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import mp_identify
 from typer.testing import CliRunner
 
 from quickrelease.case import FitOptions, load_case
@@ -42,6 +43,95 @@ def write_case(tmp_path, record_file, channels, extra="", test=None):
 SI_CHANNELS = {"u": '{ column = "u_m" }', "v": '{ column = "v_m" }', "a_head": '{ column = "a_head_m_s2" }'}
 
 
+# -- records made as an instrument would, independently of the fit's channel model (issue 9, item 21) -----
+
+#: The truth of the instrument records: Table 7's inputs and the friction they identify (rounded).
+TRUE_F1, TRUE_F2 = 419.85, 804.57
+
+
+@pytest.fixture(scope="module")
+def paper_motion(paper):
+    """Eq. 4 (c = 2/3) integrated by solve_ivp (DOP853, rtol 1e-12) to the stop event alpha_dot = 0: the
+    motion of the paper's release, written out here from the paper, sharing nothing with the package's
+    solvers or its channel model."""
+    from scipy.integrate import solve_ivp
+
+    d = paper.device
+    k, m2, L1 = 2 / 3 * d.m1 / d.m2, d.m2, d.L1
+
+    def rhs(t, y):
+        a, ad = y
+        s, co = np.sin(a), np.cos(a)
+        den = k + s * s
+        return [ad, -ad * ad * s * co / den - (2 * TRUE_F2 * s + TRUE_F1 * co) / (m2 * L1 * den)]
+
+    def stop(t, y):
+        return y[1]
+
+    stop.terminal, stop.direction = True, -1
+    ad0 = math.sqrt(2900.0 / (m2 * L1**2 * (k + math.sin(0.2) ** 2)))  # E_S = M alpha_dot0^2 (Eq. 5, 9)
+    sol = solve_ivp(rhs, (0.0, 10.0), [0.2, ad0], method="DOP853", rtol=1e-12, atol=1e-14, dense_output=True,
+                    events=stop)
+    return sol, float(sol.t_events[0][0]), rhs, L1
+
+
+def instrument_channels(motion, release_time, rate=500.0, tail=0.5, oversample=32, displacement_filter=True):
+    """u, v and the head acceleration (Table 4) as a data acquisition records them, from the continuous signals
+    on a grid ``oversample`` times finer than the record. The accelerometer's channel goes through a
+    2nd-order CIC decimator (two cascaded moving averages over a sampling interval: a triangular impulse
+    response of +-1 interval, scipy.signal.lfilter), the displacement channels through a 4th-order
+    Butterworth anti-alias filter at 0.8 of the Nyquist frequency (zero phase, as a linear-phase ADC filter is
+    once its delay is removed; ``displacement_filter=False``: point samples); then every ``oversample``-th
+    value is kept. The device rests before the release and after the stop; the acceleration is 0 there (no
+    impulse at the release: a real release takes milliseconds)."""
+    from scipy import signal
+
+    sol, t_stop, rhs, L1 = motion
+    n = int((release_time + t_stop + tail) * rate) * oversample
+    tf = np.arange(n) / (rate * oversample)
+    a, ad = sol.sol(np.clip(tf - release_time, 0.0, t_stop))
+    moving = (tf > release_time) & (tf < release_time + t_stop)
+    add = rhs(0.0, (a, ad))[1]
+    acc = np.where(moving, L1 * (np.cos(a) * ad**2 + np.sin(a) * add), 0.0)
+    box = np.ones(oversample) / oversample
+    # CIC-2 of a centred window: the triangle of 2 * oversample - 1 taps, centred by shifting its delay
+    cic = signal.lfilter(np.convolve(box, box), [1.0], np.concatenate([acc, np.zeros(oversample - 1)]))
+    out = {"a_head": cic[oversample - 1:][::oversample]}
+    sos = signal.butter(4, 0.8 * rate / 2, fs=rate * oversample, output="sos")
+    for name, x in (("u", L1 * (math.cos(0.2) - np.cos(a))), ("v", L1 * (np.sin(a) - math.sin(0.2)))):
+        out[name] = (signal.sosfiltfilt(sos, x) if displacement_filter else x)[::oversample]
+    return tf[::oversample], {k: out[k] for k in ("u", "v", "a_head")}
+
+
+INSTRUMENT_NOISE = {"u": 0.5e-3, "v": 0.5e-3, "a_head": 0.05}
+INSTRUMENT_OFFSETS = {"u": 1.2e-3, "v": -2.5e-3, "a_head": 0.0}
+
+
+def instrument_record(t, clean, seed, missing=0.0):
+    """White noise (0.5 mm, 0.05 m/s^2) and offsets on u and v added to the sampled channels; a share
+    ``missing`` of the samples lost (NaN)."""
+    rng = np.random.default_rng(seed)
+    data = {}
+    for name, values in clean.items():
+        x = values + INSTRUMENT_OFFSETS[name] + rng.normal(0.0, INSTRUMENT_NOISE[name], t.size)
+        if missing:
+            x[rng.uniform(0.0, 1.0, t.size) < missing] = np.nan
+        data[name] = x
+    return data
+
+
+def as_record(t, data):
+    from quickrelease.records import Channel, ChannelSpec, Record
+
+    channels = {}
+    for name, values in data.items():
+        ok = np.nonzero(np.isfinite(values))[0]
+        spec = ChannelSpec(name=name, column=name, unit="", factor=1.0, noise=INSTRUMENT_NOISE[name],
+                           offset=name != "a_head")
+        channels[name] = Channel(spec=spec, t=t[ok], values=values[ok], index=ok, missing=int(values.size - ok.size))
+    return Record(file=Path("<instrument>"), t=t, channels=channels)
+
+
 # -- the model of the channels --------------------------------------------------------------------------
 
 def test_channels_follow_the_release_and_rest_before_and_after(paper):
@@ -74,42 +164,72 @@ def test_window_averaged_rates_are_continuous_and_agree_with_point_values_away_f
 
 # -- round trips -------------------------------------------------------------------------------------------
 
-def test_round_trip_through_a_csv_file_within_one_percent(paper, tmp_path):
-    syn = realistic(paper, seed=3, jitter=0.02, missing=0.01)
-    syn.write_csv(tmp_path / "rec.csv")
+def test_round_trip_through_a_csv_file_within_one_percent(paper, paper_motion, tmp_path):
+    """An instrument record (solve_ivp motion, Table 4, anti-alias filter, noise, offsets, 1% lost samples)
+    written to CSV and fitted through the case file, noise levels estimated from the pre-release segment."""
+    t, clean = instrument_channels(paper_motion, 0.43)
+    data = instrument_record(t, clean, seed=3, missing=0.01)
+    columns = {"t_s": t, "u_m": data["u"], "v_m": data["v"], "a_head_m_s2": data["a_head"]}
+    np.savetxt(tmp_path / "rec.csv", np.column_stack(list(columns.values())), delimiter=",",
+               header=",".join(columns), comments="", fmt="%.17g")
     case = load_case(write_case(tmp_path, "rec.csv", SI_CHANNELS))
     fit = fit_record(case)
     assert fit.converged
-    for name in ("F1", "F2"):
-        assert fit.estimates[name] == pytest.approx(syn.truth[name], rel=0.01)
+    for name, truth in (("F1", TRUE_F1), ("F2", TRUE_F2)):
+        assert fit.estimates[name] == pytest.approx(truth, rel=0.01)
         lo, hi = fit.ci95[name]
-        assert lo < fit.estimates[name] < hi
+        assert lo < truth < hi
     assert fit.release_time == pytest.approx(0.43, abs=2e-4)  # unknown instant, a tenth of a sample
     assert fit.offsets()["u"] == pytest.approx(1.2e-3, abs=2e-4)
     assert fit.noise_source["u"] == "pre-release segment" and fit.noise["u"] == pytest.approx(5e-4, rel=0.2)
     assert fit.chi2_reduced == pytest.approx(1.0, abs=0.15)
+    # the intervals are labelled 95%: +- the Student t quantile (scipy.stats) times the standard error
+    from scipy.stats import t as student
+
+    q = student.ppf(0.975, sum(fit.samples.values()) - len(fit.names))
+    lo, hi = fit.ci95["release_time"]
+    assert 0.5 * (hi - lo) == pytest.approx(q * fit.std_errors["release_time"], rel=1e-9)
     # missing samples are reported and skipped, never interpolated
-    assert sum(fit.samples.values()) + sum(int(n.split(": ")[2].split()[0]) for n in fit.notes) == 3 * syn.t.size
+    lost = sum(int(np.isnan(v).sum()) for v in data.values())
+    assert lost > 0 and sum(fit.samples.values()) == 3 * t.size - lost
 
 
-def test_coverage_of_the_95_percent_intervals_over_200_seeds(paper):
-    """Over 200 noise seeds the 95% intervals contain the truth in 90-99% of them, and the standardized
-    errors (estimate - truth) / standard error scatter with a standard deviation near 1."""
-    hits = {"F1": 0, "F2": 0, "release_time": 0}
-    z = {name: [] for name in hits}
-    for seed in range(200):
-        syn = realistic(paper, seed=seed, release_time=0.4 + 0.29e-3 * (seed % 7))
-        fit = fit_record(paper, syn.record())
+def test_coverage_of_the_95_percent_intervals(paper, paper_motion):
+    """The 95% intervals of fits to 100 instrument records (made independently of the fit's channel model:
+    see instrument_channels) cover the truth.
+
+    Design, sized against a 90% interval sold as 95%: each interval gives zeta = 1.96 (estimate - truth) /
+    half-width, standard normal for a true 95% interval, and zeta^2 is pooled over 5 parameters (F1, F2,
+    release time, offsets of u and v) and 100 noise seeds: 500 values, about 300 independent ones (F1 and F2
+    are nearly collinear), so mean zeta^2 = 1 +- 0.08 for true 95% intervals. A 90% interval sold as 95% is
+    1.645/1.96 as wide: mean zeta^2 = 1.42 +- 0.12. The count of hits adds a binomial check: 475 +- 5 of 500
+    for 95% intervals, 450 +- 7 for 90% ones. Measured on this machine: mean zeta^2 = 1.13 and 1.09 to 1.27
+    over four other sets of 100 seeds (synth's records included), i.e. the fit's intervals cover ~93.5%
+    (its linearised covariance is ~7% narrow, mostly in the release time and the offsets); the band's upper
+    edge, 1.35, sits between that and the 90% alternative, and the 90% quantile planted in fit.py (1.60 here)
+    fails both checks. 100 fits: ~30 s of CPU."""
+    from scipy.stats import norm
+
+    z975 = norm.ppf(0.975)
+    names = ("F1", "F2", "release_time", "offset_u", "offset_v")
+    zeta2, hits = [], 0
+    channels = {}
+    for seed in range(100):
+        release_time = 0.4 + 0.29e-3 * (seed % 7)  # the release moves across the sampling grid
+        if release_time not in channels:
+            channels[release_time] = instrument_channels(paper_motion, release_time)
+        t, clean = channels[release_time]
+        fit = fit_record(paper, as_record(t, instrument_record(t, clean, seed=seed)))
         assert fit.converged
-        for name in hits:
+        assert abs(fit.F1 / TRUE_F1 - 1) < 0.01 and abs(fit.F2 / TRUE_F2 - 1) < 0.01
+        truth = {"F1": TRUE_F1, "F2": TRUE_F2, "release_time": release_time, "offset_u": 1.2e-3, "offset_v": -2.5e-3}
+        for name in names:
             lo, hi = fit.ci95[name]
-            hits[name] += lo <= syn.truth[name] <= hi
-            z[name].append((fit.estimates[name] - syn.truth[name]) / fit.std_errors[name])
-        assert abs(fit.F1 / syn.truth["F1"] - 1) < 0.01 and abs(fit.F2 / syn.truth["F2"] - 1) < 0.01
-    for name, n in hits.items():
-        assert 180 <= n <= 198, (name, n)
-        assert 0.8 < np.std(z[name]) < 1.2, name
-        assert abs(np.mean(z[name])) < 0.25, name  # no bias beyond the sampling error of the mean (0.07)
+            zeta2.append((z975 * (fit.estimates[name] - truth[name]) / (0.5 * (hi - lo))) ** 2)
+            hits += lo <= truth[name] <= hi
+    mean = float(np.mean(zeta2))
+    assert 0.8 < mean < 1.35, mean
+    assert 460 <= hits, hits
 
 
 def test_predicted_errors_are_the_fit_errors_at_the_truth(paper):
@@ -304,7 +424,7 @@ def test_fit_example_json_keys_and_truth():
     assert data["converged"] is True
     assert set(data["residual_rms"]) == {"u", "v", "a_head"}
     # the record was made with the friction identified from Table 7's inputs (examples/make_records.py)
-    for key, truth in (("F1", 419.8499), ("F2", 804.568)):
+    for key, truth in zip(("F1", "F2"), mp_identify(2900, 0.2, 0.7378, 1.05), strict=True):
         lo, hi = data[f"{key}_ci95_N"]
         assert lo < truth < hi
     assert data["release_time_s"] == pytest.approx(0.62, abs=2e-4)

@@ -6,9 +6,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import mp_alpha_final
 from typer.testing import CliRunner
 
-from quickrelease import ParameterError, load_device, simulate
+from quickrelease import ParameterError, load_device, preset, simulate, strain_energy
 from quickrelease.case import BuildingSpec, CaseFileError, load_case
 from quickrelease.cli import app
 from quickrelease.planning import (
@@ -319,4 +320,8 @@ def test_plan_case_without_building_or_fuse():
     plan = plan_case(load_case(EXAMPLES / "larger_push.toml"))
     assert plan.fuse is None and plan.clearance is None
     s = plan.summary()
-    assert s["min_gap_m"] is None and s["stroke_m"] == pytest.approx(1.4383, abs=1e-3)
+    # the stroke by hand: E_S of Eq. 2 at P = 2200 kN, alpha0 = 14.32 deg; alpha_F from Eq. 8 by mpmath;
+    # u_F = L1 (cos alpha0 - cos alpha_F) (Table 4): 1.4383 m
+    a0 = math.radians(14.32)
+    aF = float(mp_alpha_final(strain_energy(2200e3, a0, preset("paper")).total, a0, 419.85, 804.57))
+    assert s["min_gap_m"] is None and s["stroke_m"] == pytest.approx(2.477 * (math.cos(a0) - math.cos(aF)), rel=1e-10)

@@ -108,6 +108,10 @@ class PaperComparison:
     """t_F our model gives for the paper's (F1, F2) with the E_S that puts them on Eq. 13 [s]."""
     lumped_feasible_stop_times: tuple[float, float]
     """What the lumped mass model (c = 1) can produce on the line of Eq. 13 [s]."""
+    feasible_stop_times: tuple[float, float]
+    """What the model of the comparison can produce on the line of Eq. 13, printed E_S [s]."""
+    mass_factor: float
+    """c of the model of the comparison (Eq. 3-6) [-]."""
     peak_u_dot: float
     """Peak head velocity of the identified release [m/s] (Fig. 14b)."""
     peak_v_dot: float
@@ -116,35 +120,58 @@ class PaperComparison:
     v_final: float
     alpha_dot0: float
 
+    def _t_F_note(self) -> str:
+        """Whether the t_F that gives the paper's F1 prints as the paper's t_F (its rounding interval)."""
+        t = self.printed["t_F"]
+        lo, hi = t.interval
+        where = "inside" if lo <= self.t_F_for_paper_F1 <= hi else "outside"
+        return f"{where} the rounding of {t.text} ([{lo:.4g}, {hi:.4g}] s)"
+
+    def _lumped_note(self) -> str:
+        """Whether the printed t_F (any value that prints as it) is feasible with the lumped mass (c = 1), and
+        with the distributed model (c = 2/3) the identification used, from the computed intervals."""
+        t = self.printed["t_F"]
+        lo, hi = t.interval
+        a, b = self.lumped_feasible_stop_times
+        if hi < a or lo > b:
+            lumped = f"{t.text} is infeasible with c = 1"
+        elif a <= lo and hi <= b:
+            lumped = f"{t.text} is feasible with c = 1"
+        else:
+            lumped = f"part of the rounding of {t.text} is feasible with c = 1"
+        c0, c1 = self.feasible_stop_times
+        if c0 <= t.value <= c1:
+            return f"{lumped}; feasible with c = {self.mass_factor:.4g} ([{c0:.4f}, {c1:.4f}] s)"
+        return f"{lumped}; infeasible with c = {self.mass_factor:.4g} too"
+
     def rows(self) -> list[tuple[str, str, str, str]]:
         """(quantity, paper, ours, note) rows for a side-by-side table."""
         p = self.printed
         return [
             ("E_S (Eq. 2, P = 1598 kN)", p["E_S"].text, f"{self.E_S_eq2 / 1e3:.4f} kJ",
              f"+{100 * (self.E_S_eq2 / p['E_S'].value - 1):.2f}%; "
-             f"2.90 kJ needs P = {self.P_for_printed_E_S / 1e3:.1f} kN"),
+             f"{p['E_S'].text} needs P = {self.P_for_printed_E_S / 1e3:.1f} kN"),
             ("F1* (Eq. 11)", "-", f"{self.F1_max / 1e3:.4f} kN", "from printed E_S, alpha0, alpha_F"),
             ("F2* (Eq. 12)", "-", f"{self.F2_max / 1e3:.4f} kN", ""),
             ("F1 (Table 7 inputs)", p["F1"].text, f"{self.F1_printed_inputs / 1e3:.4f} kN",
-             f"t_F in [1.045, 1.055] s gives F1 in "
+             f"t_F in [{p['t_F'].interval[0]:.4g}, {p['t_F'].interval[1]:.4g}] s gives F1 in "
              f"[{self.F1_range_t_F[0] / 1e3:.4f}, {self.F1_range_t_F[1] / 1e3:.4f}] kN"),
             ("F2 (Table 7 inputs)", p["F2"].text, f"{self.F2_printed_inputs / 1e3:.4f} kN",
              f"all inputs' rounding: "
              f"[{self.F2_range_all[0] / 1e3:.4f}, {self.F2_range_all[1] / 1e3:.4f}] kN"),
             ("F1 (E_S from Eq. 2)", "-", f"{self.F1_eq2 / 1e3:.4f} kN", "E_S = our Eq. 2 value"),
             ("F2 (E_S from Eq. 2)", "-", f"{self.F2_eq2 / 1e3:.4f} kN", ""),
-            ("t_F giving the paper's F1", p["t_F"].text, f"{self.t_F_for_paper_F1:.4f} s",
-             "inside the rounding of 1.05 s"),
+            ("t_F giving the paper's F1", p["t_F"].text, f"{self.t_F_for_paper_F1:.4f} s", self._t_F_note()),
             ("E_S on Eq. 13 for paper's pair", p["E_S"].text,
              f"{self.E_S_implied_by_paper_pair / 1e3:.4f} kJ",
              f"F1/F1* + F2/F2* = {self.line_sum_paper_pair:.4f} (1 on the line)"),
             ("alpha_F, t_F of paper's pair", f"{p['alpha_final'].text}, {p['t_F'].text}",
              f"{self.paper_pair_alpha_final:.4f} rad, {self.paper_pair_stop_time:.4f} s", "our model, E_S = 2900 J"),
             ("t_F of paper's pair on Eq. 13", p["t_F"].text, f"{self.paper_pair_stop_time_on_line:.4f} s",
-             f"E_S = {self.E_S_implied_by_paper_pair:.1f} J, alpha_F = 0.7378 rad"),
+             f"E_S = {self.E_S_implied_by_paper_pair:.1f} J, alpha_F = {p['alpha_final'].text}"),
             ("t_F range, lumped mass (c = 1)", p["t_F"].text,
              f"[{self.lumped_feasible_stop_times[0]:.4f}, {self.lumped_feasible_stop_times[1]:.4f}] s",
-             "1.05 s is infeasible: the paper used c = 2/3"),
+             self._lumped_note()),
             ("peak v_dot (Fig. 14b)", "2 to 3 m/s", f"{self.peak_v_dot:.3f} m/s", ""),
             ("peak u_dot (Fig. 14b)", "~1 m/s", f"{self.peak_u_dot:.3f} m/s", ""),
         ]
@@ -201,6 +228,7 @@ def reproduce_table7(device: Device | None = None, mass_model: str | float = "di
         line_sum_paper_pair=paper_F1 / ident.F1_max + paper_F2 / ident.F2_max,
         paper_pair_alpha_final=pair.alpha_final, paper_pair_stop_time=pair.stop_time,
         paper_pair_stop_time_on_line=pair_on_line.stop_time, lumped_feasible_stop_times=lumped_line,
+        feasible_stop_times=tuple(ident.feasible_stop_times), mass_factor=float(release.mass_factor),
         peak_u_dot=summary["peak_u_dot_m_s"], peak_v_dot=summary["peak_v_dot_m_s"],
         u_final=release.u_final, v_final=release.v_final, alpha_dot0=release.alpha_dot0,
     )

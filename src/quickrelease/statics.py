@@ -35,6 +35,7 @@ __all__ = [
     "StrainEnergy",
     "strain_energy_coefficient",
     "strain_energy_limit",
+    "strain_energy_coefficient_derivative",
 ]
 
 
@@ -262,3 +263,18 @@ def strain_energy_coefficient(alpha0, device: Device):
     return (4.0 * (0.5 / c) ** 2 * d.L1 / (2.0 * d.E * d.A1) + 2.0 * (0.5 * t) ** 2 * d.L2 / (2.0 * d.E * d.A2)
             + 2.0 * t**2 * d.L3 / (2.0 * d.E * d.A3) + t**2 * d.L4 / (2.0 * d.E * d.A4)
             + 2.0 * (d.L2 / 4.0) ** 2 * d.L2 / (6.0 * d.E * d.I2) + 2.0 * 0.25 * d.L2 / (2.0 * d.kappa * d.G * d.A2))
+
+
+def strain_energy_coefficient_derivative(alpha0, device: Device):
+    """d(E_S / P^2) / d alpha0, the derivative of :func:`strain_energy_coefficient` (Eq. 2, Table 3) [J/(N^2 rad)].
+
+    Only the axial terms depend on alpha0: N1 = P / (2 cos alpha0) and N2, N3, N4 proportional to
+    P tan alpha0, and ``d(1/cos^2)/d alpha = d(tan^2)/d alpha = 2 tan(alpha) / cos^2(alpha)``.
+    """
+    a = np.asarray(alpha0, dtype=float)
+    d = device
+    t = np.tan(a)
+    c = np.cos(a)
+    coefficient = (4.0 * 0.25 * d.L1 / (2.0 * d.E * d.A1) + 2.0 * 0.25 * d.L2 / (2.0 * d.E * d.A2)
+                   + 2.0 * d.L3 / (2.0 * d.E * d.A3) + d.L4 / (2.0 * d.E * d.A4))
+    return 2.0 * t / (c * c) * coefficient

@@ -172,7 +172,7 @@ class UQResult:
     """Histogram bin width, the resolution of the percentiles [N]."""
     overflow: dict[str, int]
     sensitivities: dict[str, dict[str, float]]
-    """dF/d(input) at the nominal point, implicit function theorem [N per SI unit of the input]."""
+    """dF/d(input) at the nominal point, implicit function theorem, analytic partials [N per SI unit of input]."""
     sensitivities_fd: dict[str, dict[str, float]]
     """The same by finite differences of the whole identification (a check)."""
     histograms: dict[str, np.ndarray] = field(repr=False, default_factory=dict)
@@ -188,16 +188,66 @@ class UQResult:
         }
 
 
-def sensitivities(case: Case, h: float = 1e-6) -> tuple[dict[str, dict[str, float]], dict[str, dict[str, float]]]:
-    """dF1/dx and dF2/dx at the nominal inputs, by the implicit function theorem, and by finite differences.
+def _line_time_partials(alpha0: float, alpha_final: float, F1: float, F2: float, k: float, m2: float,
+                        L1: float) -> dict[str, float]:
+    """Partial derivatives of the stop time of a release that stops at alpha_F (Eq. 10) [s per SI unit].
 
-    On the line of Eq. 13, ``F1 = lambda F1*(x)`` and ``F2 = (1 - lambda) F2*(x)`` with lambda fixed by
-    ``t(lambda, x) = t_F``: ``dlambda/dx = -(dt/dx) / (dt/dlambda)`` (partials of the line's stop time at
-    fixed lambda, by central differences of the smooth quadrature); F1* and F2* (Eq. 11-12) are
-    differentiated analytically. The check re-identifies at perturbed inputs (central differences).
-    Inputs x: alpha0, alpha_final, stop_time and the push force (or the stored energy).
+    With ``alpha = alpha_F - delta w^2`` (``delta = alpha_F - alpha0``) and
+    ``E_S - W_F(alpha) = W_F(alpha_F) - W_F(alpha) = 2 sin(delta w^2 / 2) (A cos m + B sin m)``
+    (``A = 2 F1 L1``, ``B = 4 F2 L1``, ``m = alpha_F - delta w^2 / 2``; Eq. 7), the stop time is
+
+        t = int_0^1 g dw,   g = 2 delta w sqrt(M(alpha)) / sqrt(2 sin(delta w^2 / 2) (A cos m + B sin m)),
+
+    ``M = m2 L1^2 (k + sin^2 alpha)`` (Eq. 5), on a fixed domain with a smooth integrand. E_S is implied
+    (``E_S = W_F(alpha_F)``, Eq. 8), so t is a function of (alpha0, alpha_F, F1, F2), and its partials are the
+    integrals of ``g d(ln g)/dp``, differentiated by hand below and integrated by Gauss-Legendre (nodes doubled
+    until two rules agree to 1e-14). Returns ``t`` and ``t_alpha0``, ``t_alpha_final``, ``t_F1``, ``t_F2``.
     """
-    from ._kernels import Releases
+    delta = alpha_final - alpha0
+    A, B = 2.0 * F1 * L1, 4.0 * F2 * L1
+    previous = None
+    for n in (48, 96, 192, 384, 768):
+        x, wt = np.polynomial.legendre.leggauss(n)
+        w, wt = 0.5 * (x + 1.0), 0.5 * wt
+        w2 = w * w
+        alpha = alpha_final - delta * w2
+        m = alpha_final - 0.5 * delta * w2
+        half = 0.5 * delta * w2
+        S = np.sin(half)
+        D = A * np.cos(m) + B * np.sin(m)
+        Dm = -A * np.sin(m) + B * np.cos(m)
+        sa, ca = np.sin(alpha), np.cos(alpha)
+        kk = k + sa * sa
+        g = 2.0 * delta * w * np.sqrt(m2 * L1 * L1 * kk) / np.sqrt(2.0 * S * D)
+        dM = 2.0 * sa * ca / kk                      # d ln M / d alpha
+        dS = 0.5 * w2 * np.cos(half) / S             # d ln S / d delta
+        # d ln g / dp for p = alpha_F (delta' = 1, alpha' = 1 - w^2, m' = 1 - w^2/2) and p = alpha0
+        # (delta' = -1, alpha' = w^2, m' = w^2/2); F1 and F2 enter through D only
+        l_aF = 1.0 / delta + 0.5 * dM * (1.0 - w2) - 0.5 * dS - 0.5 * Dm * (1.0 - 0.5 * w2) / D
+        l_a0 = -1.0 / delta + 0.5 * dM * w2 + 0.5 * dS - 0.5 * Dm * 0.5 * w2 / D
+        l_F1 = -0.5 * 2.0 * L1 * np.cos(m) / D
+        l_F2 = -0.5 * 4.0 * L1 * np.sin(m) / D
+        out = np.array([wt @ g, wt @ (g * l_a0), wt @ (g * l_aF), wt @ (g * l_F1), wt @ (g * l_F2)])
+        if previous is not None and np.all(np.abs(out - previous) <= 1e-14 * np.abs(out) + 1e-300):
+            break
+        previous = out
+    return dict(zip(("t", "t_alpha0", "t_alpha_final", "t_F1", "t_F2"), (float(v) for v in out), strict=True))
+
+
+def sensitivities(case: Case, h: float = 1e-6) -> tuple[dict[str, dict[str, float]], dict[str, dict[str, float]]]:
+    """dF1/dx and dF2/dx at the nominal inputs: analytic (implicit function theorem), and by finite differences.
+
+    The identified (F1, F2) solve two equations: the stop at alpha_F (Eq. 8, ``W_F(alpha_F) - E_S = 0``, which
+    is the line of Eq. 13) and the stop time (Eq. 10, ``t(alpha0, alpha_F, F1, F2) - t_F = 0``). By the
+    implicit function theorem ``d(F1, F2)/dx = -J^-1 dG/dx`` with J the 2 x 2 Jacobian of the two equations in
+    (F1, F2). Every partial is analytic: those of Eq. 7-8 in closed form, those of the stop time by
+    differentiating its smooth integral under the integral sign (:func:`_line_time_partials`); with a push
+    force, ``E_S = P^2 e(alpha0)`` (Eq. 2) adds ``dE_S/dP = 2 P e`` and ``dE_S/dalpha0 = P^2 e'``. The
+    second result re-identifies at perturbed inputs (central differences of relative step ``h``), an
+    independent check of the whole chain. Inputs x: alpha0, alpha_final, stop_time and the push force (or
+    the stored energy).
+    """
+    from .statics import strain_energy_coefficient_derivative
 
     d = case.device
     k = case.mass_factor * d.m1 / d.m2
@@ -206,50 +256,36 @@ def sensitivities(case: Case, h: float = 1e-6) -> tuple[dict[str, dict[str, floa
     if ident.status[0] != 0:
         raise QuickReleaseError(f"{case.source}: the nominal observations are infeasible: "
                                 f"{batch.IDENTIFY_STATUS[int(ident.status[0])]}")
-    lam = float(ident.F1[0] / ident.F1_max[0])
     force_driven = not (case.energy_given or case.push_force is None)
     names = ["alpha0", "alpha_final", "stop_time", "force" if force_driven else "energy"]
     nominal = {"alpha0": case.alpha0, "alpha_final": case.alpha_final, "stop_time": case.stop_time,
                "force": case.push_force, "energy": case.stored_energy}
 
-    def energy(v: dict[str, float]) -> float:
-        if force_driven:
-            return float(v["force"] ** 2 * strain_energy_coefficient(v["alpha0"], d))
-        return float(v["energy"])
-
-    def line_time(lam_: float, v: dict[str, float]) -> float:
-        E = energy(v)
-        a0, aF = v["alpha0"], v["alpha_final"]
-        F1s = E / (2 * d.L1 * (math.sin(aF) - math.sin(a0)))
-        F2s = E / (4 * d.L1 * (math.cos(a0) - math.cos(aF)))
-        rel = Releases.build(*(np.array([x]) for x in (E, a0, lam_ * F1s, (1 - lam_) * F2s, k, d.m2, d.L1)))
-        return float(rel.stop_time()[0])
-
-    def stars(v: dict[str, float]) -> tuple[float, float]:
-        E = energy(v)
-        a0, aF = v["alpha0"], v["alpha_final"]
-        return E / (2 * d.L1 * (math.sin(aF) - math.sin(a0))), E / (4 * d.L1 * (math.cos(a0) - math.cos(aF)))
-
-    F1s, F2s = stars(nominal)
-    dl = h
-    t_lam = (line_time(lam + dl, nominal) - line_time(lam - dl, nominal)) / (2 * dl)
+    a0, aF, L1 = case.alpha0, case.alpha_final, d.L1
+    F1, F2 = float(ident.F1[0]), float(ident.F2[0])
+    A, B = 2.0 * F1 * L1, 4.0 * F2 * L1
+    tp = _line_time_partials(a0, aF, F1, F2, k, d.m2, L1)
+    # G1 = A (sin aF - sin a0) + B (cos a0 - cos aF) - E_S (Eq. 7-8); G2 = t(a0, aF, F1, F2) - t_F (Eq. 10)
+    J = np.array([[2.0 * L1 * (math.sin(aF) - math.sin(a0)), 4.0 * L1 * (math.cos(a0) - math.cos(aF))],
+                  [tp["t_F1"], tp["t_F2"]]])
+    G_x = {"alpha0": np.array([-(A * math.cos(a0) + B * math.sin(a0)), tp["t_alpha0"]]),
+           "alpha_final": np.array([A * math.cos(aF) + B * math.sin(aF), tp["t_alpha_final"]]),
+           "stop_time": np.array([0.0, -1.0]),
+           "energy": np.array([-1.0, 0.0])}
+    dF = {name: -np.linalg.solve(J, g) for name, g in G_x.items()}
+    if force_driven:
+        P = case.push_force
+        e, e_prime = strain_energy_coefficient(a0, d), strain_energy_coefficient_derivative(a0, d)
+        dF["alpha0"] = dF["alpha0"] + dF["energy"] * float(P * P * e_prime)
+        dF["force"] = dF["energy"] * float(2.0 * P * e)
     ift: dict[str, dict[str, float]] = {"F1": {}, "F2": {}}
     fd: dict[str, dict[str, float]] = {"F1": {}, "F2": {}}
     for name in names:
+        ift["F1"][name], ift["F2"][name] = float(dF[name][0]), float(dF[name][1])
         step = h * max(abs(nominal[name]), 1e-3)
         up, dn = dict(nominal), dict(nominal)
         up[name] += step
         dn[name] -= step
-        if name == "stop_time":
-            t_x = -1.0  # t(lambda, x) - t_F: the observed time enters with a minus sign
-            dF1s = dF2s = 0.0
-        else:
-            t_x = (line_time(lam, up) - line_time(lam, dn)) / (2 * step)
-            (a1, a2), (b1, b2) = stars(up), stars(dn)
-            dF1s, dF2s = (a1 - b1) / (2 * step), (a2 - b2) / (2 * step)
-        dlam = -t_x / t_lam
-        ift["F1"][name] = lam * dF1s + F1s * dlam
-        ift["F2"][name] = (1 - lam) * dF2s - F2s * dlam
         iu = _identify(case.replace(**_as_case(name, up[name], case)), _inputs(case.replace(
             **_as_case(name, up[name], case)), None, 1))
         idn = _identify(case.replace(**_as_case(name, dn[name], case)), _inputs(case.replace(
