@@ -353,7 +353,8 @@ def sweep_command(
     backend: Annotated[str, typer.Option("--backend", help="numpy (default) or dask (needs --out *.zarr).")] = "numpy",
     scheduler: Annotated[str | None, typer.Option("--scheduler", help="Dask scheduler address; default: a LocalCluster.")] = None,
     workers: Annotated[int, typer.Option("--workers", help="Workers of the LocalCluster.")] = 2,
-    resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted dask sweep in --out.")] = False,
+    resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted dask sweep in --out (same inputs only).")] = False,
+    overwrite: OverwriteOpt = False,
     as_json: JsonOpt = False,
 ) -> None:
     """Release envelope (t_F, alpha_F, u_F, v_F, peak velocities) over a grid of inputs."""
@@ -363,7 +364,7 @@ def sweep_command(
 
     grids = dict(parse_grid(g) for g in grid)
     ds = sweep(load_case(case_file), grids, backend=backend, out=out, scheduler=scheduler, workers=workers,
-               resume=resume)
+               resume=resume, overwrite=overwrite, log=lambda line: typer.echo(f"note: {line}", err=True))
     figs = save_figure(heatmap_figure(ds), out.parent, out.name.rsplit(".", 1)[0] + "_heatmaps")
     summary = {"file": str(out), "dims": {k: int(v) for k, v in ds.sizes.items()},
                "stop_time_s": [float(ds.stop_time.min()), float(ds.stop_time.max())],
