@@ -354,6 +354,7 @@ def sweep_command(
     scheduler: Annotated[str | None, typer.Option("--scheduler", help="Dask scheduler address; default: a LocalCluster.")] = None,
     workers: Annotated[int, typer.Option("--workers", help="Workers of the LocalCluster.")] = 2,
     resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted dask sweep in --out (same inputs only).")] = False,
+    block_rows: Annotated[int | None, typer.Option("--block-rows", help="Rows of the first grid per Dask block (default: about 10^6 points a block).")] = None,
     overwrite: OverwriteOpt = False,
     as_json: JsonOpt = False,
 ) -> None:
@@ -364,7 +365,7 @@ def sweep_command(
 
     grids = dict(parse_grid(g) for g in grid)
     ds = sweep(load_case(case_file), grids, backend=backend, out=out, scheduler=scheduler, workers=workers,
-               resume=resume, overwrite=overwrite, log=lambda line: typer.echo(f"note: {line}", err=True))
+               block_rows=block_rows, resume=resume, overwrite=overwrite, log=lambda line: typer.echo(f"note: {line}", err=True))
     figs = save_figure(heatmap_figure(ds), out.parent, out.name.rsplit(".", 1)[0] + "_heatmaps")
     summary = {"file": str(out), "dims": {k: int(v) for k, v in ds.sizes.items()},
                "stop_time_s": [float(ds.stop_time.min()), float(ds.stop_time.max())],

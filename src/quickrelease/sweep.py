@@ -179,9 +179,9 @@ def sweep(case: Case, grids: dict[str, np.ndarray], *, backend: str = "numpy", o
     rows_total = grids[next(iter(grids))].size
     if backend == "dask":
         per_row = int(np.prod([g.size for g in list(grids.values())[1:]]))
+        if block_rows is not None and (not isinstance(block_rows, int | np.integer) or block_rows < 1):
+            raise ParameterError("--block-rows", block_rows, "integers >= 1")
         block_rows = int(block_rows or max(1, 1_000_000 // max(per_row, 1)))
-        if block_rows < 1:
-            raise ParameterError("block_rows", block_rows, "integers >= 1")
     folder = None
     if out is not None:  # pre-flight, before the work
         from .runfolder import check_target
