@@ -97,8 +97,13 @@ def test_killed_run_leaves_the_previous_complete_result(tmp_path):
     write_results(run_case(push, state_diagram=False), out, figures=False, report=False)
     previous = _files(out)
     outcomes = []
-    for delay in sorted(RNG.uniform(0.8, 5.0) for _ in range(2)):
-        rc = _kill(_cmd("run", EXAMPLES / "paper.toml", "--out", out, "--overwrite"), delay)
+
+    def writing():  # the staging folder exists: the run is writing its files
+        return any(p.name.startswith(".out.partial-") for p in tmp_path.iterdir())
+
+    # once at a random moment, once at a random moment of the writing
+    for delay, ready in ((RNG.uniform(0.5, 4.0), None), (RNG.uniform(0.0, 1.5), writing)):
+        rc = _kill(_cmd("run", EXAMPLES / "paper.toml", "--out", out, "--overwrite"), delay, ready)
         now = _files(out)
         if rc == 0:  # finished before the kill: the whole new result, nothing of the old
             assert "identification.json" in now and "figures/fig13_response.svg" in now
@@ -125,9 +130,12 @@ def test_killed_numpy_sweep_leaves_nothing_or_a_complete_file(tmp_path, suffix):
     grids = {"F1": np.linspace(100.0, 900.0, 120), "F2": np.linspace(300.0, 1200.0, 50)}
     ref = sweep(case, grids)
     opener = xr.open_zarr if suffix == ".zarr" else xr.open_dataset
-    delay = RNG.uniform(0.3, 3.0)
+
+    def writing():  # a temporary file or staging folder beside --out: the store or file is being written
+        return any(p.name.startswith(f".{out.name}.") for p in tmp_path.iterdir())
+
     rc = _kill(_cmd("sweep", EXAMPLES / "larger_push.toml", "--grid", "F1=100:900:120", "--grid", "F2=300:1200:50",
-                    "--out", out, "--overwrite"), delay)
+                    "--out", out, "--overwrite"), RNG.uniform(0.0, 0.2), writing)
     with opener(out) as ds:  # either the previous sweep or the new one, whole: never a mixture
         _same_dataset(ds.load(), ref if ds.sizes["F1"] == 120 else previous)
         assert rc != 0 or ds.sizes["F1"] == 120
