@@ -144,3 +144,26 @@ def test_numpy_zarr_store_is_staged_and_fingerprinted(tmp_path):
     sweep(case, smaller, out=path, overwrite=True)
     assert xr.open_zarr(path).sizes["F1"] == 3
     assert sorted(p.name for p in tmp_path.iterdir()) == ["s.zarr"]
+
+
+@pytest.mark.parametrize("spacing", ["even", "uneven"])
+def test_heatmaps_of_a_large_grid_are_small(spacing):
+    """Issue 9 item 7: a 1000 x 1000 sweep wrote a 1.14 GB SVG (one path per cell); panels are images now.
+    The vector SVG of this 400 x 400 grid is about 180 MB; the rasterised one about 0.4 MB."""
+    import io
+
+    import xarray as xr
+
+    from quickrelease.sweep import OUTPUTS
+
+    n = 400 if spacing == "even" else 300
+    f = np.linspace(5e5, 3e6, n) if spacing == "even" else np.geomspace(5e5, 3e6, n)
+    a = np.linspace(0.1, 0.5, n)
+    F, A = np.meshgrid(f, a, indexing="ij")
+    data = {k: (("force", "alpha0"), np.sin(F / 3e5) * A) for k in OUTPUTS}
+    data["stopped_by"] = (("force", "alpha0"), (F * A > 6e5).astype(np.int8))
+    fig = heatmap_figure(xr.Dataset(data, coords={"force": f, "alpha0": a}))
+    buf = io.BytesIO()
+    fig.savefig(buf, format="svg", dpi=150)
+    assert buf.tell() < 2_000_000, buf.tell()
+    assert buf.getvalue().count(b"<image") >= 6  # one raster per panel
