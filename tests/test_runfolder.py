@@ -126,6 +126,16 @@ def test_uq_resume_with_other_inputs_is_refused(case_path, tmp_path, spy, change
     assert {p.name: p.read_bytes() for p in (staging / "chunks").iterdir()} == before
 
 
+def test_resuming_a_finished_run_with_other_inputs_is_refused(case_path, tmp_path, spy, uninterrupted):
+    out = tmp_path / "full"  # the finished run of the fixture
+    spy.calls[:] = []
+    line = _one_line_error(*_cli(_uq_args(case_path, out, "--resume", seed=SEED + 1))[::2])
+    assert "cannot resume" in line and "seed" in line
+    assert spy.calls == [] and (out / "uq.json").read_bytes() == uninterrupted
+    line = _one_line_error(*_cli(_uq_args(case_path, out, seed=SEED + 1))[::2])
+    assert "another run" in line and "--overwrite" in line
+
+
 def test_uq_unfinished_run_needs_resume_or_overwrite(case_path, tmp_path, spy, uninterrupted):
     out = tmp_path / "part"
     _interrupted(case_path, out, spy)
@@ -247,7 +257,7 @@ def _unwritable(tmp_path):
 
 @pytest.mark.parametrize("where", ["existing file", "under a file", "unwritable"])
 @pytest.mark.parametrize("command", ["run", "uq", "sweep-zarr", "sweep-nc"])
-def test_bad_out_is_one_line_and_nothing_is_written(tmp_path, case_path, where, command):
+def test_bad_out_is_one_line_and_nothing_is_written(tmp_path, case_path, where, command, monkeypatch):
     blocker = tmp_path / "blocker.txt"
     blocker.write_text("a file")
     suffix = {"sweep-zarr": ".zarr", "sweep-nc": ".nc"}.get(command, "")
@@ -264,9 +274,15 @@ def test_bad_out_is_one_line_and_nothing_is_written(tmp_path, case_path, where, 
             "uq": _uq_args(case_path, out),
             "sweep-zarr": ["sweep", EXAMPLES / "larger_push.toml", "--grid", "F1=100:200:3", "--out", out],
             "sweep-nc": ["sweep", EXAMPLES / "larger_push.toml", "--grid", "F1=100:200:3", "--out", out]}[command]
+    from quickrelease import workflow
+
+    work = []
+    real = workflow.run_case
+    monkeypatch.setattr(workflow, "run_case", lambda *a, **k: work.append(1) or real(*a, **k))
     before = sorted(p.name for p in tmp_path.iterdir())
     line = _one_line_error(*_cli(args)[::2])
     assert str(out) in line or out.name in line, line
+    assert work == []  # refused before the work (pre-flight)
     assert sorted(p.name for p in tmp_path.iterdir()) == before and blocker.read_text() == "a file"
 
 
