@@ -125,7 +125,8 @@ def test_run_and_report_commands(tmp_path):
     assert "Wrote 15 files" in r.stdout
     r = run("report", str(EXAMPLES / "larger_push.toml"), "--out", str(tmp_path / "r"))
     assert r.exit_code == 0, r.output
-    assert sorted(p.name for p in (tmp_path / "r").iterdir()) == ["report.html"]
+    # the report and the manifest that fingerprints it (a later run into the folder checks it)
+    assert sorted(p.name for p in (tmp_path / "r").iterdir()) == ["manifest.json", "report.html"]
 
 
 def test_case_file_error_is_one_line(tmp_path):

@@ -256,6 +256,7 @@ def identify(
 
 
 OutOpt = Annotated[Path, typer.Option("--out", "-o", help="Output folder (created if needed).")]
+OverwriteOpt = Annotated[bool, typer.Option("--overwrite", help="Replace an output holding another run's results.")]
 
 
 def _listing(paths: dict[str, Path], out: Path) -> None:
@@ -269,14 +270,17 @@ def _listing(paths: dict[str, Path], out: Path) -> None:
 def run_command(
     case_file: Annotated[Path, typer.Argument(help="Case file (TOML).")],
     out: OutOpt = Path("quickrelease-out"),
+    overwrite: OverwriteOpt = False,
     as_json: JsonOpt = False,
 ) -> None:
     """Do what the case file asks (identify if observed, then simulate) and write all results into --out."""
     from .case import load_case
-    from .workflow import run_case, write_results
+    from .workflow import results_folder, run_case, write_results
 
-    result = run_case(load_case(case_file))
-    paths = write_results(result, out)
+    case = load_case(case_file)
+    results_folder(case, out, overwrite=overwrite)  # pre-flight: refuse before the work
+    result = run_case(case)
+    paths = write_results(result, out, overwrite=overwrite)
     if as_json:
         _print_json({"release": result.summary(), "identification": result.identification_summary(),
                      "files": {k: str(v) for k, v in paths.items()}})
@@ -294,12 +298,15 @@ def run_command(
 def report(
     case_file: Annotated[Path, typer.Argument(help="Case file (TOML).")],
     out: OutOpt = Path("quickrelease-out"),
+    overwrite: OverwriteOpt = False,
 ) -> None:
     """Write the self-contained HTML report of a case (figures embedded) as --out/report.html."""
     from .case import load_case
-    from .workflow import run_case, write_results
+    from .workflow import results_folder, run_case, write_results
 
-    paths = write_results(run_case(load_case(case_file)), out, figures=False, data=False)
+    case = load_case(case_file)
+    results_folder(case, out, figures=False, data=False, overwrite=overwrite)
+    paths = write_results(run_case(case), out, figures=False, data=False, overwrite=overwrite)
     typer.echo(f"Wrote {paths['report']}")
 
 
@@ -307,6 +314,7 @@ def report(
 @_guard
 def demo(
     out: OutOpt = Path("quickrelease-demo"),
+    overwrite: OverwriteOpt = False,
 ) -> None:
     """The paper's test: E_S from Eq. 2 at P = 1598 kN, alpha0 = 0.2 rad; Table 7 identified; paper vs us.
 
@@ -319,10 +327,13 @@ def demo(
     from .case import load_case
     from .device import preset
     from .paper import reproduce_table7
-    from .workflow import run_case, write_results
+    from .workflow import results_folder, run_case, write_results
 
-    dev = preset("paper")
     mass_model = "distributed"
+    with resources.as_file(resources.files("quickrelease") / "data" / "cases" / "paper.toml") as path:
+        case = load_case(path).replace(mass_model=mass_model, source="paper case (built in)")
+    results_folder(case, out, overwrite=overwrite)  # pre-flight
+    dev = preset("paper")
     cmp = reproduce_table7(dev, mass_model=mass_model)
     typer.echo(f"Device: {dev.name} (Table 2); mass model: {mass_model}")
     terms = [(k, f"{v:.2f}") for k, v in cmp.E_S_breakdown.items()]
@@ -334,9 +345,7 @@ def demo(
         f"u_F = {cmp.u_final:.4f} m, v_F = {cmp.v_final:.4f} m, "
         f"peak u_dot = {cmp.peak_u_dot:.3f} m/s, peak v_dot = {cmp.peak_v_dot:.3f} m/s"
     )
-    with resources.as_file(resources.files("quickrelease") / "data" / "cases" / "paper.toml") as path:
-        case = load_case(path).replace(mass_model=mass_model, source="paper case (built in)")
-    paths = write_results(run_case(case), out)
+    paths = write_results(run_case(case), out, overwrite=overwrite)
     typer.echo(f"Figures and report of the paper case: {out / 'report.html'} ({len(paths)} files in {out}/)")
 
 
@@ -351,7 +360,8 @@ def uq(
     scheduler: Annotated[str | None, typer.Option("--scheduler", help="Dask scheduler address; default: a LocalCluster.")] = None,
     workers: Annotated[int, typer.Option("--workers", help="Workers of the LocalCluster.")] = 2,
     out: Annotated[Path | None, typer.Option("--out", "-o", help="Folder for chunks, uq.json and the corner figure.")] = None,
-    resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted run in --out.")] = False,
+    resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted run in --out (same inputs only).")] = False,
+    overwrite: OverwriteOpt = False,
     as_json: JsonOpt = False,
 ) -> None:
     """Uncertainty of the identified F1, F2 from the scatter of the observations (Monte Carlo)."""
@@ -360,12 +370,8 @@ def uq(
 
     case = load_case(case_file)
     result = run_uq(case, samples, seed=seed, chunk=chunk, backend=backend, scheduler=scheduler, workers=workers,
-                    out=out, resume=resume, progress=not as_json and sys.stderr.isatty())
-    if out is not None:
-        from .plots import save_figure
-        from .uq import corner_figure
-
-        save_figure(corner_figure(result), out, "uq_corner")
+                    out=out, resume=resume, overwrite=overwrite, progress=not as_json and sys.stderr.isatty(),
+                    log=lambda line: typer.echo(f"note: {line}", err=True))
     if as_json:
         _print_json(result.summary())
         return
@@ -392,7 +398,9 @@ def sweep_command(
     backend: Annotated[str, typer.Option("--backend", help="numpy (default) or dask (needs --out *.zarr).")] = "numpy",
     scheduler: Annotated[str | None, typer.Option("--scheduler", help="Dask scheduler address; default: a LocalCluster.")] = None,
     workers: Annotated[int, typer.Option("--workers", help="Workers of the LocalCluster.")] = 2,
-    resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted dask sweep in --out.")] = False,
+    resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted dask sweep in --out (same inputs only).")] = False,
+    block_rows: Annotated[int | None, typer.Option("--block-rows", help="Rows of the first grid per Dask block (default: about 10^6 points a block).")] = None,
+    overwrite: OverwriteOpt = False,
     as_json: JsonOpt = False,
 ) -> None:
     """Release envelope (t_F, alpha_F, u_F, v_F, peak velocities) over a grid of inputs."""
@@ -402,7 +410,7 @@ def sweep_command(
 
     grids = dict(parse_grid(g) for g in grid)
     ds = sweep(load_case(case_file), grids, backend=backend, out=out, scheduler=scheduler, workers=workers,
-               resume=resume)
+               block_rows=block_rows, resume=resume, overwrite=overwrite, log=lambda line: typer.echo(f"note: {line}", err=True))
     figs = save_figure(heatmap_figure(ds), out.parent, out.name.rsplit(".", 1)[0] + "_heatmaps")
     summary = {"file": str(out), "dims": {k: int(v) for k, v in ds.sizes.items()},
                "stop_time_s": [float(ds.stop_time.min()), float(ds.stop_time.max())],
@@ -484,6 +492,7 @@ def synth(
 def fit_command(
     case_file: Annotated[Path, typer.Argument(help="Case file with [record] (and/or [observations] with a scatter).")],
     out: Annotated[Path | None, typer.Option("--out", "-o", help="Also write fit.json, figures and report.html here.")] = None,
+    overwrite: OverwriteOpt = False,
     as_json: JsonOpt = False,
 ) -> None:
     """Fit F1 and F2 (with 95% intervals) to a measured record by weighted least squares."""
@@ -492,18 +501,24 @@ def fit_command(
 
     case = load_case(case_file)
     if case.record is not None:
-        from .workflow import run_case, write_results
+        from .workflow import results_folder, run_case, write_results
 
+        if out is not None:
+            results_folder(case, out, overwrite=overwrite)  # pre-flight
         result = run_case(case)
         fit = result.fit
-        paths = write_results(result, out) if out is not None else {}
+        paths = write_results(result, out, overwrite=overwrite) if out is not None else {}
     else:
+        from .runfolder import RunFolder, case_inputs
+
+        folder = RunFolder(out, "fit", {"case": case_inputs(case)}, overwrite=overwrite) if out is not None else None
         fit = fit_record(case)
         paths = {}
-        if out is not None:
+        if folder is not None:
             from .export import write_json
 
-            paths = {"fit": write_json(fit.summary(), out / "fit.json")}
+            with folder.staged() as work:
+                paths = {"fit": folder.final(write_json(fit.summary(), work / "fit.json"))}
     summary = fit.summary()
     if as_json:
         _print_json(summary)
@@ -534,17 +549,19 @@ def fit_command(
 def campaign(
     campaign_file: Annotated[Path, typer.Argument(help="Campaign file (TOML): shared device and record mapping, [[tests]].")],
     out: Annotated[Path | None, typer.Option("--out", "-o", help="Also write campaign.json, the figure and report.html here.")] = None,
+    overwrite: OverwriteOpt = False,
     as_json: JsonOpt = False,
 ) -> None:
     """Friction of every test of a campaign, and its laws in the load and the angle (F = a + b x)."""
     from .campaign import VARIABLES, run_campaign
+    from .workflow import campaign_folder, write_campaign_results
 
+    if out is not None:
+        campaign_folder(campaign_file, out, overwrite=overwrite)  # pre-flight
     result = run_campaign(campaign_file)
     paths = {}
     if out is not None:
-        from .workflow import write_campaign_results
-
-        paths = write_campaign_results(result, out)
+        paths = write_campaign_results(result, out, overwrite=overwrite)
     if as_json:
         _print_json(result.summary())
         return
@@ -579,15 +596,19 @@ def campaign(
 def plan(
     case_file: Annotated[Path, typer.Argument(help="Case file: the planned push ([test] force, alpha0), the friction estimate, and optionally [fuse], [building], [plan].")],
     out: Annotated[Path | None, typer.Option("--out", "-o", help="Also write plan.json, the figures and report.html here.")] = None,
+    overwrite: OverwriteOpt = False,
     as_json: JsonOpt = False,
 ) -> None:
     """Plan a test: fuse and angle, member checks, release envelope, clearance with the building."""
     from .case import load_case
-    from .workflow import run_case, write_results
+    from .workflow import results_folder, run_case, write_results
 
-    result = run_case(load_case(case_file), plan=True)
+    case = load_case(case_file)
+    if out is not None:
+        results_folder(case, out, plan=True, overwrite=overwrite)  # pre-flight
+    result = run_case(case, plan=True)
     plan_result = result.plan
-    paths = write_results(result, out) if out is not None else {}
+    paths = write_results(result, out, overwrite=overwrite) if out is not None else {}
     summary = plan_result.summary()
     if as_json:
         _print_json(summary)

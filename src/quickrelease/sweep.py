@@ -8,6 +8,13 @@ angular velocity, the peak head and hinge velocities, and E_S. All computed by :
 Backends: ``numpy`` computes the grid in memory; ``dask`` computes it in blocks along the first grid
 dimension on a Dask cluster, writing each finished block into a Zarr store (xarray region writes, then
 a marker file per block), so memory stays bounded by the block and ``resume`` skips finished blocks.
+
+Outputs never lie (:mod:`quickrelease.runfolder`): a NetCDF file is written under a temporary name and
+renamed when complete; a Zarr store is built in ``.NAME.partial`` beside ``out`` (its ``manifest.json``
+holds the fingerprint of the case, the grids, the block size and the package version) and moved into
+place only when every block is in, so a killed sweep leaves nothing at ``out`` that opens as a result.
+``resume`` continues that unfinished store only when its fingerprint is this sweep's (else it refuses,
+naming what differs) and computes only the blocks not marked done.
 """
 
 from __future__ import annotations
@@ -141,7 +148,8 @@ def _dataset(case: Case, grids: dict[str, np.ndarray], data: dict[str, np.ndarra
 
 
 def sweep(case: Case, grids: dict[str, np.ndarray], *, backend: str = "numpy", out: str | Path | None = None,
-          scheduler: str | None = None, workers: int = 2, block_rows: int | None = None, resume: bool = False):
+          scheduler: str | None = None, workers: int = 2, block_rows: int | None = None, resume: bool = False,
+          overwrite: bool = False, log: Any = None):
     """Release envelope over a grid of inputs; returns an xarray Dataset (dims: the grid names, in order).
 
     Parameters
@@ -157,37 +165,75 @@ def sweep(case: Case, grids: dict[str, np.ndarray], *, backend: str = "numpy", o
     block_rows : int, optional
         Rows of the first grid dimension per Dask block (default: about 10^6 points per block).
     resume : bool
-        Dask backend: keep the finished blocks of ``out`` and compute the rest.
+        Dask backend: continue the unfinished store of ``out`` (same fingerprint only): keep its finished
+        blocks and compute the rest.
+    overwrite : bool
+        Replace a Zarr store holding another sweep (or discard an unfinished one).
+    log : callable, optional
+        Receives one line per note (how many blocks a resume computes).
     """
     grids = {k: np.asarray(v, dtype=float) for k, v in grids.items()}
     _validate(grids, case)
+    if backend not in ("numpy", "dask"):
+        raise ParameterError("backend", backend, "'numpy' or 'dask'")
+    if backend == "dask" and (out is None or not str(out).endswith(".zarr")):
+        raise ParameterError("out", out, "a path ending in .zarr (the dask backend streams blocks into Zarr)")
+    if out is not None and Path(out).suffix not in (".nc", ".zarr"):
+        raise ParameterError("out", str(out), "a path ending in .nc (NetCDF) or .zarr (Zarr)")
+    if resume and backend != "dask":
+        raise ParameterError("resume", True, "the dask backend (a numpy sweep is written whole or not at all)")
     check_workers("workers", workers)
     points = math.prod(g.size for g in grids.values())
     if backend == "numpy":  # the whole grid is in memory (the dask backend streams blocks to disk)
         check_size("--grid", " x ".join(str(g.size) for g in grids.values()), points, "grid points")
     base = _base(case)
+    rows_total = grids[next(iter(grids))].size
+    if backend == "dask":
+        per_row = int(np.prod([g.size for g in list(grids.values())[1:]]))
+        if block_rows is not None and (not isinstance(block_rows, int | np.integer) or block_rows < 1):
+            raise ParameterError("--block-rows", block_rows, "integers >= 1")
+        block_rows = int(block_rows or max(1, 1_000_000 // max(per_row, 1)))
+    folder = None
+    if out is not None:  # pre-flight, before the work
+        from .runfolder import check_target
+
+        if Path(out).suffix == ".zarr":
+            folder = _store_folder(case, grids, out, block_rows if backend == "dask" else None, resume=resume,
+                                   overwrite=overwrite)
+        else:
+            check_target(out, "file")
     if backend == "numpy":
         ds = _dataset(case, grids, _compute(case, grids, base), base)
-        if out is not None:
-            _write(ds, Path(out))
+        if folder is not None:
+            with folder.staged() as work:
+                ds.to_zarr(work, mode="w")  # the manifest is (re)written complete by the commit
+        elif out is not None:
+            _write_netcdf(ds, Path(out))
         return ds
-    if backend != "dask":
-        raise ParameterError("backend", backend, "'numpy' or 'dask'")
-    if out is None or not str(out).endswith(".zarr"):
-        raise ParameterError("out", out, "a path ending in .zarr (the dask backend streams blocks into Zarr)")
-    return _sweep_dask(case, grids, base, Path(out), scheduler, workers, block_rows, resume)
+    return _sweep_dask(case, grids, base, folder, scheduler, workers, block_rows, rows_total, log)
 
 
-def _write(ds, path: Path) -> None:
-    if path.suffix == ".zarr":
-        ds.to_zarr(path, mode="w")
-        return
-    if path.suffix != ".nc":
-        raise ParameterError("out", str(path), "a path ending in .nc (NetCDF) or .zarr (Zarr)")
+def _store_folder(case: Case, grids: dict[str, np.ndarray], out, block_rows: int | None, *, resume: bool,
+                  overwrite: bool):
+    """The :class:`~quickrelease.runfolder.RunFolder` of a Zarr store: its fingerprint covers the case, the
+    grids (names, order, values), the block size (dask) and the package version."""
+    from .runfolder import RunFolder, case_inputs
+
+    inputs = {"case": case_inputs(case), "grids": {"names": list(grids), **{k: v for k, v in grids.items()}},
+              "block_rows": block_rows}
+    return RunFolder(out, "sweep", inputs, overwrite=overwrite, resume=resume, resumable=block_rows is not None)
+
+
+def _write_netcdf(ds, path: Path) -> None:
+    """Write the NetCDF file under a temporary name, renamed when complete."""
     from .export import atomic_path
+    from .runfolder import output_error
 
-    with atomic_path(path) as tmp:
-        ds.to_netcdf(tmp, engine="scipy")
+    try:
+        with atomic_path(path) as tmp:
+            ds.to_netcdf(tmp, engine="scipy")
+    except OSError as exc:
+        raise output_error(exc, path) from None
 
 
 def _block(case: Case, grids, base, path: str, rows: slice, index: int) -> int:
@@ -198,33 +244,54 @@ def _block(case: Case, grids, base, path: str, rows: slice, index: int) -> int:
     ds = _dataset(case, sub, data, base).drop_vars(list(grids))
     ds.attrs = {}
     ds.to_zarr(path, region={first: rows}, mode="r+")
-    Path(path, "_quickrelease_done", f"{index:06d}").touch()
+    Path(path, _DONE, f"{index:06d}").touch()
     return index
 
 
-def _sweep_dask(case, grids, base, path: Path, scheduler, workers, block_rows, resume):
+_DONE = "_quickrelease_done"
+_TEMPLATE = "template"
+
+
+def _sweep_dask(case, grids, base, folder, scheduler, workers, block_rows, rows_total, log):
     import xarray as xr
 
     from .distributed import map_chunks
+    from .runfolder import output_error
 
-    first = list(grids)[0]
-    per_row = int(np.prod([g.size for n, g in grids.items() if n != first]))
-    rows_total = grids[first].size
-    block_rows = block_rows or max(1, 1_000_000 // max(per_row, 1))
     blocks = [slice(i, min(i + block_rows, rows_total)) for i in range(0, rows_total, block_rows)]
-    done_dir = path / "_quickrelease_done"
-    if path.exists() and not resume:
-        raise QuickReleaseError(f"{path}: exists; pass --resume to continue it, or choose another --out")
-    if not path.exists():
-        template = _dataset(case, grids, None, base)
-        encoding = {v: {"chunks": (block_rows, *template[v].shape[1:])} for v in OUTPUTS}
-        template.to_zarr(path, mode="w", compute=False, encoding=encoding)
-        done_dir.mkdir(parents=True, exist_ok=True)
-    finished = {int(p.name) for p in done_dir.iterdir()} if done_dir.exists() else set()
-    todo = [(case, grids, base, str(path), rows, i) for i, rows in enumerate(blocks) if i not in finished]
-    for _ in map_chunks(_block, todo, scheduler, workers):
-        pass
-    return xr.open_zarr(path)
+    work = folder.open()
+    try:
+        done_dir = work / _DONE
+        mark = done_dir / _TEMPLATE
+        if not (mark.is_file() and mark.read_text(encoding="ascii", errors="replace") == folder.fingerprint):
+            # a new store, or one killed before its template was whole: (re)build it; mode="w" empties it
+            template = _dataset(case, grids, None, base)
+            encoding = {v: {"chunks": (block_rows, *template[v].shape[1:])} for v in OUTPUTS}
+            template.to_zarr(work, mode="w", compute=False, encoding=encoding)
+            folder._write_manifest(False)
+            done_dir.mkdir(parents=True, exist_ok=True)
+            mark.write_text(folder.fingerprint, encoding="ascii")
+        finished = {int(p.name) for p in done_dir.iterdir() if p.name.isdigit()}
+        todo = [(case, grids, base, str(work), rows, i) for i, rows in enumerate(blocks) if i not in finished]
+        if log is not None and len(todo) < len(blocks):
+            log(f"resuming {folder.given}: {len(blocks) - len(todo)} of {len(blocks)} blocks finished, "
+                f"computing {len(todo)}")
+        for _ in map_chunks(_block, todo, scheduler, workers):
+            pass
+        if {int(p.name) for p in done_dir.iterdir() if p.name.isdigit()} != set(range(len(blocks))):
+            raise QuickReleaseError(f"{folder.given}: blocks are missing after the sweep; run it again with --resume")
+    except OSError as exc:  # a full disk: the finished blocks stay, --resume continues
+        raise output_error(exc, folder.given) from None
+    folder.commit()
+    return xr.open_zarr(folder.out)
+
+
+def _even(v: np.ndarray) -> bool:
+    """Evenly spaced (to 1e-9 of the step) with at least two values."""
+    if v.size < 2:
+        return False
+    step = np.diff(v)
+    return bool(step[0] != 0 and np.all(np.abs(step - step[0]) <= 1e-9 * abs(step[0])))
 
 
 _TITLES = {"stop_time": "stop time $t_F$", "alpha_final": r"final angle $\alpha_F$", "u_final": "head stroke $u_F$",
@@ -250,11 +317,17 @@ def heatmap_figure(ds) -> Any:
             ax.set_ylabel(f"[{unit}]")
         else:
             x, y = ds[names[1]].values, ds[names[0]].values
-            mesh = ax.pcolormesh(x, y, np.asarray(da.values, dtype=float), shading="auto", cmap="viridis")
+            z = np.asarray(da.values, dtype=float)
+            if _even(x) and _even(y):  # one image per panel: seconds and a small SVG even for 1000 x 1000
+                dx, dy = (x[-1] - x[0]) / (x.size - 1), (y[-1] - y[0]) / (y.size - 1)
+                mesh = ax.imshow(z, origin="lower", aspect="auto", cmap="viridis",
+                                 extent=(x[0] - dx / 2, x[-1] + dx / 2, y[0] - dy / 2, y[-1] + dy / 2))
+            else:  # rasterised: an SVG holds one image per panel, not a path per cell
+                mesh = ax.pcolormesh(x, y, z, shading="auto", cmap="viridis", rasterized=True)
             fig.colorbar(mesh, ax=ax, label=f"[{unit}]")
             limit = np.asarray(ds["stopped_by"].isel(sel).values if sel else ds["stopped_by"].values)
             if limit.any() and not limit.all():
-                ax.contour(x, y, limit, levels=[0.5], colors="w", linewidths=0.8)
+                ax.contour(x, y, limit, levels=[0.5], colors="w", linewidths=0.8).set_rasterized(True)
             ax.set_xlabel(f"{names[1]} [{SWEEP_PARAMETERS[names[1]][1]}]")
             ax.set_ylabel(f"{names[0]} [{SWEEP_PARAMETERS[names[0]][1]}]")
         ax.set_title(_TITLES[key], fontsize=8)

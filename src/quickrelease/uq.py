@@ -15,7 +15,6 @@ memory stays bounded by the chunk size and a resumed run gives exactly the resul
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -305,7 +304,8 @@ def _as_case(name: str, value: float, case: Case) -> dict[str, Any]:
 
 def run_uq(case: Case, samples: int, *, seed: int = 0, chunk: int = DEFAULT_CHUNK, backend: str = "numpy",
            scheduler: str | None = None, workers: int = 2, out: str | Path | None = None, resume: bool = False,
-           progress: bool = False) -> UQResult:
+           overwrite: bool = False, figures: bool = True, progress: bool = False,
+           log: Any = None) -> UQResult:
     """Monte Carlo over the case's input scatter: the distribution of the identified F1 and F2.
 
     Parameters
@@ -322,12 +322,20 @@ def run_uq(case: Case, samples: int, *, seed: int = 0, chunk: int = DEFAULT_CHUN
         ``dask`` runs the chunks on a Dask cluster: ``scheduler`` (an address) or a LocalCluster of
         ``workers`` single-threaded processes.
     out : path, optional
-        Folder for the run: ``chunks/`` (one aggregate file per finished chunk, written atomically) and
-        ``uq.json`` (the result). Required with ``resume``.
+        Folder of the run (a :class:`quickrelease.runfolder.RunFolder`): ``manifest.json`` (the
+        fingerprint of the case, seed, samples and chunk size), ``chunks/`` (one aggregate file per finished
+        chunk, written atomically, each carrying the fingerprint), ``uq.json`` (the result) and
+        ``uq_corner.png``/``.svg`` (with ``figures``). The run works in ``.NAME.partial`` beside ``out`` and
+        moves it into place when complete; an interrupted run leaves it there, to be resumed.
     resume : bool
-        Reuse the finished chunks in ``out`` (same seed, samples and chunk size) and compute the rest.
+        Continue the unfinished run of ``out`` (refused, naming what differs, when its fingerprint is not
+        this run's): finished chunks are kept, damaged ones (a truncated file) recomputed.
+    overwrite : bool
+        Replace a folder holding another run (or discard an unfinished one).
     progress : bool
         Show a progress bar (rich).
+    log : callable, optional
+        Receives one line per note (a damaged chunk recomputed).
     """
     _check(case)
     if not isinstance(samples, int | np.integer) or samples < 1:
@@ -343,10 +351,44 @@ def run_uq(case: Case, samples: int, *, seed: int = 0, chunk: int = DEFAULT_CHUN
     if resume and out is None:
         raise ParameterError("resume", True, "runs with an output folder (out)")
     sizes = [min(chunk, samples - i) for i in range(0, samples, chunk)]
+    folder = None
+    if out is not None:  # pre-flight: before any work
+        from .runfolder import RunFolder, case_inputs
+
+        folder = RunFolder(out, "uq", {"case": case_inputs(case), "samples": int(samples), "seed": int(seed),
+                                       "chunk": int(chunk)}, overwrite=overwrite, resume=resume, resumable=True)
     edges = _edges(case, seed)
-    store = _ChunkStore(Path(out), {"samples": int(samples), "seed": int(seed), "chunk": int(chunk),
-                                    "case": case.source}, resume) if out is not None else None
-    done = store.load() if store else {}
+    if folder is None:
+        return _result(case, samples, seed, chunk, _combine(_run_chunks(case, seed, sizes, edges, {}, None, backend,
+                                                                        scheduler, workers, progress)), edges)
+    from .runfolder import output_error
+
+    notes = list(folder.notes)
+    work = folder.open()
+    try:
+        store = _ChunkStore(work, folder.fingerprint, sizes)
+        done = store.load()
+        notes += store.notes
+        for line in notes:
+            if log is not None:
+                log(line)
+        parts = _run_chunks(case, seed, sizes, edges, done, store, backend, scheduler, workers, progress)
+        result = _result(case, samples, seed, chunk, _combine(parts), edges)
+        from .export import write_json
+
+        write_json(result.summary(), work / "uq.json")
+        if figures:
+            from .plots import save_figure
+
+            save_figure(corner_figure(result), work, "uq_corner")
+    except OSError as exc:  # a full disk: the finished chunks stay, --resume continues
+        raise output_error(exc, out) from None
+    folder.commit()
+    return result
+
+
+def _run_chunks(case, seed, sizes, edges, done, store, backend, scheduler, workers, progress) -> list[dict[str, Any]]:
+    """Compute the chunks not in ``done`` (saving each to ``store`` as it finishes); all parts."""
     todo = [i for i in range(len(sizes)) if i not in done]
     parts = list(done.values())
     bar = _progress(progress, len(sizes), len(done))
@@ -366,13 +408,7 @@ def run_uq(case: Case, samples: int, *, seed: int = 0, chunk: int = DEFAULT_CHUN
             parts.append(part)
             bar.advance()
     bar.close()
-    total = _combine(parts)
-    result = _result(case, samples, seed, chunk, total, edges)
-    if store:
-        from .export import write_json
-
-        write_json(result.summary(), Path(out) / "uq.json")
-    return result
+    return parts
 
 
 def _result(case, samples, seed, chunk, total, edges) -> UQResult:
@@ -402,30 +438,53 @@ def _result(case, samples, seed, chunk, total, edges) -> UQResult:
 
 
 class _ChunkStore:
-    """Finished chunks of a run, one ``.npz`` per chunk, written atomically; a manifest guards resume."""
+    """Finished chunks of a run, one ``.npz`` per chunk, written atomically, each carrying the run's
+    fingerprint; a chunk that cannot be read whole, or belongs to another run, is recomputed."""
 
-    def __init__(self, folder: Path, manifest: dict[str, Any], resume: bool) -> None:
-        from .export import write_json
-
-        self.folder = folder
+    def __init__(self, folder: Path, fingerprint: str, sizes: list[int]) -> None:
         self.chunks = folder / "chunks"
-        path = folder / "manifest.json"
-        if path.exists():
-            old = json.loads(path.read_text())
-            if not resume:
-                raise QuickReleaseError(f"{folder}: holds a run already; pass --resume to continue it, or choose "
-                                        "another --out")
-            if old != manifest:
-                raise QuickReleaseError(f"{folder}: the run there has {old}, not {manifest}: cannot resume it")
+        self.fingerprint = fingerprint
+        self.sizes = sizes
+        self.notes: list[str] = []
         self.chunks.mkdir(parents=True, exist_ok=True)
-        write_json(manifest, path)
+
+    def _read(self, path: Path) -> dict[str, Any]:
+        """One chunk file, checked whole; raises ValueError saying what is wrong."""
+        import zipfile
+
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                part = {k: z[k] for k in z.files}
+        except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile) as exc:
+            raise ValueError(f"unreadable ({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''})"
+                             ) from None
+        shapes = {"index": (), "n": (), "n_ok": (), "status": (len(batch.IDENTIFY_STATUS),), "hist_F1": (N_BINS,),
+                  "hist_F2": (N_BINS,), "hist_2d": (N_BINS_2D, N_BINS_2D), "over_F1": (), "over_F2": (),
+                  "mean": (2,), "comoment": (3,), "fingerprint": ()}
+        for key, shape in shapes.items():
+            if key not in part or part[key].shape != shape:
+                raise ValueError(f"incomplete (entry {key!r} missing or misshapen)")
+        if str(part["fingerprint"]) != self.fingerprint:
+            raise ValueError("written by a run with other inputs")
+        part = {k: (v.item() if v.ndim == 0 else v) for k, v in part.items()}
+        index = part["index"]
+        expected = f"chunk-{index:06d}.npz" if isinstance(index, int) else None
+        if expected != path.name or not 0 <= index < len(self.sizes) or part["n"] != self.sizes[index]:
+            raise ValueError(f"holds chunk {index} of size {part['n']}, not the chunk its name says")
+        if int(np.sum(part["status"])) != part["n"] or int(part["status"][0]) != part["n_ok"]:
+            raise ValueError("inconsistent counts")
+        return part
 
     def load(self) -> dict[int, dict[str, Any]]:
+        """The finished chunks by index; damaged files are removed (and noted) so they are recomputed."""
         done = {}
         for path in sorted(self.chunks.glob("chunk-*.npz")):
-            with np.load(path) as z:
-                part = {k: z[k] for k in z.files}
-            part = {k: (v.item() if v.ndim == 0 else v) for k, v in part.items()}
+            try:
+                part = self._read(path)
+            except ValueError as exc:
+                self.notes.append(f"{path}: {exc}: recomputing that chunk")
+                path.unlink()
+                continue
             done[int(part["index"])] = part
         return done
 
@@ -434,7 +493,8 @@ class _ChunkStore:
 
         with atomic_path(self.chunks / f"chunk-{part['index']:06d}.npz") as tmp:
             with open(tmp, "wb") as fh:
-                np.savez(fh, **{k: np.asarray(v) for k, v in part.items()})
+                np.savez(fh, fingerprint=np.array(self.fingerprint),
+                         **{k: np.asarray(v) for k, v in part.items()})
 
 
 class _NoBar:
@@ -500,7 +560,7 @@ def corner_figure(result: UQResult):
     h2 = h["2d"]
     e1 = h["edges_F1"][:: N_BINS // N_BINS_2D]
     e2 = h["edges_F2"][:: N_BINS // N_BINS_2D]
-    ax.pcolormesh(e1, e2, np.ma.masked_equal(h2.T, 0), cmap="Blues", shading="flat")
+    ax.pcolormesh(e1, e2, np.ma.masked_equal(h2.T, 0), cmap="Blues", shading="flat", rasterized=True)
     nz1 = np.nonzero(h2.sum(axis=1))[0]
     nz2 = np.nonzero(h2.sum(axis=0))[0]
     if nz1.size and nz2.size:

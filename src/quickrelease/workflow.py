@@ -21,7 +21,8 @@ from .response import Response
 from .solvers import simulate
 from .statics import StrainEnergy
 
-__all__ = ["CaseResult", "run_case", "write_results", "write_campaign_results", "render_figures", "FIGURES"]
+__all__ = ["CaseResult", "run_case", "write_results", "write_campaign_results", "render_figures", "FIGURES",
+           "results_folder", "campaign_folder"]
 
 #: Figure stems and what they show.
 FIGURES = {
@@ -96,14 +97,28 @@ def run_case(case: Case, *, state_diagram: bool = True, plan: bool | None = None
                       simulate(E_S, case.alpha0, F1, F2, method="rk", **common))
         states.append(response if case.method == "explicit" else
                       simulate(E_S, case.alpha0, F1, F2, method="explicit", dt=case.dt, **common))
-    if plan is None:
-        plan = case.fuse is not None or case.building is not None
+    plan = _wants_plan(case, plan)
     planned = None
     if plan:  # the friction found above (fitted or identified) is not searched for again
         planned = plan_case(case if case.has_friction or case.friction_case is not None
                             else case.replace(F1=F1, F2=F2))
     return CaseResult(case=case, response=response, strain=case.strain(), identification=ident,
                       state_responses=states, fit=fit, plan=planned)
+
+
+def _wants_plan(case: Case, plan: bool | None) -> bool:
+    return plan if plan is not None else (case.fuse is not None or case.building is not None)
+
+
+def results_folder(case: Case, out: str | Path, *, plan: bool | None = None, figures: bool = True,
+                   report: bool = True, data: bool = True, overwrite: bool = False):
+    """The :class:`~quickrelease.runfolder.RunFolder` that :func:`write_results` writes a case's results
+    through; making it checks ``out`` before the work (pre-flight) and writes nothing."""
+    from .runfolder import RunFolder, case_inputs
+
+    inputs = {"case": case_inputs(case), "plan": _wants_plan(case, plan), "figures": figures, "report": report,
+              "data": data}
+    return RunFolder(out, "case results", inputs, overwrite=overwrite)
 
 
 def render_figures(result: CaseResult) -> dict[str, Any]:
@@ -158,16 +173,27 @@ def _child_succeeded(pid: int | None) -> bool:
 
 
 def write_results(result: CaseResult, out: str | Path, *, figures: bool = True, report: bool = True,
-                  data: bool = True) -> dict[str, Path]:
+                  data: bool = True, overwrite: bool = False) -> dict[str, Path]:
     """Write a case's results into the folder ``out`` (created if needed); returns the paths by name.
 
     Files: ``summary.json`` (the ``simulate --json`` keys), ``identification.json`` (the ``identify
     --json`` keys, when identified), ``timeseries.csv`` and ``timeseries.nc`` (the time histories),
-    ``figures/<stem>.png`` and ``.svg`` for each figure, and the self-contained ``report.html``.
+    ``figures/<stem>.png`` and ``.svg`` for each figure, the self-contained ``report.html``, and
+    ``manifest.json`` (the fingerprint of the inputs). The whole folder is written beside ``out`` and moved
+    into place at the end (:class:`~quickrelease.runfolder.RunFolder`): a failure leaves the previous
+    result; a folder holding another run's results is refused unless ``overwrite``, and then replaced.
     """
+    folder = results_folder(result.case, out, plan=result.plan is not None, figures=figures, report=report,
+                            data=data, overwrite=overwrite)
+    with folder.staged() as work:
+        paths = _write_results_into(result, work, figures=figures, report=report, data=data)
+    return {name: folder.final(path) for name, path in paths.items()}
+
+
+def _write_results_into(result: CaseResult, out: Path, *, figures: bool, report: bool,
+                        data: bool) -> dict[str, Path]:
     from .export import write_csv, write_json, write_netcdf, write_text
 
-    out = Path(out)
     paths: dict[str, Path] = {}
     if data:
         paths["summary"] = write_json(result.summary(), out / "summary.json")
@@ -208,19 +234,29 @@ def write_results(result: CaseResult, out: str | Path, *, figures: bool = True, 
     return paths
 
 
-def write_campaign_results(result, out: str | Path) -> dict[str, Path]:
+def campaign_folder(campaign_file: str | Path, out: str | Path, *, overwrite: bool = False):
+    """The :class:`~quickrelease.runfolder.RunFolder` of a campaign's results (pre-flight: writes nothing)."""
+    from .runfolder import RunFolder, _file_digest
+
+    return RunFolder(out, "campaign results", {"campaign_file": _file_digest(Path(campaign_file))},
+                     overwrite=overwrite)
+
+
+def write_campaign_results(result, out: str | Path, *, overwrite: bool = False) -> dict[str, Path]:
     """Write a campaign's results into ``out``: ``campaign.json``, ``figures/campaign_friction.png``/``.svg``
-    and the self-contained ``report.html``; returns the paths by name."""
+    and the self-contained ``report.html`` (staged and moved into place as :func:`write_results` does);
+    returns the paths by name."""
     from .campaign import campaign_figure
     from .export import write_json, write_text
     from .plots import save_figure
     from .report import render_campaign_report
 
-    out = Path(out)
-    paths = {"campaign": write_json(result.summary(), out / "campaign.json")}
-    fig = campaign_figure(result)
-    for fmt, path in save_figure(fig, out / "figures", "campaign_friction").items():
-        paths[f"campaign_friction.{fmt}"] = path
-    svg = paths["campaign_friction.svg"].read_text(encoding="utf-8")
-    paths["report"] = write_text(render_campaign_report(result, {"campaign_friction": svg}), out / "report.html")
-    return paths
+    folder = campaign_folder(result.source, out, overwrite=overwrite)
+    with folder.staged() as work:
+        paths = {"campaign": write_json(result.summary(), work / "campaign.json")}
+        fig = campaign_figure(result)
+        for fmt, path in save_figure(fig, work / "figures", "campaign_friction").items():
+            paths[f"campaign_friction.{fmt}"] = path
+        svg = paths["campaign_friction.svg"].read_text(encoding="utf-8")
+        paths["report"] = write_text(render_campaign_report(result, {"campaign_friction": svg}), work / "report.html")
+    return {name: folder.final(path) for name, path in paths.items()}
