@@ -1,0 +1,356 @@
+"""Model-free analysis of the building's free-vibration decay (SI units).
+
+From the displacement of the isolation layer after the release (a record, or a model), without fitting a
+model of the isolators:
+
+- the turning points (peaks) of each half-cycle, located between samples, and the zero crossings;
+- per half-cycle n (from turning point n to n + 1): the amplitude ``A_n = |x_{n+1} - x_n| / 2`` (half the
+  swing: free of the sensor's zero and of a permanent offset), the equivalent period
+  ``T_eq = 2 (t_{n+1} - t_n)``, and between successive half-cycles the equivalent viscous damping ratio
+  ``zeta_eq = d / sqrt(pi^2 + d^2)``, ``d = ln(A_{n-1} / A_n)``: with viscous damping alone zeta_eq is
+  constant, with Coulomb friction it grows as the amplitude falls (the signature of sliders);
+- the decay law. A linear isolator with viscous damping ratio zeta and sliders of friction F_s moves, in
+  each half-cycle, as a damped free vibration about the shifted centre ``sign(x_n) delta``,
+  ``delta = F_s / k``, so successive signed peaks obey exactly
+
+      x_{n+1} - e = -r (x_n - e) + (1 + r) delta sign(x_n - e),   r = exp(-pi zeta / sqrt(1 - zeta^2)),  (*)
+
+  (e the sensor's reading where the isolators carry no force)
+  the combined decrement law (Coulomb and viscous damping together, cf. Feeny and Liang, J. Sound Vib.
+  196(4), 1996, 439-451): the amplitude falls geometrically (factor r) for viscous damping alone and
+  linearly (2 delta per half-cycle) for friction alone. Fitting (*) to the peaks by linear least squares
+  separates the two: ``zeta = -ln r / sqrt(pi^2 + ln^2 r)`` and ``F_s = k delta`` (k from the period and the
+  mass). The pure laws (delta = 0; r = 1) are fitted too and their residuals reported, so the record says
+  which law it follows;
+- the hysteresis loop: the isolators' total force ``-m x_ddot`` against the displacement (rubber, dampers
+  and sliders together; the inertia force of a rigid superstructure), when an acceleration channel exists.
+
+(*) holds for the linear model with sliders; a bilinear rubber spring has no such law (its period and
+decrement change with the amplitude by themselves), which the per-half-cycle equivalents then show.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy.optimize import minimize_scalar
+
+from .errors import ParameterError
+
+__all__ = ["DecayAnalysis", "DecayLaw", "analyse_decay", "combined_decay_law", "turning_points",
+           "zero_crossings", "hysteresis_loop"]
+
+
+@dataclass(frozen=True)
+class DecayLaw:
+    """The combined decrement law (*) fitted to successive peaks, and the two pure laws beside it."""
+
+    ratio: float
+    """r, the viscous amplitude ratio per half-cycle [-]."""
+    friction_displacement: float
+    """delta = F_s / k [m]."""
+    ratio_se: float
+    friction_displacement_se: float
+    damping_ratio: float
+    """zeta = -ln r / sqrt(pi^2 + ln^2 r) [-]."""
+    damping_ratio_se: float
+    rms: float
+    """RMS residual of (*) over the peaks [m]."""
+    rms_viscous_only: float
+    """RMS residual of the geometric law (delta = 0) [m]."""
+    rms_friction_only: float
+    """RMS residual of the linear law (r = 1) [m]."""
+    half_cycles: int
+
+    def friction_force(self, stiffness: float) -> float:
+        """F_s = k delta [N] for the stiffness k [N/m]."""
+        return stiffness * self.friction_displacement
+
+    def summary(self) -> dict[str, Any]:
+        return {"ratio": self.ratio, "ratio_se": self.ratio_se, "friction_displacement_m": self.friction_displacement,
+                "friction_displacement_se_m": self.friction_displacement_se, "damping_ratio": self.damping_ratio,
+                "damping_ratio_se": self.damping_ratio_se, "rms_m": self.rms,
+                "rms_viscous_only_m": self.rms_viscous_only, "rms_friction_only_m": self.rms_friction_only,
+                "half_cycles": self.half_cycles}
+
+
+def combined_decay_law(peaks, offset: bool = True) -> DecayLaw:
+    """Fit (*) to successive signed turning points [m]: ``x_{n+1} = -r x_n + g s_n + h``.
+
+    ``s_n = +1`` when x_n is a maximum and -1 at a minimum (the direction of the swing, which does not
+    depend on the sensor's zero), ``g = (1 + r) delta`` and ``h = (1 + r) e`` (e the reading where the
+    isolators carry no force; h = 0 when ``offset`` is False). Linear least squares; standard errors from
+    the residuals (zero for exact peaks). Needs one more peak than unknowns.
+    """
+    x = np.asarray(peaks, dtype=float)
+    unknowns = 3 if offset else 2
+    if x.ndim != 1 or x.size < unknowns + 1 or not np.all(np.isfinite(x)):
+        raise ParameterError("peaks", f"{x.size} value(s)", f"at least {unknowns + 1} finite successive peaks", "m")
+    xn, xn1 = x[:-1], x[1:]
+    s = -np.sign(xn1 - xn)
+    columns = [-xn, s] + ([np.ones_like(xn)] if offset else [])
+    A = np.column_stack(columns)
+    coef, *_ = np.linalg.lstsq(A, xn1, rcond=None)
+    r, g = float(coef[0]), float(coef[1])
+    resid = xn1 - A @ coef
+    n = xn.size
+    dof = n - unknowns
+    s2 = float(resid @ resid) / dof if dof > 0 else 0.0
+    cov = s2 * np.linalg.pinv(A.T @ A)
+    delta = g / (1.0 + r)
+    # delta = g / (1 + r): gradient (-g / (1 + r)^2, 1 / (1 + r)) in (r, g)
+    grad = np.array([-g / (1.0 + r) ** 2, 1.0 / (1.0 + r)])
+    delta_se = math.sqrt(max(float(grad @ cov[:2, :2] @ grad), 0.0))
+    r_se = math.sqrt(max(float(cov[0, 0]), 0.0))
+    if 0.0 < r < 1.0:
+        lr = math.log(r)
+        zeta = -lr / math.hypot(math.pi, lr)
+        dzeta = -(math.pi**2) / math.hypot(math.pi, lr) ** 3 / r  # d zeta / d r
+        zeta_se = abs(dzeta) * r_se
+    else:
+        zeta, zeta_se = (0.0 if r >= 1.0 else math.nan), math.nan
+
+    def rms_of(cols) -> float:
+        B = np.column_stack(cols)
+        c, *_ = np.linalg.lstsq(B, xn1, rcond=None)
+        return math.sqrt(float(np.mean((xn1 - B @ c) ** 2)))
+
+    const = [np.ones_like(xn)] if offset else []
+    rms_v = rms_of([-xn] + const)  # geometric decay: delta = 0
+    # linear decay: r = 1, x_{n+1} + x_n = g s_n + h
+    B = np.column_stack([s] + const)
+    c, *_ = np.linalg.lstsq(B, xn1 + xn, rcond=None)
+    rms_f = math.sqrt(float(np.mean((xn1 + xn - B @ c) ** 2)))
+    return DecayLaw(ratio=r, friction_displacement=delta, ratio_se=r_se, friction_displacement_se=delta_se,
+                    damping_ratio=zeta, damping_ratio_se=zeta_se, rms=math.sqrt(float(np.mean(resid**2))),
+                    rms_viscous_only=rms_v, rms_friction_only=rms_f, half_cycles=n)
+
+
+def _check_series(t, x, name: str = "x") -> tuple[np.ndarray, np.ndarray]:
+    t = np.asarray(t, dtype=float)
+    x = np.asarray(x, dtype=float)
+    if t.ndim != 1 or t.shape != x.shape or t.size < 8:
+        raise ParameterError(name, f"{x.size} sample(s)", "at least 8 samples on a time axis of the same length")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(x))):
+        raise ParameterError(name, "non-finite samples", "finite values (drop missing samples first)")
+    if np.any(np.diff(t) <= 0):
+        raise ParameterError("t", "not increasing", "strictly increasing times", "s")
+    return t, x
+
+
+def _refine_extremum(t: np.ndarray, x: np.ndarray, i: int, half: int) -> tuple[float, float]:
+    """Time and value of the turning point near sample i.
+
+    The velocity vanishes at the turning point tp on both sides, but the acceleration (and every higher
+    derivative) jumps there when the sliders' force changes sign, so each side has its own Taylor series:
+    ``x = X + a_s u^2 + b_s u^3 + c_s u^4`` (u = t - tp, s the side), with X shared. For each tp the model
+    is linear in its seven coefficients; tp minimises the residual (bounded scalar search between the
+    samples next to i). With ``half`` samples a side of about a twelfth of a half-cycle, the neglected
+    fifth-order terms are about 1e-7 of the amplitude.
+    """
+    lo, hi = max(i - half, 0), min(i + half + 1, t.size)
+    tt, xx = t[lo:hi], x[lo:hi]
+    if tt.size < 9:
+        return float(t[i]), float(x[i])
+    scale = float(tt[-1] - tt[0])
+
+    def solve(tp: float):
+        u = (tt - tp) / scale
+        left = (u < 0).astype(float)
+        right = 1.0 - left
+        u2 = u * u
+        A = np.column_stack([np.ones_like(u), u2 * left, u2 * right, u2 * u * left, u2 * u * right,
+                             u2 * u2 * left, u2 * u2 * right])
+        coef, *_ = np.linalg.lstsq(A, xx, rcond=None)
+        r = xx - A @ coef
+        return float(r @ r), float(coef[0])
+
+    a, b = float(t[max(i - 1, lo)]), float(t[min(i + 1, hi - 1)])
+    res = minimize_scalar(lambda tp: solve(tp)[0], bounds=(a, b), method="bounded",
+                          options={"xatol": 1e-13 * max(abs(a), abs(b), scale)})
+    tp = float(res.x)
+    return tp, solve(tp)[1]
+
+
+def turning_points(t, x, noise: float = 0.0, rest: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Times [s] and signed values [m] of the successive turning points of a decay that starts at rest.
+
+    The first sample is the release (the building at rest at its pushed displacement), the first turning
+    point. The others are found by a zigzag with hysteresis: the running extreme in the current direction
+    of motion becomes a turning point once the signal has come back from it by more than
+    ``(2 sqrt(2 ln n) + 2) noise`` (noise: the standard deviation of the noise on x; n samples), beyond the
+    range of the noise alone, so noise does not make half-cycles. When the record ends on a
+    rest (the sliders stuck), the last extreme is the final turning point, at the median of the rest.
+    Each turning point after the first is located between samples (``_refine_extremum``).
+    """
+    t, x = _check_series(t, x)
+    n = x.size
+    # the range of n Gaussian samples stays below 2 sqrt(2 ln n) standard deviations (their expected
+    # extremes), plus a margin of 2: noise alone does not make a half-cycle
+    threshold = float(noise) * (2.0 * math.sqrt(2.0 * math.log(n)) + 2.0)
+    direction = -1.0 if x[0] > rest else 1.0
+    idx: list[int] = []
+    best = 1
+    for k in range(2, n):
+        if direction * (x[k] - x[best]) > 0.0:
+            best = k
+        elif direction * (x[best] - x[k]) > threshold:
+            idx.append(best)
+            direction = -direction
+            best = k
+    stuck = n - 1 - best >= 4
+    if stuck:
+        idx.append(best)
+    half = 3
+    if len(idx) >= 2:
+        half = int(max(5, min(np.median(np.diff(idx)) // 12, 400)))
+    times, values = [float(t[0])], [float(x[0])]
+    for j, i in enumerate(idx):
+        if stuck and j == len(idx) - 1 and n - 1 - i > half:
+            times.append(_refine_extremum(t, x, i, half)[0])
+            values.append(float(np.median(x[i:])))
+            continue
+        tp, xp = _refine_extremum(t, x, i, half)
+        times.append(tp)
+        values.append(xp)
+    return np.array(times), np.array(values)
+
+
+def zero_crossings(t, x, level: float = 0.0) -> np.ndarray:
+    """Times [s] where x crosses ``level``, between samples by the cubic through the four nearest samples."""
+    t, x = _check_series(t, x)
+    y = x - level
+    k = np.nonzero((y[:-1] < 0) & (y[1:] >= 0) | (y[:-1] > 0) & (y[1:] <= 0))[0]
+    out = []
+    for i in k:
+        lo = max(i - 1, 0)
+        hi = min(lo + 4, y.size)
+        lo = max(hi - 4, 0)
+        tt, yy = t[lo:hi], y[lo:hi]
+        t0 = float(tt[0])
+        p = np.polynomial.Polynomial.fit(tt - t0, yy, deg=min(3, tt.size - 1))
+        roots = [float(r.real) + t0 for r in p.roots() if abs(r.imag) < 1e-12 * (1 + abs(r.real))]
+        roots = [r for r in roots if t[i] <= r <= t[i + 1]]
+        out.append(roots[0] if roots else float(t[i] - y[i] * (t[i + 1] - t[i]) / (y[i + 1] - y[i])))
+    return np.array(out)
+
+
+@dataclass(frozen=True, eq=False)
+class DecayAnalysis:
+    """Model-free analysis of a free-vibration decay (SI units)."""
+
+    peak_times: np.ndarray
+    """Times of the turning points [s], the release first."""
+    peaks: np.ndarray
+    """Signed displacements at the turning points [m], the release displacement first."""
+    zero_crossings: np.ndarray
+    """Times where the displacement crosses its rest level [s]."""
+    amplitude: np.ndarray
+    """Amplitude of each half-cycle, half its swing |x_{n+1} - x_n| / 2 [m]."""
+    equivalent_period: np.ndarray
+    """2 (t_{n+1} - t_n) per half-cycle [s]."""
+    equivalent_damping: np.ndarray
+    """d / sqrt(pi^2 + d^2), d = ln(A_{n-1} / A_n), between successive half-cycles [-] (one fewer than the
+    half-cycles)."""
+    damping_amplitude: np.ndarray
+    """The amplitude each equivalent damping refers to, sqrt(A_{n-1} A_n) [m]."""
+    law: DecayLaw | None
+    """The combined decrement law fitted to the peaks (None with fewer than three)."""
+    period: float
+    """Damped period: twice the least-squares slope of the turning-point times against their count [s]
+    (nan with fewer than two turning points)."""
+    natural_period: float
+    """``period sqrt(1 - zeta^2)``, zeta from the combined law [s]."""
+    notes: tuple[str, ...] = field(default=())
+
+    def stiffness(self, mass: float) -> float:
+        """k = m (2 pi / T_n)^2 [N/m] for the mass m [kg]."""
+        return float(mass) * (2.0 * math.pi / self.natural_period) ** 2
+
+    def friction_force(self, mass: float) -> float:
+        """F_s = k delta [N] from the combined law (nan without one)."""
+        return self.law.friction_force(self.stiffness(mass)) if self.law else math.nan
+
+    def summary(self, mass: float | None = None) -> dict[str, Any]:
+        out: dict[str, Any] = {
+            "half_cycles": int(max(self.peaks.size - 1, 0)), "period_s": self.period,
+            "natural_period_s": self.natural_period, "peaks_m": self.peaks.tolist(),
+            "peak_times_s": self.peak_times.tolist(), "zero_crossings_s": self.zero_crossings.tolist(),
+            "amplitude_m": self.amplitude.tolist(), "equivalent_period_s": self.equivalent_period.tolist(),
+            "equivalent_damping": self.equivalent_damping.tolist(),
+            "damping_amplitude_m": self.damping_amplitude.tolist(),
+            "law": self.law.summary() if self.law else None, "notes": list(self.notes)}
+        if mass is not None and self.law is not None:
+            out["stiffness_N_m"] = self.stiffness(mass)
+            out["friction_N"] = self.friction_force(mass)
+        return out
+
+
+def analyse_decay(t, x, release_time: float | None = None, noise: float = 0.0, rest: float = 0.0) -> DecayAnalysis:
+    """Model-free analysis of the isolation layer's displacement x(t) [m] after the release.
+
+    Parameters
+    ----------
+    t, x : arrays
+        Times [s] and displacements [m] (offset removed: x = 0 where the isolators carry no force).
+    release_time : float, optional
+        The release instant [s]; samples before it are ignored (default: the first sample).
+    noise : float
+        Standard deviation of the noise on x [m]; swings within the range of the noise are not half-cycles.
+    rest : float
+        The unloaded position [m] the zero crossings refer to.
+    """
+    t, x = _check_series(t, x)
+    notes = []
+    if release_time is not None:
+        t_r = float(release_time)
+        if not (math.isfinite(t_r) and t[0] <= t_r < t[-1]):
+            raise ParameterError("release_time", t_r, f"[{t[0]:.6g}, {t[-1]:.6g}) s, within the record", "s")
+        before = x[t <= t_r]
+        # at rest before the release: the pushed displacement is the mean level of the quiet segment
+        x0 = float(np.median(before)) if before.size >= 3 else float(np.interp(t_r, t, x))
+        after = t > t_r
+        t, x = _check_series(np.concatenate([[t_r], t[after]]), np.concatenate([[x0], x[after]]))
+    times, peaks = turning_points(t, x, noise, rest)
+    crossings = zero_crossings(t, x - rest) if x.size >= 8 else np.empty(0)
+    if peaks.size >= 2:
+        amplitude = 0.5 * np.abs(np.diff(peaks))
+        teq = 2.0 * np.diff(times)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            d = np.log(amplitude[:-1] / amplitude[1:])
+            zeq = np.where(np.isfinite(d), d / np.sqrt(math.pi**2 + d * d), math.nan)
+        zamp = np.sqrt(amplitude[:-1] * amplitude[1:])
+        # the period: twice the slope of the turning-point times against their count (least squares over
+        # all of them, not just the first and the last); the final stick is located less sharply than a
+        # turning point (the record is flat after it), so it is left out when there are other half-cycles
+        use = times[:-1] if times.size > 3 else times
+        period = 2.0 * float(np.polyfit(np.arange(use.size), use, 1)[0])
+    else:
+        amplitude = teq = zeq = zamp = np.empty(0)
+        period = math.nan
+        notes.append("fewer than two turning points: no half-cycle to analyse")
+    law = combined_decay_law(peaks) if peaks.size >= 5 else None
+    zeta = law.damping_ratio if law and math.isfinite(law.damping_ratio) else 0.0
+    natural = period * math.sqrt(1.0 - zeta * zeta) if math.isfinite(period) else math.nan
+    return DecayAnalysis(peak_times=times, peaks=peaks, zero_crossings=crossings, amplitude=amplitude,
+                         equivalent_period=teq, equivalent_damping=zeq, damping_amplitude=zamp, law=law, period=period,
+                         natural_period=natural, notes=tuple(notes))
+
+
+def hysteresis_loop(x, acceleration, mass: float) -> tuple[np.ndarray, np.ndarray]:
+    """The isolators' total force ``F = -m x_ddot`` [N] against the displacement x [m].
+
+    For a rigid superstructure on the isolation layer, F is the force of rubber, dampers and sliders
+    together (Newton's law with no external force after the release). Returns (x, F).
+    """
+    x = np.asarray(x, dtype=float)
+    acc = np.asarray(acceleration, dtype=float)
+    if x.shape != acc.shape:
+        raise ParameterError("acceleration", f"{acc.size} sample(s)", f"{x.size} samples, like x")
+    m = float(mass)
+    if not (math.isfinite(m) and m > 0):
+        raise ParameterError("mass", m, "(0, inf)", "kg")
+    return x, -m * acc
