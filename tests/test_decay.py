@@ -129,3 +129,13 @@ def test_bad_input():
         analyse_decay(t, np.cos(t), release_time=5.0)
     with pytest.raises(ParameterError, match="increasing"):
         analyse_decay(t[::-1], np.cos(t))
+
+
+def test_readme_building_example_runs_as_written(capsys):
+    from pathlib import Path
+
+    text = Path(__file__).resolve().parents[1].joinpath("README.md").read_text(encoding="utf-8")
+    block = text[text.index("## The isolated building"):].split("```python\n")[1].split("```")[0]
+    exec(compile(block, "README.md", "exec"), {})
+    out = capsys.readouterr().out
+    assert "11 half-cycles" in out and "zeta = 0.04000" in out and "F_s = 12000 N" in out
