@@ -12,7 +12,8 @@ from __future__ import annotations
 
 from importlib.metadata import PackageNotFoundError, version
 
-from . import dynamics, kinematics, statics
+from . import building, decay, dynamics, kinematics, statics
+from .building import FreeVibration, Isolation, free_vibration
 from .device import DEVICE_KEYS, Device, load_device, preset, preset_names
 from .dynamics import (
     MASS_MODELS,
@@ -33,6 +34,7 @@ from .errors import (
     UnitError,
 )
 from .identify import Identification, identify_friction, stop_time_on_line
+from .isolation_fit import BuildingChannel, IsolationFit, compare_models, fit_isolation
 from .response import STOP_REASONS, Response
 from .solvers import METHODS, simulate, stop_time
 from .statics import InternalForces, StrainEnergy, fuse_force, internal_forces, push_force, strain_energy
@@ -52,4 +54,6 @@ __all__ = [
     "Response", "STOP_REASONS", "METHODS", "simulate", "stop_time",
     "InternalForces", "StrainEnergy", "fuse_force", "internal_forces", "push_force", "strain_energy",
     "parse_quantity", "dynamics", "kinematics", "statics", "__version__",
+    "building", "decay", "Isolation", "FreeVibration", "free_vibration",
+    "BuildingChannel", "IsolationFit", "fit_isolation", "compare_models",
 ]

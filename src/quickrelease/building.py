@@ -192,7 +192,7 @@ def _ec_es(a: float, q: float, tau):
         w = math.sqrt(-q)
         slow = np.exp((w - a) * tau)  # w < a: both exponents are negative
         fast = np.exp(-(w + a) * tau)
-        return 0.5 * (slow + fast), fast * np.expm1(2.0 * w * tau) / (2.0 * w)
+        return 0.5 * (slow + fast), -slow * np.expm1(-2.0 * w * tau) / (2.0 * w)
     e = np.exp(-a * tau)
     return e, e * tau
 
