@@ -125,6 +125,34 @@ class BatchRelease(_Result):
     by more than rounding)."""
     peak_v_ddot: np.ndarray
     """Peak |central hinge acceleration| during the motion [m/s^2], to the same accuracy."""
+    status: np.ndarray | None = None
+    """0 computed; 1 outside the floating-point range (see :data:`RELEASE_STATUS`; every output NaN)."""
+
+
+#: Status of a case of :func:`release` (``BatchRelease.status``).
+RELEASE_STATUS = {
+    0: "ok",
+    1: "outside the floating-point range: E_S, 2 F1 L1 or 4 F2 L1 is not a finite positive float, or a result "
+       "overflows (outputs NaN)",
+}
+
+#: Friction whose work to the flat rhombus is below this share of E_S changes no result by a rounding unit
+#: (t_F and the rates move by about half that share): it is taken as 0, so that forces down to the smallest
+#: subnormal give the frictionless answers instead of overflowing E_S / (2 F1 L1).
+NEGLIGIBLE_WORK = 2.0**-64
+
+
+def _screen(E_S, F1, F2, L1):
+    """(F1, F2, E_S, bad) for the kernels: negligible friction set to 0, cases outside the floating-point
+    range marked ``bad`` and replaced by a harmless case (their outputs are then set to NaN)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        A, B = 2.0 * F1 * L1, 4.0 * F2 * L1
+        bad = ~(np.isfinite(E_S) & (E_S > 0) & np.isfinite(A) & np.isfinite(B))
+        tiny = ~bad & (A + B <= NEGLIGIBLE_WORK * E_S)
+    if not (bad.any() or tiny.any()):
+        return F1, F2, E_S, bad
+    F1, F2, E_S = (np.where(tiny | bad, 0.0, F1), np.where(tiny | bad, 0.0, F2), np.where(bad, 1.0, E_S))
+    return F1, F2, E_S, bad
 
 
 @dataclass(frozen=True)
@@ -172,7 +200,9 @@ def stop_time(E_S, alpha0, F1, F2, c=2.0 / 3.0, m1=None, m2=None, L1=None, *, ch
     """
     m1, m2, L1 = _paper_defaults(m1, m2, L1)
     shape, (E_S, alpha0, F1, F2, c, m1, m2, L1) = _flat(E_S, alpha0, F1, F2, c, m1, m2, L1)
+    F1, F2, E_S, bad = _screen(E_S, F1, F2, L1)
     t, aF, code = _stop_arrays(E_S, alpha0, F1, F2, c * m1 / m2, m2, L1, chunk)
+    t[bad], aF[bad] = np.nan, np.nan
     return BatchStop(t.reshape(shape), aF.reshape(shape), code.reshape(shape))
 
 
@@ -289,6 +319,7 @@ def release(E_S, alpha0, F1, F2, c=2.0 / 3.0, m1=None, m2=None, L1=None, *, chun
                                           "peak_u_dot", "peak_v_dot", "peak_u_ddot", "peak_v_ddot")}
     code = np.empty(n, dtype=np.int8)
     k = c * m1 / m2
+    F1, F2, E_S, bad = _screen(E_S, F1, F2, L1)
     t, aF_all, code[:] = _stop_arrays(E_S, alpha0, F1, F2, k, m2, L1, chunk)
     out["stop_time"][:] = t
     out["alpha_final"][:] = aF_all
@@ -309,6 +340,11 @@ def release(E_S, alpha0, F1, F2, c=2.0 / 3.0, m1=None, m2=None, L1=None, *, chun
     from . import _fast
 
     _fast.peak_accel_kernel(E_S, alpha0, aF_all, F1, F2, k, m2, L1, N_PEAK, out["peak_u_ddot"], out["peak_v_ddot"])
+    for v in out.values():  # a result that overflows is flagged too, never left as a silent inf or NaN
+        bad |= ~np.isfinite(v)
+    for v in out.values():
+        v[bad] = np.nan
+    out["status"] = bad.astype(np.int8)
     res = {key: v.reshape(shape) for key, v in out.items()}
     return BatchRelease(stopped_by=code.reshape(shape), **res)
 

@@ -418,6 +418,7 @@ def sweep_command(
                "v_final_m": [float(ds.v_final.min()), float(ds.v_final.max())],
                "peak_v_dot_m_s": [float(ds.peak_v_dot.min()), float(ds.peak_v_dot.max())],
                "geometric_limit_share": float(ds.stopped_by.mean()),
+               "flagged": int((ds.status != 0).sum()),  # outputs NaN, the reason in the status variable
                "figures": [str(p) for p in figs.values()]}
     if as_json:
         _print_json(summary)
