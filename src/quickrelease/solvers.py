@@ -72,8 +72,8 @@ class FirstIntegral:
         self.alpha_final = float(self._rel.alpha_final[0])
         self.stopped_by = "geometric_limit" if self.geometric_limit else "friction"
         self._time_map: TimeMap | None = None
-        coarse = [v for v in (self.E_S, self.F1, self.F2) if 0.0 < v < _FINEST_SUBNORMAL]
-        if coarse:  # a deep subnormal carries few bits: results would be off in their leading digits
+        coarse = [v for v in (self.E_S,) if 0.0 < v < _FINEST_SUBNORMAL]
+        if coarse:  # a deep subnormal E_S carries few bits: the results would be off in their leading digits
             _unresolved(self, f"an input of {coarse[0]:.6g} < {_FINEST_SUBNORMAL:.3g}, a subnormal float with fewer "
                         "than 43 significant bits")
         if not (math.isfinite(self.alpha_final) and 0.0 < self.alpha_dot0 < math.inf):
