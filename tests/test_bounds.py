@@ -89,9 +89,17 @@ def test_identify_interval_exact_for_huge_stop_time():
     assert 0.5 < lo < hi < 5.0, info.value.feasible
 
 
-def test_identify_unresolvable_energy_names_it():
-    with np.errstate(all="ignore"), pytest.raises(QuickReleaseError, match=r"^E_S = 1e-308 J .*not finite"):
+def test_identify_tiny_energy_reports_the_scaled_interval():
+    """E_S = 1e-308 J: the feasible stop times are finite and scale as 1/sqrt(E_S) (Eq. 10: the friction
+    limits scale with E_S, the rate with its square root); t_F = 1.05 s lies far outside them."""
+    with pytest.raises(QuickReleaseError) as ref:
+        identify_friction(0.2, 0.7378, 100.0, stored_energy=2900.0)
+    with np.errstate(all="ignore"), pytest.raises(QuickReleaseError) as info:
         identify_friction(0.2, 0.7378, 1.05, stored_energy=1e-308)
+    scale = math.sqrt(2900.0) / math.sqrt(1e-308)
+    np.testing.assert_allclose(info.value.feasible, np.array(ref.value.feasible) * scale, rtol=1e-9)
+    with np.errstate(all="ignore"), pytest.raises(ParameterError, match=r"^E_S = 4.94066e-324 J"):
+        identify_friction(0.2, 0.7378, 1.05, stored_energy=5e-324)
 
 
 def test_grid_whose_span_overflows_is_named():

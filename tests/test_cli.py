@@ -48,6 +48,23 @@ def test_identify_json():
     assert (data["F1_N"], data["F2_N"]) == pytest.approx(mp_identify(2900, 0.2, 0.7378, 1.05), rel=1e-10)
 
 
+def test_identify_json_names_the_boundary():
+    """Issue 9 item 15: the summary carries ``boundary``; simulate's own output with F2 = 0 is identified on it."""
+    import quickrelease as qr
+
+    r = qr.simulate(500.0, 0.6, 300.0, 0.0, n_points=2)
+    assert r.stopped_by == "friction"
+    out = run("identify", "--energy", "500 J", "--alpha0", "0.6", "--alpha-final", f"{r.alpha_final!r} rad",
+              "--stop-time", f"{r.stop_time!r} s", "--json")
+    assert out.exit_code == 0, out.output
+    data = json.loads(out.stdout)
+    assert data["boundary"] == "F2 = 0" and data["F2_N"] == 0.0
+    assert data["F1_N"] == pytest.approx(300.0, rel=1e-9)
+    inner = run("identify", "--energy", "2.90 kJ", "--alpha0", "0.2", "--alpha-final", "0.7378 rad",
+                "--stop-time", "1.05 s", "--json")
+    assert json.loads(inner.stdout)["boundary"] is None
+
+
 def test_identify_lumped_is_infeasible():
     r = run("identify", "--energy", "2.90 kJ", "--alpha0", "0.2", "--alpha-final", "0.7378",
             "--stop-time", "1.05", "--mass-model", "lumped")

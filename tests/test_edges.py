@@ -249,9 +249,14 @@ def test_item18_extreme_energies_and_forces_are_finite_and_right():
                         ("peak_u_ddot", 1.0), ("peak_v_ddot", 1.0)):
             got, base = float(getattr(b, name)), float(getattr(one, name))
             assert math.isfinite(got) and abs(got / (base * E**p) - 1) < 1e-12, name
-    r = qr.simulate(5e-324, 0.2, 0.0, 0.0, n_points=5)
-    assert math.isfinite(r.stop_time) and np.all(np.isfinite(r.alpha)) and np.all(np.isfinite(r.alpha_dot))
+    # the smallest subnormal carries one bit: its t_F would be off in the leading digit (7% measured against
+    # the 1/sqrt(E_S) scaling), so it is refused naming E_S; 1e-308 (51 bits) is finite and scales exactly
+    with pytest.raises(qr.ParameterError, match=r"^E_S = 4.94066e-324 J"):
+        qr.simulate(5e-324, 0.2, 0.0, 0.0, n_points=5)
+    r = qr.simulate(1e-308, 0.2, 0.0, 0.0, n_points=5)
+    assert np.all(np.isfinite(r.alpha)) and np.all(np.isfinite(r.alpha_dot))
     assert np.all(np.diff(r.alpha) > 0) and r.alpha_final == math.pi / 2
+    assert abs(r.stop_time / (float(one.stop_time) / math.sqrt(1e-308)) - 1) < 1e-9
     # a sweep of ~1e-297 rad: 400 working digits for the reference
     t = qr.stop_time(2900.0, 0.2, 1e300, 0.0)
     t_ref = mp_reference(2900.0, 0.2, 1e300, 0.0, PAPER.m1, PAPER.m2, PAPER.L1, 2 / 3, dps=400)[0]

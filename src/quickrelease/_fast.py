@@ -11,6 +11,7 @@ Compiled on first use and cached on disk (``cache=True``).
 from __future__ import annotations
 
 import math
+import types
 
 import numpy as np
 from numba import njit
@@ -206,20 +207,30 @@ def identify_kernel(a0, aF, tF, E, k, m2, L1, x16, w16, x24, w24, near, hard, ma
         iter_out[i] = iterations
 
 
+_accel = njit(cache=True, nogil=True)(_kernels.head_hinge_acceleration)
+#: ``_kernels.refine_peak`` compiled as written, its call of ``head_hinge_acceleration`` bound to ``_accel``.
+_refine_peak = njit(cache=True, nogil=True)(types.FunctionType(
+    _kernels.refine_peak.__code__, {**_kernels.refine_peak.__globals__, "head_hinge_acceleration": _accel},
+    "refine_peak", _kernels.refine_peak.__defaults__))
+
+
 @njit(cache=True, nogil=True)
-def _parabola_peak(y0, y1, y2):
-    """Largest value of the parabola through (-1, y0), (0, y1), (1, y2) when its vertex is a maximum."""
-    curv = y0 - 2.0 * y1 + y2
-    if curv < 0.0:
-        return y1 - 0.125 * (y2 - y0) * ((y2 - y0) / curv)  # no square: finite up to 1e308
-    return y1
+def _refined(best, j, n, a0, h, E, s0, c0, A, B, F1, F2, k, m2, L1, which):
+    """The best sample j's value, raised to the maximum at a root of the jerk in [a_(j-1), a_j] or
+    [a_j, a_(j+1)] when one lies there (``_kernels.refine_peak``)."""
+    out = best
+    if j > 0:
+        out = max(out, _refine_peak(a0 + (j - 1) * h, a0 + j * h, E, s0, c0, A, B, F1, F2, k, m2, L1, which))
+    if j < n - 1:
+        out = max(out, _refine_peak(a0 + j * h, a0 + (j + 1) * h, E, s0, c0, A, B, F1, F2, k, m2, L1, which))
+    return out
 
 
 @njit(cache=True, nogil=True)
 def peak_accel_kernel(E, a0, aE, F1, F2, k, m2, L1, n, pu_out, pv_out):
     """Peaks of |u_ddot| and |v_ddot| over [alpha0, alpha_end] (the numpy ``batch._peak_accelerations``):
-    n equally spaced angles (sines and cosines by rotation, no trigonometric call per angle), then the
-    vertex of the parabola through the best three when the best is inside the interval."""
+    n equally spaced angles (sines and cosines by rotation, no trigonometric call per angle) pick the best
+    sample; the maximum is then the root of the jerk bracketed by its neighbours (``_kernels.refine_peak``)."""
     for i in range(E.size):
         h = (aE[i] - a0[i]) / (n - 1)
         ch, sh = math.cos(h), math.sin(h)
@@ -230,8 +241,6 @@ def peak_accel_kernel(E, a0, aE, F1, F2, k, m2, L1, n, pu_out, pv_out):
         ml = m2[i] * L1[i]
         best_u = best_v = -1.0
         ju = jv = 0
-        pu_prev = pv_prev = 0.0
-        pu_left = pv_left = pu_right = pv_right = 0.0
         for j in range(n):
             K = E[i] - A * (s - s0) - B * (c0 - c)
             d = k[i] + s * s
@@ -239,15 +248,11 @@ def peak_accel_kernel(E, a0, aE, F1, F2, k, m2, L1, n, pu_out, pv_out):
             acc = -rate2 * s * c / d - (2.0 * F2[i] * s + F1[i] * c) / (ml * d)
             pu = abs(L1[i] * (c * rate2 + s * acc))
             pv = abs(L1[i] * (-s * rate2 + c * acc))
-            if j == ju + 1:
-                pu_right = pu
-            if j == jv + 1:
-                pv_right = pv
             if pu > best_u:
-                best_u, ju, pu_left = pu, j, pu_prev
+                best_u, ju = pu, j
             if pv > best_v:
-                best_v, jv, pv_left = pv, j, pv_prev
-            pu_prev, pv_prev = pu, pv
+                best_v, jv = pv, j
             s, c = s * ch + c * sh, c * ch - s * sh
-        pu_out[i] = _parabola_peak(pu_left, best_u, pu_right) if 0 < ju < n - 1 else best_u
-        pv_out[i] = _parabola_peak(pv_left, best_v, pv_right) if 0 < jv < n - 1 else best_v
+        args = (E[i], s0, c0, A, B, F1[i], F2[i], k[i], m2[i], L1[i])
+        pu_out[i] = _refined(best_u, ju, n, a0[i], h, *args, 0)
+        pv_out[i] = _refined(best_v, jv, n, a0[i], h, *args, 1)

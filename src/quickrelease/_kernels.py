@@ -385,3 +385,75 @@ class Releases:
         # K = 2 R C sigma with C = cos(anchor - phi - half)
         value = 2.0 * self.R[case] * (self.cos_p[case] * np.cos(half) + self.sin_p[case] * np.sin(half)) * np.sin(half)
         return np.maximum(value, 0.0)
+
+
+# -- peak accelerations: the value and its slope in alpha, and the maximum at a root of the slope ------------
+
+def head_hinge_acceleration(alpha, E, s0, c0, A, B, F1, F2, k, m2, L1, which):
+    """u_ddot (``which = 0``) or v_ddot (``which = 1``) at angle alpha of a release [m/s^2], and its derivative
+    in alpha [m/s^2/rad] (Table 4, alpha_dot^2 from Eq. 10 and alpha_ddot from Eq. 3/4).
+
+    With ``K = E - A (sin a - s0) - B (c0 - cos a)`` (A = 2 F1 L1, B = 4 F2 L1: Eq. 9), ``d = k + sin^2 a``,
+    ``r = alpha_dot^2 = K / (m2 L1^2 d)`` and ``q = alpha_ddot = -r sin a cos a / d - (2 F2 sin a + F1 cos a) /
+    (m2 L1 d)``: ``u_ddot = L1 (cos a r + sin a q)``, ``v_ddot = L1 (-sin a r + cos a q)``. Along the motion
+    alpha increases, so the jerk d/dt = alpha_dot d/dalpha vanishes where the derivative returned does.
+    Scalar and plain ``math`` (compiled as is by :mod:`quickrelease._fast`).
+    """
+    s = math.sin(alpha)
+    c = math.cos(alpha)
+    K = E - A * (s - s0) - B * (c0 - c)
+    Kp = -A * c - B * s
+    if K < 0.0:
+        K = 0.0
+    ml = m2 * L1
+    d = k + s * s
+    dpd = 2.0 * s * c / d  # d'/d
+    r = K / (ml * L1 * d)
+    rp = (Kp / (ml * L1) - r * 2.0 * s * c) / d
+    Q = 2.0 * F2 * s + F1 * c
+    Qp = 2.0 * F2 * c - F1 * s
+    q = -r * s * c / d - Q / (ml * d)
+    qp = -(rp * s * c + r * (c * c - s * s)) / d + (r * s * c / d) * dpd - Qp / (ml * d) + (Q / (ml * d)) * dpd
+    if which == 0:
+        return L1 * (c * r + s * q), L1 * (-s * r + c * rp + c * q + s * qp)
+    return L1 * (-s * r + c * q), L1 * (-c * r - s * rp - s * q + c * qp)
+
+
+def refine_peak(lo, hi, E, s0, c0, A, B, F1, F2, k, m2, L1, which):
+    """The maximum of |u_ddot| (which 0) or |v_ddot| (which 1) inside [lo, hi] [rad], at the root of its
+    slope, when the slope goes from + at lo to - at hi; -1 otherwise [m/s^2].
+
+    The root (of the jerk, see :func:`head_hinge_acceleration`) by the Illinois false position, bracketed,
+    to a bracket of 4 ulps or a zero slope; the value is then the acceleration there (no interpolation, so it
+    never exceeds the true maximum by more than rounding). :mod:`quickrelease._fast` compiles this very
+    function, with its global ``head_hinge_acceleration`` bound to the compiled one.
+    """
+    g_lo, p_lo = head_hinge_acceleration(lo, E, s0, c0, A, B, F1, F2, k, m2, L1, which)
+    g_hi, p_hi = head_hinge_acceleration(hi, E, s0, c0, A, B, F1, F2, k, m2, L1, which)
+    f_lo = p_lo if g_lo >= 0.0 else -p_lo
+    f_hi = p_hi if g_hi >= 0.0 else -p_hi
+    if not (f_lo > 0.0 and f_hi < 0.0):
+        return -1.0
+    x = 0.5 * (lo + hi)
+    side = 0
+    for _ in range(200):
+        x = hi - f_hi * ((hi - lo) / (f_hi - f_lo))
+        if not (lo < x < hi):
+            x = 0.5 * (lo + hi)
+        g, p = head_hinge_acceleration(x, E, s0, c0, A, B, F1, F2, k, m2, L1, which)
+        f = p if g >= 0.0 else -p
+        if f == 0.0:
+            break
+        if f > 0.0:
+            lo, f_lo = x, f
+            if side == 1:
+                f_hi *= 0.5
+            side = 1
+        else:
+            hi, f_hi = x, f
+            if side == -1:
+                f_lo *= 0.5
+            side = -1
+        if hi - lo <= 8.8e-16 * max(abs(lo), abs(hi)):
+            break
+    return abs(head_hinge_acceleration(x, E, s0, c0, A, B, F1, F2, k, m2, L1, which)[0])

@@ -418,6 +418,7 @@ def sweep_command(
                "v_final_m": [float(ds.v_final.min()), float(ds.v_final.max())],
                "peak_v_dot_m_s": [float(ds.peak_v_dot.min()), float(ds.peak_v_dot.max())],
                "geometric_limit_share": float(ds.stopped_by.mean()),
+               "flagged": int((ds.status != 0).sum()),  # outputs NaN, the reason in the status variable
                "figures": [str(p) for p in figs.values()]}
     if as_json:
         _print_json(summary)
@@ -642,12 +643,13 @@ def plan(
         c = plan_result.clearance
         verdict = (f"CONTACT at {c.first_contact_time:.3g} s: {1e3 * c.margin_needed:.4g} mm more room needed"
                    if c.contact else "no contact")
-        typer.echo(f"Clearance: d0 = {1e3 * c.d0:.4g} mm, largest approach {1e3 * c.max_approach:.4g} mm, minimum gap "
-                   f"{1e3 * c.min_gap:.4g} mm at {c.min_gap_time:.4g} s: {verdict}")
+        typer.echo(f"Clearance: d0 = {1e3 * c.d0:.4g} mm, largest approach {1e3 * c.max_approach:.4g} mm, "
+                   f"{c.describe_minimum()}: {verdict}")
         if plan_result.clearance_spread is not None:
             sp = plan_result.clearance_spread
+            p5 = "-" if sp["min_gap_p5_m"] is None else f"{1e3 * sp['min_gap_p5_m']:.4g}"
             typer.echo(f"  over {sp['clearance_samples']} friction samples: 5% of minimum gaps below "
-                       f"{1e3 * sp['min_gap_p5_m']:.4g} mm, contact in {100 * sp['contact_share']:.3g}%")
+                       f"{p5} mm, contact in {100 * sp['contact_share']:.3g}%")
     for text in plan_result.notes:
         typer.echo(f"note: {text}")
     if paths:

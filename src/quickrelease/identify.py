@@ -90,6 +90,7 @@ class Identification:
             "stop_time_residual_s": self.stop_time_residual,
             "feasible_stop_time_s": list(self.feasible_stop_times),
             "mass_factor": self.mass_factor,
+            "boundary": self.boundary,
         }
 
 

@@ -20,6 +20,7 @@ import numpy as np
 
 from . import batch
 from ._validate import check_size
+from .building import FreeVibration, Isolation, free_vibration
 from .case import BuildingSpec, Case, Distribution
 from .device import Device
 from .dynamics import angular_acceleration
@@ -31,8 +32,8 @@ from .statics import InternalForces, internal_forces, strain_energy
 
 __all__ = [
     "FuseChoice", "FuseTable", "fuse_choices", "MemberCheck", "MemberChecks", "member_checks", "Envelope",
-    "release_envelope", "FrictionSamples", "friction_samples", "building_motion", "pushed_displacement",
-    "Clearance", "clearance",
+    "release_envelope", "FrictionSamples", "friction_samples", "building_motion", "building_isolation",
+    "pushed_displacement", "Clearance", "clearance", "GAP_GROWS",
     "PlanResult", "plan_case", "ENVELOPE_QUANTITIES", "plan_figures", "choices_figure", "utilisation_figure",
     "envelope_figure", "gap_figure",
 ]
@@ -423,10 +424,10 @@ def building_motion(t, d0: float, period: float, damping_ratio: float = 0.0, fri
     """Free vibration of the isolated building released at rest from d0: x(t), x_dot(t), x_ddot(t) [m, m/s, m/s^2].
 
     Single degree of freedom, ``x_ddot + 2 zeta omega x_dot + omega^2 x = -a_f sign(x_dot)`` with
-    ``omega = 2 pi / T`` and ``a_f`` the Coulomb friction of sliding isolators over the mass. Solved in closed
-    form half-cycle by half-cycle: in each the motion is the damped free vibration about the shifted
-    equilibrium ``-a_f sign(x_dot) / omega^2``, from rest to rest in ``pi / omega_d``; the building stops for
-    good (sticks) at a turning point where ``omega^2 |x| <= a_f``. x is positive in the push direction.
+    ``omega = 2 pi / T`` and ``a_f`` the Coulomb friction of sliding isolators over the mass; x is positive in
+    the push direction. The motion is :func:`quickrelease.building.free_vibration` of the linear isolation
+    (exact closed form half-cycle by half-cycle, sticking for good at a turning point where
+    ``omega^2 |x| <= a_f``), for a unit mass: only ``a_f = F_s / m`` enters.
     """
     for name, value, valid in (("period", period, "(0, inf) s"), ("damping_ratio", damping_ratio, "[0, 1)"),
                                ("isolator friction", friction_acceleration, "[0, inf) m/s^2")):
@@ -439,32 +440,25 @@ def building_motion(t, d0: float, period: float, damping_ratio: float = 0.0, fri
     if friction_acceleration < 0:
         raise ParameterError("isolator friction", friction_acceleration, "[0, inf)", "m/s^2")
     t = np.asarray(t, dtype=float)
-    w = 2.0 * math.pi / period
-    wd = w * math.sqrt(1.0 - damping_ratio**2)
-    half = math.pi / wd
-    x = np.full(t.shape, float(d0))
-    v = np.zeros(t.shape)
-    a = np.zeros(t.shape)
-    start, x_start = 0.0, float(d0)
+    if float(d0) == 0.0:
+        return np.zeros(t.shape), np.zeros(t.shape), np.zeros(t.shape)
     t_max = float(np.max(t)) if t.size else 0.0
-    while start <= t_max:
-        if w * w * abs(x_start) <= friction_acceleration:  # sticks: static friction holds it
-            m = t >= start
-            x[m], v[m], a[m] = x_start, 0.0, 0.0
-            break
-        direction = -math.copysign(1.0, x_start)  # moves towards the (shifted) equilibrium
-        x_eq = -friction_acceleration * direction / (w * w)
-        y0 = x_start - x_eq
-        m = (t >= start) & (t < start + half)
-        tau = t[m] - start
-        e = np.exp(-damping_ratio * w * tau)
-        cos, sin = np.cos(wd * tau), np.sin(wd * tau)
-        x[m] = x_eq + y0 * e * (cos + damping_ratio * w / wd * sin)
-        v[m] = -y0 * (w * w / wd) * e * sin
-        a[m] = -2.0 * damping_ratio * w * v[m] - w * w * (x[m] - x_eq)
-        x_start = x_eq - y0 * math.exp(-damping_ratio * w * half)
-        start += half
-    return x, v, a
+    iso = Isolation.linear(1.0, period, damping_ratio, friction_acceleration)
+    return free_vibration(iso, d0, t_end=max(t_max, period)).state(t)
+
+
+def building_isolation(building: BuildingSpec) -> Isolation:
+    """The ``[building]`` table as the linear isolation of :mod:`quickrelease.building` (k = m (2 pi / T)^2,
+    viscous damping ratio, Coulomb sliders). Without a mass the motion needs no friction (``a_f = F_s / m``):
+    a unit mass stands in when the friction is 0."""
+    friction = building.friction_force
+    mass = building.mass
+    if mass is None:
+        if friction > 0.0:
+            raise ParameterError("[building] mass", None, "given with the isolators' friction (the motion depends "
+                                 "on friction / mass)", "kg")
+        mass = 1.0
+    return Isolation.linear(mass, building.period, building.damping_ratio, friction)
 
 
 def pushed_displacement(push_force: float, building: BuildingSpec) -> float:
@@ -474,6 +468,11 @@ def pushed_displacement(push_force: float, building: BuildingSpec) -> float:
         return building.displacement
     k = building.mass * (2.0 * math.pi / building.period) ** 2
     return max(push_force - building.friction_force, 0.0) / k
+
+
+#: What :class:`Clearance` says when the gap grows over the whole horizon (no minimum after it opens).
+GAP_GROWS = ("the gap grows over the whole horizon: the head outruns the building's first (largest) approach and "
+             "has stopped, so no later approach can close it; there is no minimum after the opening")
 
 
 @dataclass(frozen=True, eq=False)
@@ -488,11 +487,13 @@ class Clearance:
     approach: np.ndarray
     """d0 - x(t) [m]: how far the building has come back towards the device."""
     d0: float
-    min_gap: float
-    """The smallest gap once the gap has opened (see :func:`clearance`) [m]."""
-    min_gap_time: float
+    min_gap: float | None
+    """The smallest gap once the gap has opened (see :func:`clearance`) [m]; None when the gap grows over the
+    whole horizon (then ``note`` says so)."""
+    min_gap_time: float | None
     contact: bool
     first_contact_time: float | None
+    """The first instant the gap closes (a bracketed root of the closed-form gap) [s]; None without contact."""
     margin_needed: float
     """How much more room the head needs to stay clear: max(0, -min_gap) [m]."""
     max_approach: float
@@ -501,11 +502,45 @@ class Clearance:
     """The time span checked [s]."""
     gap_series: tuple[float, float]
     """(u_dot0, (u_ddot0 - a_b0) / 2): gap ~ u_dot0 t + that t^2 for small t."""
+    note: str = ""
+    """Why no minimum is reported (:data:`GAP_GROWS`), else empty."""
+
+    def describe_minimum(self) -> str:
+        """``minimum gap X mm at Y s``, or why there is none."""
+        if self.min_gap is None:
+            return "no minimum gap: " + self.note
+        return f"minimum gap {1e3 * self.min_gap:.4g} mm at {self.min_gap_time:.4g} s"
 
     def summary(self) -> dict[str, Any]:
         return {"d0_m": self.d0, "min_gap_m": self.min_gap, "min_gap_time_s": self.min_gap_time,
                 "contact": self.contact, "first_contact_time_s": self.first_contact_time,
-                "margin_needed_m": self.margin_needed, "max_approach_m": self.max_approach, "horizon_s": self.horizon}
+                "margin_needed_m": self.margin_needed, "max_approach_m": self.max_approach, "horizon_s": self.horizon,
+                "note": self.note}
+
+
+class _Gap:
+    """The gap u(t) - (d0 - x(t)) [m] and its rate u_dot + x_dot [m/s], from the device's first integral and the
+    building's closed form: continuous functions of t for the root finders."""
+
+    def __init__(self, release: FirstIntegral, motion: FreeVibration, d0: float):
+        self.release, self.motion, self.d0 = release, motion, float(d0)
+
+    def __call__(self, s: float) -> float:
+        alpha, _ = self.release.state_at(np.array([s]))
+        x, _, _ = self.motion.state(np.array([s]))
+        return float(retraction(alpha[0], self.release.alpha0, self.release.L1) - (self.d0 - x[0]))
+
+    def rate(self, s: float) -> float:
+        alpha, alpha_dot = self.release.state_at(np.array([s]))
+        _, v, _ = self.motion.state(np.array([s]))
+        return float(self.release.L1 * math.sin(alpha[0]) * alpha_dot[0] + v[0])
+
+
+def _root(f, a: float, b: float) -> float:
+    """The root of f in [a, b] (f(a) >= 0 > f(b)) to machine precision."""
+    from scipy.optimize import brentq
+
+    return float(brentq(f, a, b, xtol=1e-300, rtol=4.0 * np.finfo(float).eps, maxiter=200))
 
 
 def clearance(release: FirstIntegral, building: BuildingSpec, d0: float, n: int = 6001, refine: bool = True) \
@@ -514,37 +549,75 @@ def clearance(release: FirstIntegral, building: BuildingSpec, d0: float, n: int 
 
     At the rupture the head and the building are in contact (gap 0). The head retracts by u(t) (Table 4;
     the device's centre stays put, both heads retract symmetrically, and the jack's ram does not follow
-    within the second or so of the release); the building springs back from d0 (:func:`building_motion`).
-    The gap opens at once (``u_dot0 > 0`` while the building starts from rest); the minimum gap is taken after
-    the gap's first maximum, when the building catches up, over ``max(1.5 t_F, one period)``: after the
-    device has stopped the gap is ``u_F`` minus the approach, smallest at the building's first largest
-    approach half a period after release. A gap below 0 is a contact: the building hits the device, which
-    would spoil the free-vibration test.
+    within the second or so of the release); the building springs back from d0 (the exact closed form of
+    :func:`quickrelease.building.free_vibration`, :func:`building_isolation`). The gap opens at once
+    (``u_dot0 > 0`` while the building starts from rest); the minimum gap is taken after the gap's first
+    maximum, when the building catches up, over ``max(1.5 t_F, one period)``: after the device has stopped the
+    gap is ``u_F`` minus the approach, smallest at the building's first largest approach half a period after
+    release. A gap below 0 is a contact: the building hits the device, which would spoil the free-vibration
+    test.
+
+    The gap is sampled at ``n`` instants to bracket its events, which are then located on the continuous gap:
+    the minimum as the root of the gap's rate ``u_dot + x_dot`` (brentq; a golden section where the rate jumps,
+    at a stop on the flat rhombus), and the first contact as the first root of the gap (brentq, to machine
+    precision), both bracketed by the samples (the first contact also by the refined minimum, when the gap dips
+    below 0 only between two samples).
+
+    When the gap never falls within the horizon (the head outruns the building's first, largest, approach),
+    there is no minimum after the opening: ``min_gap`` and ``min_gap_time`` are None, ``contact`` is False
+    (the later approaches are smaller and the head has stopped, so none can close the gap) and ``note`` says
+    so (:data:`GAP_GROWS`).
     """
     period = building.period
-    a_f = building.friction_force / building.mass if building.friction_force else 0.0
+    iso = building_isolation(building)
+    a_f = iso.friction / iso.mass
     t_stop = release.stop_time()
     horizon = max(1.5 * t_stop, period)
+    motion = free_vibration(iso, d0, t_end=horizon)
+    f = _Gap(release, motion, d0)
     t = np.linspace(0.0, horizon, n)
     alpha, alpha_dot = release.state_at(t)
     L1 = release.L1
     head = retraction(alpha, release.alpha0, L1)
-    x, _, _ = building_motion(t, d0, period, building.damping_ratio, a_f)
+    x, _, _ = motion.state(t)
     approach = d0 - x
     gap = head - approach
     # the gap opens, then the building may catch up: the minimum after the gap's first maximum
     falling = np.nonzero(np.diff(gap) < 0)[0]
+    t_min = g_min = None
+    note = ""
     if falling.size:
         first_max = int(falling[0])
         k = first_max + int(np.argmin(gap[first_max:]))
-    else:  # the gap grows all the while: report it at the building's largest approach
-        k = int(np.argmax(approach))
-    t_min = float(t[k])
-    if refine and 0 < k < n - 1:  # refine on the continuous gap (golden section on the bracketing samples)
-        t_min = _refine_minimum(lambda s: _gap_at(s, release, building, d0, a_f), float(t[k - 1]), float(t[k + 1]))
-    g_min = float(_gap_at(t_min, release, building, d0, a_f))
+        t_min = float(t[k])
+        if refine and 0 < k < n - 1:
+            a, b = float(t[k - 1]), float(t[k + 1])
+            ra, rb = f.rate(a), f.rate(b)
+            if ra < 0.0 < rb:  # the gap's rate changes sign: its root is the minimum
+                t_min = _root(lambda s: -f.rate(s), a, b)
+            else:  # a kink (the head stops on the flat rhombus): golden section on the bracketing samples
+                t_min = _refine_minimum(f, a, b)
+        g_min = f(t_min)
+    else:
+        note = GAP_GROWS
+    first_contact = None
     negative = np.nonzero(gap[1:] < 0)[0]
-    first_contact = float(t[negative[0] + 1]) if negative.size else None
+    if negative.size:  # the first sample past the crossing and the one before it bracket the first contact
+        j = int(negative[0]) + 1
+        a, b = float(t[j - 1]), float(t[j])
+    elif g_min is not None and g_min < 0:  # the gap dips below 0 only between samples: bracket by the minimum
+        b = float(t_min)
+        a = float(t[max(int(np.searchsorted(t, b)) - 1, 0)])
+    else:
+        a = b = None
+    if a is not None:
+        while a == 0.0:  # the gap is 0 at the release and opens at once: halve towards it for a positive gap
+            s = 0.5 * b
+            if s == 0.0 or f(s) > 0.0:
+                a = s
+            else:
+                b = s
+        first_contact = _root(f, a, b) if f(a) >= 0.0 > f(b) else b
     alpha0 = release.alpha0
     s0, c0 = math.sin(alpha0), math.cos(alpha0)
     rate0 = release.alpha_dot0
@@ -553,17 +626,18 @@ def clearance(release: FirstIntegral, building: BuildingSpec, d0: float, n: int 
     a_b0 = w * w * d0 - a_f  # the building's initial acceleration towards the device
     u_dot0 = L1 * s0 * rate0
     u_ddot0 = L1 * (c0 * rate0**2 + s0 * acc0)
-    contact = first_contact is not None or g_min < 0
+    contact = first_contact is not None
     return Clearance(t=t, gap=gap, head=head, approach=approach, d0=float(d0), min_gap=g_min, min_gap_time=t_min,
-                     contact=bool(contact), first_contact_time=first_contact, margin_needed=max(0.0, -g_min),
+                     contact=bool(contact), first_contact_time=first_contact,
+                     margin_needed=max(0.0, -g_min) if g_min is not None else 0.0,
                      max_approach=float(np.max(approach)), horizon=horizon,
-                     gap_series=(u_dot0, 0.5 * (u_ddot0 - a_b0)))
+                     gap_series=(u_dot0, 0.5 * (u_ddot0 - a_b0)), note=note)
 
 
-def _gap_at(s: float, release: FirstIntegral, building: BuildingSpec, d0: float, a_f: float) -> float:
-    alpha, _ = release.state_at(np.array([s]))
-    x, _, _ = building_motion(np.array([s]), d0, building.period, building.damping_ratio, a_f)
-    return float(retraction(alpha[0], release.alpha0, release.L1) - (d0 - x[0]))
+def _gap_at(s: float, release: FirstIntegral, building: BuildingSpec, d0: float) -> float:
+    """The gap at one instant s [s] (see :func:`clearance`) [m]."""
+    motion = free_vibration(building_isolation(building), d0, t_end=max(float(s), building.period))
+    return _Gap(release, motion, d0)(s)
 
 
 def _refine_minimum(f, a: float, b: float, tol: float = 1e-10) -> float:
@@ -666,12 +740,15 @@ def plan_case(case: Case, *, clearance_samples: int = 200) -> PlanResult:
         if envelope.samples > 1:
             idx = np.linspace(0, envelope.samples - 1, min(clearance_samples, envelope.samples)).astype(int)
             F1s, F2s = envelope.values["F1"], envelope.values["F2"]
-            gaps = np.array([clearance(FirstIntegral(case.stored_energy, a0, F1s[i], F2s[i], d.m1, d.m2, d.L1,
-                                                     case.mass_factor), case.building, d0, n=1501,
-                                                 refine=False).min_gap
-                             for i in idx])
-            spread = {"min_gap_p5_m": float(np.percentile(gaps, 5)), "contact_share": float(np.mean(gaps < 0)),
-                      "clearance_samples": int(idx.size)}
+            runs = [clearance(FirstIntegral(case.stored_energy, a0, F1s[i], F2s[i], d.m1, d.m2, d.L1,
+                                            case.mass_factor), case.building, d0, n=1501, refine=False)
+                    for i in idx]
+            gaps = np.array([r.min_gap for r in runs if r.min_gap is not None])
+            # a sample whose gap grows all the while has no minimum (and no contact): the 5th percentile is
+            # over the samples that have one, and their count is reported
+            spread = {"min_gap_p5_m": float(np.percentile(gaps, 5)) if gaps.size else None,
+                      "contact_share": float(np.mean([r.contact for r in runs])),
+                      "clearance_samples": int(idx.size), "clearance_samples_with_minimum": int(gaps.size)}
     return PlanResult(case=case, push_force=P, alpha0=a0, stored_energy=case.stored_energy, members=members,
                       envelope=envelope, fuse=fuse_table, clearance=clear, clearance_spread=spread,
                       notes=tuple(notes))
@@ -774,9 +851,10 @@ def gap_figure(clear: Clearance):
     ax.axhline(0.0, color="black", lw=0.8)
     if clear.contact:
         ax.fill_between(clear.t, clear.gap, 0.0, where=clear.gap < 0, color=_COLORS["b"], alpha=0.3, label="contact")
-    ax.plot([clear.min_gap_time], [clear.min_gap], "o", color=_COLORS["b"])
-    ax.annotate(f"min gap {1e3 * clear.min_gap:.0f} mm at {clear.min_gap_time:.3g} s", (clear.min_gap_time,
-                clear.min_gap), textcoords="offset points", xytext=(6, -12), fontsize=8)
+    if clear.min_gap is not None:
+        ax.plot([clear.min_gap_time], [clear.min_gap], "o", color=_COLORS["b"])
+        ax.annotate(f"min gap {1e3 * clear.min_gap:.0f} mm at {clear.min_gap_time:.3g} s", (clear.min_gap_time,
+                    clear.min_gap), textcoords="offset points", xytext=(6, -12), fontsize=8)
     ax.set_xlabel("time after release [s]")
     ax.set_ylabel("[m]")
     verdict = "CONTACT" if clear.contact else "clear"

@@ -259,13 +259,13 @@ def _plan_section(plan, svgs: dict[str, str]) -> str:
                    "room is needed</span>" if c.contact else "no contact: the head stays clear of the building")
         parts.append(f"<p>Building: T = {_num(b.period, '.4g')} s, ζ = {_num(b.damping_ratio, '.3g')}, isolator "
                      f"friction {_num(b.friction_force / 1e3, '.4g')} kN; pushed displacement d0 = "
-                     f"{_num(1e3 * c.d0, '.4g')} mm. Minimum gap {_num(1e3 * c.min_gap, '.4g')} mm at "
-                     f"{_num(c.min_gap_time, '.4g')} s; largest approach {_num(1e3 * c.max_approach, '.4g')} mm. "
+                     f"{_num(1e3 * c.d0, '.4g')} mm; {_e(c.describe_minimum())}; "
+                     f"largest approach {_num(1e3 * c.max_approach, '.4g')} mm. "
                      f"{verdict}.</p>")
         if plan.clearance_spread is not None:
             sp = plan.clearance_spread
             parts.append(f"<p>Over {sp['clearance_samples']} friction samples: 5% of the minimum gaps below "
-                         f"{_num(1e3 * sp['min_gap_p5_m'], '.4g')} mm; contact in "
+                         f"{_num(sp['min_gap_p5_m'] and 1e3 * sp['min_gap_p5_m'], '.4g')} mm; contact in "
                          f"{_num(100 * sp['contact_share'], '.3g')}% of them.</p>")
         parts.append(_figure(svgs, "plan_gap"))
     for text in plan.notes:

@@ -72,6 +72,10 @@ class FirstIntegral:
         self.alpha_final = float(self._rel.alpha_final[0])
         self.stopped_by = "geometric_limit" if self.geometric_limit else "friction"
         self._time_map: TimeMap | None = None
+        coarse = [v for v in (self.E_S,) if 0.0 < v < _FINEST_SUBNORMAL]
+        if coarse:  # a deep subnormal E_S carries few bits: the results would be off in their leading digits
+            _unresolved(self, f"an input of {coarse[0]:.6g} < {_FINEST_SUBNORMAL:.3g}, a subnormal float with fewer "
+                        "than 43 significant bits")
         if not (math.isfinite(self.alpha_final) and 0.0 < self.alpha_dot0 < math.inf):
             _unresolved(self, f"alpha_F = {self.alpha_final:.6g} rad, alpha_dot0 = {self.alpha_dot0:.6g} rad/s")
 
@@ -157,6 +161,10 @@ def stop_time(E_S: float, alpha0: float, F1: float, F2: float, *,
     c = dynamics.mass_factor(mass_model)
     _check_release(E_S, alpha0, F1, F2)
     return FirstIntegral(E_S, alpha0, F1, F2, device.m1, device.m2, device.L1, c).stop_time()
+
+
+#: Below this a subnormal float has fewer than 43 significant bits (relative spacing above 1e-13).
+_FINEST_SUBNORMAL = math.ldexp(1.0, -1031)
 
 
 def _unresolved(fi: FirstIntegral, derived: str) -> None:

@@ -53,6 +53,7 @@ OUTPUTS = {
     "peak_u_ddot": ("peak head acceleration", "m/s^2"),
     "peak_v_ddot": ("peak central hinge acceleration", "m/s^2"),
     "stored_energy": ("stored strain energy E_S", "J"),
+    "status": ("0: computed, 1: outside the floating-point range (outputs NaN; batch.RELEASE_STATUS)", "1"),
 }
 
 
@@ -131,6 +132,9 @@ def _compute(case: Case, grids: dict[str, np.ndarray], base: dict[str, float], b
     return out
 
 
+_FLAGS = ("stopped_by", "status")
+
+
 def _dataset(case: Case, grids: dict[str, np.ndarray], data: dict[str, np.ndarray] | None, base: dict[str, float]):
     import xarray as xr
 
@@ -139,8 +143,8 @@ def _dataset(case: Case, grids: dict[str, np.ndarray], data: dict[str, np.ndarra
     shape = tuple(grids[n].size for n in names)
     variables = {}
     for key, (long, unit) in OUTPUTS.items():
-        values = data[key] if data is not None else np.zeros(shape, dtype=np.int8 if key == "stopped_by" else float)
-        variables[key] = (names, np.asarray(values, dtype=np.int8 if key == "stopped_by" else float),
+        values = data[key] if data is not None else np.zeros(shape, dtype=np.int8 if key in _FLAGS else float)
+        variables[key] = (names, np.asarray(values, dtype=np.int8 if key in _FLAGS else float),
                           {"long_name": long, "units": unit})
     attrs = {"title": f"quickrelease sweep: {case.title}", "case": case.source, "device": case.device.name}
     attrs.update({f"fixed_{k}": float(v) for k, v in base.items() if k not in grids and np.isfinite(v)})
