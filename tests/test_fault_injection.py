@@ -159,7 +159,9 @@ def test_killed_dask_sweep_resumes_to_the_identical_store(tmp_path):
         return done.is_dir() and any(p.name.isdigit() for p in done.iterdir())
 
     rc = _kill(base, RNG.uniform(0.0, 1.5), ready=some_blocks_done)
-    if rc != 0:
+    # killed after the store was moved into place (while drawing the heat maps beside it), the store is the
+    # complete result, checked below; killed before, nothing is at --out
+    if rc != 0 and staging.exists():
         with pytest.raises(Exception):  # noqa: B017 - nothing at --out opens as a result
             xr.open_zarr(out)
         # resuming with a changed grid (a new shape; a new range: test_sweep.py) is refused in one line
