@@ -361,7 +361,7 @@ def run_campaign(path: str | Path) -> CampaignResult:
 
 def campaign_figure(result: CampaignResult):
     """Friction against each variable: the tests (95% error bars), the fitted law and its 95% band."""
-    from .plots import _COLORS, _figure
+    from .plots import _COLORS, _figure, user_label
 
     nv = len(result.variables)
     fig = _figure(3.4 * nv + 0.6, 5.8, left=0.1, right=0.98, bottom=0.1, top=0.86, wspace=0.3, hspace=0.48)
@@ -381,7 +381,8 @@ def campaign_figure(result: CampaignResult):
             ax.plot(grid * scale, mean, color=_COLORS["a"], label="fitted law")
             ax.errorbar(x * scale, y, yerr=1.96 * se, fmt="o", ms=4, color=_COLORS["b"], capsize=2, label="tests")
             for xi, yi, t in zip(x, y, result.tests, strict=True):
-                ax.annotate(t.name, (xi * scale, yi), textcoords="offset points", xytext=(4, 3), fontsize=6)
+                user_label(ax, "annotate", t.name, (xi * scale, yi), textcoords="offset points", xytext=(4, 3),
+                           fontsize=6)
             verdict = "significant" if law.significant else "not significant"
             ax.set_title(f"{friction}: slope {law.slope / scale:.3g} ± {law.slope_se / scale:.2g} N/{unit}\n"
                          f"(p = {law.p_value:.2g}, {verdict} at 5%)", fontsize=8)
@@ -389,5 +390,5 @@ def campaign_figure(result: CampaignResult):
             ax.set_ylabel(f"${friction[0]}_{friction[1]}$ [N]")
             if row == 0 and col == 0:
                 ax.legend(fontsize=6, loc="best")
-    fig.suptitle(f"{result.title}: friction against load and angle")
+    user_label(fig, "suptitle", f"{result.title}: friction against load and angle")
     return fig

@@ -34,6 +34,12 @@ def _clean(text: str) -> str:
     return str(text).translate(_CONTROL)
 
 
+def _echo(message: Any = "", err: bool = False) -> None:
+    """Print a line of a command's output with :func:`_clean` applied: user text (titles, test names, file
+    names, notes) reaches the terminal as text, never as escape sequences."""
+    typer.echo(_clean(message), err=err)
+
+
 class _OneLineErrors(TyperGroup):
     """Usage errors (a bad integer, an unknown option, a missing argument) as one line on stderr, exit 2.
 
@@ -260,9 +266,9 @@ OverwriteOpt = Annotated[bool, typer.Option("--overwrite", help="Replace an outp
 
 
 def _listing(paths: dict[str, Path], out: Path) -> None:
-    typer.echo(f"Wrote {len(paths)} files to {out}/:")
+    _echo(f"Wrote {len(paths)} files to {out}/:")
     for path in paths.values():
-        typer.echo(f"  {path.relative_to(out)}")
+        _echo(f"  {path.relative_to(out)}")
 
 
 @app.command("run")
@@ -307,7 +313,7 @@ def report(
     case = load_case(case_file)
     results_folder(case, out, figures=False, data=False, overwrite=overwrite)
     paths = write_results(run_case(case), out, figures=False, data=False, overwrite=overwrite)
-    typer.echo(f"Wrote {paths['report']}")
+    _echo(f"Wrote {paths['report']}")
 
 
 @app.command()
@@ -335,18 +341,18 @@ def demo(
     results_folder(case, out, overwrite=overwrite)  # pre-flight
     dev = preset("paper")
     cmp = reproduce_table7(dev, mass_model=mass_model)
-    typer.echo(f"Device: {dev.name} (Table 2); mass model: {mass_model}")
+    _echo(f"Device: {dev.name} (Table 2); mass model: {mass_model}")
     terms = [(k, f"{v:.2f}") for k, v in cmp.E_S_breakdown.items()]
     terms.append(("total E_S", f"{cmp.E_S_eq2:.2f}"))
     _table("E_S by term (Eq. 2) [J]", terms, ("term", "J"))
     _table("Table 7: the paper and quickrelease", cmp.rows(), ("quantity", "paper", "quickrelease", "note"))
-    typer.echo(
+    _echo(
         f"Release with the identified friction: alpha_dot0 = {cmp.alpha_dot0:.4f} rad/s, "
         f"u_F = {cmp.u_final:.4f} m, v_F = {cmp.v_final:.4f} m, "
         f"peak u_dot = {cmp.peak_u_dot:.3f} m/s, peak v_dot = {cmp.peak_v_dot:.3f} m/s"
     )
     paths = write_results(run_case(case), out, overwrite=overwrite)
-    typer.echo(f"Figures and report of the paper case: {out / 'report.html'} ({len(paths)} files in {out}/)")
+    _echo(f"Figures and report of the paper case: {out / 'report.html'} ({len(paths)} files in {out}/)")
 
 
 @app.command()
@@ -371,7 +377,7 @@ def uq(
     case = load_case(case_file)
     result = run_uq(case, samples, seed=seed, chunk=chunk, backend=backend, scheduler=scheduler, workers=workers,
                     out=out, resume=resume, overwrite=overwrite, progress=not as_json and sys.stderr.isatty(),
-                    log=lambda line: typer.echo(f"note: {line}", err=True))
+                    log=lambda line: _echo(f"note: {line}", err=True))
     if as_json:
         _print_json(result.summary())
         return
@@ -382,7 +388,7 @@ def uq(
         (name, f"{result.nominal[name]:.2f}", f"{p[name]['p2.5']:.2f}", f"{p[name]['p50']:.2f}",
          f"{p[name]['p97.5']:.2f}", f"{result.std[name]:.2f}") for name in ("F1", "F2")],
         ("friction [N]", "nominal", "2.5%", "50%", "97.5%", "std"))
-    typer.echo(f"correlation(F1, F2) = {result.correlation:.4f}; infeasible samples: "
+    _echo(f"correlation(F1, F2) = {result.correlation:.4f}; infeasible samples: "
                f"{100 * result.infeasible_share:.2f}%; percentile resolution {result.resolution['F1']:.3g} N")
     sens = [(f"d{f}/d{x}", f"{v:.6g}", f"{result.sensitivities_fd[f][x]:.6g}")
             for f in ("F1", "F2") for x, v in result.sensitivities[f].items()]
@@ -410,7 +416,7 @@ def sweep_command(
 
     grids = dict(parse_grid(g) for g in grid)
     ds = sweep(load_case(case_file), grids, backend=backend, out=out, scheduler=scheduler, workers=workers,
-               block_rows=block_rows, resume=resume, overwrite=overwrite, log=lambda line: typer.echo(f"note: {line}", err=True))
+               block_rows=block_rows, resume=resume, overwrite=overwrite, log=lambda line: _echo(f"note: {line}", err=True))
     figs = save_figure(heatmap_figure(ds), out.parent, out.name.rsplit(".", 1)[0] + "_heatmaps")
     summary = {"file": str(out), "dims": {k: int(v) for k, v in ds.sizes.items()},
                "stop_time_s": [float(ds.stop_time.min()), float(ds.stop_time.max())],
@@ -474,7 +480,7 @@ def synth(
         _print_json(summary)
         return
     t = syn.truth
-    typer.echo(f"Wrote {out} ({syn.t.size} rows at {syn.rate:g} Hz, channels {', '.join(names)}); friction "
+    _echo(f"Wrote {out} ({syn.t.size} rows at {syn.rate:g} Hz, channels {', '.join(names)}); friction "
                f"{syn.notes[0].removeprefix('friction ')}: F1 = {t['F1']:.6g} N, F2 = {t['F2']:.6g} N; release at "
                f"{t['release_time']:g} s, stop {t['stop_time']:.6g} s later at alpha_F = {t['alpha_final']:.6g} rad")
     _table("Precision of a fit to such a record (Cramer-Rao bound at the truth)", [
@@ -483,9 +489,9 @@ def synth(
         ("correlation(F1, F2)", f"{pred['correlation_F1_F2']:+.4f}", ""),
     ], ("", "standard error", "relative"))
     if case_out is not None:
-        typer.echo(f"Wrote {case_out}: quickrelease fit {case_out}")
+        _echo(f"Wrote {case_out}: quickrelease fit {case_out}")
     else:
-        typer.echo("To fit it, add to a case file:\n" + table)
+        _echo("To fit it, add to a case file:\n" + table)
 
 
 @app.command("fit")
@@ -537,10 +543,10 @@ def fit_command(
                              f"{fit.residual_rms[n]:.3g}") for n in fit.residual_rms],
                ("channel", "samples", "noise (SI)", "from", "rms residual"))
     i1, i2 = fit.names.index("F1"), fit.names.index("F2")
-    typer.echo(f"correlation(F1, F2) = {fit.correlation[i1, i2]:+.4f}; model stop t_F = {fit.stop_time:.6g} s at "
+    _echo(f"correlation(F1, F2) = {fit.correlation[i1, i2]:+.4f}; model stop t_F = {fit.stop_time:.6g} s at "
                f"alpha_F = {fit.alpha_final:.6g} rad")
     for text in (*fit.notes, *fit.warnings):
-        typer.echo(f"note: {text}" if text in fit.notes else f"warning: {text}")
+        _echo(f"note: {text}" if text in fit.notes else f"warning: {text}")
     if paths:
         _listing(paths, out)
 
@@ -585,7 +591,7 @@ def campaign(
     for friction, joint in result.joint.items():
         terms = joint.summary()["terms"]
         units = {n: VARIABLES[n][3:] if n in VARIABLES else (1.0, "") for n in terms}
-        typer.echo(f"joint law {friction} = a + " + " + ".join(f"b_{v} {v}" for v in joint.variables) + ": " + ", ".join(
+        _echo(f"joint law {friction} = a + " + " + ".join(f"b_{v} {v}" for v in joint.variables) + ": " + ", ".join(
             f"{'a' if n == 'intercept' else 'b_' + n} = {v['value'] / units[n][0]:.4g} ± {v['se'] / units[n][0]:.2g} "
             f"N{'/' + units[n][1] if units[n][1] else ''} (p = {v['p_value']:.2g})" for n, v in terms.items()))
     if paths:
@@ -614,7 +620,7 @@ def plan(
     if as_json:
         _print_json(summary)
         return
-    typer.echo(f"{result.case.title}: P = {plan_result.push_force / 1e3:.6g} kN at alpha0 = {plan_result.alpha0:.4g} "
+    _echo(f"{result.case.title}: P = {plan_result.push_force / 1e3:.6g} kN at alpha0 = {plan_result.alpha0:.4g} "
                f"rad, E_S = {plan_result.stored_energy:.6g} J")
     if plan_result.fuse is not None:
         ft = plan_result.fuse
@@ -625,7 +631,7 @@ def plan(
                 for c in ft.choices if c.within],
                ("d [mm]", "alpha0 [rad]", "P [kN]", "E_S [J]", "P inside the target"))
         for text in ft.warnings:
-            typer.echo(f"warning: {text}")
+            _echo(f"warning: {text}")
     m = plan_result.members
     _table(f"Member checks (fuse stress N4/A4 = {m.fuse_stress / 1e6:.4g} MPa)", [
         (c.member, c.check, f"{c.demand / (1e6 if c.unit == 'Pa' else 1e3):.4g}",
@@ -643,15 +649,15 @@ def plan(
         c = plan_result.clearance
         verdict = (f"CONTACT at {c.first_contact_time:.3g} s: {1e3 * c.margin_needed:.4g} mm more room needed"
                    if c.contact else "no contact")
-        typer.echo(f"Clearance: d0 = {1e3 * c.d0:.4g} mm, largest approach {1e3 * c.max_approach:.4g} mm, "
+        _echo(f"Clearance: d0 = {1e3 * c.d0:.4g} mm, largest approach {1e3 * c.max_approach:.4g} mm, "
                    f"{c.describe_minimum()}: {verdict}")
         if plan_result.clearance_spread is not None:
             sp = plan_result.clearance_spread
             p5 = "-" if sp["min_gap_p5_m"] is None else f"{1e3 * sp['min_gap_p5_m']:.4g}"
-            typer.echo(f"  over {sp['clearance_samples']} friction samples: 5% of minimum gaps below "
+            _echo(f"  over {sp['clearance_samples']} friction samples: 5% of minimum gaps below "
                        f"{p5} mm, contact in {100 * sp['contact_share']:.3g}%")
     for text in plan_result.notes:
-        typer.echo(f"note: {text}")
+        _echo(f"note: {text}")
     if paths:
         _listing(paths, out)
 
@@ -665,7 +671,7 @@ def bench(
     """Benchmarks: kernel throughput on one core vs scipy (same run), accuracy vs mpmath, uq 1e8 on Dask."""
     from .bench import run_bench
 
-    result = run_bench(quick=quick, log=(lambda line: None) if as_json else (lambda line: typer.echo(line, err=True)))
+    result = run_bench(quick=quick, log=(lambda line: None) if as_json else (lambda line: _echo(line, err=True)))
     if as_json:
         _print_json(result)
         return
@@ -677,7 +683,7 @@ def main() -> None:
     try:
         app()
     except QuickReleaseError as exc:  # pragma: no cover - commands guard themselves
-        typer.echo(f"error: {exc}", err=True)
+        _echo(f"error: {_clean(exc)}", err=True)
         sys.exit(2)
 
 

@@ -119,10 +119,19 @@ def write_netcdf(response: Response, path: str | Path, attrs: dict[str, Any] | N
                     value = np.int64(value) if abs(value) >= 2**31 else np.int32(value)
                 elif isinstance(value, float):
                     value = np.float64(value)  # scipy would store a Python float as float32
+                elif isinstance(value, str):
+                    value = _text_attr(value)
                 setattr(f, key, value)
         finally:
             f.close()
     return Path(path)
+
+
+def _text_attr(text: str) -> bytes:
+    """A text attribute as NetCDF classic stores text: UTF-8 bytes (NC_CHAR), the encoding the NetCDF
+    conventions and xarray read back as text. scipy's writer encodes ``str`` as ASCII and fails on any
+    other letter (a title "Prüfung", a test name in CJK)."""
+    return text.encode("utf-8")
 
 
 def _var_name(column: str) -> str:

@@ -20,7 +20,7 @@ from .statics import StrainEnergy
 
 __all__ = [
     "fig13", "fig14", "fig15", "identification_figure", "strain_energy_figure", "fit_figure", "save_figure",
-    "state_diagram_data", "identification_curve_data",
+    "state_diagram_data", "identification_curve_data", "user_text", "user_label",
 ]
 
 _STYLE = {
@@ -41,6 +41,23 @@ def _figure(width: float, height: float, **margins: float):
     fig = Figure(figsize=(width, height))
     fig.subplots_adjust(**{"left": 0.12, "right": 0.97, "bottom": 0.14, "top": 0.9, **margins})
     return fig
+
+
+#: Control characters but newline and tab: no glyph draws them, and XML (the SVG) forbids them.
+_CONTROL = dict.fromkeys([*range(0x00, 0x09), *range(0x0B, 0x20), *range(0x7F, 0xA0)], "?")
+
+
+def user_text(text: Any) -> str:
+    """User text (a title, a test name) made safe to draw: control characters shown as '?'.
+
+    Draw it with ``parse_math=False`` (see :func:`user_label`): a ``$`` in a name is a dollar sign, not
+    the start of matplotlib mathtext (an unbalanced or invalid formula would stop the figure)."""
+    return str(text).translate(_CONTROL)
+
+
+def user_label(ax_or_fig, method: str, text: Any, *args: Any, **kwargs: Any):
+    """``ax_or_fig.<method>(text, ...)`` for user text: cleaned by :func:`user_text`, mathtext off."""
+    return getattr(ax_or_fig, method)(user_text(text), *args, parse_math=False, **kwargs)
 
 
 def _mark_stop(ax, response: Response) -> None:
