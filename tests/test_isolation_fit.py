@@ -9,7 +9,7 @@ import pytest
 from building_reference import reference
 
 from quickrelease.errors import ParameterError
-from quickrelease.isolation_fit import BuildingChannel, compare_models, fit_isolation, ljung_box
+from quickrelease.isolation_fit import BuildingChannel, compare_models, decay_check, fit_isolation, ljung_box
 
 M = 4.0e5
 
@@ -48,6 +48,11 @@ def test_linear_isolation_recovered_with_calibrated_errors():
         z += [(fit.estimates[n] - v) / fit.std_errors[n] for n, v in truth.items()]
         lo, hi = fit.ci95["friction"]
         assert lo < fit.estimates["friction"] < hi and fit.interval_method["friction"] == "jacobian"
+        if seed == 1:  # the model-free decay agrees with the fit (the combined law is exact for this model)
+            check = decay_check(fit)
+            assert [r["parameter"] for r in check["rows"]] == ["period", "damping_ratio", "friction"]
+            assert all(abs(r["difference_in_se"]) < 10 for r in check["rows"]), check["rows"]
+            assert abs(check["rows"][0]["decay"] - T) < 0.01 * T
     rms = float(np.sqrt(np.mean(np.square(z))))
     assert 0.7 < rms < 1.35, rms
     assert fit.isolation().period == pytest.approx(fit.estimates["period"], rel=1e-12)
@@ -78,6 +83,7 @@ def test_bilinear_from_design_values_and_model_choice():
     table = compare_models([linear, bilinear])
     assert table[0]["model"] == "bilinear" and table[1]["delta_bic"] > 100
     assert any("does not support" in w for w in linear.warnings)
+    assert "no decay law" in decay_check(bilinear)["notes"][0]
 
 
 def test_ljung_box_white_and_coloured():

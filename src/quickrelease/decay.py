@@ -264,6 +264,8 @@ class DecayAnalysis:
     (nan with fewer than two turning points)."""
     natural_period: float
     """``period sqrt(1 - zeta^2)``, zeta from the combined law [s]."""
+    period_se: float = math.nan
+    """Standard error of the period from the scatter of the turning-point times about their line [s]."""
     notes: tuple[str, ...] = field(default=())
 
     def stiffness(self, mass: float) -> float:
@@ -277,7 +279,7 @@ class DecayAnalysis:
     def summary(self, mass: float | None = None) -> dict[str, Any]:
         out: dict[str, Any] = {
             "half_cycles": int(max(self.peaks.size - 1, 0)), "period_s": self.period,
-            "natural_period_s": self.natural_period, "peaks_m": self.peaks.tolist(),
+            "natural_period_s": self.natural_period, "period_se_s": self.period_se, "peaks_m": self.peaks.tolist(),
             "peak_times_s": self.peak_times.tolist(), "zero_crossings_s": self.zero_crossings.tolist(),
             "amplitude_m": self.amplitude.tolist(), "equivalent_period_s": self.equivalent_period.tolist(),
             "equivalent_damping": self.equivalent_damping.tolist(),
@@ -327,17 +329,24 @@ def analyse_decay(t, x, release_time: float | None = None, noise: float = 0.0, r
         # all of them, not just the first and the last); the final stick is located less sharply than a
         # turning point (the record is flat after it), so it is left out when there are other half-cycles
         use = times[:-1] if times.size > 3 else times
-        period = 2.0 * float(np.polyfit(np.arange(use.size), use, 1)[0])
+        n_use = np.arange(use.size)
+        slope = float(np.polyfit(n_use, use, 1)[0])
+        period = 2.0 * slope
+        period_se = math.nan
+        if use.size >= 4:  # from the scatter of the turning-point times about the line
+            resid = use - np.polyval(np.polyfit(n_use, use, 1), n_use)
+            s2 = float(resid @ resid) / (use.size - 2)
+            period_se = 2.0 * math.sqrt(s2 / float(np.sum((n_use - n_use.mean()) ** 2)))
     else:
         amplitude = teq = zeq = zamp = np.empty(0)
-        period = math.nan
+        period = period_se = math.nan
         notes.append("fewer than two turning points: no half-cycle to analyse")
     law = combined_decay_law(peaks) if peaks.size >= 5 else None
     zeta = law.damping_ratio if law and math.isfinite(law.damping_ratio) else 0.0
     natural = period * math.sqrt(1.0 - zeta * zeta) if math.isfinite(period) else math.nan
     return DecayAnalysis(peak_times=times, peaks=peaks, zero_crossings=crossings, amplitude=amplitude,
-                         equivalent_period=teq, equivalent_damping=zeq, damping_amplitude=zamp, law=law, period=period,
-                         natural_period=natural, notes=tuple(notes))
+                         equivalent_period=teq, equivalent_damping=zeq, damping_amplitude=zamp, law=law,
+                         period=period, period_se=period_se, natural_period=natural, notes=tuple(notes))
 
 
 def hysteresis_loop(x, acceleration, mass: float) -> tuple[np.ndarray, np.ndarray]:

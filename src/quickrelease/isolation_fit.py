@@ -40,7 +40,8 @@ from scipy.optimize import brentq, least_squares
 from .building import Isolation, free_vibration
 from .errors import ParameterError, QuickReleaseError
 
-__all__ = ["BuildingChannel", "IsolationFit", "fit_isolation", "compare_models", "ljung_box", "CHANNEL_KINDS"]
+__all__ = ["BuildingChannel", "IsolationFit", "fit_isolation", "compare_models", "decay_check", "ljung_box",
+           "CHANNEL_KINDS"]
 
 #: Channel kinds of the isolation layer and their SI units.
 CHANNEL_KINDS = {"x": "m", "v": "m/s", "a": "m/s^2"}
@@ -544,3 +545,45 @@ def compare_models(fits) -> list[dict[str, Any]]:
              "delta_aic": f.aic - best_aic, "delta_bic": f.bic - best_bic,
              "whiteness_p": f.whiteness_p} for f in fits]
     return sorted(rows, key=lambda row: row["bic"])
+
+
+def decay_check(fit: IsolationFit) -> dict[str, Any]:
+    """The model-free decay analysis (:mod:`quickrelease.decay`) of the fit's displacement channel beside
+    the fitted model: where they agree, and where they cannot.
+
+    For the linear model the combined decrement law is exact, so the period, damping ratio and friction of
+    the decay and of the fit estimate the same quantities: each row gives both values and their
+    difference in units of the combined standard error (the fit's and the decay's, the two taken as
+    independent, which overstates the spread a little since they share the record: a few units are
+    expected; tens mean the record and the model disagree). For the bilinear model no decay law exists
+    (period and decrement change with the amplitude by themselves) and only the per-half-cycle
+    equivalents are returned, with a note saying so.
+    """
+    from .decay import analyse_decay
+
+    xch = next((c for c in fit.channels if c.kind == "x"), None)
+    if xch is None:
+        return {"rows": [], "notes": ["no displacement channel: no decay analysis"]}
+    offset = fit.offsets().get(xch.name, 0.0)
+    analysis = analyse_decay(xch.t, xch.values - offset, release_time=fit.release_time, noise=fit.noise[xch.name])
+    out: dict[str, Any] = {"analysis": analysis.summary(fit.mass), "rows": [], "notes": []}
+    if fit.model != "linear":
+        out["notes"].append("bilinear isolators follow no decay law: compare the equivalent period and damping "
+                            "against the amplitude instead")
+        return out
+    if analysis.law is None:
+        out["notes"].append("fewer than four half-cycles: no decay law")
+        return out
+    law = analysis.law
+    k = analysis.stiffness(fit.mass)
+    pairs = {"period": (analysis.natural_period, analysis.period_se),
+             "damping_ratio": (law.damping_ratio, law.damping_ratio_se),
+             "friction": (analysis.friction_force(fit.mass), k * law.friction_displacement_se)}
+    for name, (value, decay_se) in pairs.items():
+        if name not in fit.estimates:
+            continue
+        se = math.hypot(fit.std_errors[name], decay_se if math.isfinite(decay_se) else 0.0)
+        out["rows"].append({"parameter": name, "fit": fit.estimates[name], "decay": float(value),
+                            "decay_se": float(decay_se), "difference_in_se": (float(value) - fit.estimates[name]) / se
+                            if se > 0 else math.nan})
+    return out
