@@ -32,6 +32,7 @@ def rules() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
 #: the numpy path calls (:mod:`quickrelease.dynamics`): one definition, the same rounding.
 _limit_margin = njit(cache=True, nogil=True)(dynamics.limit_margin_terms)
 _sweep = njit(cache=True, nogil=True)(dynamics.sweep_terms)
+_stop_cos = njit(cache=True, nogil=True)(dynamics.stop_cosine_terms)
 _slack = njit(cache=True, nogil=True)(_kernels.feasible_slack)
 
 
@@ -96,7 +97,7 @@ def stop_kernel(E, sa0_in, ca0_in, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, ne
                 cb = B / R
             else:
                 delta = max(delta, 0.0)
-                cb = math.sqrt((1.0 - s) * (1.0 + s))
+                cb = _stop_cos(E[i], A, B, R, sa0, ca0)  # cos(alpha_F - phi), as numpy computes it
             sA = (B * cb + A * s) / R
             cA = (A * cb - B * s) / R
             aF_out[i] = min(a0[i] + delta, _HALF_PI)

@@ -175,18 +175,38 @@ def sweep_terms(E_S, A, B, R, sin_alpha0, cos_alpha0):
     ``cu = sqrt((1 - u)(1 + u))`` and ``N = sin(delta) = u cv - s cu = e (cv + s (u + s) / (cu + cv))``
     (using ``cv - cu = (u^2 - s^2) / (cu + cv)``): for a small sweep ``N ~ e / cv``, every term of the
     same sign, so delta keeps full relative accuracy however small it is (alpha_F - alpha0 computed from a
-    rounded alpha_F would carry an absolute error of about 1e-16 rad). Pure arithmetic and one square
-    root and atan2 (compiled as is by :mod:`quickrelease._fast`). Meaningful for the friction regime
-    (``limit_margin_terms <= 0``); the geometric limit's sweep is ``pi/2 - alpha0``.
+    rounded alpha_F would carry an absolute error of about 1e-16 rad). ``cu`` is
+    :func:`stop_cosine_terms` (not ``sqrt((1 - u)(1 + u))``, which loses ``eps / cu^2`` of cu when u is
+    near -1: rail friction with a small alpha0). Pure arithmetic and one square root and atan2 (compiled
+    as is by :mod:`quickrelease._fast`). Meaningful for the friction regime (``limit_margin_terms <= 0``);
+    the geometric limit's sweep is ``pi/2 - alpha0``.
     """
     s = (A * sin_alpha0 - B * cos_alpha0) / R
     cv = (A * cos_alpha0 + B * sin_alpha0) / R
     e = E_S / R
     u = s + e
-    cu = np.sqrt(np.maximum((1.0 - u) * (1.0 + u), 0.0))
+    cu = np.sqrt(np.maximum(cv * cv - e * ((s + s) + e), 0.0))  # stop_cosine_terms, inline for numba
     N = e * (cv + s * (u + s) / (cu + cv))
     D = cu * cv + u * s
     return np.arctan2(N, D)
+
+
+def stop_cosine_terms(E_S, A, B, R, sin_alpha0, cos_alpha0):
+    """``cos(alpha_F - phi)`` of a friction stop (Eq. 8) to a few ulps of itself, cu >= 0 [-].
+
+    With s, cv, e, u as in :func:`sweep_terms`, ``cu^2 = 1 - u^2 = cv^2 - e (2 s + e)`` (``cv^2 = 1 - s^2``).
+    The textbook ``(1 - u)(1 + u)`` rounds ``1 + u`` to an absolute ulp: where u is near -1 (rail
+    friction, phi near pi/2, with a small alpha0: ``cu = sin(alpha_F)``, 1.7e-3 for E_S = 0.1 J,
+    alpha0 = 1e-4 rad, F2 = 7255 N) that is a relative error ``eps / cu^2`` of cu (1.5e-11 there), which
+    moved alpha_F and t_F by 2e-11 to 3e-11. Here, for s < 0 both terms are >= 0 (no cancellation at
+    u -> -1); the one left is at u -> +1 (a stop at pi/2 with F2 << F1), where cu is as sensitive to E_S
+    itself (``d cu / d E_S = -u / (R cu)``): there it is accurate to ``eps cv^2 / cu^2``, better than the
+    textbook's ``eps / cu^2``. Pure arithmetic (compiled as is by :mod:`quickrelease._fast`).
+    """
+    s = (A * sin_alpha0 - B * cos_alpha0) / R
+    cv = (A * cos_alpha0 + B * sin_alpha0) / R
+    e = E_S / R
+    return np.sqrt(np.maximum(cv * cv - e * ((s + s) + e), 0.0))
 
 
 def sweep_angle(E_S, alpha0, F1, F2, L1):
