@@ -185,7 +185,8 @@ def sweep_terms(E_S, A, B, R, sin_alpha0, cos_alpha0):
     cv = (A * cos_alpha0 + B * sin_alpha0) / R
     e = E_S / R
     u = s + e
-    cu = np.sqrt(np.maximum(cv * cv - e * ((s + s) + e), 0.0))  # stop_cosine_terms, inline for numba
+    neg = (s < 0.0) * 1.0  # stop_cosine_terms, inline for numba
+    cu = np.sqrt(np.maximum((1.0 - u) * (neg * (cv * cv / np.maximum(1.0 - s, 1.0) + e) + (1.0 - neg) * (1.0 + u)), 0.0))
     N = e * (cv + s * (u + s) / (cu + cv))
     D = cu * cv + u * s
     return np.arctan2(N, D)
@@ -194,19 +195,21 @@ def sweep_terms(E_S, A, B, R, sin_alpha0, cos_alpha0):
 def stop_cosine_terms(E_S, A, B, R, sin_alpha0, cos_alpha0):
     """``cos(alpha_F - phi)`` of a friction stop (Eq. 8) to a few ulps of itself, cu >= 0 [-].
 
-    With s, cv, e, u as in :func:`sweep_terms`, ``cu^2 = 1 - u^2 = cv^2 - e (2 s + e)`` (``cv^2 = 1 - s^2``).
-    The textbook ``(1 - u)(1 + u)`` rounds ``1 + u`` to an absolute ulp: where u is near -1 (rail
+    With s, cv, e, u as in :func:`sweep_terms`, ``cu^2 = (1 - u)(1 + u)`` with ``1 + u = cv^2 / (1 - s) + e``
+    for s < 0 (``cv^2 = 1 - s^2``; every term >= 0). The textbook ``(1 - u)(1 + u)`` rounds ``1 + u`` to an absolute ulp: where u is near -1 (rail
     friction, phi near pi/2, with a small alpha0: ``cu = sin(alpha_F)``, 1.7e-3 for E_S = 0.1 J,
     alpha0 = 1e-4 rad, F2 = 7255 N) that is a relative error ``eps / cu^2`` of cu (1.5e-11 there), which
-    moved alpha_F and t_F by 2e-11 to 3e-11. Here, for s < 0 both terms are >= 0 (no cancellation at
-    u -> -1); the one left is at u -> +1 (a stop at pi/2 with F2 << F1), where cu is as sensitive to E_S
-    itself (``d cu / d E_S = -u / (R cu)``): there it is accurate to ``eps cv^2 / cu^2``, better than the
-    textbook's ``eps / cu^2``. Pure arithmetic (compiled as is by :mod:`quickrelease._fast`).
+    moved alpha_F and t_F by 2e-11 to 3e-11. For s >= 0 the textbook form is kept bit for bit: there
+    ``R (1 - u)`` is the classifier's ``-limit_margin_terms`` rounded the same way (a stop at pi/2 with
+    F2 << F1 stays consistent with its classification). Pure arithmetic, no branch (compiled as is by
+    :mod:`quickrelease._fast`).
     """
     s = (A * sin_alpha0 - B * cos_alpha0) / R
     cv = (A * cos_alpha0 + B * sin_alpha0) / R
     e = E_S / R
-    return np.sqrt(np.maximum(cv * cv - e * ((s + s) + e), 0.0))
+    u = s + e
+    neg = (s < 0.0) * 1.0  # 1 + s = cv^2 / (1 - s) for s < 0; as before (bit for bit) for s >= 0
+    return np.sqrt(np.maximum((1.0 - u) * (neg * (cv * cv / np.maximum(1.0 - s, 1.0) + e) + (1.0 - neg) * (1.0 + u)), 0.0))
 
 
 def sweep_angle(E_S, alpha0, F1, F2, L1):
