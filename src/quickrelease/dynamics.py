@@ -186,7 +186,8 @@ def sweep_terms(E_S, A, B, R, sin_alpha0, cos_alpha0):
     e = E_S / R
     u = s + e
     neg = (s < 0.0) * 1.0  # stop_cosine_terms, inline for numba
-    cu = np.sqrt(np.maximum((1.0 - u) * (neg * (cv * cv / np.maximum(1.0 - s, 1.0) + e) + (1.0 - neg) * (1.0 + u)), 0.0))
+    one_plus_u = neg * (cv * cv / np.maximum(1.0 - s, 1.0) + e) + (1.0 - neg) * (1.0 + u)
+    cu = np.sqrt(np.maximum((1.0 - u) * one_plus_u, 0.0))
     N = e * (cv + s * (u + s) / (cu + cv))
     D = cu * cv + u * s
     return np.arctan2(N, D)
@@ -208,8 +209,9 @@ def stop_cosine_terms(E_S, A, B, R, sin_alpha0, cos_alpha0):
     cv = (A * cos_alpha0 + B * sin_alpha0) / R
     e = E_S / R
     u = s + e
-    neg = (s < 0.0) * 1.0  # 1 + s = cv^2 / (1 - s) for s < 0; as before (bit for bit) for s >= 0
-    return np.sqrt(np.maximum((1.0 - u) * (neg * (cv * cv / np.maximum(1.0 - s, 1.0) + e) + (1.0 - neg) * (1.0 + u)), 0.0))
+    neg = (s < 0.0) * 1.0  # 1 + s = cv^2 / (1 - s) for s < 0; as before for s >= 0
+    one_plus_u = neg * (cv * cv / np.maximum(1.0 - s, 1.0) + e) + (1.0 - neg) * (1.0 + u)
+    return np.sqrt(np.maximum((1.0 - u) * one_plus_u, 0.0))
 
 
 def sweep_angle(E_S, alpha0, F1, F2, L1):
