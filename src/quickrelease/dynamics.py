@@ -197,7 +197,8 @@ def stop_cosine_terms(E_S, A, B, R, sin_alpha0, cos_alpha0):
     """``cos(alpha_F - phi)`` of a friction stop (Eq. 8) to a few ulps of itself, cu >= 0 [-].
 
     With s, cv, e, u as in :func:`sweep_terms`, ``cu^2 = (1 - u)(1 + u)`` with ``1 + u = cv^2 / (1 - s) + e``
-    for s < 0 (``cv^2 = 1 - s^2``; every term >= 0). The textbook ``(1 - u)(1 + u)`` rounds ``1 + u`` to an absolute ulp: where u is near -1 (rail
+    for s < 0 (``cv^2 = 1 - s^2``; every term >= 0).
+    The textbook ``(1 - u)(1 + u)`` rounds ``1 + u`` to an absolute ulp: where u is near -1 (rail
     friction, phi near pi/2, with a small alpha0: ``cu = sin(alpha_F)``, 1.7e-3 for E_S = 0.1 J,
     alpha0 = 1e-4 rad, F2 = 7255 N) that is a relative error ``eps / cu^2`` of cu (1.5e-11 there), which
     moved alpha_F and t_F by 2e-11 to 3e-11. For s >= 0 the textbook form is kept bit for bit: there
