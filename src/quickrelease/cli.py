@@ -220,7 +220,11 @@ def simulate(
     if as_json:
         _print_json(summary)
         return
-    _table("Release", [(k, _fmt(v)) for k, v in summary.items()], ("quantity", "value"))
+    from .response import STOP_REASONS
+
+    words = {"stopped_by": f"{response.stopped_by}: {STOP_REASONS[response.stopped_by]}",
+             "stop_time_s": "inf (never arrives)"} if response.stopped_by == "creeps_to_limit" else {}
+    _table("Release", [(k, words.get(k, _fmt(v))) for k, v in summary.items()], ("quantity", "value"))
 
 
 @app.command()
