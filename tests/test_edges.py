@@ -349,6 +349,13 @@ def test_item18_creep_every_method_agrees(ulps):
     numpy_path = _kernels.Releases.build(*(np.array([v]) for v in (E, a0, F1, F2, 2 / 3 * PAPER.m1 / PAPER.m2,
                                                                     PAPER.m2, PAPER.L1)))
     assert int(numpy_path.regime[0]) == 2 and numpy_path.stop_time()[0] == math.inf
+    from quickrelease import _fast  # the compiled loop itself decides (not only its graded-tier fallback to numpy)
+
+    t, aF, code = np.empty(1), np.empty(1), np.empty(1, dtype=np.int8)
+    one = [np.array([v]) for v in (E, math.sin(a0), math.cos(a0), a0, F1, F2, 2 / 3 * PAPER.m1 / PAPER.m2,
+                                   PAPER.m2, PAPER.L1)]
+    _fast.stop_kernel(*one, *_fast.rules(), *_fast.tier_constants(), t, aF, code)
+    assert (int(code[0]), t[0], aF[0]) == (2, math.inf, math.pi / 2)
 
 
 def test_item18_creep_needs_no_rail_friction():
@@ -361,3 +368,20 @@ def test_item18_creep_needs_no_rail_friction():
         r = qr.simulate(E, a0, F1_0, F2, n_points=2)
         assert int(b.stopped_by) in (0, 1) and math.isfinite(r.stop_time) and r.stopped_by != "creeps_to_limit"
         assert abs(float(b.stop_time) / r.stop_time - 1) < 1e-12
+
+
+def test_item18_creep_cli_says_it_in_words():
+    import json
+
+    from typer.testing import CliRunner
+
+    from quickrelease.cli import app
+
+    args = ["simulate", "--energy", "1 J", "--alpha0", "1.5 rad", "--f1", "80.58123980909731 N", "--f2", "0 N"]
+    out = CliRunner().invoke(app, [*args, "--json"])
+    assert out.exit_code == 0, out.output
+    summary = json.loads(out.output)
+    assert summary["stop_time_s"] is None and summary["stopped_by"] == "creeps_to_limit"
+    table = CliRunner().invoke(app, args)
+    assert table.exit_code == 0 and "inf (never arrives)" in table.output and "never arrives" in table.output
+    assert "nan" not in table.output.lower()
