@@ -1,0 +1,129 @@
+"""The state of one release as a function of time, alpha(t), tabulated for many sample times at once.
+
+A record holds up to millions of sample times; inverting the time map (:class:`quickrelease._timemap.TimeMap`,
+a few Newton steps on a degree-32 series) at each of them costs microseconds per time and per model
+evaluation. During the motion alpha(t) solves a smooth ODE (Eq. 3/4 on the branch alpha_dot > 0), so it is
+smooth on the closed interval [0, t_F], stop included. :class:`StateTable` tabulates it on uniform nodes
+``t_k = k t_F / M`` with alpha, alpha_dot (the first integral, Eq. 9-10, at the inverted node times) and
+alpha_ddot (the equation of motion, Eq. 3/4), and interpolates between nodes with the quintic Hermite
+polynomial that matches all three at both ends of the cell (C^2 across nodes; error O(h^6) in alpha, O(h^4)
+in alpha_ddot). The cell of a time is found by arithmetic on the uniform grid, so evaluating N times costs
+about twenty array passes: linear in N with a small constant, independent of the table size.
+
+Accuracy rule: M starts at :data:`START_CELLS` and is doubled until, at every cell midpoint, the interpolated
+alpha, alpha_dot and alpha_ddot differ from the exact values (time map inverted at the midpoint) by at most
+:data:`TOL` times the largest magnitude of that quantity over the nodes. alpha_ddot is checked because the
+acceleration channels of a record are second differences of the displacement over the sampling window,
+i.e. window averages of its second derivative: their error is that of the interpolated alpha_ddot. If
+:data:`MAX_CELLS` cells do not suffice, :meth:`StateTable.build` returns None and the caller inverts the
+time map at every time.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import os
+
+import numpy as np
+
+__all__ = ["StateTable", "TOL", "START_CELLS", "MAX_CELLS"]
+
+#: Largest interpolation error at the cell midpoints, relative to the largest |alpha|, |alpha_dot|,
+#: |alpha_ddot| over the nodes.
+TOL = 1e-10
+START_CELLS = 64
+MAX_CELLS = 1 << 16
+
+
+def _quintic_coefficients(p, d, s, h) -> np.ndarray:
+    """Monomial coefficients (in u = (t - t_k)/h, u in [0, 1]) of the quintic Hermite interpolant of each cell
+    from the values p, first derivatives d and second derivatives s at the nodes (arrays of M + 1)."""
+    p0, p1 = p[:-1], p[1:]
+    d0, d1 = d[:-1] * h, d[1:] * h
+    s0, s1 = s[:-1] * h * h, s[1:] * h * h
+    c0, c1, c2 = p0, d0, 0.5 * s0
+    a = p1 - c0 - c1 - c2          # c3 + c4 + c5
+    b = d1 - c1 - 2.0 * c2         # 3 c3 + 4 c4 + 5 c5
+    e = s1 - 2.0 * c2              # 6 c3 + 12 c4 + 20 c5
+    c3 = 10.0 * a - 4.0 * b + 0.5 * e
+    c4 = -15.0 * a + 7.0 * b - e
+    c5 = 6.0 * a - 3.0 * b + 0.5 * e
+    return np.stack([c0, c1, c2, c3, c4, c5], axis=1)
+
+
+class StateTable:
+    """alpha(t), alpha_dot(t) on [0, t_F] by piecewise quintic Hermite interpolation on uniform nodes."""
+
+    def __init__(self, t_end: float, coef: np.ndarray, error: float) -> None:
+        self.t_end = float(t_end)
+        self.coef = coef
+        """(M, 6) monomial coefficients of alpha on each cell, in the cell's variable u in [0, 1]."""
+        self.cells = coef.shape[0]
+        self.h = self.t_end / self.cells
+        self.error = float(error)
+        """The largest relative error found at the cell midpoints (of alpha, alpha_dot, alpha_ddot)."""
+
+    @classmethod
+    def build(cls, t_end: float, exact: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
+              acceleration: Callable[[np.ndarray, np.ndarray], np.ndarray], tol: float = TOL,
+              start: int = START_CELLS, max_cells: int = MAX_CELLS) -> StateTable | None:
+        """Tabulate on [0, t_end]; ``exact(t)`` gives (alpha, alpha_dot) at times t (the time map inverted),
+        ``acceleration(alpha, alpha_dot)`` alpha_ddot (Eq. 3/4). None if ``max_cells`` cells do not meet ``tol``.
+        """
+        if not (np.isfinite(t_end) and t_end > 0.0):
+            return None
+        m = start
+        t = np.linspace(0.0, t_end, m + 1)
+        a, ad = exact(t)
+        add = acceleration(a, ad)
+        best = np.inf
+        while m <= max_cells:
+            h = t_end / m
+            coef = _quintic_coefficients(a, ad, add, h)
+            tm = t[:-1] + 0.5 * h
+            am, adm = exact(tm)
+            addm = acceleration(am, adm)
+            ia, iad, iadd = _horner(coef, np.full(m, 0.5), h)
+            err = max(float(np.max(np.abs(ia - am))) / max(float(np.max(np.abs(a))), 1e-300),
+                      float(np.max(np.abs(iad - adm))) / max(float(np.max(np.abs(ad))), 1e-300),
+                      float(np.max(np.abs(iadd - addm))) / max(float(np.max(np.abs(add))), 1e-300))
+            if os.environ.get("QR_DEBUG"):
+                print(m, err)
+            if err <= tol:
+                return cls(t_end, coef, err)
+            if err > 0.5 * best:  # no longer converging: the rounding of the exact values is reached
+                return None
+            best = err
+            # double: the midpoints become nodes
+            m *= 2
+            t = np.linspace(0.0, t_end, m + 1)
+            a = _interleave(a, am)
+            ad = _interleave(ad, adm)
+            add = _interleave(add, addm)
+        return None
+
+    def state(self, t: np.ndarray, acceleration: bool = False) -> tuple[np.ndarray, ...]:
+        """alpha [rad], alpha_dot [rad/s] (and alpha_ddot [rad/s^2]) at times t in [0, t_end] (clipped to it)."""
+        x = np.clip(np.asarray(t, dtype=float) / self.h, 0.0, float(self.cells))
+        k = np.minimum(x.astype(np.intp), self.cells - 1)
+        u = x - k
+        a, ad, add = _horner(self.coef[k], u, self.h, second=acceleration)
+        return (a, ad, add) if acceleration else (a, ad)
+
+
+def _interleave(nodes: np.ndarray, mids: np.ndarray) -> np.ndarray:
+    out = np.empty(nodes.size + mids.size)
+    out[0::2], out[1::2] = nodes, mids
+    return out
+
+
+def _horner(c: np.ndarray, u: np.ndarray, h: float, second: bool = True):
+    """alpha, alpha_dot (and alpha_ddot) of the cell polynomials ``c`` (N, 6) at local u (N,)."""
+    a = ((((c[:, 5] * u + c[:, 4]) * u + c[:, 3]) * u + c[:, 2]) * u + c[:, 1]) * u + c[:, 0]
+    ad = (((5.0 * c[:, 5] * u + 4.0 * c[:, 4]) * u + 3.0 * c[:, 3]) * u + 2.0 * c[:, 2]) * u + c[:, 1]
+    add = None
+    if second:
+        add = ((20.0 * c[:, 5] * u + 12.0 * c[:, 4]) * u + 6.0 * c[:, 3]) * u + 2.0 * c[:, 2]
+        add = add / (h * h)
+    return a, ad / h, add
