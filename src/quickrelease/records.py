@@ -100,6 +100,10 @@ def channel_model(name: str, alpha, alpha_dot, alpha_ddot, alpha0: float, L1: fl
 RATE_OF = {"alpha_dot": "alpha", "u_dot": "u", "v_dot": "v", "a_head": "u", "a_hinge": "v"}
 _ACCELERATIONS = ("a_head", "a_hinge")
 #: Gauss-Legendre nodes and weights on [0, 1] for the window averages of velocities.
+#: Sample times per block of :func:`release_channels` (each block needs up to 8 window times per sample).
+_BLOCK = 1 << 17
+#: Samples within the motion from which on :func:`release_channels` interpolates a channel table.
+_TABLE_MIN = 2048
 _GL_Y, _GL_W = (lambda x, w: (0.5 * (x + 1.0), 0.5 * w))(*np.polynomial.legendre.leggauss(4))
 
 
@@ -132,13 +136,60 @@ def release_channels(names, t, release_time: float, release, window: float = 0.0
     alpha_dot and alpha_ddot within 1e-12 of their ranges); ``exact=True`` inverts the time map at every time.
     """
     s = np.asarray(t, dtype=float) - release_time
-    fi = release
+    if exact:
+        return _direct(names, s, release, window, exact=True)
+    return _tabulated(names, s, release, window)
+
+
+def _tabulated(names, s, fi, window: float) -> dict[str, np.ndarray]:
+    """:func:`release_channels` at a cost linear in the number of samples with a small constant.
+
+    Samples whose window lies entirely at rest before the release or after the stop take that rest's
+    constant value; samples whose window lies entirely within the motion, where every channel is a smooth
+    function of time, take it from a :class:`~quickrelease._statetable.ChannelTable` (piecewise degree-7
+    polynomials on uniform cells, each channel within :data:`~quickrelease._statetable.CHANNEL_TOL` of its
+    range, built from :func:`_direct`); the few samples whose window reaches across the release or the stop
+    are computed directly.
+    """
+    from ._statetable import ChannelTable
+
+    t_stop = fi.stop_time()
+    lo, hi = window, t_stop - window
+    inside = (s > lo) & (s < hi)
+    if np.count_nonzero(inside) < _TABLE_MIN:
+        return _direct(names, s, fi, window, exact=False)
+    table = ChannelTable.build(lambda x: _direct(names, x, fi, window, exact=False), names, lo, hi)
+    if table is None:
+        return _direct(names, s, fi, window, exact=False)
+    pre = s <= -window
+    post = s > t_stop + window
+    edge = ~(inside | pre | post)
+    rest = _direct(names, np.array([-window - 1.0, t_stop + window + 1.0]), fi, window, exact=False)
+    values = table.values(s[inside])
+    out = {}
+    for name in names:
+        v = np.empty(s.shape)
+        v[pre], v[post] = rest[name][0], rest[name][1]
+        v[inside] = values[name]
+        out[name] = v
+    if np.any(edge):
+        direct = _direct(names, s[edge], fi, window, exact=False)
+        for name in names:
+            out[name][edge] = direct[name]
+    return out
+
+
+def _direct(names, s, fi, window: float, exact: bool) -> dict[str, np.ndarray]:
+    """:func:`release_channels` at times ``s`` since the release, every time evaluated (in blocks)."""
+    if s.size > _BLOCK:  # in blocks: the window times of a block stay small in memory
+        blocks = [_direct(names, s[i:i + _BLOCK], fi, window, exact) for i in range(0, s.size, _BLOCK)]
+        return {name: np.concatenate([b[name] for b in blocks]) for name in names}
     if not exact and window > 0.0 and any(name in _ACCELERATIONS for name in names):
         accel = [name for name in names if name in _ACCELERATIONS]
         out = _window_accelerations(accel, s, fi, window)
         rest = [name for name in names if name not in _ACCELERATIONS]
         if rest:
-            out.update(release_channels(rest, t, release_time, fi, window))
+            out.update(_direct(rest, s, fi, window, exact))
         return {name: out[name] for name in names}
     n = s.size
     point = [name for name in names if window <= 0.0 or name not in RATE_OF]
@@ -205,7 +256,7 @@ def _window_accelerations(names, s, fi, window: float) -> dict[str, np.ndarray]:
     weight (1 - y) gives the average with error of order (Delta / T)^8 (T the time scale of the motion),
     free of the cancellation that makes the second difference lose ``eps / Delta^2`` (1e-6 of the range at
     50 kHz). Samples whose window reaches across the release or the stop (a jump of x'', or of x' at the
-    geometric limit) take the second difference (:func:`release_channels` with ``exact=True``).
+    geometric limit) are integrated piecewise (:func:`_edge_acceleration`).
     """
     y, weights = _triangle_rule()
     t_stop = fi.stop_time()
@@ -225,10 +276,45 @@ def _window_accelerations(names, s, fi, window: float) -> dict[str, np.ndarray]:
         full = np.empty(n)
         full[smooth] = acc
         out[name] = full
-    if np.any(edge):
-        exact = release_channels(names, s[edge], 0.0, fi, window, exact=True)
+    for i in np.nonzero(edge)[0]:
+        values = _edge_acceleration(names, float(s[i]), fi, window)
         for name in names:
-            out[name][edge] = exact[name]
+            out[name][i] = values[name]
+    return out
+
+
+#: Gauss-Legendre nodes and weights on [0, 1] for the pieces of a window cut by the release or the stop.
+_GL8_Y, _GL8_W = (lambda x, w: (0.5 * (x + 1.0), 0.5 * w))(*np.polynomial.legendre.leggauss(8))
+
+
+def _edge_acceleration(names, s: float, fi, window: float) -> dict[str, float]:
+    """The window average of :func:`_window_accelerations` for a sample whose window reaches across the
+    release or the stop: each half of the window is cut at them and each smooth piece integrated by
+    8-point Gauss-Legendre (the weight (1 - y) included); at the geometric limit the velocity drops to 0 at
+    the stop, a Dirac impulse of x'' whose weight is the velocity just before it."""
+    t_stop = fi.stop_time()
+    pieces_t, pieces_w = [], []
+    for side in (1.0, -1.0):
+        cuts = sorted({0.0, 1.0} | {y for y in ((0.0 - s) * side / window, (t_stop - s) * side / window)
+                                    if 0.0 < y < 1.0})
+        for a, b in zip(cuts[:-1], cuts[1:], strict=False):
+            y = a + (b - a) * _GL8_Y
+            pieces_t.append(s + side * window * y)
+            pieces_w.append((b - a) * _GL8_W * (1.0 - y))
+    times, weights = np.concatenate(pieces_t), np.concatenate(pieces_w)
+    moving = (times > 0.0) & (times <= t_stop)
+    alpha, alpha_dot = fi.state_at(times)
+    alpha_ddot = np.where(moving, angular_acceleration(alpha, np.maximum(alpha_dot, 1e-300), fi.F1, fi.F2, fi.m1,
+                                                       fi.m2, fi.L1, fi.c), 0.0)
+    out = {}
+    for name in names:
+        inst = np.where(moving, channel_model(name, alpha, alpha_dot, alpha_ddot, fi.alpha0, fi.L1), 0.0)
+        value = float(weights @ inst)
+        if fi.geometric_limit and abs(t_stop - s) < window:  # the velocity's drop to 0 at the flat rhombus
+            a_F, ad_F = fi.state_at(np.array([t_stop]))
+            v_F = float(channel_model(RATE_OF[name] + "_dot", a_F, ad_F, 0.0, fi.alpha0, fi.L1)[0])
+            value -= (1.0 - abs(t_stop - s) / window) / window * v_F
+        out[name] = value
     return out
 
 
