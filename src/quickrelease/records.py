@@ -133,7 +133,7 @@ def release_channels(names, t, release_time: float, release, window: float = 0.0
 
     The state at the times within the motion comes from the release's interpolated state table
     (:meth:`~quickrelease.solvers.FirstIntegral.state_at_many`: cost linear in the number of times, alpha,
-    alpha_dot and alpha_ddot within 1e-12 of their ranges); ``exact=True`` inverts the time map at every time.
+    alpha_dot and alpha_ddot within 1e-9 of their largest values); ``exact=True`` inverts the time map at every time.
     """
     s = np.asarray(t, dtype=float) - release_time
     if exact:

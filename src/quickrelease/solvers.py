@@ -167,7 +167,7 @@ class FirstIntegral:
         t_stop = self.stop_time()
         moving = (t > 0.0) & (t <= t_stop)
         count = int(np.count_nonzero(moving))
-        table = self.state_table if count >= 4096 else None
+        table = self.state_table if count >= 1 << 16 else None
         if table is None:
             alpha, alpha_dot = self.state_at(t)
             if not acceleration:
