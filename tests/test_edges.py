@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 import quickrelease as qr
-from quickrelease import batch, dynamics
+from quickrelease import _kernels, batch, dynamics, solvers
 
 PAPER = qr.preset("paper")
 
@@ -306,3 +306,126 @@ def test_item15_stop_cosine_against_mpmath_where_u_is_near_minus_one():
             ref = mp.sqrt(1 - u * u)
             worst = max(worst, abs(float(got / ref - 1)))
     assert worst < 1e-14
+
+
+# -- item 18 (creep): F2 = 0 and E_S = W_F(pi/2) within rounding: the device creeps towards pi/2 ----------------
+
+CREEP = (1.0, 1.5, 80.58123980909731, 0.0)  # E_S [J], alpha0 [rad], F1, F2 [N]: the float margin is exactly 0
+
+
+def _creep_mp(E_S, alpha0, F1, dps=50):
+    """(exact margin of the float inputs, rho, t_F(margin = +rho), t_F(exact margin), frictionless t) at dps digits.
+
+    F2 = 0: E_S - W_F(alpha) = d + 2 A sin^2(x/2), x = pi/2 - alpha, d the margin (a hand step from Eq. 7); for
+    d < 0 the stop is at sin(x_F/2) = sqrt(-d / (2A)) and the remaining energy 2 A cos(aF - y/2) sin(y/2)."""
+    with mp.workdps(dps):
+        E, a0, F1m, L1, m1, m2 = (mp.mpf(v) for v in (E_S, alpha0, F1, PAPER.L1, PAPER.m1, PAPER.m2))
+        A, hp, c = 2 * F1m * L1, mp.pi / 2, mp.mpf(2) / 3
+
+        def M(a):
+            return m2 * L1**2 * (c * m1 / m2 + mp.sin(a) ** 2)
+
+        def t_of(d):
+            if d > 0:
+                s = mp.sqrt(d / A)
+                return mp.quad(lambda x: mp.sqrt(M(hp - x) / (d + 2 * A * mp.sin(x / 2) ** 2)), [0, s, 1e4 * s, hp - a0])
+            aF = hp - 2 * mp.asin(mp.sqrt(-d / (2 * A)))
+            return mp.quad(lambda y: mp.sqrt(M(aF - y) / (2 * A * mp.cos(aF - y / 2) * mp.sin(y / 2))),
+                           [0, hp - aF, 1e4 * (hp - aF), aF - a0])
+
+        margin = E - A * (1 - mp.sin(a0))
+        rho = mp.mpf(dynamics.MARGIN_RTOL) * (E + A)
+        t0 = mp.quad(lambda a: mp.sqrt(M(a) / E), [a0, hp])
+        return margin, rho, t_of(rho), t_of(margin), t0
+
+
+def test_item18_creep_rule_justified_at_50_digits():
+    """Why a margin within rho of 0 (F2 = 0) is reported as creeping: at 50 digits the float inputs' exact margin
+    is inside the band (-5.8e-15 J, 1.6% of rho), every t_F the band allows is >= 15 frictionless times (79.7 s;
+    t_F(-rho) is the same to leading order), and the inputs' own t_F (90.6 s, a friction stop 5e-9 rad short of
+    pi/2) is 14% above that: a number set by 16 ulps of rounding, not by the device (t_F -> inf as margin -> 0)."""
+    E, a0, F1, _ = CREEP
+    margin, rho, t_rho, t_true, t0 = _creep_mp(E, a0, F1)
+    assert float(dynamics.limit_margin(E, a0, F1, 0.0, PAPER.L1)) == 0.0
+    assert abs(margin) <= rho and margin != 0
+    assert t_rho > 10 * t0 and t_true > 1.1 * t_rho
+    fi = solvers.FirstIntegral(E, a0, F1, 0.0, PAPER.m1, PAPER.m2, PAPER.L1, 2 / 3)
+    assert fi.horizon() < t_rho / 2  # the returned history ends well before any release of the band could
+    # just outside the band (margin -100 rho): a determined friction stop, finite, and right to within what the
+    # rounding of the margin allows (dt_F / dmargin = tau / (2 |margin|), tau ~ t0 here: a margin known to rho
+    # moves t_F by t0 rho / (2 |margin| t_F) relatively, 4e-4 here; 6.7e-6 measured)
+    F1_out = F1 * float(1 + 100 * rho / E)  # W_F(pi/2) above E_S by about 100 rho
+    r = qr.simulate(E, a0, F1_out, 0.0, n_points=3)
+    m_out, _, _, t_ref, _ = _creep_mp(E, a0, F1_out)
+    assert r.stopped_by == "friction" and m_out < -10 * rho
+    assert abs(r.stop_time / float(t_ref) - 1) < float(t0 * rho / (2 * abs(m_out) * t_ref))
+
+
+@pytest.mark.parametrize("ulps", [0, -2, 3])
+def test_item18_creep_every_method_agrees(ulps):
+    """energy, rk, explicit, batch (compiled and numpy) and the scalar API: t_F = inf, alpha_F = pi/2, the reason,
+    finite arrays; the returned history against an independent 30-digit integral of Eq. 10 with margin 0."""
+    E, a0, F1, F2 = CREEP
+    F1 += ulps * math.ulp(F1)  # the margin within a few ulps of 0: still inside the rounding band
+    runs = {m: qr.simulate(E, a0, F1, F2, method=m, n_points=9, dt=1e-3) for m in ("energy", "rk", "explicit")}
+    for m, r in runs.items():
+        assert (r.stop_time, r.alpha_final, r.stopped_by) == (math.inf, math.pi / 2, "creeps_to_limit"), m
+        for arr in (r.t, r.alpha, r.alpha_dot, r.alpha_ddot, r.u, r.v_ddot):
+            assert np.all(np.isfinite(arr)), m
+        assert np.all(np.diff(r.alpha) >= 0) and r.alpha[-1] < math.pi / 2 and r.summary()["stop_time_s"] is None
+    en, rk = runs["energy"], runs["rk"]
+    assert np.allclose(rk.t, en.t, rtol=1e-15) and np.max(np.abs(rk.alpha - en.alpha)) < 1e-9
+    assert abs(en.alpha_dot[-1] / en.alpha_dot[0] - 1e-3) < 1e-3 * 0.05  # the horizon: E_K = 1e-6 E_S
+    with mp.workdps(30):  # t(alpha_end) with E_S - W_F = A (1 - sin a) (margin 0, F2 = 0)
+        A, L1, hp = 2 * mp.mpf(F1) * PAPER.L1, mp.mpf(PAPER.L1), mp.pi / 2
+        x_end = hp - mp.mpf(float(en.alpha[-1]))
+        t_ref = mp.quad(lambda x: mp.sqrt(PAPER.m2 * L1**2 * (mp.mpf(2) / 3 * PAPER.m1 / PAPER.m2 + mp.cos(x) ** 2)
+                                          / (2 * A * mp.sin(x / 2) ** 2)), [x_end, 10 * x_end, hp - a0])
+    assert abs(en.t[-1] / float(t_ref) - 1) < 1e-9
+    assert qr.stop_time(E, a0, F1, F2) == math.inf
+    assert dynamics.final_angle(E, a0, F1, F2, PAPER.L1) == math.pi / 2
+    assert not dynamics.reaches_geometric_limit(E, a0, F1, F2, PAPER.L1)
+    for out in (batch.stop_time(E, a0, F1, F2), batch.release(E, a0, F1, F2)):
+        assert (float(out.stop_time), float(out.alpha_final), int(out.stopped_by)) == (math.inf, math.pi / 2, 2)
+        assert batch.STOPPED_BY[2] == "creeps_to_limit"
+    rel = batch.release(E, a0, F1, F2)
+    assert int(rel.status) == 0 and all(np.isfinite(getattr(rel, k)) for k in ("u_final", "peak_u_ddot", "peak_v_ddot"))
+    numpy_path = _kernels.Releases.build(*(np.array([v]) for v in (E, a0, F1, F2, 2 / 3 * PAPER.m1 / PAPER.m2,
+                                                                    PAPER.m2, PAPER.L1)))
+    assert int(numpy_path.regime[0]) == 2 and numpy_path.stop_time()[0] == math.inf
+    from quickrelease import _fast  # the compiled loop itself decides (not only its graded-tier fallback to numpy)
+
+    t, aF, code = np.empty(1), np.empty(1), np.empty(1, dtype=np.int8)
+    one = [np.array([v]) for v in (E, math.sin(a0), math.cos(a0), a0, F1, F2, 2 / 3 * PAPER.m1 / PAPER.m2,
+                                   PAPER.m2, PAPER.L1)]
+    _fast.stop_kernel(*one, *_fast.rules(), *_fast.tier_constants(), t, aF, code)
+    assert (int(code[0]), t[0], aF[0]) == (2, math.inf, math.pi / 2)
+
+
+def test_item18_creep_needs_no_rail_friction():
+    """With rail friction resolving the approach (B^2 >> 2 A rho) the margin-0 release arrives in finite time:
+    the flat rhombus or a stop (rail friction decelerates it there), never inf."""
+    E, a0, F1, _ = CREEP
+    for F2 in (1e-3, 1.0):
+        F1_0 = (E - 4 * F2 * PAPER.L1 * math.cos(a0)) / (2 * PAPER.L1 * (1 - math.sin(a0)))
+        b = batch.stop_time(E, a0, F1_0, F2)
+        r = qr.simulate(E, a0, F1_0, F2, n_points=2)
+        assert int(b.stopped_by) in (0, 1) and math.isfinite(r.stop_time) and r.stopped_by != "creeps_to_limit"
+        assert abs(float(b.stop_time) / r.stop_time - 1) < 1e-12
+
+
+def test_item18_creep_cli_says_it_in_words():
+    import json
+
+    from typer.testing import CliRunner
+
+    from quickrelease.cli import app
+
+    args = ["simulate", "--energy", "1 J", "--alpha0", "1.5 rad", "--f1", "80.58123980909731 N", "--f2", "0 N"]
+    out = CliRunner().invoke(app, [*args, "--json"])
+    assert out.exit_code == 0, out.output
+    summary = json.loads(out.output)
+    assert summary["stop_time_s"] is None and summary["stopped_by"] == "creeps_to_limit"
+    table = CliRunner().invoke(app, args)
+    assert table.exit_code == 0 and "inf (never arrives)" in table.output and "never arrives" in table.output
+    assert "nan" not in table.output.lower()

@@ -85,7 +85,8 @@ def test_energy_method_balance_and_monotone_alpha(case):
     assert _balance(r) < 1e-9
     assert np.all(np.diff(r.alpha) >= 0.0) and np.all(r.alpha_dot >= 0.0)
     assert r.alpha[0] == a0 and a0 <= r.alpha_final <= HALF_PI
-    assert np.all(np.diff(r.t) > 0.0) and math.isfinite(r.stop_time)
+    # t_F is finite except for a release that creeps towards pi/2 (F2 = 0 at the boundary: dynamics.creeps_terms)
+    assert np.all(np.diff(r.t) > 0.0) and (math.isfinite(r.stop_time) or r.stopped_by == "creeps_to_limit")
 
 
 #: The bound the rk method meets on the energy balance at its default tolerances (README, solvers.RK_RTOL).
@@ -128,8 +129,8 @@ def test_batch_agrees_with_single_case_solver_including_status(cases):
     b = batch.release(E, a0, F1, F2, c=c)
     for i, case in enumerate(cases):
         r = qr.simulate(*case[:4], mass_model=case[4], n_points=2)
-        assert int(b.stopped_by[i]) == (r.stopped_by == "geometric_limit")
-        assert abs(b.stop_time[i] / r.stop_time - 1.0) < 1e-12
+        assert batch.STOPPED_BY[int(b.stopped_by[i])] == r.stopped_by
+        assert b.stop_time[i] == r.stop_time if math.isinf(r.stop_time) else abs(b.stop_time[i] / r.stop_time - 1) < 1e-12
         assert b.alpha_final[i] == r.alpha_final
         assert math.isfinite(b.peak_u_ddot[i]) and math.isfinite(b.peak_v_ddot[i])
 

@@ -31,6 +31,7 @@ def rules() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
 #: The classifier of the stop and the cancellation-free sweep of Eq. 8, compiled from the very functions
 #: the numpy path calls (:mod:`quickrelease.dynamics`): one definition, the same rounding.
 _limit_margin = njit(cache=True, nogil=True)(dynamics.limit_margin_terms)
+_creeps = njit(cache=True, nogil=True)(dynamics.creeps_terms)
 _sweep = njit(cache=True, nogil=True)(dynamics.sweep_terms)
 _stop_cos = njit(cache=True, nogil=True)(dynamics.stop_cosine_terms)
 _slack = njit(cache=True, nogil=True)(_kernels.feasible_slack)
@@ -54,7 +55,8 @@ def tier_constants() -> tuple[float, float, float, float]:
 @njit(cache=True, nogil=True)
 def stop_kernel(E, sa0_in, ca0_in, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq,
                 t_out, aF_out, code_out):
-    """t_F, alpha_F and the regime code (0 friction, 1 limit, -1: graded tier, left to numpy).
+    """t_F, alpha_F and the regime code (0 friction, 1 limit, 2 creeps to the limit: t_F = inf, -1: graded tier,
+    left to numpy).
 
     sin and cos of alpha0 come in computed by numpy, as the numpy kernels compute them, so the classifier
     sees the same numbers on both paths."""
@@ -65,6 +67,11 @@ def stop_kernel(E, sa0_in, ca0_in, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, ne
         B = 4.0 * F2[i] * L1[i]
         R = math.hypot(A, B)
         Kl = _limit_margin(E[i], A, B, sa0, ca0)
+        if _creeps(Kl, E[i], A, B):  # creeps towards pi/2 and never arrives (dynamics.creeps_terms)
+            t_out[i] = math.inf
+            aF_out[i] = _HALF_PI
+            code_out[i] = 2
+            continue
         if Kl > 0.0:  # the rhombus becomes flat first: anchor pi/2
             delta = _HALF_PI - a0[i]
             sm = math.sin(0.5 * delta)

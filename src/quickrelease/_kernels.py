@@ -20,6 +20,10 @@ quadrature node: only square roots and arithmetic.
 ``K = K_lim + 2 A sigma^2 + 2 B sigma q`` (all terms >= 0, ``K_lim = E_S - W_F(pi/2)``),
 ``sin(alpha) = 1 - 2 sigma^2`` and ``dt/dw = 4 sigma_m w sqrt(M/K) / q``.
 
+``creep`` (the margin within its rounding of 0 and no rail friction to speak of,
+:func:`quickrelease.dynamics.creeps_terms`): the ``limit`` formulas with ``K_lim = 0``; the integrand then
+grows like 1/w at w = 0 and t_F = inf (the device creeps towards pi/2 and never arrives).
+
 Smooth cases take a 16-node Gauss-Legendre rule. Cases whose integrand has a near-singularity close
 to the end of the interval (C or K nearly vanishing there: a stop close to the flat rhombus with
 little rail friction, or barely reaching it) are detected per case from the ratio of that factor at
@@ -46,7 +50,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from .dynamics import limit_margin_terms, stop_cosine_terms, sweep_terms
+from .dynamics import creeps_terms, limit_margin_terms, stop_cosine_terms, sweep_terms
 
 HALF_PI = 0.5 * math.pi
 
@@ -68,7 +72,9 @@ MASS_RATIO = 0.5
 #: against mpmath on both regimes).
 MASS_HARD = 0.25
 
-REGIME_FRICTION, REGIME_LIMIT = 0, 1
+#: ``creep`` (:func:`quickrelease.dynamics.creeps_terms`): the margin within rounding of 0 without rail friction;
+#: the motion is that of the ``limit`` regime with ``K_lim = 0`` and never ends (t_F = inf, alpha_F = pi/2).
+REGIME_FRICTION, REGIME_LIMIT, REGIME_CREEP = 0, 1, 2
 
 #: Relative rounding allowance of a stop time at an end of the feasible interval of the identification:
 #: each of the two evaluations that meet there (the observation, when it comes from a model, and the
@@ -177,7 +183,7 @@ class Releases:
 
     @property
     def geometric_limit(self) -> np.ndarray:
-        return self.regime != REGIME_FRICTION
+        return self.regime == REGIME_LIMIT
 
     @property
     def hard(self) -> np.ndarray:
@@ -192,7 +198,9 @@ class Releases:
         R = np.hypot(A, B)
         W_limit = A * (1.0 - sa0) + B * ca0
         K_lim = limit_margin_terms(E_S, A, B, sa0, ca0)
-        geo = K_lim > 0.0
+        creep = creeps_terms(K_lim, E_S, A, B)
+        K_lim = np.where(creep, 0.0, K_lim)  # the creeping motion: the margin is 0 (within its rounding)
+        geo = (K_lim > 0.0) | creep  # anchor pi/2 for both
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             # Eq. 8: sin(alpha_F - phi) = sin(alpha0 - phi) + E_S/R, with cos(phi) = A/R, sin(phi) = B/R
             s = (A * sa0 - B * ca0) / R + E_S / R  # u of sweep_terms, rounded the same way: one alpha_F
@@ -213,7 +221,7 @@ class Releases:
                 sin_a = np.where(geo, 1.0, sin_a)
                 cos_a = np.where(geo, 0.0, cos_a)
                 cb = np.where(geo, 0.0, cb)
-        regime = geo.astype(np.int8)
+        regime = np.where(creep, REGIME_CREEP, geo.astype(np.int8)).astype(np.int8)
         delta = np.where(geo, HALF_PI - alpha0, np.clip(delta, 0.0, HALF_PI - alpha0))
         anchor = np.minimum(alpha0 + delta, HALF_PI)
         sigma_m = np.sin(0.5 * delta)
@@ -233,7 +241,7 @@ class Releases:
             if np.any(self.regime):
                 K_lim = self.K_lim
                 K_start = K_lim + 2.0 * self.A * sm * sm + 2.0 * self.B * sm * q_m
-                ratio = np.where(self.regime == REGIME_LIMIT, K_lim / K_start, ratio)
+                ratio = np.where(self.regime != REGIME_FRICTION, K_lim / K_start, ratio)
         return ratio
 
     def take(self, index) -> Releases:
@@ -246,7 +254,7 @@ class Releases:
         sm = self.sigma_m[col]
         sigma = sm * w * w
         q = np.sqrt(1.0 - sigma * sigma)
-        free = (self.regime == REGIME_LIMIT)[col]
+        free = (self.regime != REGIME_FRICTION)[col]
         sin_alpha = self.sin_a[col] * (1.0 - 2.0 * sigma * sigma) - self.cos_a[col] * 2.0 * sigma * q
         mass = self.k[col] + sin_alpha * sin_alpha
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -326,6 +334,12 @@ class Releases:
                  (REGIME_FRICTION, 1): lambda r: r._smooth_stop_time(N_NODES_MASS),
                  (REGIME_LIMIT, 0): lambda r: r._limit_stop_time(N_NODES),
                  (REGIME_LIMIT, 1): lambda r: r._limit_stop_time(N_NODES_MASS)}
+        creep = self.regime == REGIME_CREEP
+        if np.any(creep):  # never arrives (t_F = inf); the others as usual
+            t = np.full(self.E_S.shape, np.inf)
+            if not np.all(creep):
+                t[~creep] = self.take(~creep).stop_time()
+            return t
         key = self.regime.astype(np.int16) * 3 + self.tier
         present = np.unique(key) if key.size > 1 else key
         if present.size == 1 and int(present[0]) != 2 and int(present[0]) != 5:
@@ -366,7 +380,7 @@ class Releases:
         sigma = self.sigma_m[case] * np.asarray(w, dtype=float) ** 2
         q = np.sqrt(1.0 - sigma * sigma)
         sin_alpha = self.sin_a[case] * (1.0 - 2.0 * sigma * sigma) - self.cos_a[case] * 2.0 * sigma * q
-        if self.regime[case] == REGIME_LIMIT:
+        if self.regime[case] != REGIME_FRICTION:
             K = self.K_lim[case] + 2.0 * self.A[case] * sigma * sigma \
                 + 2.0 * self.B[case] * sigma * q
         else:
@@ -377,7 +391,7 @@ class Releases:
     def remaining_energy(self, alpha: np.ndarray, case: int = 0) -> np.ndarray:
         """E_S - W_F(alpha) without cancellation, for one case [J] (Eq. 9)."""
         alpha = np.asarray(alpha, dtype=float)
-        if self.regime[case] == REGIME_LIMIT:
+        if self.regime[case] != REGIME_FRICTION:
             x = HALF_PI - alpha
             return self.K_lim[case] + 2.0 * self.A[case] * np.sin(0.5 * x) ** 2 \
                 + self.B[case] * np.sin(x)

@@ -36,7 +36,9 @@ __all__ = [
 CHUNK = 2048
 
 #: Codes of ``stopped_by`` arrays.
-STOPPED_BY = {0: "friction", 1: "geometric_limit"}
+#: 2: the margin E_S - W_F(pi/2) within its rounding of 0 without rail friction: the device creeps towards pi/2
+#: and never arrives (stop_time = inf, alpha_final = pi/2: :func:`quickrelease.dynamics.creeps_terms`).
+STOPPED_BY = {0: "friction", 1: "geometric_limit", 2: "creeps_to_limit"}
 
 #: Codes of :attr:`BatchIdentification.status` and what they mean.
 IDENTIFY_STATUS = {
@@ -88,11 +90,11 @@ class BatchStop(_Result):
     """Stop time and final angle of many releases (arrays of the broadcast input shape)."""
 
     stop_time: np.ndarray
-    """t_F [s]: to the friction stop, or to the flat rhombus."""
+    """t_F [s]: to the friction stop, or to the flat rhombus (inf where the device creeps towards it)."""
     alpha_final: np.ndarray
     """alpha_F [rad] (pi/2 at the geometric limit)."""
     stopped_by: np.ndarray
-    """0 friction, 1 geometric limit (see :data:`STOPPED_BY`)."""
+    """0 friction, 1 geometric limit, 2 creeps to the limit (see :data:`STOPPED_BY`)."""
 
     @property
     def geometric_limit(self) -> np.ndarray:
@@ -104,11 +106,11 @@ class BatchRelease(_Result):
     """Stop, stroke, opening and peak velocities of many releases."""
 
     stop_time: np.ndarray
-    """t_F [s]."""
+    """t_F [s] (inf where the device creeps towards the flat rhombus, stopped_by 2)."""
     alpha_final: np.ndarray
     """alpha_F [rad]."""
     stopped_by: np.ndarray
-    """0 friction, 1 geometric limit."""
+    """0 friction, 1 geometric limit, 2 creeps to the limit (t_F = inf; see :data:`STOPPED_BY`)."""
     u_final: np.ndarray
     """Head stroke u_F [m] (Table 4)."""
     v_final: np.ndarray
@@ -340,8 +342,10 @@ def release(E_S, alpha0, F1, F2, c=2.0 / 3.0, m1=None, m2=None, L1=None, *, chun
     from . import _fast
 
     _fast.peak_accel_kernel(E_S, alpha0, aF_all, F1, F2, k, m2, L1, N_PEAK, out["peak_u_ddot"], out["peak_v_ddot"])
-    for v in out.values():  # a result that overflows is flagged too, never left as a silent inf or NaN
-        bad |= ~np.isfinite(v)
+    creeps = code == 2  # t_F = inf by the classifier (STOPPED_BY 2): a result, not an overflow
+    for name, v in out.items():  # a result that overflows is flagged too, never left as a silent inf or NaN
+        finite = np.isfinite(v) | (creeps & (v == np.inf)) if name == "stop_time" else np.isfinite(v)
+        bad |= ~finite
     for v in out.values():
         v[bad] = np.nan
     out["status"] = bad.astype(np.int8)

@@ -226,7 +226,11 @@ def simulate(
     if as_json:
         _print_json(summary)
         return
-    _table("Release", [(k, _fmt(v)) for k, v in summary.items()], ("quantity", "value"))
+    from .response import STOP_REASONS
+
+    words = {"stopped_by": f"{response.stopped_by}: {STOP_REASONS[response.stopped_by]}",
+             "stop_time_s": "inf (never arrives)"} if response.stopped_by == "creeps_to_limit" else {}
+    _table("Release", [(k, words.get(k, _fmt(v))) for k, v in summary.items()], ("quantity", "value"))
 
 
 @app.command()
@@ -419,11 +423,13 @@ def sweep_command(
                block_rows=block_rows, resume=resume, overwrite=overwrite, log=lambda line: _echo(f"note: {line}", err=True))
     figs = save_figure(heatmap_figure(ds), out.parent, out.name.rsplit(".", 1)[0] + "_heatmaps")
     summary = {"file": str(out), "dims": {k: int(v) for k, v in ds.sizes.items()},
-               "stop_time_s": [float(ds.stop_time.min()), float(ds.stop_time.max())],
+               "stop_time_s": [float(ds.stop_time.min()),  # creeping cases (stopped_by 2, t_F = inf): counted apart
+                               float(ds.stop_time.where(ds.stopped_by != 2).max())],
+               "creeps_to_limit_count": int((ds.stopped_by == 2).sum()),
                "u_final_m": [float(ds.u_final.min()), float(ds.u_final.max())],
                "v_final_m": [float(ds.v_final.min()), float(ds.v_final.max())],
                "peak_v_dot_m_s": [float(ds.peak_v_dot.min()), float(ds.peak_v_dot.max())],
-               "geometric_limit_share": float(ds.stopped_by.mean()),
+               "geometric_limit_share": float((ds.stopped_by == 1).mean()),
                "flagged": int((ds.status != 0).sum()),  # outputs NaN, the reason in the status variable
                "figures": [str(p) for p in figs.values()]}
     if as_json:

@@ -33,6 +33,9 @@ __all__ = [
     "sweep_angle",
     "reaches_geometric_limit",
     "limit_margin",
+    "creeps_terms",
+    "creeps_to_limit",
+    "MARGIN_RTOL",
     "friction_limits",
 ]
 
@@ -140,6 +143,41 @@ def limit_margin_terms(E_S, A, B, sin_alpha0, cos_alpha0):
     return E_S - (A * (1.0 - sin_alpha0) + B * cos_alpha0)  # W_F(pi/2) as in _limit_dissipation
 
 
+#: Rounding allowance of the margin E_S - W_F(pi/2), as a share of ``E_S + A + B``: its computed value
+#: (:func:`limit_margin_terms`) is within ``eps (E_S + 3 A + 3 B)`` or so of the exact margin of the float
+#: inputs (A, B, sin and cos of alpha0 each rounded once, 1 - sin alpha0 exact by Sterbenz, the final
+#: difference exact where it matters); 4 eps covers that with room.
+MARGIN_RTOL = 4.0 * 2.220446049250313e-16
+
+
+def creeps_terms(margin, E_S, A, B):
+    """True where the device creeps towards the flat rhombus and never arrives: t_F = inf [-].
+
+    With ``B = 4 F2 L1 = 0`` and the margin ``K_lim = E_S - W_F(pi/2)`` (:func:`limit_margin_terms`) at 0,
+    the remaining energy near pi/2 is ``A (1 - sin alpha) ~ A x^2 / 2`` (x = pi/2 - alpha, A = 2 F1 L1), so
+    ``x_dot = -x sqrt(A / (2 M(pi/2)))``: x decays exponentially with the time constant
+    ``tau = sqrt(2 M(pi/2) / A)`` and alpha = pi/2 is never reached. For a margin ``K_lim`` of either sign
+    t_F is finite, ``tau (ln(2 x0) + ln(A / (2 |K_lim|)) / 2)`` to leading order (the flat rhombus reached for
+    K_lim > 0, a friction stop at ``x_F = sqrt(2 |K_lim| / A)`` for K_lim < 0): it grows without bound as the
+    margin vanishes. The rule: where the margin lies within its rounding allowance
+    ``rho = MARGIN_RTOL (E_S + A + B)`` of 0, t_F of the float inputs is not determined by what the code can
+    compute (every value from about ``tau (ln(2 x0) + ln(A / (2 rho)) / 2)``, some 15-19 tau, up to infinity
+    is consistent with it), and the release is reported as creeping: ``stop_time = inf``,
+    ``alpha_final = pi/2`` (the limit), ``stopped_by = "creeps_to_limit"``. Rail friction resolves the
+    approach (K ~ B x, finite arrival) once ``B^2 > 2 A rho``; below that it is as if B were 0.
+    Pure arithmetic (compiled as is by :mod:`quickrelease._fast`): the one place this is decided, used by
+    every method next to :func:`limit_margin_terms`.
+    """
+    rho = MARGIN_RTOL * E_S + MARGIN_RTOL * A + MARGIN_RTOL * B  # no overflow for inputs near the float range
+    return (abs(margin) <= rho) & (B <= np.sqrt(2.0 * A) * np.sqrt(rho))
+
+
+def creeps_to_limit(E_S, alpha0, F1, F2, L1):
+    """True where the release creeps towards pi/2 without arriving (see :func:`creeps_terms`)."""
+    A, B = 2.0 * F1 * L1, 4.0 * F2 * L1
+    return creeps_terms(limit_margin(E_S, alpha0, F1, F2, L1), E_S, A, B)
+
+
 def dissipation_at_limit(alpha0, F1, F2, L1):
     """Energy dissipated on the way from alpha0 to the flat rhombus alpha = pi/2 (Eq. 7) [J]."""
     return _limit_dissipation(2.0 * F1 * L1, 4.0 * F2 * L1, np.sin(alpha0), np.cos(alpha0))
@@ -154,9 +192,11 @@ def reaches_geometric_limit(E_S, alpha0, F1, F2, L1):
     """True where friction cannot dissipate E_S before the rhombus is flat (alpha = pi/2).
 
     That is ``E_S > W_F(pi/2)`` (Eq. 7), decided by :func:`limit_margin_terms` (the single classifier
-    used by every solver); there the device reaches the geometric limit with kinetic energy left.
+    used by every solver); there the device reaches the geometric limit with kinetic energy left. False where
+    the margin is within its rounding of 0 without rail friction: the device creeps (:func:`creeps_terms`).
     """
-    return limit_margin(E_S, alpha0, F1, F2, L1) > 0.0
+    margin = limit_margin(E_S, alpha0, F1, F2, L1)
+    return (margin > 0.0) & ~creeps_terms(margin, E_S, 2.0 * F1 * L1, 4.0 * F2 * L1)
 
 
 def _phase(F1, F2, L1):
@@ -225,7 +265,8 @@ def sweep_angle(E_S, alpha0, F1, F2, L1):
     B = 4.0 * F2 * L1
     R = np.hypot(A, B)
     sa0, ca0 = np.sin(alpha0), np.cos(alpha0)
-    limit = limit_margin_terms(E_S, A, B, sa0, ca0) > 0.0
+    margin = limit_margin_terms(E_S, A, B, sa0, ca0)
+    limit = (margin > 0.0) | creeps_terms(margin, E_S, A, B)  # the sweep to pi/2: reached, or its limit
     with np.errstate(divide="ignore", invalid="ignore"):
         delta = sweep_terms(E_S, A, B, R, sa0, ca0)
     delta = np.where(limit, HALF_PI - alpha0, np.clip(delta, 0.0, HALF_PI - alpha0))
@@ -243,10 +284,10 @@ def final_angle(E_S, alpha0, F1, F2, L1):
 
     Where friction cannot stop the device before the rhombus is flat (see
     :func:`reaches_geometric_limit`), the motion ends at the geometric limit and
-    pi/2 is returned.
+    pi/2 is returned; so too where it creeps towards it (:func:`creeps_to_limit`: pi/2 is its limit).
     """
     delta = sweep_angle(E_S, alpha0, F1, F2, L1)
-    limit = reaches_geometric_limit(E_S, alpha0, F1, F2, L1)
+    limit = reaches_geometric_limit(E_S, alpha0, F1, F2, L1) | creeps_to_limit(E_S, alpha0, F1, F2, L1)
     alpha_F = np.where(limit, HALF_PI, np.minimum(np.asarray(alpha0, dtype=float) + delta, HALF_PI))
     return float(alpha_F) if np.ndim(alpha_F) == 0 else alpha_F
 

@@ -9,9 +9,11 @@ c, the release instant and a constant offset per channel, by minimizing
 
 (plus, when the case gives ``[observations]`` with a scatter, the two stop observations weighted by
 their standard deviations) with scipy's bounded ``least_squares`` (friction >= 0). The model is the energy
-solution (Eq. 9-10) evaluated at the sample times (:meth:`FirstIntegral.state_at`), at rest before the
-release and after the stop. The noise level sigma of each channel is given in the case file or estimated
-from the record's pre-release segment (the device at rest).
+solution (Eq. 9-10) at the sample times, at rest before the release and after the stop; within the motion
+each channel is interpolated from a table built per parameter vector and checked to 1e-11 of the channel's
+range (:mod:`quickrelease.records`), so a model evaluation costs time linear in the record. The noise level
+sigma of each channel is given in the case file or estimated from the record's pre-release segment (the
+device at rest).
 
 Uncertainty: the covariance of the estimates is ``(J^T J)^-1`` (J the Jacobian of the weighted
 residuals at the solution), scaled by the reduced chi-square unless ``absolute_sigma``; standard errors,

@@ -174,7 +174,22 @@ def identify_friction(alpha0: float, alpha_final: float, stop_time: float, *,
     feasible = (_line_time(0.0, E_S, alpha0, F1_max, F2_max, device, c),
                 _line_time(F1_max, E_S, alpha0, F1_max, F2_max, device, c))  # not residual + t_F: exact
     count += 2
-    if not all(math.isfinite(t) and t > 0.0 for t in feasible):
+    F1_top = F1_max
+    if feasible[1] == math.inf and math.isfinite(feasible[0]):
+        # alpha_F within rounding of pi/2: the F1* end (F2 = 0) creeps towards pi/2 (dynamics.creeps_terms), so the
+        # feasible interval is unbounded above; the root is searched below the rounding band (F1* (1 - 1e-12) moves
+        # the margin by 1e-12 W_F, far outside it), and any slower observation is that end
+        F1_top = F1_max * (1.0 - 1e-12)
+        t_top = _line_time(F1_top, E_S, alpha0, F1_max, F2_max, device, c)
+        count += 1
+        if math.isfinite(t_top) and stop_time >= t_top:
+            return Identification(
+                F1=F1_max, F2=0.0, F1_max=F1_max, F2_max=F2_max, stored_energy=E_S, alpha0=float(alpha0),
+                alpha_final=float(alpha_final), stop_time=float(stop_time), mass_factor=c, device=device,
+                stop_time_residual=0.0, feasible_stop_times=feasible,
+                push_force=None if push_force is None else float(push_force), iterations=count, boundary="F2 = 0")
+    if not (all(t > 0.0 for t in feasible) and math.isfinite(feasible[0])
+            and (math.isfinite(feasible[1]) or F1_top < F1_max)):
         raise QuickReleaseError(f"E_S = {E_S:.6g} J (alpha0 = {alpha0:.6g} rad, alpha_F = {alpha_final:.6g} rad): "
                                 f"the feasible stop times are [{feasible[0]:.6g}, {feasible[1]:.6g}] s, not finite "
                                 "in floating point; E_S is outside the range the model resolves")
@@ -185,13 +200,14 @@ def identify_friction(alpha0: float, alpha_final: float, stop_time: float, *,
     boundary = None
     if abs(lo) <= feasible_slack(feasible[0], alpha0, alpha_final, 0.0):
         F1, F2, res, boundary = 0.0, F2_max, lo, "F1 = 0"
-    elif abs(hi) <= feasible_slack(feasible[1], alpha0, alpha_final, 0.0) or \
+    elif math.isfinite(hi) and abs(hi) <= feasible_slack(feasible[1], alpha0, alpha_final, 0.0) or \
             0.0 > hi >= -feasible_slack(feasible[1], alpha0, alpha_final, 1.0):  # the F1* end: widened outwards
         F1, F2, res, boundary = F1_max, 0.0, hi, "F2 = 0"
     elif lo > 0.0 or hi < 0.0:
         raise InfeasibleObservationError(float(stop_time), feasible)
     else:
-        F1 = brent(residual, 0.0, F1_max, lo, hi, xtol=1e-14 * F1_max)
+        hi = hi if F1_top == F1_max else residual(F1_top)
+        F1 = brent(residual, 0.0, F1_top, lo, hi, xtol=1e-14 * F1_max)
         F2 = F2_max * (1.0 - F1 / F1_max)
         res = residual(F1)
     return Identification(

@@ -17,6 +17,9 @@ __all__ = ["Response", "STOP_REASONS"]
 STOP_REASONS = {
     "friction": "friction dissipated the stored energy (Eq. 8)",
     "geometric_limit": "the rhombus became flat (alpha = pi/2) with kinetic energy left",
+    "creeps_to_limit": "creeps towards the flat rhombus and never arrives (stop_time = inf, alpha_final = pi/2 "
+                       "its limit): no rail friction and E_S = W_F(pi/2) within rounding "
+                       "(quickrelease.dynamics.creeps_terms)",
 }
 
 
@@ -52,11 +55,13 @@ class Response:
     device: Device
     """The device simulated."""
     stop_time: float
-    """t_F, when the motion ended [s]."""
+    """t_F, when the motion ended [s]; inf for ``"creeps_to_limit"`` (the arrays then end at the horizon
+    ``stats["horizon_s"]``, where the kinetic energy is 1e-6 E_S; pi/2 - alpha decays like exp(-t / tau) after it,
+    ``tau = stats["time_constant_s"]``)."""
     alpha_final: float
     """alpha_F, the angle where the motion ended [rad]."""
     stopped_by: str
-    """``"friction"`` or ``"geometric_limit"`` (see :data:`STOP_REASONS`)."""
+    """``"friction"``, ``"geometric_limit"`` or ``"creeps_to_limit"`` (see :data:`STOP_REASONS`)."""
     method: str
     """Solver that produced the response: ``energy``, ``rk`` or ``explicit``."""
     stats: dict[str, Any] = field(default_factory=dict)
@@ -140,7 +145,7 @@ class Response:
             "F1_N": self.F1,
             "F2_N": self.F2,
             "alpha_final_rad": self.alpha_final,
-            "stop_time_s": self.stop_time,
+            "stop_time_s": self.stop_time if math.isfinite(self.stop_time) else None,  # None: never (JSON null)
             "stopped_by": self.stopped_by,
             "u_final_m": self.u_final,
             "v_final_m": self.v_final,

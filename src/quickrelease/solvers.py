@@ -33,6 +33,7 @@ import numpy as np
 from . import dynamics
 from ._kernels import Releases
 from ._roots import brent
+from ._statetable import StateTable
 from ._timemap import TimeMap
 from ._validate import HALF_PI, check_angle, check_nonnegative, check_positive, check_size
 from .device import Device, preset
@@ -66,12 +67,14 @@ class FirstIntegral:
         self.E_S, self.alpha0, self.F1, self.F2 = float(E_S), float(alpha0), float(F1), float(F2)
         self.m1, self.m2, self.L1, self.c = float(m1), float(m2), float(L1), float(c)
         self._rel = Releases.build(*(np.array([v]) for v in (E_S, alpha0, F1, F2, c * m1 / m2, m2, L1)))
-        self.regime = ("friction", "limit")[int(self._rel.regime[0])]
-        self.geometric_limit = self.regime != "friction"
+        self.regime = ("friction", "limit", "creep")[int(self._rel.regime[0])]
+        self.geometric_limit = self.regime == "limit"
+        self.creeps = self.regime == "creep"  # t_F = inf (dynamics.creeps_terms): creeps towards pi/2
         self.anchor = float(self._rel.anchor[0])
         self.alpha_final = float(self._rel.alpha_final[0])
-        self.stopped_by = "geometric_limit" if self.geometric_limit else "friction"
+        self.stopped_by = {"friction": "friction", "limit": "geometric_limit", "creep": "creeps_to_limit"}[self.regime]
         self._time_map: TimeMap | None = None
+        self._state_table: StateTable | None | bool = False  # False: not built yet; None: none meets the tolerance
         coarse = [v for v in (self.E_S,) if 0.0 < v < _FINEST_SUBNORMAL]
         if coarse:  # a deep subnormal E_S carries few bits: the results would be off in their leading digits
             _unresolved(self, f"an input of {coarse[0]:.6g} < {_FINEST_SUBNORMAL:.3g}, a subnormal float with fewer "
@@ -113,15 +116,40 @@ class FirstIntegral:
         return float(self._rel.rate_at(np.array([1.0]))[0])
 
     @property
+    def w_end(self) -> float:
+        """w where the returned motion ends: 0 (the stop, or the flat rhombus), or for a creeping release the
+        horizon, where the kinetic energy has come down to ``CREEP_HORIZON E_S`` (K = 2 A sigma^2 + 2 B sigma q
+        with K_lim = 0, solved for sigma with q = 1, exact to O(sigma^2)) [-]."""
+        if not self.creeps:
+            return 0.0
+        rel, hE = self._rel, CREEP_HORIZON * self.E_S
+        A, B = float(rel.A[0]), float(rel.B[0])
+        sigma_h = hE / (B + math.sqrt(B * B + 2.0 * A * hE))
+        return math.sqrt(sigma_h / float(rel.sigma_m[0]))
+
+    def horizon(self) -> float:
+        """Time to :attr:`w_end` [s]: the stop time, or for a creeping release the end of the returned history."""
+        if not self.creeps:
+            return self.stop_time()
+        return float(self.elapsed(np.array([self.w_end]))[0])
+
+    @property
+    def time_constant(self) -> float:
+        """tau = sqrt(2 M(pi/2) / A) [s]: pi/2 - alpha decays like exp(-t / tau) as a creeping release nears pi/2."""
+        return math.sqrt(2.0 * float(self.mass(HALF_PI)) / float(self._rel.A[0]))
+
+    @property
     def time_map(self) -> TimeMap:
-        """t(w) as a piecewise Chebyshev series (built on first use)."""
+        """t(w) as a piecewise Chebyshev series on [w_end, 1] (built on first use)."""
         if self._time_map is None:
-            self._time_map = TimeMap(self.integrand)
+            w0 = self.w_end
+            self._time_map = TimeMap(lambda u: (1.0 - w0) * self.integrand(w0 + (1.0 - w0) * u))
         return self._time_map
 
     def w_at_times(self, t) -> np.ndarray:
         """The integration variable w reached at times t since release (clipped to the motion) [-]."""
-        return self.time_map.invert(t)
+        w0 = self.w_end
+        return w0 + (1.0 - w0) * self.time_map.invert(t)
 
     def state_at(self, t) -> tuple[np.ndarray, np.ndarray]:
         """alpha and alpha_dot at times t since release [rad, rad/s], at rest before 0 and after the stop.
@@ -137,7 +165,54 @@ class FirstIntegral:
         before, after = t <= 0.0, t > t_stop
         alpha[before], alpha_dot[before] = self.alpha0, 0.0
         alpha[after], alpha_dot[after] = self.alpha_final, 0.0
+        if self.creeps:  # past the horizon, the exponential creep towards pi/2 (leading order in pi/2 - alpha)
+            t_h, tau = self.horizon(), self.time_constant
+            late = t > t_h
+            x = (HALF_PI - float(self.alpha(np.array([self.w_end]))[0])) * np.exp(-(t[late] - t_h) / tau)
+            alpha[late], alpha_dot[late] = HALF_PI - x, x / tau
         return alpha, alpha_dot
+
+    @property
+    def state_table(self) -> StateTable | None:
+        """alpha(t) on the motion as a quintic Hermite table (built on first use; None where no table of
+        :data:`quickrelease._statetable.MAX_CELLS` cells meets :data:`quickrelease._statetable.TOL`)."""
+        if self._state_table is False:
+            def acceleration(alpha, alpha_dot):  # on the branch alpha_dot > 0, the stop included (its limit)
+                return dynamics.angular_acceleration(alpha, np.maximum(alpha_dot, 1e-300), self.F1, self.F2,
+                                                     self.m1, self.m2, self.L1, self.c)
+
+            def exact(t):
+                w = self.w_at_times(t)
+                return self.alpha(w), self._rel.rate_at(w)
+
+            self._state_table = StateTable.build(self.stop_time(), exact, acceleration)
+        return self._state_table
+
+    def state_at_many(self, t, acceleration: bool = False) -> tuple[np.ndarray, ...]:
+        """As :meth:`state_at`, for many times at a cost linear in their number: the times at rest take the
+        rest values, the times within the motion the interpolated :attr:`state_table` (relative error at most
+        :data:`quickrelease._statetable.TOL` in alpha, alpha_dot and alpha_ddot; see :mod:`quickrelease._statetable`).
+        Falls back to :meth:`state_at` for few times or where no table meets the tolerance.
+        """
+        t = np.asarray(t, dtype=float)
+        t_stop = self.stop_time()
+        moving = (t > 0.0) & (t <= t_stop)
+        count = int(np.count_nonzero(moving))
+        table = self.state_table if count >= 1 << 16 else None
+        if table is None:
+            alpha, alpha_dot = self.state_at(t)
+            if not acceleration:
+                return alpha, alpha_dot
+            alpha_ddot = dynamics.angular_acceleration(alpha, alpha_dot, self.F1, self.F2, self.m1, self.m2,
+                                                       self.L1, self.c)
+            return alpha, alpha_dot, alpha_ddot
+        alpha = np.full(t.shape, self.alpha0)
+        alpha_dot = np.zeros(t.shape)
+        alpha_ddot = np.zeros(t.shape)
+        alpha[t > t_stop] = self.alpha_final
+        a, ad, add = table.state(t[moving], acceleration=True)
+        alpha[moving], alpha_dot[moving], alpha_ddot[moving] = a, ad, add
+        return (alpha, alpha_dot, alpha_ddot) if acceleration else (alpha, alpha_dot)
 
 
 def stop_time(E_S: float, alpha0: float, F1: float, F2: float, *,
@@ -163,6 +238,10 @@ def stop_time(E_S: float, alpha0: float, F1: float, F2: float, *,
     return FirstIntegral(E_S, alpha0, F1, F2, device.m1, device.m2, device.L1, c).stop_time()
 
 
+#: A creeping release (t_F = inf, :func:`quickrelease.dynamics.creeps_terms`) is returned up to the time where its
+#: kinetic energy has come down to this share of E_S (its speed to about 1e-3 of the initial): ``stats["horizon_s"]``.
+CREEP_HORIZON = 1e-6
+
 #: Below this a subnormal float has fewer than 43 significant bits (relative spacing above 1e-13).
 _FINEST_SUBNORMAL = math.ldexp(1.0, -1031)
 
@@ -187,17 +266,23 @@ def _check_release(E_S, alpha0, F1, F2) -> None:
 
 # -- the three methods ----------------------------------------------------------------
 
+def _creep_stats(fi: FirstIntegral) -> dict[str, float]:
+    """What a creeping release's history covers: its horizon and the time constant of the creep after it."""
+    return {"horizon_s": fi.horizon(), "time_constant_s": fi.time_constant} if fi.creeps else {}
+
+
 def _solve_energy(fi: FirstIntegral, n_points: int, **_: Any) -> dict[str, Any]:
     t_stop = fi.stop_time()
-    t = np.linspace(0.0, t_stop, n_points)
+    t = np.linspace(0.0, fi.horizon(), n_points)
     w = fi.w_at_times(t)
-    w[0], w[-1] = 1.0, 0.0
+    w[0], w[-1] = 1.0, fi.w_end
     alpha = fi.alpha(w)
     alpha[0] = fi.alpha0
-    alpha[-1] = fi.alpha_final
+    if not fi.creeps:
+        alpha[-1] = fi.alpha_final
     alpha_dot = fi._rel.rate_at(w)
     return {"t": t, "alpha": alpha, "alpha_dot": alpha_dot, "stop_time": t_stop,
-            "alpha_final": fi.alpha_final, "stats": {"n_points": n_points}}
+            "alpha_final": fi.alpha_final, "stats": {"n_points": n_points, **_creep_stats(fi)}}
 
 
 def _solve_rk(fi: FirstIntegral, n_points: int, rtol: float = RK_RTOL, atol: float | None = None,
@@ -229,13 +314,15 @@ def _solve_rk(fi: FirstIntegral, n_points: int, rtol: float = RK_RTOL, atol: flo
     flat.direction = 1
 
     alpha_dot0 = float(dynamics.initial_rate(fi.E_S, fi.alpha0, m1, m2, L1, c))
-    if max_time is None:
+    if fi.creeps:  # never stops (t_F = inf): integrated to the first integral's horizon
+        max_time = fi.horizon()
+    elif max_time is None:
         # generous horizon: the slowest release stops long before this
         max_time = 1e3 * (HALF_PI - fi.alpha0) / alpha_dot0 + 10.0
     atol = RK_ATOL_SHARE * alpha_dot0 if atol is None else atol
     sol = solve_ivp(rhs, (0.0, max_time), [fi.alpha0, alpha_dot0], method=rk_method,
                     rtol=rtol, atol=atol, events=(stopped, flat), dense_output=True)
-    if sol.status != 1:
+    if sol.status != 1 and not (fi.creeps and sol.status == 0):
         raise RuntimeError(f"solve_ivp ended without reaching a stop: {sol.message}")
     t_zero = float(sol.t_events[0][0]) if sol.t_events[0].size else math.inf
     t_flat = float(sol.t_events[1][0]) if sol.t_events[1].size else math.inf
@@ -259,7 +346,12 @@ def _solve_rk(fi: FirstIntegral, n_points: int, rtol: float = RK_RTOL, atol: flo
         extra = (rate_flat - rate_true) / decel if decel > 0.0 and rate_flat > rate_true else 0.0
         return t_flat + (extra if extra < t_flat else 0.0)
 
-    if fi.geometric_limit:
+    if fi.creeps:
+        # t_F = inf (dynamics.creeps_terms): the history up to the first integral's horizon (K = 1e-6 E_S there,
+        # far above rk's error), or an event of the integration's own before it (within its error of pi/2)
+        t_stop, stopped_by, alpha_final, end_rate = math.inf, "creeps_to_limit", HALF_PI, None
+        t_hist = min(fi.horizon(), t_zero, t_flat)
+    elif fi.geometric_limit:
         # The one classifier (dynamics.limit_margin_terms) says the rhombus becomes flat with kinetic energy
         # left. Within rounding of the boundary the integrated alpha_dot may vanish a hair before pi/2: that
         # instant (the closest approach) is then the arrival at the flat rhombus.
@@ -286,15 +378,16 @@ def _solve_rk(fi: FirstIntegral, n_points: int, rtol: float = RK_RTOL, atol: flo
             alpha_final = HALF_PI
         stopped_by = "friction"
         end_rate = 0.0
-    t = np.linspace(0.0, t_stop, n_points)
+    t = np.linspace(0.0, t_hist if fi.creeps else t_stop, n_points)
     y = sol.sol(t)
     alpha, alpha_dot = y[0].copy(), y[1].copy()
     alpha[0], alpha_dot[0] = fi.alpha0, alpha_dot0
-    alpha[-1], alpha_dot[-1] = alpha_final, end_rate
+    if not fi.creeps:
+        alpha[-1], alpha_dot[-1] = alpha_final, end_rate
     return {"t": t, "alpha": alpha, "alpha_dot": alpha_dot, "stop_time": t_stop,
             "alpha_final": alpha_final, "stopped_by": stopped_by,
             "stats": {"nfev": int(sol.nfev), "steps": int(sol.t.size - 1), "rk_method": rk_method,
-                      "rtol": rtol, "atol": atol}}
+                      "rtol": rtol, "atol": atol, **_creep_stats(fi)}}
 
 
 def _solve_explicit(fi: FirstIntegral, dt: float | None = None, max_steps: int = 20_000_000,
@@ -302,7 +395,7 @@ def _solve_explicit(fi: FirstIntegral, dt: float | None = None, max_steps: int =
     """Table 6, step by step; the stop is found inside the last step."""
     dt = 1e-4 if dt is None else float(dt)
     check_positive("dt", dt, "s")
-    t_stop = fi.stop_time()  # the energy solution's t_F: the steps needed, known before stepping
+    t_stop = fi.horizon()  # the energy solution's t_F (or a creeping release's horizon): the steps needed
     if t_stop / dt > max_steps:
         raise ParameterError("dt", dt, f"[t_F / {max_steps:,}, inf) = [{t_stop / max_steps:.3g}, inf) (t_F = "
                              f"{t_stop:.6g} s; at most {max_steps:,} steps)", "s")
@@ -355,13 +448,17 @@ def _solve_explicit(fi: FirstIntegral, dt: float | None = None, max_steps: int =
         ts.append(t)
         als.append(a)
         ads.append(ad)
+        if fi.creeps and t >= t_stop:  # a creeping release (t_F = inf) is stepped to its horizon
+            stopped_by = "horizon"
+            break
     else:
         raise ParameterError("dt", dt, f"values that reach the stop within max_steps = {max_steps}", "s")
     # stopped_by is the one classifier's (as for every method); the first-order trajectory may end the other
     # way within its O(dt) error of a stop at pi/2: its own ending is kept in the stats.
     return {"t": np.array(ts), "alpha": np.array(als), "alpha_dot": np.array(ads),
-            "stop_time": t, "alpha_final": als[-1], "stopped_by": fi.stopped_by,
-            "stats": {"dt": dt, "steps": len(ts) - 1, "scheme_end": stopped_by}}
+            "stop_time": math.inf if fi.creeps else t, "alpha_final": HALF_PI if fi.creeps else als[-1],
+            "stopped_by": fi.stopped_by,
+            "stats": {"dt": dt, "steps": len(ts) - 1, "scheme_end": stopped_by, **_creep_stats(fi)}}
 
 
 _SOLVERS = {"energy": _solve_energy, "rk": _solve_rk, "explicit": _solve_explicit}
@@ -412,7 +509,7 @@ def simulate(E_S: float, alpha0: float, F1: float = 0.0, F2: float = 0.0, *,
     device = device or preset("paper")
     c = dynamics.mass_factor(mass_model)
     fi = FirstIntegral(E_S, alpha0, F1, F2, device.m1, device.m2, device.L1, c)
-    t_stop = fi.stop_time()
+    t_stop = fi.horizon()  # t_F, or where the returned history of a creeping release ends (t_F = inf)
     if not 0.0 < t_stop < math.inf:
         _unresolved(fi, f"t_F = {t_stop:.6g} s")
     out = _SOLVERS[method](fi, n_points=int(n_points), dt=dt, rtol=rtol, atol=atol, rk_method=rk_method)

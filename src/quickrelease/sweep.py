@@ -44,7 +44,7 @@ SWEEP_PARAMETERS = {
 OUTPUTS = {
     "stop_time": ("time from release to the end of the motion t_F", "s"),
     "alpha_final": ("final angle alpha_F", "rad"),
-    "stopped_by": ("0: friction stop, 1: geometric limit (flat rhombus)", "1"),
+    "stopped_by": ("0: friction stop, 1: geometric limit (flat rhombus), 2: creeps towards it (stop_time inf)", "1"),
     "u_final": ("head stroke u_F", "m"),
     "v_final": ("central hinge opening v_F", "m"),
     "alpha_dot0": ("initial angular velocity (Eq. 6)", "rad/s"),
@@ -329,7 +329,7 @@ def heatmap_figure(ds) -> Any:
             else:  # rasterised: an SVG holds one image per panel, not a path per cell
                 mesh = ax.pcolormesh(x, y, z, shading="auto", cmap="viridis", rasterized=True)
             fig.colorbar(mesh, ax=ax, label=f"[{unit}]")
-            limit = np.asarray(ds["stopped_by"].isel(sel).values if sel else ds["stopped_by"].values)
+            limit = np.asarray(ds["stopped_by"].isel(sel).values if sel else ds["stopped_by"].values) == 1
             if limit.any() and not limit.all():
                 ax.contour(x, y, limit, levels=[0.5], colors="w", linewidths=0.8).set_rasterized(True)
             ax.set_xlabel(f"{names[1]} [{SWEEP_PARAMETERS[names[1]][1]}]")

@@ -1,0 +1,73 @@
+"""Cost of the release model and of a whole fit against the record length (issue 9, item 11).
+
+Run: python benchmarks/bench_fit_scaling.py [--full] [--fit]
+
+Records of 1e5, 1e6 (and with --full 1e7) rows are made here by the package's synth (examples/paper.toml,
+channels u, v, a_head; the sampling rate set so the record has the number of rows). Printed per size:
+seconds per model evaluation (the tabulated path of ``release_channels``, and the exact path that inverts
+the time map at every time, for the 1e5 record only) and, with --fit, seconds per whole fit; each also per
+row, and as a ratio against the 1e5 record measured in the same run. Linear cost: the ratio per row stays
+near 1 as the record grows.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+from quickrelease.case import load_case
+from quickrelease.fit import fit_record
+from quickrelease.records import release_channels
+from quickrelease.solvers import FirstIntegral
+from quickrelease.synth import synthesize
+
+EXAMPLES = Path(__file__).parent.parent / "examples"
+
+
+def timed(func, repeat: int = 3) -> float:
+    best = float("inf")
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        func()
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--full", action="store_true", help="also 1e7 rows")
+    parser.add_argument("--fit", action="store_true", help="also time whole fits")
+    args = parser.parse_args()
+    case = load_case(EXAMPLES / "paper.toml")
+    sizes = [10**5, 10**6] + ([10**7] if args.full else [])
+    duration = 2.2  # release at 0.5 s, t_F ~ 1.05 s, then at rest
+    base = {}
+    print(f"{'rows':>10s} {'what':28s} {'seconds':>10s} {'us/row':>9s} {'per row vs 1e5':>15s}")
+    for n in sizes:
+        syn = synthesize(case, ["u", "v", "a_head"], rate=n / duration, duration=duration, seed=1)
+        record = syn.record()
+        d = case.device
+        F1, F2 = 419.85, 804.57
+        fi = FirstIntegral(case.stored_energy, case.alpha0, F1, F2, d.m1, d.m2, d.L1, case.mass_factor)
+        names, t, window = list(record.channels), record.t, record.sampling_interval()
+
+        def model(fi=fi, names=names, t=t, window=window, exact=False):
+            # a fresh release per evaluation, as in a fit (its tables are built per parameter vector)
+            f = FirstIntegral(fi.E_S, fi.alpha0, fi.F1, fi.F2, fi.m1, fi.m2, fi.L1, fi.c)
+            return release_channels(names, t, 0.5, f, window, exact=exact)
+
+        rows = [("model evaluation", timed(model))]
+        if n == sizes[0]:
+            rows.append(("model evaluation, exact path", timed(lambda: model(exact=True), repeat=1)))
+        if args.fit:
+            rows.append(("whole fit", timed(lambda record=record: fit_record(case, record), repeat=1)))
+        for what, seconds in rows:
+            per_row = seconds / t.size
+            base.setdefault(what, per_row)
+            print(f"{t.size:10d} {what:28s} {seconds:10.3f} {1e6 * per_row:9.3f} {per_row / base[what]:14.2f}x",
+                  flush=True)
+
+
+if __name__ == "__main__":
+    main()
