@@ -11,6 +11,7 @@ Compiled on first use and cached on disk (``cache=True``).
 from __future__ import annotations
 
 import math
+import os
 import types
 
 import numpy as np
@@ -19,6 +20,25 @@ from numba import njit
 from . import _kernels, dynamics
 
 _HALF_PI = 0.5 * math.pi
+
+
+def _refresh_stale_cache() -> None:
+    """Make this file at least as new as the modules whose functions it compiles in.
+
+    numba stamps a cached function with its own source file only, and the kernels here inline functions
+    of :mod:`quickrelease.dynamics` and :mod:`quickrelease._kernels`: after an edit or a checkout that
+    changes those alone, the cached kernels would keep the old formulas (a stale kernel once made batch
+    and simulate differ by an ulp). Touching this file invalidates them; a read-only install is left as is.
+    """
+    try:
+        newest = max(os.stat(m.__file__).st_mtime for m in (dynamics, _kernels))
+        if newest > os.stat(__file__).st_mtime:
+            os.utime(__file__)
+    except OSError:
+        pass
+
+
+_refresh_stale_cache()
 
 
 def rules() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
