@@ -264,6 +264,50 @@ def test_item18_extreme_energies_and_forces_are_finite_and_right():
     assert dynamics.final_angle(1e-17, 0.2, 100.0, 100.0, PAPER.L1) >= 0.2
 
 
+# -- item 15 follow-up: rail friction with a small alpha0 (u = sin(alpha_F - phi) near -1) ---------------------
+
+@pytest.mark.parametrize("F2", [7255.0, 3624.5, 512.0, 20000.0])
+@pytest.mark.parametrize("a0", [1e-4, 3e-3])
+def test_item15_small_alpha0_rail_friction_alpha_F_t_F_and_the_F1_0_end(F2, a0):
+    """E_S = 0.1 J, F1 = 0: alpha_F (Eq. 8) and t_F to 1e-13 of the 30-digit reference, and identify / batch.identify
+    return the F1 = 0 end for simulate's own output (cos(alpha_F - phi) = sin(alpha_F) was computed as
+    sqrt((1 - u)(1 + u)) with 1 + u ~ 1e-6 rounded to an ulp: alpha_F and t_F 2e-11 to 3e-11 off, t_F 7e-12 below
+    t_F(F1 = 0), outside the 4e-12 allowance)."""
+    E, c = 0.1, 2 / 3
+    t_ref, aF_ref, how, _ = mp_reference(E, a0, 0.0, F2, PAPER.m1, PAPER.m2, PAPER.L1, c)
+    assert how == "friction"
+    r = qr.simulate(E, a0, 0.0, F2, mass_model=c, n_points=2)
+    b = batch.release(E, a0, 0.0, F2, c=c)
+    with mp.workdps(30):
+        for aF, tF in ((r.alpha_final, r.stop_time), (float(b.alpha_final), float(b.stop_time))):
+            assert abs((mp.mpf(aF) - a0) / (aF_ref - a0) - 1) < 1e-13
+            assert abs(mp.mpf(tF) / t_ref - 1) < 1e-13
+    bi = batch.identify(a0, r.alpha_final, r.stop_time, E, c=c)
+    assert int(bi.status) == 0 and float(bi.F1) == 0.0 and abs(float(bi.F2) / F2 - 1) < 1e-12
+    ident = qr.identify_friction(a0, r.alpha_final, r.stop_time, stored_energy=E, mass_model=c)
+    assert ident.boundary == "F1 = 0" and ident.F1 == 0.0 and abs(ident.F2 / F2 - 1) < 1e-12
+
+
+def test_item15_stop_cosine_against_mpmath_where_u_is_near_minus_one():
+    """cos(alpha_F - phi) to a few ulps of itself where 1 + u is tiny (Eq. 8 in 30 digits)."""
+    rng = np.random.default_rng(15)
+    worst = 0.0
+    for _ in range(200):
+        a0, E, F2 = 10 ** rng.uniform(-5, -1), 10 ** rng.uniform(-3, 1), 10 ** rng.uniform(1, 5)
+        F1 = 0.0 if rng.random() < 0.5 else F2 * 10 ** rng.uniform(-6, -2)
+        A, B = 2 * F1 * PAPER.L1, 4 * F2 * PAPER.L1
+        R = math.hypot(A, B)
+        if dynamics.limit_margin_terms(E, A, B, math.sin(a0), math.cos(a0)) > 0:
+            continue
+        got = float(dynamics.stop_cosine_terms(E, A, B, R, math.sin(a0), math.cos(a0)))
+        with mp.workdps(30):
+            phi = mp.atan2(B, A)
+            u = mp.sin(mp.mpf(a0) - phi) + mp.mpf(E) / mp.hypot(A, B)
+            ref = mp.sqrt(1 - u * u)
+            worst = max(worst, abs(float(got / ref - 1)))
+    assert worst < 1e-14
+
+
 # -- item 18 (creep): F2 = 0 and E_S = W_F(pi/2) within rounding: the device creeps towards pi/2 ----------------
 
 CREEP = (1.0, 1.5, 80.58123980909731, 0.0)  # E_S [J], alpha0 [rad], F1, F2 [N]: the float margin is exactly 0

@@ -16,6 +16,7 @@ from hypothesis import strategies as st
 
 import quickrelease as qr
 from quickrelease import batch, dynamics
+from quickrelease._kernels import feasible_slack
 
 PAPER = qr.preset("paper")
 HALF_PI = 0.5 * math.pi
@@ -135,7 +136,7 @@ def test_batch_agrees_with_single_case_solver_including_status(cases):
 
 
 @SETTINGS
-@given(releases(min_sweep=1e-6))
+@given(releases())
 def test_identify_simulate_round_trip(case):
     """simulate -> (alpha_F, t_F) -> identify recovers F1, F2 (a friction stop is always identifiable)."""
     E, a0, F1, F2, c = case
@@ -143,12 +144,13 @@ def test_identify_simulate_round_trip(case):
     assume(r.stopped_by == "friction" and r.alpha_final < HALF_PI)
     # Not within 1e-6 E_S of the flat rhombus: there the end F1 = F1* of the line has t_F ~ ln(1/cos alpha_F),
     # so the identification is ill-conditioned (and with F2 = 0 t_F itself is not determined by the inputs).
-    # KNOWN GAP (issue 9, item 15 follow-up): there, and for sweeps below 1e-6 rad, the round trip can miss
-    # by more than the rounding allowance; the cases hypothesis finds are listed in the H3 report.
+    # KNOWN GAP (issue 9, item 15 follow-up): there the round trip can miss by more than the rounding allowance.
     assume(abs(float(dynamics.limit_margin(E, a0, F1, F2, PAPER.L1))) > 1e-6 * E)
-    # KNOWN GAP too: alpha0 ~ 1e-4 with F1 = 0 puts t_F 1e-11 outside t_F(F1 = 0) (the 4e-12 allowance is not met
-    # by the identification's quadrature there): (0.1, 1e-4, 0, 7255, 2/3), (0.1, 1e-4, 0, 3624.5, 2/3).
-    assume(a0 >= 1e-2)
+    # (alpha0 < 1e-2 is no longer excluded: its misses were alpha_F, t_F off by 3e-11, dynamics.stop_cosine_terms)
+    # KNOWN GAP: a stop within 1e-4 rad of pi/2 (cos(alpha_F) small): 1 - sin(alpha0) and 1 - u carry the rounding
+    # of sin(alpha0) relative to themselves; at (4.954e-9, pi/2 - 1.06e-5, 1, 0, 2/3) simulate's t_F is 1.0e-8 off the
+    # 30-digit reference (22.92433824 s) and identify returns F2 = 8e-12 N instead of 0. Not fixed yet.
+    assume(math.cos(r.alpha_final) > 1e-4)
     b = batch.identify(a0, r.alpha_final, r.stop_time, E, c=c)
     assert int(b.status) == 0, b.reasons()
     # On the line of Eq. 13 (F1/F1* + F2/F2* = 1) the stop time pins F1; compare in units of F1*, F2*. The
@@ -156,6 +158,13 @@ def test_identify_simulate_round_trip(case):
     # r of t_F (1e-12 quadrature, and eps alpha_F / sweep from the rounding of alpha_F) moves F1/F1* by up to
     # r t_F / (t_hi - t_lo).
     t_lo, t_hi = float(b.stop_time_min), float(b.stop_time_max)
+    if abs(r.stop_time - t_lo) <= feasible_slack(t_lo, a0, r.alpha_final, 0.0) and \
+            abs(r.stop_time - t_hi) <= feasible_slack(t_hi, a0, r.alpha_final, 0.0):
+        # A sweep so small that the whole line of Eq. 13 lies within rounding of both ends (its stop times differ
+        # at second order in the sweep, the allowance grows as eps alpha_F / sweep): F1 = 0 and F2 = 0 explain
+        # the observation equally, in float64. Only that it is a boundary solution is checked.
+        assert float(b.F1) in (0.0, float(b.F1_max))
+        return
     r_t = 4e-12 + 4 * np.finfo(float).eps * r.alpha_final / (r.alpha_final - a0)
     tol = 1e-6 + r_t * t_hi / (t_hi - t_lo)
     assert abs(float(b.F1 / b.F1_max) - F1 / float(b.F1_max)) < tol

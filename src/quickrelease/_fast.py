@@ -11,6 +11,7 @@ Compiled on first use and cached on disk (``cache=True``).
 from __future__ import annotations
 
 import math
+import os
 import types
 
 import numpy as np
@@ -19,6 +20,25 @@ from numba import njit
 from . import _kernels, dynamics
 
 _HALF_PI = 0.5 * math.pi
+
+
+def _refresh_stale_cache() -> None:
+    """Make this file at least as new as the modules whose functions it compiles in.
+
+    numba stamps a cached function with its own source file only, and the kernels here inline functions
+    of :mod:`quickrelease.dynamics` and :mod:`quickrelease._kernels`: after an edit or a checkout that
+    changes those alone, the cached kernels would keep the old formulas (a stale kernel once made batch
+    and simulate differ by an ulp). Touching this file invalidates them; a read-only install is left as is.
+    """
+    try:
+        newest = max(os.stat(m.__file__).st_mtime for m in (dynamics, _kernels))
+        if newest > os.stat(__file__).st_mtime:
+            os.utime(__file__)
+    except OSError:
+        pass
+
+
+_refresh_stale_cache()
 
 
 def rules() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -33,6 +53,7 @@ def rules() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
 _limit_margin = njit(cache=True, nogil=True)(dynamics.limit_margin_terms)
 _creeps = njit(cache=True, nogil=True)(dynamics.creeps_terms)
 _sweep = njit(cache=True, nogil=True)(dynamics.sweep_terms)
+_stop_cos = njit(cache=True, nogil=True)(dynamics.stop_cosine_terms)
 _slack = njit(cache=True, nogil=True)(_kernels.feasible_slack)
 
 
@@ -103,7 +124,7 @@ def stop_kernel(E, sa0_in, ca0_in, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, ne
                 cb = B / R
             else:
                 delta = max(delta, 0.0)
-                cb = math.sqrt((1.0 - s) * (1.0 + s))
+                cb = _stop_cos(E[i], A, B, R, sa0, ca0)  # cos(alpha_F - phi), as numpy computes it
             sA = (B * cb + A * s) / R
             cA = (A * cb - B * s) / R
             aF_out[i] = min(a0[i] + delta, _HALF_PI)

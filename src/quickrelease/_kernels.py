@@ -50,7 +50,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from .dynamics import creeps_terms, limit_margin_terms, sweep_terms
+from .dynamics import creeps_terms, limit_margin_terms, stop_cosine_terms, sweep_terms
 
 HALF_PI = 0.5 * math.pi
 
@@ -208,7 +208,7 @@ class Releases:
             at_flat = ~geo & ((delta >= HALF_PI - alpha0) | (s >= 1.0))
             if np.any(geo):
                 s = np.where(geo, 1.0, s)
-            cb = np.sqrt(np.maximum((1.0 - s) * (1.0 + s), 0.0))  # cos(alpha_F - phi)
+            cb = stop_cosine_terms(E_S, A, B, R, sa0, ca0)  # cos(alpha_F - phi), no cancellation at u -> -1
             if np.any(at_flat):
                 # a friction stop at pi/2 within rounding: sin, cos of alpha_F - phi at alpha_F = pi/2
                 # (cos(phi), sin(phi)), consistent with the sweep pi/2 - alpha0 (cb from a rounded s

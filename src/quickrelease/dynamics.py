@@ -215,18 +215,44 @@ def sweep_terms(E_S, A, B, R, sin_alpha0, cos_alpha0):
     ``cu = sqrt((1 - u)(1 + u))`` and ``N = sin(delta) = u cv - s cu = e (cv + s (u + s) / (cu + cv))``
     (using ``cv - cu = (u^2 - s^2) / (cu + cv)``): for a small sweep ``N ~ e / cv``, every term of the
     same sign, so delta keeps full relative accuracy however small it is (alpha_F - alpha0 computed from a
-    rounded alpha_F would carry an absolute error of about 1e-16 rad). Pure arithmetic and one square
-    root and atan2 (compiled as is by :mod:`quickrelease._fast`). Meaningful for the friction regime
-    (``limit_margin_terms <= 0``); the geometric limit's sweep is ``pi/2 - alpha0``.
+    rounded alpha_F would carry an absolute error of about 1e-16 rad). ``cu`` is
+    :func:`stop_cosine_terms` (not ``sqrt((1 - u)(1 + u))``, which loses ``eps / cu^2`` of cu when u is
+    near -1: rail friction with a small alpha0). Pure arithmetic and one square root and atan2 (compiled
+    as is by :mod:`quickrelease._fast`). Meaningful for the friction regime (``limit_margin_terms <= 0``);
+    the geometric limit's sweep is ``pi/2 - alpha0``.
     """
     s = (A * sin_alpha0 - B * cos_alpha0) / R
     cv = (A * cos_alpha0 + B * sin_alpha0) / R
     e = E_S / R
     u = s + e
-    cu = np.sqrt(np.maximum((1.0 - u) * (1.0 + u), 0.0))
+    neg = (s < 0.0) * 1.0  # stop_cosine_terms, inline for numba
+    one_plus_u = neg * (cv * cv / np.maximum(1.0 - s, 1.0) + e) + (1.0 - neg) * (1.0 + u)
+    cu = np.sqrt(np.maximum((1.0 - u) * one_plus_u, 0.0))
     N = e * (cv + s * (u + s) / (cu + cv))
     D = cu * cv + u * s
     return np.arctan2(N, D)
+
+
+def stop_cosine_terms(E_S, A, B, R, sin_alpha0, cos_alpha0):
+    """``cos(alpha_F - phi)`` of a friction stop (Eq. 8) to a few ulps of itself, cu >= 0 [-].
+
+    With s, cv, e, u as in :func:`sweep_terms`, ``cu^2 = (1 - u)(1 + u)`` with ``1 + u = cv^2 / (1 - s) + e``
+    for s < 0 (``cv^2 = 1 - s^2``; every term >= 0).
+    The textbook ``(1 - u)(1 + u)`` rounds ``1 + u`` to an absolute ulp: where u is near -1 (rail
+    friction, phi near pi/2, with a small alpha0: ``cu = sin(alpha_F)``, 1.7e-3 for E_S = 0.1 J,
+    alpha0 = 1e-4 rad, F2 = 7255 N) that is a relative error ``eps / cu^2`` of cu (1.5e-11 there), which
+    moved alpha_F and t_F by 2e-11 to 3e-11. For s >= 0 the textbook form is kept bit for bit: there
+    ``R (1 - u)`` is the classifier's ``-limit_margin_terms`` rounded the same way (a stop at pi/2 with
+    F2 << F1 stays consistent with its classification). Pure arithmetic, no branch (compiled as is by
+    :mod:`quickrelease._fast`).
+    """
+    s = (A * sin_alpha0 - B * cos_alpha0) / R
+    cv = (A * cos_alpha0 + B * sin_alpha0) / R
+    e = E_S / R
+    u = s + e
+    neg = (s < 0.0) * 1.0  # 1 + s = cv^2 / (1 - s) for s < 0; as before for s >= 0
+    one_plus_u = neg * (cv * cv / np.maximum(1.0 - s, 1.0) + e) + (1.0 - neg) * (1.0 + u)
+    return np.sqrt(np.maximum((1.0 - u) * one_plus_u, 0.0))
 
 
 def sweep_angle(E_S, alpha0, F1, F2, L1):
