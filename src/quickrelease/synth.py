@@ -422,9 +422,9 @@ def synthesize_building(case: Case, channels: list[str] | tuple[str, ...], *, ra
         raise ParameterError("d0", d0, "(0, inf) (the push must move the building past its sliders' friction)", "m")
     R0 = pushed_state(iso, d0)[1]
     if abs(R0) <= iso.friction:
-        raise ParameterError("[building] displacement", d0, f"a pushed displacement whose restoring force "
-                             f"({R0:.6g} N) exceeds the sliders' friction ({iso.friction:.6g} N): else the building "
-                             "never moves after the release", "m")
+        raise QuickReleaseError(f"{case.source}: [building] d0 = {d0:.6g} m: the sliders' friction F_s = "
+                                f"{iso.friction:.6g} N holds the building there (restoring force {R0:.6g} N <= F_s), "
+                                "so it never moves after the release: push it farther")
     period = iso.period
     motion = free_vibration(iso, d0, t_end=20.0 * period)
     t_stop = motion.stop_time
