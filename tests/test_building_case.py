@@ -259,3 +259,16 @@ def test_synth_refuses_a_push_the_sliders_hold(tmp_path):
     with pytest.raises(QuickReleaseError, match=r"case.toml: \[building\] d0 = 0.01 m: the sliders' friction F_s = "
                                                 r"127486 N holds the building there \(restoring force 64152.4 N"):
         synthesize_building(case, ["x"], rate=200.0)
+
+
+def test_an_edited_building_record_is_another_run(tmp_path):
+    """The run folder's fingerprint takes the building's record files by their content, as the device's."""
+    from quickrelease.runfolder import case_inputs, fingerprint
+
+    _write_record(tmp_path)
+    case = _case(tmp_path, RECORD)
+    before = fingerprint(case_inputs(case))
+    assert case_inputs(case)["building"]["record"]["channels"]["a"]["file"]["name"] == "acc.csv"
+    with open(tmp_path / "acc.csv", "a") as fh:
+        fh.write("1500.0,0.0\n")
+    assert fingerprint(case_inputs(case)) != before
