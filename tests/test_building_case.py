@@ -272,3 +272,31 @@ def test_an_edited_building_record_is_another_run(tmp_path):
     with open(tmp_path / "acc.csv", "a") as fh:
         fh.write("1500.0,0.0\n")
     assert fingerprint(case_inputs(case)) != before
+
+
+def test_the_shipped_whole_test_example(tmp_path):
+    """examples/building.toml: a valid device case (for `run`) and a building case whose record has an LVDT in
+    mm at 200 Hz and an accelerometer in g0 at 100 Hz in its own file; the truth of make_records.py."""
+    import json
+    from pathlib import Path
+
+    from quickrelease import preset
+    from quickrelease.planning import member_checks
+
+    path = Path(__file__).parent.parent / "examples" / "building.toml"
+    case = load_case(path)
+    assert case.has_test and case.alpha0 == 0.2 and case.building.mass == 8e5
+    # the push of [test] holds the pushed building: P = k d0 + F_s (to 1e-4)
+    k = 8e5 * math.pi**2
+    assert case.push_force == pytest.approx(k * 0.1825 + 0.02 * 8e5 * G, rel=1e-4)
+    data = load_building(case)
+    x, a = data.channels
+    assert (x.name, a.name) == ("x", "a") and np.median(np.diff(x.t)) == pytest.approx(5e-3)
+    assert np.median(np.diff(a.t)) == pytest.approx(1e-2) and x.t[-1] == a.t[-1] == 60.0
+    # before the release (2.05 s) the layer rests at d0 + 0.8 mm offset, the base at 0.004 g0 offset
+    assert np.mean(x.values[x.t < 2.0]) == pytest.approx(0.1825 + 0.8e-3, abs=2e-5)
+    assert np.mean(a.values[a.t < 2.0]) == pytest.approx(0.004 * G, abs=1e-3)
+    assert any("missing sample(s) skipped" in note for note in data.notes)
+    # `run` plans the clearance on it: the member checks' summary is valid JSON though the paper's device
+    # has no W2 for the head's check (its demand unknown, not NaN)
+    json.dumps(member_checks(1598e3, 0.2, preset("paper")).summary(), allow_nan=False)
