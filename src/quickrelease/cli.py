@@ -471,11 +471,11 @@ def synth(
         _synth_building(case, channels, rate, noise, offset, release_time, duration, seed, jitter, missing, out,
                         case_out, as_json)
         return
-    names = [c.strip() for c in (channels or "u,v,a_head").split(",") if c.strip()]
-    syn = synthesize(case, names, rate=parse_quantity(rate or "500 Hz", "frequency", "--rate"),
+    names = [c.strip() for c in ("u,v,a_head" if channels is None else channels).split(",") if c.strip()]
+    syn = synthesize(case, names, rate=parse_quantity("500 Hz" if rate is None else rate, "frequency", "--rate"),
                      noise=parse_channel_values(noise or [], "--noise"),
                      offsets=parse_channel_values(offset or [], "--offset"),
-                     release_time=parse_quantity(release_time or "0.5 s", "time", "--release-time"),
+                     release_time=parse_quantity("0.5 s" if release_time is None else release_time, "time", "--release-time"),
                      duration=None if duration is None else parse_quantity(duration, "time", "--duration"),
                      seed=seed, jitter=jitter, missing=missing)
     pred = predicted_errors(case, syn)  # everything that can fail comes before the first file is written
@@ -519,11 +519,11 @@ def _synth_building(case, channels: str | None, rate: str | None, noise: list[st
 
     if case.building is None:
         raise QuickReleaseError(f"{case.source}: --building needs a [building] table (the building to simulate)")
-    names = [c.strip() for c in (channels or "x,a").split(",") if c.strip()]
-    syn = synthesize_building(case, names, rate=parse_quantity(rate or "200 Hz", "frequency", "--rate"),
+    names = [c.strip() for c in ("x,a" if channels is None else channels).split(",") if c.strip()]
+    syn = synthesize_building(case, names, rate=parse_quantity("200 Hz" if rate is None else rate, "frequency", "--rate"),
                               noise=parse_channel_values(noise or [], "--noise", BUILDING_CHANNELS),
                               offsets=parse_channel_values(offset or [], "--offset", BUILDING_CHANNELS),
-                              release_time=parse_quantity(release_time or "2 s", "time", "--release-time"),
+                              release_time=parse_quantity("2 s" if release_time is None else release_time, "time", "--release-time"),
                               duration=None if duration is None else parse_quantity(duration, "time", "--duration"),
                               seed=seed, jitter=jitter, missing=missing)
     # everything that can fail comes before the first file is written
