@@ -505,8 +505,8 @@ def test_campaign_errors(tmp_path):
 
 def test_a_channel_in_its_own_file_at_its_own_rate(paper, tmp_path):
     """The accelerometer logged by another acquisition: its own file, time column (ms) and rate (200 Hz
-    beside the 500 Hz displacements), its own length; the fit evaluates it on its own time axis."""
-    disp = synthesize(paper, ["u", "v"], rate=500.0, offsets={"u": 1.2e-3, "v": -2.5e-3}, release_time=0.43, seed=11)
+    beside the 250 Hz displacements), its own length; the fit evaluates it on its own time axis."""
+    disp = synthesize(paper, ["u", "v"], rate=250.0, offsets={"u": 1.2e-3, "v": -2.5e-3}, release_time=0.43, seed=11)
     acc = synthesize(paper, ["a_head"], rate=200.0, release_time=0.43, seed=12, duration=2.2)
     disp.to_pandas().to_csv(tmp_path / "disp.csv", index=False)
     (tmp_path / "acc.csv").write_text("t_acc_ms,acc_g\n" + "".join(
