@@ -300,3 +300,23 @@ def test_the_shipped_whole_test_example(tmp_path):
     # `run` plans the clearance on it: the member checks' summary is valid JSON though the paper's device
     # has no W2 for the head's check (its demand unknown, not NaN)
     json.dumps(member_checks(1598e3, 0.2, preset("paper")).summary(), allow_nan=False)
+
+
+def test_clearance_with_a_bilinear_building_reaches_its_first_return():
+    """A bilinear isolation pushed far past its yield returns on its soft branch (T2 = 2 pi sqrt(m / k2) = 4 s
+    here), later than 1.5 t_F and its initial period (0.63 s): the clearance covers the largest approach, which
+    the independent solve_ivp reference puts at d0 - min x."""
+    from quickrelease import preset
+    from quickrelease.case import BuildingSpec
+    from quickrelease.planning import clearance
+    from quickrelease.solvers import FirstIntegral
+
+    d = preset("paper")
+    release = FirstIntegral(2900.0, 0.2, 419.85, 804.57, d.m1, d.m2, d.L1, 2 / 3)
+    m, k1, k2, Fy, d0 = 4e5, 4e7, 1e6, 8e4, 0.15
+    b = BuildingSpec(model="bilinear", mass=m, k1=k1, k2=k2, yield_force=Fy, damping_ratio=0.02, friction=5e3)
+    clear = clearance(release, b, d0)
+    t = np.linspace(0.0, 6.0, 60001)
+    x, _ = reference(m, k1, k2, Fy * (1 - k2 / k1), 2 * 0.02 * math.sqrt(k1 * m), 5e3, d0, t)
+    assert t[np.argmin(x)] > 1.5 * release.stop_time()  # the first return comes after the device has stopped
+    assert clear.max_approach == pytest.approx(d0 - np.min(x), rel=1e-6)
