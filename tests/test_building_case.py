@@ -320,3 +320,15 @@ def test_clearance_with_a_bilinear_building_reaches_its_first_return():
     x, _ = reference(m, k1, k2, Fy * (1 - k2 / k1), 2 * 0.02 * math.sqrt(k1 * m), 5e3, d0, t)
     assert t[np.argmin(x)] > 1.5 * release.stop_time()  # the first return comes after the device has stopped
     assert clear.max_approach == pytest.approx(d0 - np.min(x), rel=1e-6)
+
+
+def test_planning_says_it_takes_the_2dof_building_as_rigid(tmp_path):
+    from quickrelease.planning import plan_case
+
+    path = tmp_path / "case.toml"
+    path.write_text('[test]\nforce = "1598 kN"\nenergy = "2.90 kJ"\nalpha0 = 0.2\n[friction]\nF1 = "420 N"\n'
+                    'F2 = "805 N"\n' + TWO_DOF.replace('displacement = "0.1 m"\n', ""))
+    plan = plan_case(load_case(path))
+    assert any("2dof building taken as rigid" in note for note in plan.notes)
+    # d0 = (P - 0) / k with k = m (2 pi / T)^2 of the whole mass (no friction given)
+    assert plan.clearance.d0 == pytest.approx(1598e3 / (6.37e6 / G * math.pi**2), rel=1e-12)

@@ -743,6 +743,9 @@ def plan_case(case: Case, *, clearance_samples: int = 200) -> PlanResult:
     if case.building is not None:
         d = case.device
         d0 = pushed_displacement(P, case.building)
+        if case.building.model == "2dof":
+            notes.append("clearance: the 2dof building taken as rigid on its isolation layer (the whole mass on the "
+                         "isolation period; the superstructure's own mode left out)")
         if not d0 > 0:
             raise QuickReleaseError(f"{case.source}: the isolators' friction ({case.building.friction_force:.6g} N) "
                                     f"holds the push (P = {P:.6g} N): no displacement to release from")
