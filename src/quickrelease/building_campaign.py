@@ -1,0 +1,359 @@
+"""Campaigns of releases of one building: the isolation system against the release amplitude.
+
+A snap-back campaign releases one building several times from different pushed displacements d0 (or push
+forces P). Each release is fitted on its own (:func:`quickrelease.isolation_fit.fit_isolation`, with
+standard errors and 95% intervals); then, for each quantity of the isolation system, the law
+``q = a + b x`` across the campaign is fitted by weighted least squares (the device campaign's machinery,
+:func:`quickrelease.campaign.fit_line`: weights ``1 / SE^2``, the covariance inflated by the reduced
+chi-square when the tests scatter more than their standard errors say), with its 95% confidence band and
+a Student t test of ``b = 0`` (does the amplitude matter?). The variable x is the release amplitude
+``|d0|`` [m] (``displacement``), its logarithm ``ln(|d0| / 1 m)`` (``log_displacement``) or the push force
+P [N] (``force``).
+
+Quantities (per release, from the fitted model, SI):
+
+- ``period``: the linear model's period ``T = 2 pi sqrt(m / k)`` (the bilinear model's: of k1) [s];
+- ``secant_period``: ``2 pi sqrt(m / k_sec)``, ``k_sec = R(d0) / d0`` the bearings' secant stiffness at the
+  pushed state (:func:`quickrelease.building.pushed_state`; the sliders' friction is left out of it and
+  counted in the damping) [s]; equals ``period`` for the linear model;
+- ``damping_ratio``: the viscous damping ratio zeta [-] (bilinear: referred to k1);
+- ``friction``: the sliders' friction F_s [N];
+- ``equivalent_damping_ratio``: ``zeta_eq = E_D / (4 pi E_S)`` of one cycle of amplitude |d0| at the secant
+  frequency, ``E_S = k_sec d0^2 / 2`` and ``E_D = pi c omega_sec d0^2 + 4 F_s |d0| + 4 f_p (|d0| - d_y)``
+  (viscous, Coulomb and hysteretic loops; f_p = F_y (1 - k2 / k1), d_y = F_y / k1, the last term only
+  beyond d_y); for the linear model ``zeta_eq = zeta + 2 F_s / (pi k |d0|)``;
+- bilinear also ``stiffness_ratio`` k2 / k1 [-] and ``yield_force`` F_y [N].
+
+Physically, a linear spring with viscous damping and Coulomb sliders has constant T, zeta and F_s: a
+campaign of such a building finds no significant amplitude effect on them, while its equivalent damping
+falls with the amplitude (the friction's share, ``2 F_s / (pi k d0)``). A significant slope of F_s or T
+says the isolators are not what the model assumes (friction that depends on the pressure or the velocity,
+a stiffness that softens with the strain).
+
+Derived quantities carry the delta-method standard error (the gradient by central differences, the fit's
+covariance); a parameter whose interval is the profile likelihood's is weighted by the half-width of that
+interval over the Student t quantile.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy import stats
+
+from .building import pushed_state
+from .campaign import LinearLaw, fit_line, law_panel, weights_or_none
+from .errors import ParameterError, QuickReleaseError
+from .isolation_fit import BuildingChannel, IsolationFit, _isolation, fit_isolation
+
+__all__ = ["BuildingRelease", "ReleaseEstimates", "BuildingCampaignResult", "fit_building_campaign",
+           "building_campaign_figure", "derived_quantity", "BUILDING_VARIABLES", "QUANTITIES", "DEFAULT_QUANTITIES"]
+
+#: Regressors of the amplitude laws: (label, unit, scale for plots, plot unit).
+BUILDING_VARIABLES = {
+    "displacement": ("release amplitude |d0|", "m", 1e2, "cm"),
+    "log_displacement": ("ln(|d0| / 1 m)", "-", 1.0, "-"),
+    "force": ("push force P", "N", 1e-3, "kN"),
+}
+#: Quantities of the isolation system: (label, unit, scale for plots, plot unit, symbol).
+QUANTITIES = {
+    "period": ("period T", "s", 1.0, "s", "T"),
+    "secant_period": ("secant period at d0", "s", 1.0, "s", "T_sec"),
+    "damping_ratio": ("viscous damping ratio", "-", 1e2, "%", "zeta"),
+    "friction": ("slider friction F_s", "N", 1e-3, "kN", "F_s"),
+    "equivalent_damping_ratio": ("equivalent damping ratio at d0", "-", 1e2, "%", "zeta_eq"),
+    "stiffness_ratio": ("stiffness ratio k2/k1", "-", 1.0, "-", "k2/k1"),
+    "yield_force": ("yield force F_y", "N", 1e-3, "kN", "F_y"),
+}
+#: The quantities a campaign fits laws for, by model.
+DEFAULT_QUANTITIES = {
+    "linear": ("period", "damping_ratio", "friction", "equivalent_damping_ratio"),
+    "bilinear": ("secant_period", "damping_ratio", "friction", "equivalent_damping_ratio", "period",
+                 "stiffness_ratio", "yield_force"),
+}
+_FITTED = ("period", "damping_ratio", "friction", "stiffness_ratio", "yield_force")
+
+
+@dataclass(frozen=True, eq=False)
+class BuildingRelease:
+    """One release of the campaign: its records and what was pushed (SI)."""
+
+    name: str
+    channels: tuple[BuildingChannel, ...]
+    d0: float | None = None
+    """The pushed displacement [m]; None: from the record (the fit's d0). Given and a displacement channel
+    present, the fit still estimates d0 from the record and the law uses the estimate."""
+    force: float | None = None
+    """The push force P [N] (needed for laws in ``force``)."""
+    release_time: float | None = None
+    """Start value of the release instant [s, record time]; None: detected."""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "channels", tuple(self.channels))
+        if not self.channels:
+            raise ParameterError(f"{self.name}.channels", "none", "at least one channel of the isolation layer")
+        if self.d0 is not None and not (math.isfinite(self.d0) and self.d0 != 0.0):
+            raise ParameterError(f"{self.name}.d0", self.d0, "finite and non-zero", "m")
+        if self.force is not None and not (math.isfinite(self.force) and self.force > 0.0):
+            raise ParameterError(f"{self.name}.force", self.force, "(0, inf)", "N")
+
+
+def derived_quantity(name: str, model: str, mass: float, p: dict[str, float]) -> float:
+    """A quantity of the isolation system from the model's parameters ``p`` (fit_isolation's names, with
+    ``d0``), in SI: see the module's docstring for the equations."""
+    if name in ("period", "damping_ratio", "friction", "stiffness_ratio", "yield_force"):
+        return float(p[name])
+    iso = _isolation(model, mass, p)
+    d = abs(float(p["d0"]))
+    _, R0, _ = pushed_state(iso, d)
+    k_sec = R0 / d
+    if name == "secant_period":
+        return 2.0 * math.pi * math.sqrt(mass / k_sec)
+    if name == "equivalent_damping_ratio":
+        omega = math.sqrt(k_sec / mass)
+        hysteretic = 0.0
+        if iso.model == "bilinear":
+            d_y = float(iso.yield_force) / iso.stiffness
+            hysteretic = 4.0 * iso.plastic_yield * max(d - d_y, 0.0)
+        dissipated = math.pi * iso.damping * omega * d * d + 4.0 * iso.friction * d + hysteretic
+        return dissipated / (2.0 * math.pi * k_sec * d * d)
+    raise ParameterError("quantity", name, ", ".join(QUANTITIES))
+
+
+@dataclass(frozen=True, eq=False)
+class ReleaseEstimates:
+    """One release fitted: its amplitude and force, and each quantity with standard error and interval."""
+
+    name: str
+    d0: float
+    """The release amplitude used by the laws [m] (the fit's d0 where it estimated one, else the given)."""
+    d0_given: float | None
+    force: float | None
+    values: dict[str, float]
+    std_errors: dict[str, float]
+    """For the laws' weights: the Jacobian's standard error, or the profile interval's half-width over the
+    Student t quantile where the fit gave a profile interval."""
+    ci95: dict[str, tuple[float, float]]
+    interval_method: dict[str, str]
+    fit: IsolationFit = field(repr=False)
+
+    def value(self, variable: str) -> float:
+        if variable == "displacement":
+            return abs(self.d0)
+        if variable == "log_displacement":
+            return math.log(abs(self.d0))
+        if variable == "force":
+            if self.force is None:
+                raise QuickReleaseError(f"release {self.name} has no push force (give force, or drop 'force' "
+                                        "from variables)")
+            return float(self.force)
+        raise ParameterError("variable", variable, ", ".join(BUILDING_VARIABLES))
+
+    def summary(self) -> dict[str, Any]:
+        return _json_safe({
+            "name": self.name, "d0_m": self.d0, "d0_given_m": self.d0_given, "push_force_N": self.force,
+            "estimates": self.values, "std_errors": self.std_errors,
+            "ci95": {k: list(v) for k, v in self.ci95.items()}, "interval_method": self.interval_method,
+            "units": {k: QUANTITIES[k][1] for k in self.values}, "chi2_reduced": self.fit.chi2_reduced,
+            "converged": self.fit.converged, "warnings": list(self.fit.warnings)})
+
+
+def _json_safe(value):
+    """NaN and infinities as None (JSON has none), recursively."""
+    if isinstance(value, dict):
+        return {k: _json_safe(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_safe(v) for v in value]
+    if isinstance(value, (float, np.floating)):
+        return float(value) if math.isfinite(value) else None
+    if isinstance(value, np.integer):
+        return int(value)
+    return value
+
+
+def _estimates(release: BuildingRelease, fit: IsolationFit, quantities: tuple[str, ...]) -> ReleaseEstimates:
+    """The release's quantities: fitted ones with the fit's intervals, derived ones by the delta method."""
+    params = dict(fit.estimates)
+    if "d0" not in params:
+        params["d0"] = float(release.d0)
+    tq = float(stats.t.ppf(0.975, max(fit.dof, 1)))
+    se_all = np.array([fit.std_errors[n] for n in fit.names])
+    cov = fit.correlation * np.outer(se_all, se_all)
+    values, ses, ci, method = {}, {}, {}, {}
+    for q in quantities:
+        if q in _FITTED and q in fit.estimates:
+            values[q] = fit.estimates[q]
+            ci[q] = tuple(fit.ci95[q])
+            method[q] = fit.interval_method[q]
+            ses[q] = (ci[q][1] - ci[q][0]) / (2.0 * tq) if method[q] == "profile" else fit.std_errors[q]
+            continue
+        values[q] = derived_quantity(q, fit.model, fit.mass, params)
+        grad = np.zeros(len(fit.names))
+        for i, n in enumerate(fit.names):  # central differences on the free parameters
+            if n.startswith("offset_") or n == "release_time":
+                continue
+            h = 1e-6 * max(abs(params[n]), se_all[i], 1e-12)
+            hi, lo = dict(params), dict(params)
+            hi[n] += h
+            lo[n] -= h
+            try:
+                grad[i] = (derived_quantity(q, fit.model, fit.mass, hi)
+                           - derived_quantity(q, fit.model, fit.mass, lo)) / (2.0 * h)
+            except ParameterError:  # at a bound (friction 0): one-sided
+                grad[i] = (derived_quantity(q, fit.model, fit.mass, hi) - values[q]) / h
+        ses[q] = math.sqrt(max(float(grad @ cov @ grad), 0.0))
+        ci[q] = (values[q] - tq * ses[q], values[q] + tq * ses[q])
+        method[q] = "delta"
+    return ReleaseEstimates(name=release.name, d0=params["d0"], d0_given=release.d0, force=release.force,
+                            values=values, std_errors=ses, ci95=ci, interval_method=method, fit=fit)
+
+
+@dataclass(frozen=True, eq=False)
+class BuildingCampaignResult:
+    """The releases of one building fitted one by one, and the laws of each quantity in each variable."""
+
+    title: str
+    source: str
+    model: str
+    mass: float
+    releases: list[ReleaseEstimates]
+    laws: dict[tuple[str, str], LinearLaw]
+    """(quantity, variable) -> law."""
+    variables: tuple[str, ...]
+    quantities: tuple[str, ...]
+    notes: str = ""
+
+    @property
+    def kind(self) -> str:
+        return "building"
+
+    def significant_effects(self) -> list[tuple[str, str]]:
+        """The (quantity, variable) pairs whose slope differs from 0 at the 5% level."""
+        return [key for key, law in self.laws.items() if law.significant]
+
+    def summary(self) -> dict[str, Any]:
+        """JSON-ready (no NaN): the keys of ``quickrelease campaign --json`` for a building campaign."""
+        laws = []
+        for law in self.laws.values():
+            y_unit, x_unit = QUANTITIES[law.quantity][1], BUILDING_VARIABLES[law.variable][1]
+            slope_unit = y_unit if x_unit == "-" else (f"1/{x_unit}" if y_unit == "-" else f"{y_unit}/{x_unit}")
+            laws.append({**law.summary(), "units": {"a": y_unit, "b": slope_unit}})
+        return _json_safe({"kind": "building", "title": self.title, "campaign": self.source, "model": self.model,
+                           "mass_kg": self.mass, "variables": list(self.variables),
+                           "quantities": list(self.quantities), "releases": [r.summary() for r in self.releases],
+                           "laws": laws,
+                           "significant_5pct": [f"{q} ~ {v}" for q, v in self.significant_effects()],
+                           "notes": self.notes})
+
+
+def fit_building_campaign(releases, mass: float, model: str = "linear", *, variables=("displacement",),
+                          quantities=None, start: dict[str, float] | None = None, title: str = "",
+                          source: str = "", notes: str = "") -> BuildingCampaignResult:
+    """Fit every release of one building, then the law of each quantity in each variable.
+
+    Parameters
+    ----------
+    releases : sequence of BuildingRelease
+        At least three releases (a law needs a degree of freedom), at different amplitudes (or forces).
+    mass : float
+        Mass carried by the isolation layer [kg], the same in every release.
+    model : {"linear", "bilinear"}
+    variables : sequence of str
+        Regressors of the laws: ``displacement`` (|d0| [m]), ``log_displacement`` (ln |d0|), ``force`` (P [N]).
+    quantities : sequence of str, optional
+        Default :data:`DEFAULT_QUANTITIES` of the model.
+    start : dict, optional
+        Start values of every fit (the design values; the bilinear fit needs them).
+
+    Raises
+    ------
+    ParameterError
+        For an unknown model, variable or quantity, or repeated release names.
+    QuickReleaseError
+        With fewer than three releases, a variable that is constant or missing, or a fit that fails (the
+        message names the release).
+    """
+    releases = list(releases)
+    if model not in DEFAULT_QUANTITIES:
+        raise ParameterError("model", model, ", ".join(DEFAULT_QUANTITIES))
+    variables = tuple(variables)
+    bad = [v for v in variables if v not in BUILDING_VARIABLES]
+    if bad or not variables:
+        raise ParameterError("variables", bad[0] if bad else "none", ", ".join(BUILDING_VARIABLES))
+    quantities = tuple(quantities) if quantities is not None else DEFAULT_QUANTITIES[model]
+    allowed = DEFAULT_QUANTITIES[model] + (("secant_period",) if model == "linear" else ())
+    bad = [q for q in quantities if q not in allowed]
+    if bad or not quantities:
+        raise ParameterError("quantities", bad[0] if bad else "none", ", ".join(allowed))
+    names = [r.name for r in releases]
+    if len(set(names)) != len(names):
+        raise ParameterError("releases", ", ".join(names), "distinct release names")
+    if len(releases) < 3:
+        raise QuickReleaseError(f"{len(releases)} release(s): an amplitude law needs at least 3")
+    # what can be checked before the fits
+    if "force" in variables:
+        missing = [r.name for r in releases if r.force is None]
+        if missing:
+            raise QuickReleaseError(f"release {missing[0]} has no push force (give force, or drop 'force' from "
+                                    "variables)")
+        if len({r.force for r in releases}) == 1:
+            raise QuickReleaseError("every release has the same push force: no law in force can be fitted")
+    if any(v != "force" for v in variables) and all(r.d0 is not None for r in releases) \
+            and len({abs(r.d0) for r in releases}) == 1:
+        raise QuickReleaseError("every release has the same pushed displacement d0: no law in the amplitude can be "
+                                "fitted")
+    estimates = []
+    for r in releases:
+        fixed = None
+        if r.d0 is not None and not any(c.kind == "x" for c in r.channels):
+            fixed = {"d0": float(r.d0)}  # no displacement channel: the given d0 is the release state
+        try:
+            fit = fit_isolation(r.channels, mass, model, release_time=r.release_time, start=start, fixed=fixed)
+        except QuickReleaseError as exc:
+            raise type(exc)(f"release {r.name}: {exc}") from None
+        estimates.append(_estimates(r, fit, quantities))
+    laws = {}
+    for v in variables:
+        x = [r.value(v) for r in estimates]
+        if np.ptp(x) == 0:
+            raise QuickReleaseError(f"every release has the same {BUILDING_VARIABLES[v][0]}: no law in {v} can be "
+                                    "fitted")
+        for q in quantities:
+            laws[(q, v)] = fit_line(x, [r.values[q] for r in estimates],
+                                    weights_or_none(r.std_errors[q] for r in estimates), quantity=q, variable=v)
+    return BuildingCampaignResult(title=title or "Building campaign", source=source, model=model, mass=float(mass),
+                                  releases=estimates, laws=laws, variables=variables, quantities=quantities,
+                                  notes=notes)
+
+
+def building_campaign_figure(result: BuildingCampaignResult):
+    """Each quantity against each variable: the releases with their 95% intervals, the law and its band."""
+    from .plots import _figure, user_label
+
+    nq, nv = len(result.quantities), len(result.variables)
+    fig = _figure(3.2 * nq + 0.6, 2.9 * nv + 0.9, left=0.06, right=0.98, bottom=0.12 / nv, top=1 - 0.3 / nv,
+                  wspace=0.35, hspace=0.6)
+    axes = np.atleast_2d(fig.subplots(nv, nq, squeeze=False))
+    for row, v in enumerate(result.variables):
+        x_label, _, x_scale, x_unit = BUILDING_VARIABLES[v]
+        x = [r.value(v) for r in result.releases]
+        for col, q in enumerate(result.quantities):
+            y_label, _, y_scale, y_unit, symbol = QUANTITIES[q]
+            y = np.array([r.values[q] for r in result.releases])
+            lo = np.array([r.ci95[q][0] for r in result.releases])
+            hi = np.array([r.ci95[q][1] for r in result.releases])
+            ax = axes[row, col]
+            slope_unit = f"{y_unit}/{x_unit}" if x_unit != "-" else y_unit
+            law_panel(ax, result.laws[(q, v)], x, y, np.vstack([y - lo, hi - y]).clip(min=0.0),
+                      [r.name for r in result.releases], x_scale=x_scale, y_scale=y_scale,
+                      x_label=f"{x_label} [{x_unit}]", y_label=f"{y_label} [{y_unit}]", slope_unit=slope_unit,
+                      name=symbol)
+            ax.ticklabel_format(axis="y", useOffset=False)
+            if row == 0 and col == 0:
+                ax.legend(fontsize=6, loc="best")
+    user_label(fig, "suptitle", f"{result.title}: the isolation system against the release amplitude "
+                                f"({result.model} model)")
+    return fig
