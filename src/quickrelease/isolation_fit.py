@@ -241,6 +241,8 @@ def _start(model: str, mass: float, channels: list[BuildingChannel], t_r: float,
                     start["damping_ratio"] = float(np.clip(analysis.law.damping_ratio, 0.005, 0.5))
                 k = mass * (2.0 * math.pi / start["period"]) ** 2
                 start["friction"] = max(analysis.law.friction_displacement * k, 0.0)
+                if math.isfinite(analysis.law.rest):
+                    start["rest"] = analysis.law.rest
         except QuickReleaseError:
             pass
     if model == "bilinear":
@@ -353,10 +355,17 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
         raise ParameterError("d0", d0, "a non-zero pushed displacement (give a displacement channel or fixed d0)",
                              "m")
     p0 = _start(model, mass, channels, t_r0, d0, noise)
+    rest = p0.pop("rest", None)
     p0.update(d0=d0, release_time=t_r0)
     for ch in channels:
         if ch.offset:
             p0[f"offset_{ch.name}"] = offsets0[ch.name]
+    if (model == "linear" and rest is not None and xch is not None and xch.offset and "d0" not in fixed
+            and abs(rest) < 0.5 * abs(d0)):
+        # the displacement sensor's zero: the decay law's rest reading, not 0 (the pushed level is d0 plus
+        # that zero, and a start with the zero off by a few noise levels can settle in a wrong count of
+        # half-cycles before the sliders stick); the law is exact for the linear model only
+        p0[f"offset_{xch.name}"], p0["d0"] = rest, d0 - rest
     p0.update(start or {})
     physical = ["period", "damping_ratio", "friction"] + (["stiffness_ratio", "yield_force"]
                                                           if model == "bilinear" else [])
