@@ -6,11 +6,13 @@ lstsq; the equivalent damping against a force-displacement loop integrated here 
 import io
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 from building_reference import reference
 from scipy import stats
+from typer.testing import CliRunner
 
 from quickrelease.building_campaign import (
     BuildingRelease,
@@ -19,6 +21,7 @@ from quickrelease.building_campaign import (
     fit_building_campaign,
 )
 from quickrelease.campaign import fit_line, weights_or_none
+from quickrelease.cli import app
 from quickrelease.errors import ParameterError, QuickReleaseError
 from quickrelease.isolation_fit import BuildingChannel, fit_isolation
 
@@ -27,6 +30,8 @@ T, ZETA = 2.0, 0.03
 K = M * (2 * math.pi / T) ** 2
 C = 2 * ZETA * math.sqrt(K * M)
 AMPLITUDES = (0.05, 0.09, 0.13, 0.17, 0.20)  # m
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+runner = CliRunner()
 
 
 def _record(d0, Fs, seed, duration=13.0, t_release=0.4):
@@ -183,6 +188,7 @@ def test_summary_is_json_and_the_figure_draws(constant):
     buf = io.StringIO()
     fig.savefig(buf, format="svg")
     assert len(fig.axes) == len(constant.quantities) * len(constant.variables) and "R5" in buf.getvalue()
+    assert [ax.get_title().split(":")[0] for ax in fig.axes[:4]] == ["T", "zeta", "F_s", "zeta_eq"]
 
 
 def test_bad_campaigns_are_refused_before_any_fit():
@@ -215,3 +221,67 @@ def test_a_sensor_zero_does_not_send_the_fit_to_a_wrong_count_of_half_cycles():
     fit = fit_isolation([BuildingChannel("x", "x", t, x + 0.003 + rng.normal(0, 2e-4, t.size))], M, "linear")
     assert fit.chi2_reduced < 1.3 and not fit.warnings
     assert abs(fit.estimates["friction"] - 2.0e4) < 4 * fit.std_errors["friction"]
+
+
+# -- the campaign file and the command ----------------------------------------------------------------------------
+
+def test_campaign_command_on_the_shipped_example(tmp_path):
+    """examples/building_campaign.toml: records made with F_s = 40 kN + 150 kN/m |d0|, T = 2.0 s, zeta = 3 %
+    (examples/make_records.py): the law of F_s is found, none of T or zeta."""
+    r = runner.invoke(app, ["campaign", str(EXAMPLES / "building_campaign.toml"), "--json", "--out", str(tmp_path)])
+    assert r.exit_code == 0, r.output
+    data = json.loads(r.stdout)
+    assert data == json.loads((tmp_path / "campaign.json").read_text(encoding="utf-8"))
+    laws = {(law["quantity"], law["variable"]): law for law in data["laws"]}
+    fs = laws[("friction", "displacement")]
+    assert fs["significant_5pct"] and abs(fs["b"] - 150e3) < 3 * fs["b_se"] and abs(fs["a"] - 40e3) < 3 * fs["a_se"]
+    for q in ("period", "damping_ratio"):
+        assert not laws[(q, "displacement")]["significant_5pct"]
+        assert not laws[(q, "force")]["significant_5pct"]
+    assert [rel["d0_given_m"] for rel in data["releases"]] == pytest.approx([0.06, 0.09, 0.12, 0.15, 0.18])
+    assert [rel["push_force_N"] for rel in data["releases"]] == [434e3, 631e3, 828e3, 1025e3, 1222e3]
+    report = (tmp_path / "report.html").read_text(encoding="utf-8")
+    assert '<figure id="campaign_building"><svg' in report and "R5" in report and "zeta_eq" in report
+    assert (tmp_path / "figures" / "campaign_building.png").stat().st_size > 1000
+
+
+_GOOD = """title = "c"
+[building]
+mass = "650 t"
+period = "2 s"
+[building.record]
+time = "t_s"
+[building.record.channels]
+x = { column = "x_mm", unit = "mm" }
+"""
+
+
+def _test(name, record=None, extra=""):
+    return f'[[tests]]\nname = "{name}"\ndisplacement = "60 mm"\n' + (f'record = "{record}"\n' if record else "") + extra
+
+
+@pytest.mark.parametrize("text, fragment", [
+    (_GOOD + _test("A", "a.csv") + _test("B") + _test("C", "a.csv"), "test B: missing key record"),
+    (_GOOD + _test("A", "a.csv") + _test("B", "missing.csv") + _test("C", "a.csv"), "missing.csv"),
+    ('[device]\npreset = "paper"\n' + _GOOD + _test("A", "a.csv"), "[device] beside [building]"),
+    (_GOOD.replace('title = "c"', '[record]\ntime = "t_s"') + _test("A", "a.csv"), "[record] beside [building]"),
+    (_GOOD + _test("A", "a.csv", "alpha0 = 0.2\n"), "'alpha0' is a key of a device campaign"),
+    ('[record]\ntime = "t_s"\n' + _test("A", "a.csv"), "test A: unknown key 'displacement'"),
+    (_GOOD.replace('mass = "650 t"', 'mass = "650 t"\ndisplacement = "5 cm"') + _test("A", "a.csv"),
+     "[building] displacement"),
+    (_GOOD + 'variables = ["speed"]\n' + _test("A", "a.csv"), "unknown channel 'variables'"),
+    ('variables = ["speed"]\n' + _GOOD + _test("A", "a.csv"), "variables = ['speed']"),
+    (_GOOD.replace('period = "2 s"', 'model = "2dof"\nperiod = "2 s"') + _test("A", "a.csv"), "model = '2dof'"),
+    (_GOOD + _test("A", "a.csv", 'force = "-1 kN"\n'), "force = '-1 kN'"),
+    (_GOOD + _test("A", "a.csv") + _test("B", "missing.csv"), "c.toml: 2 test(s): an amplitude law needs at least 3"),
+])
+def test_bad_building_campaigns_are_one_line_exit_2(tmp_path, text, fragment):
+    rows = "\n".join(f"{i * 0.01:.2f},{60.0 if i < 100 else 0.0}" for i in range(400))
+    (tmp_path / "a.csv").write_text("t_s,x_mm\n" + rows + "\n", encoding="utf-8")
+    path = tmp_path / "c.toml"
+    path.write_text(text, encoding="utf-8")
+    out = tmp_path / "out"
+    r = runner.invoke(app, ["campaign", str(path), "--out", str(out)])
+    assert r.exit_code == 2, r.output
+    assert fragment in r.stderr and r.stderr.startswith("error: ") and r.stderr.count("\n") == 1, r.stderr
+    assert "Traceback" not in r.output and not out.exists()

@@ -357,3 +357,140 @@ def building_campaign_figure(result: BuildingCampaignResult):
     user_label(fig, "suptitle", f"{result.title}: the isolation system against the release amplitude "
                                 f"({result.model} model)")
     return fig
+
+
+# -- the campaign file ------------------------------------------------------------------------------------------
+
+_TOP_KEYS = {"title", "notes", "variables", "building", "tests"}
+_TEST_KEYS = {"name", "record", "displacement", "force", "release_time"}
+#: Keys of a device campaign, refused beside [building] (a campaign is of the device or of the building).
+_DEVICE_TOP = {"device", "test", "record", "fit", "simulation"}
+_DEVICE_TEST = {"case", "alpha0", "alpha_final", "stop_time", "energy", "mass_model"}
+
+
+def load_building_campaign(path, data: dict[str, Any]) -> tuple[str, str, tuple[str, ...], str, float,
+                                                                 dict[str, float], list[BuildingRelease]]:
+    """Read a building campaign file (its parsed TOML ``data``): every release's record is read and checked
+    here, before any fit. Returns (title, notes, variables, model, mass, start values, releases).
+
+    Campaign file::
+
+        title = "..."
+        variables = ["displacement"]       # also "log_displacement", "force"
+        [building]                         # shared: model, mass, the design values (start values)
+        model = "linear"
+        mass = "400 t"
+        period = "2 s"
+        [building.record]                  # shared: time column and channel mapping of the records
+        time = "t_s"
+        [building.record.channels]
+        x = { column = "x_mm", unit = "mm" }
+
+        [[tests]]
+        name = "R1"
+        displacement = "50 mm"             # the pushed displacement d0, and/or force = "220 kN"
+        record = "records/R1.csv"          # the building's record of this release (relative to this file)
+        # release_time = "1 s"             # optional start value
+
+    Raises
+    ------
+    CaseFileError
+        A malformed file or test, a device key beside ``[building]`` (one line naming the file and key).
+    RecordError
+        A record file or column missing (one line naming the file and the column).
+    """
+    import copy
+    from pathlib import Path
+
+    from .building_case import load_building
+    from .case import CaseFileError, case_from_mapping
+    from .units import parse_quantity
+
+    path = Path(path)
+    source = str(path)
+    mixed = sorted(set(data) & _DEVICE_TOP)
+    if mixed:
+        raise CaseFileError(f"{source}: [{mixed[0]}] beside [building]: a campaign is of the device ([device], "
+                            "[record], [[tests]] with force and alpha0) or of the building ([building], [[tests]] "
+                            "with displacement or force and record), not both")
+    unknown = sorted(set(data) - _TOP_KEYS)
+    if unknown:
+        raise CaseFileError(f"{source}: unknown key {unknown[0]!r}; valid: {', '.join(sorted(_TOP_KEYS))}")
+    template = data["building"]
+    if not isinstance(template, dict):
+        raise CaseFileError(f"{source}: [building] is not a table")
+    if template.get("model", "linear") not in DEFAULT_QUANTITIES:
+        raise CaseFileError(f"{source}: [building] model = {template.get('model')!r}: a campaign fits the "
+                            f"{' or '.join(repr(m) for m in DEFAULT_QUANTITIES)} model")
+    if "displacement" in template:
+        raise CaseFileError(f"{source}: [building] displacement: give each release's own in [[tests]] "
+                            "displacement")
+    variables = data.get("variables", ["displacement"])
+    if not isinstance(variables, list) or not variables or any(v not in BUILDING_VARIABLES for v in variables):
+        raise CaseFileError(f"{source}: variables = {variables!r}: expected a list of {', '.join(BUILDING_VARIABLES)}")
+    tests = data.get("tests")
+    if not isinstance(tests, list) or not tests:
+        raise CaseFileError(f"{source}: missing [[tests]]: give one table per release (name, displacement or "
+                            "force, record)")
+    if len(tests) < 3:
+        raise CaseFileError(f"{source}: {len(tests)} test(s): an amplitude law needs at least 3 releases")
+    releases, names, start, mass = [], set(), {}, math.nan
+    for i, entry in enumerate(tests):
+        if not isinstance(entry, dict):
+            raise CaseFileError(f"{source}: tests[{i}] is not a table")
+        name = str(entry.get("name", f"R{i + 1}"))
+        where = f"{source}: test {name}"
+        if name in names:
+            raise CaseFileError(f"{where}: the name is used twice")
+        names.add(name)
+        device = sorted(set(entry) & _DEVICE_TEST)
+        if device:
+            raise CaseFileError(f"{where}: {device[0]!r} is a key of a device campaign, beside [building] (a "
+                                "campaign is of the device or of the building, not both)")
+        bad = sorted(set(entry) - _TEST_KEYS)
+        if bad:
+            raise CaseFileError(f"{where}: unknown key {bad[0]!r}; valid: {', '.join(sorted(_TEST_KEYS))}")
+        if "record" not in entry:
+            raise CaseFileError(f"{where}: missing key record (the building's record of this release, e.g. "
+                                "record = 'records/R1.csv')")
+        if "displacement" not in entry and "force" not in entry:
+            raise CaseFileError(f"{where}: give displacement (the pushed d0, e.g. '120 mm') or force (the push "
+                                "force, e.g. '500 kN')")
+        building = copy.deepcopy(template)
+        record = building.setdefault("record", {})
+        if not isinstance(record, dict):
+            raise CaseFileError(f"{source}: [building.record] is not a table")
+        record["file"] = entry["record"]
+        if "release_time" in entry:
+            record["release_time"] = entry["release_time"]
+        if "displacement" in entry:
+            building["displacement"] = entry["displacement"]
+        case = case_from_mapping({"title": name, "building": building}, source=where, base=path.parent,
+                                 require_test=False)
+        loaded = load_building(case)
+        force = None
+        if "force" in entry:
+            try:
+                force = parse_quantity(entry["force"], "force", "force")
+            except QuickReleaseError as exc:
+                raise CaseFileError(f"{where}: {exc}") from None
+            if not force > 0.0:
+                raise CaseFileError(f"{where}: force = {entry['force']!r}: expected a positive push force, e.g. "
+                                    "'500 kN'")
+        if not loaded.channels:
+            raise CaseFileError(f"{where}: [building.record.channels] maps no channel")
+        releases.append(BuildingRelease(name, loaded.channels, d0=loaded.d0, force=force,
+                                        release_time=loaded.release_time))
+        start = {k: v for k, v in loaded.start.items() if k != "d0"}  # d0: each release's own, from its record
+        mass = loaded.mass
+    title = str(data.get("title", path.stem))
+    return title, str(data.get("notes", "")), tuple(variables), str(template.get("model", "linear")), mass, \
+        start, releases
+
+
+def run_building_campaign(path, data: dict[str, Any]) -> BuildingCampaignResult:
+    """Read a building campaign file (:func:`load_building_campaign`) and fit it
+    (:func:`fit_building_campaign`)."""
+    title, notes, variables, model, mass, start, releases = load_building_campaign(path, data)
+    return fit_building_campaign(releases, mass, model, variables=variables, start=start or None, title=title,
+                                 source=str(path), notes=notes)

@@ -377,8 +377,13 @@ def _identify_test(name: str, case: Case) -> CampaignTest:
                         method="stop observations")
 
 
-def run_campaign(path: str | Path) -> CampaignResult:
+def run_campaign(path: str | Path):
     """Identify every test of a campaign file and fit the friction laws.
+
+    A campaign file with a ``[building]`` table is a campaign of releases of one building: its releases
+    are fitted and the laws in the amplitude returned as a
+    :class:`~quickrelease.building_campaign.BuildingCampaignResult`
+    (:func:`quickrelease.building_campaign.run_building_campaign`); else a :class:`CampaignResult`.
 
     Raises
     ------
@@ -388,6 +393,11 @@ def run_campaign(path: str | Path) -> CampaignResult:
         With fewer than three tests (a law needs a degree of freedom), or a variable that is missing or
         constant over the tests.
     """
+    data = read_toml(Path(path), "campaign file", CaseFileError)
+    if "building" in data:
+        from .building_campaign import run_building_campaign
+
+        return run_building_campaign(path, data)
     title, notes, variables, cases = load_campaign(path)
     if len(cases) < 3:
         raise QuickReleaseError(f"{path}: {len(cases)} test(s): a friction law needs at least 3")
@@ -423,8 +433,8 @@ def law_panel(ax, law: LinearLaw, x, y, yerr, names, *, x_scale: float = 1.0, y_
     ax.plot(grid * x_scale, mean * y_scale, color=_COLORS["a"], label="fitted law")
     ax.errorbar(x * x_scale, y * y_scale, yerr=np.asarray(yerr, dtype=float) * y_scale, fmt="o", ms=4,
                 color=_COLORS["b"], capsize=2, label="tests")
-    for xi, yi, name in zip(x, y, names, strict=True):
-        user_label(ax, "annotate", name, (xi * x_scale, yi * y_scale), textcoords="offset points", xytext=(4, 3),
+    for xi, yi, test in zip(x, y, names, strict=True):
+        user_label(ax, "annotate", test, (xi * x_scale, yi * y_scale), textcoords="offset points", xytext=(4, 3),
                    fontsize=6)
     verdict = "significant" if law.significant else "not significant"
     factor = y_scale / x_scale
