@@ -39,8 +39,8 @@ F1_LAW = (150.0, 0.17e-3)  # F1 = a + b P [N, N/N]
 F2_CONSTANT = 805.0
 
 #: The synthetic building campaign: name, pushed displacement d0 [m], release instant [s].
-BUILDING_RELEASES = [("R1", 0.06, 2.13), ("R2", 0.09, 1.87), ("R3", 0.12, 2.41), ("R4", 0.15, 2.02),
-                     ("R5", 0.18, 1.95)]
+BUILDING_RELEASES = [("R1", 0.06, 2.134), ("R2", 0.09, 1.871), ("R3", 0.12, 2.417), ("R4", 0.15, 2.023),
+                     ("R5", 0.18, 1.953)]
 BUILDING = {"mass": 650e3, "period": 2.0, "damping_ratio": 0.03}
 FS_LAW = (40e3, 150e3)  # F_s = a + b |d0| [N, N/m]
 

@@ -432,8 +432,6 @@ def load_building_campaign(path, data: dict[str, Any]) -> tuple[str, str, tuple[
     if not isinstance(tests, list) or not tests:
         raise CaseFileError(f"{source}: missing [[tests]]: give one table per release (name, displacement or "
                             "force, record)")
-    if len(tests) < 3:
-        raise CaseFileError(f"{source}: {len(tests)} test(s): an amplitude law needs at least 3 releases")
     releases, names, start, mass = [], set(), {}, math.nan
     for i, entry in enumerate(tests):
         if not isinstance(entry, dict):
@@ -483,6 +481,8 @@ def load_building_campaign(path, data: dict[str, Any]) -> tuple[str, str, tuple[
                                         release_time=loaded.release_time))
         start = {k: v for k, v in loaded.start.items() if k != "d0"}  # d0: each release's own, from its record
         mass = loaded.mass
+    if len(releases) < 3:
+        raise CaseFileError(f"{source}: {len(releases)} test(s): an amplitude law needs at least 3 releases")
     title = str(data.get("title", path.stem))
     return title, str(data.get("notes", "")), tuple(variables), str(template.get("model", "linear")), mass, \
         start, releases

@@ -209,12 +209,16 @@ def _wls(X: np.ndarray, y: np.ndarray, se: np.ndarray | None) -> tuple[np.ndarra
     n, p = X.shape
     dof = n - p
     w = np.ones(n) if se is None else 1.0 / se**2
-    A = X.T @ (w[:, None] * X)
-    beta = np.linalg.solve(A, X.T @ (w * y))
+    # least squares on the weighted rows, the columns scaled to unit norm (an SVD, not the normal equations:
+    # a push force in N beside a constant column, or weights many decades apart, leave them near singular)
+    A = X * np.sqrt(w)[:, None]
+    norms = np.linalg.norm(A, axis=0)
+    norms = np.where(norms > 0, norms, 1.0)
+    beta = np.linalg.lstsq(A / norms, y * np.sqrt(w), rcond=None)[0] / norms
     r = y - X @ beta
     chi2 = float(np.sum(w * r * r))
     red = chi2 / dof if dof > 0 else float("nan")
-    cov = np.linalg.inv(A)
+    cov = np.linalg.pinv((A / norms).T @ (A / norms), hermitian=True) / np.outer(norms, norms)
     if se is None:
         cov = cov * red  # residual variance
     else:

@@ -442,7 +442,13 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
     chi2_red = chi2 / dof if dof > 0 else math.nan
     J = res.jac
     try:
-        cov = np.linalg.pinv(J.T @ J)
+        # columns scaled to unit norm before the inversion: the parameters' units differ by many orders
+        # (a friction in N beside a displacement in m), and pinv's cutoff on the unscaled J^T J drops the
+        # direction of the small columns and returns a standard error near zero for a poorly scaled one
+        norms = np.linalg.norm(J, axis=0)
+        norms = np.where(norms > 0, norms, 1.0)
+        Js = J / norms
+        cov = np.linalg.pinv(Js.T @ Js, hermitian=True) / np.outer(norms, norms)
     except np.linalg.LinAlgError:
         cov = np.full((p, p), np.nan)
     scale = 1.0 if absolute else chi2_red
