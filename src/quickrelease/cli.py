@@ -629,7 +629,7 @@ def _building_campaign_tables(result) -> None:
         _, _, y_scale, y_unit, symbol = QUANTITIES[law.quantity]
         _, _, x_scale, x_unit = BUILDING_VARIABLES[law.variable]
         factor = y_scale / x_scale
-        rows.append((f"{symbol} = a + b {law.variable}", f"{law.intercept * y_scale:.4g} ± "
+        rows.append((f"{symbol} = a + b {law.variable}", f"{law.intercept * y_scale:#.5g} ± "
                      f"{law.intercept_se * y_scale:.2g} {y_unit}", f"{law.slope * factor:.4g} ± "
                      f"{law.slope_se * factor:.2g} {y_unit}" + (f"/{x_unit}" if x_unit != "-" else ""),
                      f"{law.p_value:.2g}", "yes" if law.significant else "no"))

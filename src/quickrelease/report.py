@@ -373,7 +373,7 @@ def _building_campaign_section(result, svgs: dict[str, str]) -> list[str]:
         per = f"/{x_unit}" if x_unit != "-" else ""
         verdict = "<strong>yes</strong>" if law.significant else "no"
         rows.append(f"<tr><td>{_e(symbol)}</td><td>{_e(x_label)}</td><td class=\"num\">"
-                    f"{_num(law.intercept * y_scale, '.4g')} ± {_num(law.intercept_se * y_scale, '.2g')} {_e(y_unit)}"
+                    f"{_num(law.intercept * y_scale, '#.5g')} ± {_num(law.intercept_se * y_scale, '.2g')} {_e(y_unit)}"
                     f"</td><td class=\"num\">{_num(law.slope * y_scale / x_scale, '.4g')} ± "
                     f"{_num(law.slope_se * y_scale / x_scale, '.2g')} {_e(y_unit + per)}</td>"
                     f"<td class=\"num\">{_num(law.p_value, '.2g')}</td><td>{verdict}</td>"
