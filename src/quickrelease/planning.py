@@ -217,7 +217,8 @@ class MemberChecks:
     def summary(self) -> dict[str, Any]:
         return {"push_force_N": self.forces.P, "alpha0_rad": self.forces.alpha0, "fuse_stress_Pa": self.fuse_stress,
                 "utilisation": self.utilisation(),
-                "checks": [{"member": c.member, "check": c.check, "demand": c.demand, "capacity": c.capacity,
+                "checks": [{"member": c.member, "check": c.check,  # a skipped check may have no demand (NaN)
+                            "demand": c.demand if math.isfinite(c.demand) else None, "capacity": c.capacity,
                             "unit": c.unit, "utilisation": c.utilisation, "note": c.note} for c in self.checks],
                 "internal_forces_N": {"N1": self.forces.N1, "N2": self.forces.N2, "V2": self.forces.V2,
                                       "N3": self.forces.N3, "N4": self.forces.N4},
@@ -556,7 +557,9 @@ def clearance(release: FirstIntegral, building: BuildingSpec, d0: float, n: int 
     within the second or so of the release); the building springs back from d0 (the exact closed form of
     :func:`quickrelease.building.free_vibration`, :func:`building_isolation`). The gap opens at once
     (``u_dot0 > 0`` while the building starts from rest); the minimum gap is taken after the gap's first
-    maximum, when the building catches up, over ``max(1.5 t_F, one period)``: after the device has stopped the
+    maximum, when the building catches up, over ``max(1.5 t_F, one period, the building's first return)``
+    (a bilinear isolation pushed past its yield returns on its soft branch, later than its initial period
+    says): after the device has stopped the
     gap is ``u_F`` minus the approach, smallest at the building's first largest approach half a period after
     release. A gap below 0 is a contact: the building hits the device, which would spoil the free-vibration
     test.
@@ -576,7 +579,10 @@ def clearance(release: FirstIntegral, building: BuildingSpec, d0: float, n: int 
     period = iso.period
     a_f = iso.friction / iso.mass
     t_stop = release.stop_time()
-    horizon = max(1.5 * t_stop, period)
+    # the building's first return (its largest approach) within the horizon: half a period for the linear
+    # isolation, later for a bilinear one pushed past its yield (the soft branch's longer period)
+    first = free_vibration(iso, d0, t_end=100.0 * period).reversal_times
+    horizon = max(1.5 * t_stop, period, float(first[1]) if first.size > 1 else 0.0)
     motion = free_vibration(iso, d0, t_end=horizon)
     f = _Gap(release, motion, d0)
     t = np.linspace(0.0, horizon, n)

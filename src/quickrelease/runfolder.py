@@ -109,14 +109,22 @@ def case_inputs(case: Any) -> dict[str, Any]:
         return d
 
     data = strip(data)
-    record = getattr(case, "record", None)
-    if record is not None:
-        data["record"]["file"] = {"name": Path(record.file).name, "sha256": _file_digest(record.file)}
-        for name, ch in (getattr(record, "channels", None) or {}).items():
-            file = getattr(ch, "file", None)
-            if file is not None:
-                data["record"]["channels"][name]["file"] = {"name": Path(file).name, "sha256": _file_digest(file)}
+    _digest_record(getattr(case, "record", None), data.get("record"))
+    building = getattr(case, "building", None)  # the building's record ([building.record]) likewise
+    if building is not None:
+        _digest_record(getattr(building, "record", None), data["building"].get("record"))
     return data
+
+
+def _digest_record(record: Any, data: dict[str, Any] | None) -> None:
+    """Replace the record's file paths in ``data`` (its canonical form) by their names and SHA-256."""
+    if record is None or data is None:
+        return
+    data["file"] = {"name": Path(record.file).name, "sha256": _file_digest(record.file)}
+    for name, ch in (getattr(record, "channels", None) or {}).items():
+        file = getattr(ch, "file", None)
+        if file is not None:
+            data["channels"][name]["file"] = {"name": Path(file).name, "sha256": _file_digest(file)}
 
 
 def _flatten(data: Any, prefix: str = "") -> dict[str, Any]:
