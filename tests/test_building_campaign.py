@@ -289,3 +289,16 @@ def test_bad_building_campaigns_are_one_line_exit_2(tmp_path, text, fragment):
     assert r.exit_code == 2, r.output
     assert fragment in r.stderr and r.stderr.startswith("error: ") and r.stderr.count("\n") == 1, r.stderr
     assert "Traceback" not in r.output and not out.exists()
+
+
+def test_an_edited_record_is_another_campaign_run(tmp_path):
+    """The campaign folder's fingerprint holds the records the tests name, not only the campaign file."""
+    from quickrelease.workflow import campaign_folder
+
+    (tmp_path / "a.csv").write_text("t_s,x_mm\n0,1\n", encoding="utf-8")
+    path = tmp_path / "c.toml"
+    path.write_text(_GOOD + _test("A", "a.csv") + _test("B", "a.csv") + _test("C", "a.csv"), encoding="utf-8")
+    before = campaign_folder(path, tmp_path / "out").fingerprint
+    assert campaign_folder(path, tmp_path / "out").fingerprint == before
+    (tmp_path / "a.csv").write_text("t_s,x_mm\n0,2\n", encoding="utf-8")
+    assert campaign_folder(path, tmp_path / "out").fingerprint != before

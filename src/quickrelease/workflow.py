@@ -235,10 +235,27 @@ def _write_results_into(result: CaseResult, out: Path, *, figures: bool, report:
 
 
 def campaign_folder(campaign_file: str | Path, out: str | Path, *, overwrite: bool = False):
-    """The :class:`~quickrelease.runfolder.RunFolder` of a campaign's results (pre-flight: writes nothing)."""
+    """The :class:`~quickrelease.runfolder.RunFolder` of a campaign's results (pre-flight: writes nothing).
+
+    Its inputs are the campaign file and every file its tests name (``record``, ``case``) by their SHA-256:
+    an edited record is another run."""
+    import tomllib
+
     from .runfolder import RunFolder, _file_digest
 
-    return RunFolder(out, "campaign results", {"campaign_file": _file_digest(Path(campaign_file))},
+    path = Path(campaign_file)
+    files = {}
+    try:
+        tests = tomllib.loads(path.read_text(encoding="utf-8")).get("tests", [])
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        tests = []  # reported by the campaign's own reading
+    for i, test in enumerate(tests if isinstance(tests, list) else []):
+        for key in ("record", "case"):
+            name = test.get(key) if isinstance(test, dict) else None
+            if isinstance(name, str):
+                file = Path(name) if Path(name).is_absolute() else path.parent / name
+                files[f"tests[{i}].{key}"] = _file_digest(file)
+    return RunFolder(out, "campaign results", {"campaign_file": _file_digest(path), "files": files},
                      overwrite=overwrite)
 
 
