@@ -302,3 +302,16 @@ def test_an_edited_record_is_another_campaign_run(tmp_path):
     assert campaign_folder(path, tmp_path / "out").fingerprint == before
     (tmp_path / "a.csv").write_text("t_s,x_mm\n0,2\n", encoding="utf-8")
     assert campaign_folder(path, tmp_path / "out").fingerprint != before
+
+
+def test_a_roof_channel_of_a_rigid_building_is_fitted_as_the_layer():
+    """The schema's roof channels (x_roof, v_roof, a_roof) move with the layer under a rigid
+    superstructure; the fit took them (a KeyError before)."""
+    rng = np.random.default_rng(5)
+    t = np.arange(-1.0, 9.0, 0.01)
+    rows = reference(M, K, K, math.inf, C, 2.0e4, 0.13, t - 0.4037, with_rates=True)[0]
+    channels = [BuildingChannel("x", "x", t, rows[0] + rng.normal(0, 2e-4, t.size)),
+                BuildingChannel("a_roof", "a_roof", t, rows[2] + rng.normal(0, 0.02, t.size))]
+    fit = fit_isolation(channels, M, "linear")
+    for name, value in {"period": T, "damping_ratio": ZETA, "friction": 2.0e4}.items():
+        assert abs(fit.estimates[name] - value) < 4 * fit.std_errors[name], (name, fit.estimates[name])

@@ -167,7 +167,7 @@ def _channel_model(iso: Isolation, d0: float, t_r: float, kind: str, t: np.ndarr
     horizon = max(t_last - t_r, 1e-9)
     fv = free_vibration(iso, d0, t_end=horizon)
     x, v, a = fv.state(t - t_r)
-    return {"x": x, "v": v, "a": a}[kind]
+    return {"x": x, "v": v, "a": a}[kind.removesuffix("_roof")]  # rigid superstructure: the roof moves with the layer
 
 
 def ljung_box(residuals, lags: int = 20) -> float:
@@ -390,7 +390,7 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
         out = []
         for c in channels:
             x, v, a = fv.state(c.t - p["release_time"])
-            y = {"x": x, "v": v, "a": a}[c.kind]
+            y = {"x": x, "v": v, "a": a}[c.kind.removesuffix("_roof")]  # rigid: the roof moves with the layer
             out.append(y + p.get(f"offset_{c.name}", 0.0))
         return np.concatenate(out)
 
