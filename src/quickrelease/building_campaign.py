@@ -33,6 +33,11 @@ a stiffness that softens with the strain).
 Derived quantities carry the delta-method standard error (the gradient by central differences, the fit's
 covariance); a parameter whose interval is the profile likelihood's is weighted by the half-width of that
 interval over the Student t quantile.
+
+The releases share one building, so a release whose fit misfits its record (reduced chi-square above
+:data:`MISFIT_RESTART` with known noise: the fit's local minima, e.g. a wrong count of half-cycles before
+the sliders stick, or the bilinear model's friction traded against its yield force) is refitted from the
+estimates of each release that fits well, and the better fit kept (``restarted_from`` names its start).
 """
 
 from __future__ import annotations
@@ -75,6 +80,8 @@ DEFAULT_QUANTITIES = {
                  "stiffness_ratio", "yield_force"),
 }
 _FITTED = ("period", "damping_ratio", "friction", "stiffness_ratio", "yield_force")
+#: Reduced chi-square (known noise) above which a release is refitted from the other releases' estimates.
+MISFIT_RESTART = 1.3
 
 
 @dataclass(frozen=True, eq=False)
@@ -139,6 +146,9 @@ class ReleaseEstimates:
     ci95: dict[str, tuple[float, float]]
     interval_method: dict[str, str]
     fit: IsolationFit = field(repr=False)
+    restarted_from: str | None = None
+    """The release whose estimates started this fit, when the first fit's misfit exceeded the noise and
+    the restart fitted better (:data:`MISFIT_RESTART`)."""
 
     def value(self, variable: str) -> float:
         if variable == "displacement":
@@ -158,7 +168,8 @@ class ReleaseEstimates:
             "estimates": self.values, "std_errors": self.std_errors,
             "ci95": {k: list(v) for k, v in self.ci95.items()}, "interval_method": self.interval_method,
             "units": {k: QUANTITIES[k][1] for k in self.values}, "chi2_reduced": self.fit.chi2_reduced,
-            "converged": self.fit.converged, "warnings": list(self.fit.warnings)})
+            "converged": self.fit.converged, "warnings": list(self.fit.warnings),
+            "restarted_from": self.restarted_from})
 
 
 def _json_safe(value):
@@ -174,7 +185,8 @@ def _json_safe(value):
     return value
 
 
-def _estimates(release: BuildingRelease, fit: IsolationFit, quantities: tuple[str, ...]) -> ReleaseEstimates:
+def _estimates(release: BuildingRelease, fit: IsolationFit, quantities: tuple[str, ...],
+               restarted_from: str | None = None) -> ReleaseEstimates:
     """The release's quantities: fitted ones with the fit's intervals, derived ones by the delta method."""
     params = dict(fit.estimates)
     if "d0" not in params:
@@ -208,7 +220,44 @@ def _estimates(release: BuildingRelease, fit: IsolationFit, quantities: tuple[st
         ci[q] = (values[q] - tq * ses[q], values[q] + tq * ses[q])
         method[q] = "delta"
     return ReleaseEstimates(name=release.name, d0=params["d0"], d0_given=release.d0, force=release.force,
-                            values=values, std_errors=ses, ci95=ci, interval_method=method, fit=fit)
+                            values=values, std_errors=ses, ci95=ci, interval_method=method, fit=fit,
+                            restarted_from=restarted_from)
+
+
+def _fixed(release: BuildingRelease) -> dict[str, float] | None:
+    if release.d0 is not None and not any(c.kind in ("x", "x_roof") for c in release.channels):
+        return {"d0": float(release.d0)}  # no displacement channel: the given d0 is the release state
+    return None
+
+
+def _misfit(fit: IsolationFit) -> bool:
+    """The fit's misfit exceeds its noise (the warning of :func:`fit_isolation`): a local minimum, or a
+    model the record does not support."""
+    return fit.absolute_sigma and math.isfinite(fit.chi2_reduced) and fit.chi2_reduced > MISFIT_RESTART
+
+
+def _restart_misfits(releases, fits: list[IsolationFit], mass: float, model: str) -> dict[str, str]:
+    """Refit each release whose misfit exceeds its noise from the estimates of every release that fits
+    well (the campaign knows the building: the model's misfit has local minima, e.g. the count of
+    half-cycles before the sliders stick), keeping the lowest chi-square; ``fits`` is updated in place.
+    Returns {release: the release whose estimates started its kept fit}."""
+    good = [(r.name, f) for r, f in zip(releases, fits, strict=True) if not _misfit(f) and f.converged]
+    restarted = {}
+    for i, r in enumerate(releases):
+        if not _misfit(fits[i]):
+            continue
+        for name, other in good:
+            start = {n: other.estimates[n] for n in _FITTED if n in other.estimates}
+            try:
+                trial = fit_isolation(r.channels, mass, model, release_time=r.release_time, start=start,
+                                      fixed=_fixed(r))
+            except QuickReleaseError:
+                continue
+            if trial.chi2 < fits[i].chi2:
+                fits[i], restarted[r.name] = trial, name
+            if not _misfit(fits[i]):
+                break
+    return restarted
 
 
 @dataclass(frozen=True, eq=False)
@@ -305,16 +354,15 @@ def fit_building_campaign(releases, mass: float, model: str = "linear", *, varia
             and len({abs(r.d0) for r in releases}) == 1:
         raise QuickReleaseError("every release has the same pushed displacement d0: no law in the amplitude can be "
                                 "fitted")
-    estimates = []
+    fits = []
     for r in releases:
-        fixed = None
-        if r.d0 is not None and not any(c.kind == "x" for c in r.channels):
-            fixed = {"d0": float(r.d0)}  # no displacement channel: the given d0 is the release state
         try:
-            fit = fit_isolation(r.channels, mass, model, release_time=r.release_time, start=start, fixed=fixed)
+            fits.append(fit_isolation(r.channels, mass, model, release_time=r.release_time, start=start,
+                                      fixed=_fixed(r)))
         except QuickReleaseError as exc:
             raise type(exc)(f"release {r.name}: {exc}") from None
-        estimates.append(_estimates(r, fit, quantities))
+    restarts = _restart_misfits(releases, fits, mass, model)
+    estimates = [_estimates(r, fit, quantities, restarts.get(r.name)) for r, fit in zip(releases, fits, strict=True)]
     laws = {}
     for v in variables:
         x = [r.value(v) for r in estimates]

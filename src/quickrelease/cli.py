@@ -687,6 +687,12 @@ def _building_campaign_tables(result) -> None:
                      f"{law.p_value:.2g}", "yes" if law.significant else "no"))
     _table("Laws in the amplitude (weighted least squares; p of slope = 0)", rows,
            ("law", "a", "b", "p", "significant at 5%"))
+    for r in result.releases:
+        if r.restarted_from:
+            _echo(f"note: release {r.name} was refitted from the estimates of {r.restarted_from} (its first fit "
+                  "misfit its record)")
+        for text in r.fit.warnings:
+            _echo(f"warning: release {r.name}: {text}")
 
 
 @app.command()

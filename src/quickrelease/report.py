@@ -360,7 +360,8 @@ def _building_campaign_section(result, svgs: dict[str, str]) -> list[str]:
             cells.append(f"<td class=\"num\">{_num(r.values[q] * scale, '#.5g')} [{_num(lo * scale, '#.5g')}, "
                          f"{_num(hi * scale, '#.5g')}]</td>")
         force = "" if r.force is None else _num(r.force / 1e3, ".4g")
-        warn = "; ".join(r.fit.warnings)
+        warn = "; ".join(([f"refitted from {r.restarted_from}'s estimates"] if r.restarted_from else [])
+                         + list(r.fit.warnings))
         rows.append(f"<tr><td>{_e(r.name)}</td><td class=\"num\">{_num(abs(r.d0) * 1e2, '.4g')}</td>"
                     f"<td class=\"num\">{force}</td>{''.join(cells)}<td>{_e(warn)}</td></tr>")
     parts.append(f"<table><thead><tr><th>release</th><th>|d0| [cm]</th><th>P [kN]</th>{head}<th>warnings</th>"
