@@ -41,10 +41,10 @@ def _record(d0, Fs, seed, duration=13.0, t_release=0.4037):
     return [BuildingChannel("lvdt", "x", t, x + 0.003 + rng.normal(0, 2e-4, t.size))]
 
 
-def _campaign(friction_of, seed0):
+def _campaign(friction_of, seed0, amplitudes=AMPLITUDES, variables=("displacement", "force")):
     releases = [BuildingRelease(f"R{i + 1}", _record(d0, friction_of(d0), seed0 + i), d0=d0,
-                                force=K * d0 + friction_of(d0)) for i, d0 in enumerate(AMPLITUDES)]
-    return fit_building_campaign(releases, M, "linear", variables=("displacement", "force"))
+                                force=K * d0 + friction_of(d0)) for i, d0 in enumerate(amplitudes)]
+    return fit_building_campaign(releases, M, "linear", variables=variables)
 
 
 @pytest.fixture(scope="module")
@@ -56,7 +56,8 @@ def constant():
 @pytest.fixture(scope="module")
 def growing():
     """The sliders' friction grows with the amplitude: F_s = 10 kN + 100 kN/m |d0|."""
-    return _campaign(lambda d0: 1.0e4 + 1.0e5 * d0, 200)
+    return _campaign(lambda d0: 1.0e4 + 1.0e5 * d0, 200, (0.05, 0.10, 0.15, 0.20),
+                     ("displacement", "log_displacement"))
 
 
 def test_linear_coulomb_building_shows_no_amplitude_effect(constant):
@@ -85,6 +86,8 @@ def test_friction_that_grows_with_the_amplitude_is_found(growing):
     law = growing.laws[("friction", "displacement")]
     assert law.significant and law.p_value < 1e-4
     assert abs(law.slope - 1.0e5) < 3 * law.slope_se and abs(law.intercept - 1.0e4) < 3 * law.intercept_se
+    log_law = growing.laws[("friction", "log_displacement")]  # the wrong shape: more scatter, still found
+    assert log_law.significant and log_law.slope > 0 and log_law.chi2_reduced > 10
     for q in ("period", "damping_ratio"):
         assert not growing.laws[(q, "displacement")].significant, growing.laws[(q, "displacement")].summary()
 
@@ -103,17 +106,18 @@ def _hand_wls(x, y, se):
 def test_laws_against_a_hand_weighted_least_squares(constant, growing):
     for result in (constant, growing):
         for (q, v), law in result.laws.items():
-            x = [abs(r.d0) if v == "displacement" else r.force for r in result.releases]
+            x = [{"displacement": abs(r.d0), "log_displacement": math.log(abs(r.d0)), "force": r.force}[v]
+                 for r in result.releases]
             beta, cov, red = _hand_wls(x, [r.values[q] for r in result.releases],
                                        [r.std_errors[q] for r in result.releases])
             assert law.intercept == pytest.approx(beta[0], rel=1e-9, abs=1e-12)
             assert law.slope == pytest.approx(beta[1], rel=1e-8)
             assert law.chi2_reduced == pytest.approx(red, rel=1e-8)
             assert law.slope_se == pytest.approx(math.sqrt(cov[1, 1]), rel=1e-8)
-            t = beta[1] / math.sqrt(cov[1, 1])
-            assert law.p_value == pytest.approx(2 * stats.t.sf(abs(t), 3), rel=1e-6, abs=1e-300)
-            x_star = 0.123 if v == "displacement" else 4.0e5
-            half = stats.t.ppf(0.975, 3) * math.sqrt(np.array([1, x_star]) @ cov @ np.array([1, x_star]))
+            t, dof = beta[1] / math.sqrt(cov[1, 1]), len(x) - 2
+            assert law.p_value == pytest.approx(2 * stats.t.sf(abs(t), dof), rel=1e-6, abs=1e-300)
+            x_star = {"displacement": 0.123, "log_displacement": -2.1, "force": 4.0e5}[v]
+            half = stats.t.ppf(0.975, dof) * math.sqrt(np.array([1, x_star]) @ cov @ np.array([1, x_star]))
             mean, lo, hi = law.band(x_star)
             assert (lo, hi) == pytest.approx((mean - half, mean + half), rel=1e-8)
 
@@ -235,7 +239,8 @@ def test_campaign_command_on_the_shipped_example(tmp_path):
     assert fs["significant_5pct"] and abs(fs["b"] - 150e3) < 3 * fs["b_se"] and abs(fs["a"] - 40e3) < 3 * fs["a_se"]
     for q in ("period", "damping_ratio"):
         assert not laws[(q, "displacement")]["significant_5pct"]
-        assert not laws[(q, "force")]["significant_5pct"]
+    assert set(laws) == {(q, "displacement") for q in ("period", "damping_ratio", "friction",
+                                                        "equivalent_damping_ratio")}
     assert [rel["d0_given_m"] for rel in data["releases"]] == pytest.approx([0.06, 0.09, 0.12, 0.15, 0.18])
     for rel in data["releases"]:  # each release's own intervals hold its truth (a collapsed standard error
         # of F_s, from an unscaled J^T J, once made the law's normal matrix singular here)
