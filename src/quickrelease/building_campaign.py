@@ -382,7 +382,8 @@ def building_campaign_figure(result: BuildingCampaignResult):
     from .plots import _figure, user_label
 
     nq, nv = len(result.quantities), len(result.variables)
-    fig = _figure(3.2 * nq + 0.6, 2.9 * nv + 0.9, left=0.06, right=0.98, bottom=0.12 / nv, top=1 - 0.3 / nv,
+    height = 2.9 * nv + 0.9  # [in]: 0.85 in for the titles above, 0.5 in for the labels below
+    fig = _figure(3.2 * nq + 0.6, height, left=0.06, right=0.98, bottom=0.5 / height, top=1 - 0.85 / height,
                   wspace=0.35, hspace=0.6)
     axes = np.atleast_2d(fig.subplots(nv, nq, squeeze=False))
     for row, v in enumerate(result.variables):
