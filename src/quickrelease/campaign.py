@@ -48,8 +48,8 @@ from .device import read_toml
 from .errors import QuickReleaseError
 from .fit import FitResult, fit_record, observation_sigma
 
-__all__ = ["CampaignTest", "Law", "JointLaw", "CampaignResult", "load_campaign", "run_campaign", "fit_law",
-           "VARIABLES"]
+__all__ = ["CampaignTest", "LinearLaw", "Law", "JointLaw", "CampaignResult", "load_campaign", "run_campaign",
+           "fit_law", "fit_line", "weights_or_none", "law_panel", "VARIABLES"]
 
 #: Regressors of the friction laws: (attribute of Case, label, unit, scale for plots, plot unit).
 VARIABLES = {
@@ -105,10 +105,12 @@ def _p_value(t: float, dof: int) -> float:
 
 
 @dataclass(frozen=True)
-class Law:
-    """``F = intercept + slope x``, fitted over the tests by (weighted) least squares."""
+class LinearLaw:
+    """``y = intercept + slope x`` fitted over the tests of a campaign by (weighted) least squares: a
+    quantity (a friction force, a period, a damping ratio) against a variable (the push force, the angle,
+    the release amplitude). The device's friction laws and the building's amplitude laws are both these."""
 
-    friction: str
+    quantity: str
     variable: str
     intercept: float
     slope: float
@@ -144,13 +146,29 @@ class Law:
         return self.p_value < 0.05
 
     def band(self, x) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The law and its 95% confidence band (of the mean) at x: (mean, low, high) [N]."""
+        """The law and its 95% confidence band (of the mean) at x: (mean, low, high), in y's unit."""
         x = np.asarray(x, dtype=float)
         mean = self.intercept + self.slope * x
         c = self.covariance
         var = c[0, 0] + 2.0 * c[0, 1] * x + c[1, 1] * x * x
         half = _t_quantile(self.dof) * np.sqrt(np.maximum(var, 0.0))
         return mean, mean - half, mean + half
+
+    def summary(self) -> dict[str, Any]:
+        return {"quantity": self.quantity, "variable": self.variable,
+                "law": f"{self.quantity} = a + b {self.variable}", "a": self.intercept, "a_se": self.intercept_se,
+                "b": self.slope, "b_se": self.slope_se, "t": self.t_statistic, "p_value": self.p_value,
+                "significant_5pct": self.significant, "dof": self.dof, "chi2_reduced": self.chi2_reduced,
+                "weighted": self.weighted, "x_range": list(self.x_range)}
+
+
+@dataclass(frozen=True)
+class Law(LinearLaw):
+    """A friction law of the device campaign, ``F = intercept + slope x`` [N]."""
+
+    @property
+    def friction(self) -> str:
+        return self.quantity
 
     def summary(self) -> dict[str, Any]:
         unit = VARIABLES[self.variable][2]
@@ -191,12 +209,16 @@ def _wls(X: np.ndarray, y: np.ndarray, se: np.ndarray | None) -> tuple[np.ndarra
     n, p = X.shape
     dof = n - p
     w = np.ones(n) if se is None else 1.0 / se**2
-    A = X.T @ (w[:, None] * X)
-    beta = np.linalg.solve(A, X.T @ (w * y))
+    # least squares on the weighted rows, the columns scaled to unit norm (an SVD, not the normal equations:
+    # a push force in N beside a constant column, or weights many decades apart, leave them near singular)
+    A = X * np.sqrt(w)[:, None]
+    norms = np.linalg.norm(A, axis=0)
+    norms = np.where(norms > 0, norms, 1.0)
+    beta = np.linalg.lstsq(A / norms, y * np.sqrt(w), rcond=None)[0] / norms
     r = y - X @ beta
     chi2 = float(np.sum(w * r * r))
     red = chi2 / dof if dof > 0 else float("nan")
-    cov = np.linalg.inv(A)
+    cov = np.linalg.pinv((A / norms).T @ (A / norms), hermitian=True) / np.outer(norms, norms)
     if se is None:
         cov = cov * red  # residual variance
     else:
@@ -204,23 +226,51 @@ def _wls(X: np.ndarray, y: np.ndarray, se: np.ndarray | None) -> tuple[np.ndarra
     return beta, cov, dof, red
 
 
-def _standard_errors(tests: list[CampaignTest], friction: str) -> np.ndarray | None:
-    se = [getattr(t, f"{friction}_se") for t in tests]
-    if any(s is None or not s > 0 for s in se):
+def weights_or_none(se) -> np.ndarray | None:
+    """The standard errors as an array when every one is positive and finite (a weighted law), else None
+    (an unweighted law: one missing or zero standard error would otherwise take all the weight)."""
+    se = list(se)
+    if any(s is None or not (math.isfinite(s) and s > 0) for s in se):
         return None
     return np.array(se, dtype=float)
+
+
+def _standard_errors(tests: list[CampaignTest], friction: str) -> np.ndarray | None:
+    return weights_or_none(getattr(t, f"{friction}_se") for t in tests)
+
+
+def fit_line(x, y, se=None, *, quantity: str = "y", variable: str = "x", law_type: type[LinearLaw] = LinearLaw
+             ) -> LinearLaw:
+    """Fit ``y = a + b x`` by least squares, weighted by ``1 / se^2`` when ``se`` is given (see
+    :func:`weights_or_none`), with the covariance inflated by the reduced chi-square when it exceeds 1.
+
+    Raises
+    ------
+    QuickReleaseError
+        With fewer than three points (no degree of freedom for the scatter) or a constant x.
+    """
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    if x.ndim != 1 or x.shape != y.shape or x.size < 3:
+        raise QuickReleaseError(f"{quantity} against {variable}: {x.size} point(s); a law needs at least 3")
+    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
+        raise QuickReleaseError(f"{quantity} against {variable}: non-finite values")
+    if np.ptp(x) == 0:
+        raise QuickReleaseError(f"every test has the same {variable}: no law in {variable} can be fitted")
+    se = None if se is None else np.asarray(se, dtype=float)
+    beta, cov, dof, red = _wls(np.column_stack([np.ones_like(x), x]), y, se)
+    return law_type(quantity=quantity, variable=variable, intercept=float(beta[0]), slope=float(beta[1]),
+                    covariance=cov, dof=dof, chi2_reduced=red, weighted=se is not None,
+                    x_range=(float(x.min()), float(x.max())))
 
 
 def fit_law(tests: list[CampaignTest], friction: str, variable: str) -> Law:
     """Fit ``friction = a + b variable`` over the tests (weighted when every test has a standard error)."""
     x = np.array([t.value(variable) for t in tests])
     y = np.array([getattr(t, friction) for t in tests])
-    se = _standard_errors(tests, friction)
     if np.ptp(x) == 0:
         raise QuickReleaseError(f"every test has the same {VARIABLES[variable][1]}: no law in {variable} can be fitted")
-    beta, cov, dof, red = _wls(np.column_stack([np.ones_like(x), x]), y, se)
-    return Law(friction=friction, variable=variable, intercept=float(beta[0]), slope=float(beta[1]), covariance=cov,
-               dof=dof, chi2_reduced=red, weighted=se is not None, x_range=(float(x.min()), float(x.max())))
+    return fit_line(x, y, _standard_errors(tests, friction), quantity=friction, variable=variable, law_type=Law)
 
 
 def fit_joint(tests: list[CampaignTest], friction: str, variables: tuple[str, ...]) -> JointLaw:
@@ -331,8 +381,13 @@ def _identify_test(name: str, case: Case) -> CampaignTest:
                         method="stop observations")
 
 
-def run_campaign(path: str | Path) -> CampaignResult:
+def run_campaign(path: str | Path):
     """Identify every test of a campaign file and fit the friction laws.
+
+    A campaign file with a ``[building]`` table is a campaign of releases of one building: its releases
+    are fitted and the laws in the amplitude returned as a
+    :class:`~quickrelease.building_campaign.BuildingCampaignResult`
+    (:func:`quickrelease.building_campaign.run_building_campaign`); else a :class:`CampaignResult`.
 
     Raises
     ------
@@ -342,6 +397,11 @@ def run_campaign(path: str | Path) -> CampaignResult:
         With fewer than three tests (a law needs a degree of freedom), or a variable that is missing or
         constant over the tests.
     """
+    data = read_toml(Path(path), "campaign file", CaseFileError)
+    if "building" in data:
+        from .building_campaign import run_building_campaign
+
+        return run_building_campaign(path, data)
     title, notes, variables, cases = load_campaign(path)
     if len(cases) < 3:
         raise QuickReleaseError(f"{path}: {len(cases)} test(s): a friction law needs at least 3")
@@ -359,9 +419,38 @@ def run_campaign(path: str | Path) -> CampaignResult:
                           notes=notes)
 
 
+def law_panel(ax, law: LinearLaw, x, y, yerr, names, *, x_scale: float = 1.0, y_scale: float = 1.0,
+              x_label: str = "", y_label: str = "", slope_unit: str = "", name: str | None = None) -> None:
+    """One panel of a campaign figure: the tests (values ``y`` at ``x`` with error bars ``yerr``, one value
+    or (low, high) rows of distances), the fitted law and its 95% band, the slope and its p-value in the
+    title (under ``name``, default the law's quantity). ``x_scale`` and ``y_scale`` convert SI to the
+    plotted units."""
+    from .plots import _COLORS, user_label
+
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    span = law.x_range[1] - law.x_range[0]
+    grid = np.linspace(law.x_range[0] - 0.05 * span, law.x_range[1] + 0.05 * span, 100)
+    mean, lo, hi = law.band(grid)
+    ax.fill_between(grid * x_scale, lo * y_scale, hi * y_scale, color=_COLORS["a"], alpha=0.18, lw=0,
+                    label="95% band")
+    ax.plot(grid * x_scale, mean * y_scale, color=_COLORS["a"], label="fitted law")
+    ax.errorbar(x * x_scale, y * y_scale, yerr=np.asarray(yerr, dtype=float) * y_scale, fmt="o", ms=4,
+                color=_COLORS["b"], capsize=2, label="tests")
+    for xi, yi, test in zip(x, y, names, strict=True):
+        user_label(ax, "annotate", test, (xi * x_scale, yi * y_scale), textcoords="offset points", xytext=(4, 3),
+                   fontsize=6)
+    verdict = "significant" if law.significant else "not significant"
+    factor = y_scale / x_scale
+    ax.set_title(f"{name or law.quantity}: slope {law.slope * factor:.3g} ± {law.slope_se * factor:.2g} {slope_unit}\n"
+                 f"(p = {law.p_value:.2g}, {verdict} at 5%)", fontsize=8)
+    ax.set_xlabel(x_label)
+    ax.set_ylabel(y_label)
+
+
 def campaign_figure(result: CampaignResult):
     """Friction against each variable: the tests (95% error bars), the fitted law and its 95% band."""
-    from .plots import _COLORS, _figure, user_label
+    from .plots import _figure, user_label
 
     nv = len(result.variables)
     fig = _figure(3.4 * nv + 0.6, 5.8, left=0.1, right=0.98, bottom=0.1, top=0.86, wspace=0.3, hspace=0.48)
@@ -370,24 +459,11 @@ def campaign_figure(result: CampaignResult):
         for col, var in enumerate(result.variables):
             ax = axes[row, col]
             _, label, _, scale, unit = VARIABLES[var]
-            x = np.array([t.value(var) for t in result.tests])
-            y = np.array([getattr(t, friction) for t in result.tests])
             se = np.array([getattr(t, f"{friction}_se") or 0.0 for t in result.tests])
-            law = result.laws[(friction, var)]
-            span = law.x_range[1] - law.x_range[0]
-            grid = np.linspace(law.x_range[0] - 0.05 * span, law.x_range[1] + 0.05 * span, 100)
-            mean, lo, hi = law.band(grid)
-            ax.fill_between(grid * scale, lo, hi, color=_COLORS["a"], alpha=0.18, lw=0, label="95% band")
-            ax.plot(grid * scale, mean, color=_COLORS["a"], label="fitted law")
-            ax.errorbar(x * scale, y, yerr=1.96 * se, fmt="o", ms=4, color=_COLORS["b"], capsize=2, label="tests")
-            for xi, yi, t in zip(x, y, result.tests, strict=True):
-                user_label(ax, "annotate", t.name, (xi * scale, yi), textcoords="offset points", xytext=(4, 3),
-                           fontsize=6)
-            verdict = "significant" if law.significant else "not significant"
-            ax.set_title(f"{friction}: slope {law.slope / scale:.3g} ± {law.slope_se / scale:.2g} N/{unit}\n"
-                         f"(p = {law.p_value:.2g}, {verdict} at 5%)", fontsize=8)
-            ax.set_xlabel(f"{label} [{unit}]")
-            ax.set_ylabel(f"${friction[0]}_{friction[1]}$ [N]")
+            law_panel(ax, result.laws[(friction, var)], [t.value(var) for t in result.tests],
+                      [getattr(t, friction) for t in result.tests], 1.96 * se, [t.name for t in result.tests],
+                      x_scale=scale, x_label=f"{label} [{unit}]", y_label=f"${friction[0]}_{friction[1]}$ [N]",
+                      slope_unit=f"N/{unit}")
             if row == 0 and col == 0:
                 ax.legend(fontsize=6, loc="best")
     user_label(fig, "suptitle", f"{result.title}: friction against load and angle")

@@ -617,7 +617,8 @@ def campaign(
     overwrite: OverwriteOpt = False,
     as_json: JsonOpt = False,
 ) -> None:
-    """Friction of every test of a campaign, and its laws in the load and the angle (F = a + b x)."""
+    """Friction of every test of a campaign, and its laws in the load and the angle (F = a + b x); or, for a
+    campaign file with [building], the isolation system of every release and its laws in the amplitude."""
     from .campaign import VARIABLES, run_campaign
     from .workflow import campaign_folder, write_campaign_results
 
@@ -629,6 +630,11 @@ def campaign(
         paths = write_campaign_results(result, out, overwrite=overwrite)
     if as_json:
         _print_json(result.summary())
+        return
+    if getattr(result, "kind", "device") == "building":
+        _building_campaign_tables(result)
+        if paths:
+            _listing(paths, out)
         return
 
     def pm(value, se):
@@ -654,6 +660,39 @@ def campaign(
             f"N{'/' + units[n][1] if units[n][1] else ''} (p = {v['p_value']:.2g})" for n, v in terms.items()))
     if paths:
         _listing(paths, out)
+
+
+def _building_campaign_tables(result) -> None:
+    """The tables of a building campaign: each release's estimates, then the laws in the amplitude."""
+    from .building_campaign import BUILDING_VARIABLES, QUANTITIES
+
+    qs = result.quantities
+    rows = []
+    for r in result.releases:
+        cells = [r.name, f"{abs(r.d0) * 1e2:.4g}", "" if r.force is None else f"{r.force / 1e3:.4g}"]
+        for q in qs:
+            scale = QUANTITIES[q][2]
+            cells.append(f"{r.values[q] * scale:#.5g} ± {r.std_errors[q] * scale:.2g}")
+        rows.append(tuple(cells))
+    _table(f"{result.title}: the {result.model} isolation system per release (± standard error)", rows,
+           ("release", "|d0| [cm]", "P [kN]", *(f"{QUANTITIES[q][4]} [{QUANTITIES[q][3]}]" for q in qs)))
+    rows = []
+    for law in result.laws.values():
+        _, _, y_scale, y_unit, symbol = QUANTITIES[law.quantity]
+        _, _, x_scale, x_unit = BUILDING_VARIABLES[law.variable]
+        factor = y_scale / x_scale
+        rows.append((f"{symbol} = a + b {law.variable}", f"{law.intercept * y_scale:#.5g} ± "
+                     f"{law.intercept_se * y_scale:.2g} {y_unit}", f"{law.slope * factor:.4g} ± "
+                     f"{law.slope_se * factor:.2g} {y_unit}" + (f"/{x_unit}" if x_unit != "-" else ""),
+                     f"{law.p_value:.2g}", "yes" if law.significant else "no"))
+    _table("Laws in the amplitude (weighted least squares; p of slope = 0)", rows,
+           ("law", "a", "b", "p", "significant at 5%"))
+    for r in result.releases:
+        if r.restarted_from:
+            _echo(f"note: release {r.name} was refitted from the estimates of {r.restarted_from} (its first fit "
+                  "misfit its record)")
+        for text in r.fit.warnings:
+            _echo(f"warning: release {r.name}: {text}")
 
 
 @app.command()

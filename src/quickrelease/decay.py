@@ -64,6 +64,9 @@ class DecayLaw:
     rms_friction_only: float
     """RMS residual of the linear law (r = 1) [m]."""
     half_cycles: int
+    rest: float = math.nan
+    """e = h / (1 + r), the reading where the isolators carry no force [m] (nan when fitted without the
+    constant)."""
 
     def friction_force(self, stiffness: float) -> float:
         """F_s = k delta [N] for the stiffness k [N/m]."""
@@ -126,7 +129,8 @@ def combined_decay_law(peaks, offset: bool = True) -> DecayLaw:
     rms_f = math.sqrt(float(np.mean((xn1 + xn - B @ c) ** 2)))
     return DecayLaw(ratio=r, friction_displacement=delta, ratio_se=r_se, friction_displacement_se=delta_se,
                     damping_ratio=zeta, damping_ratio_se=zeta_se, rms=math.sqrt(float(np.mean(resid**2))),
-                    rms_viscous_only=rms_v, rms_friction_only=rms_f, half_cycles=n)
+                    rms_viscous_only=rms_v, rms_friction_only=rms_f, half_cycles=n,
+                    rest=float(coef[2]) / (1.0 + r) if offset else math.nan)
 
 
 def _check_series(t, x, name: str = "x") -> tuple[np.ndarray, np.ndarray]:

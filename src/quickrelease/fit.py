@@ -492,8 +492,12 @@ def fit_record(case: Case, record: Record | None = None, *, options: FitOptions 
     dof = m - p
     chi2 = float(r @ r)
     chi2_red = chi2 / dof if dof > 0 else None
-    JtJ = J.T @ J
-    cov = np.linalg.pinv(JtJ, rcond=1e-15, hermitian=True)
+    # columns scaled to unit norm before the inversion (parameters in N beside offsets in m: pinv's cutoff on
+    # the unscaled J^T J would drop the small columns' direction and give them a standard error near zero)
+    norms = np.linalg.norm(J, axis=0)
+    norms = np.where(norms > 0, norms, 1.0)
+    Js = J / norms
+    cov = np.linalg.pinv(Js.T @ Js, rcond=1e-15, hermitian=True) / np.outer(norms, norms)
     if not options.absolute_sigma and chi2_red is not None:
         cov = cov * chi2_red
     se = np.sqrt(np.maximum(np.diag(cov), 0.0))

@@ -167,7 +167,7 @@ def _channel_model(iso: Isolation, d0: float, t_r: float, kind: str, t: np.ndarr
     horizon = max(t_last - t_r, 1e-9)
     fv = free_vibration(iso, d0, t_end=horizon)
     x, v, a = fv.state(t - t_r)
-    return {"x": x, "v": v, "a": a}[kind]
+    return {"x": x, "v": v, "a": a}[kind.removesuffix("_roof")]  # rigid superstructure: the roof moves with the layer
 
 
 def ljung_box(residuals, lags: int = 20) -> float:
@@ -241,6 +241,8 @@ def _start(model: str, mass: float, channels: list[BuildingChannel], t_r: float,
                     start["damping_ratio"] = float(np.clip(analysis.law.damping_ratio, 0.005, 0.5))
                 k = mass * (2.0 * math.pi / start["period"]) ** 2
                 start["friction"] = max(analysis.law.friction_displacement * k, 0.0)
+                if math.isfinite(analysis.law.rest):
+                    start["rest"] = analysis.law.rest
         except QuickReleaseError:
             pass
     if model == "bilinear":
@@ -353,10 +355,17 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
         raise ParameterError("d0", d0, "a non-zero pushed displacement (give a displacement channel or fixed d0)",
                              "m")
     p0 = _start(model, mass, channels, t_r0, d0, noise)
+    rest = p0.pop("rest", None)
     p0.update(d0=d0, release_time=t_r0)
     for ch in channels:
         if ch.offset:
             p0[f"offset_{ch.name}"] = offsets0[ch.name]
+    if (model == "linear" and rest is not None and xch is not None and xch.offset and "d0" not in fixed
+            and abs(rest) < 0.5 * abs(d0)):
+        # the displacement sensor's zero: the decay law's rest reading, not 0 (the pushed level is d0 plus
+        # that zero, and a start with the zero off by a few noise levels can settle in a wrong count of
+        # half-cycles before the sliders stick); the law is exact for the linear model only
+        p0[f"offset_{xch.name}"], p0["d0"] = rest, d0 - rest
     p0.update(start or {})
     physical = ["period", "damping_ratio", "friction"] + (["stiffness_ratio", "yield_force"]
                                                           if model == "bilinear" else [])
@@ -381,7 +390,7 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
         out = []
         for c in channels:
             x, v, a = fv.state(c.t - p["release_time"])
-            y = {"x": x, "v": v, "a": a}[c.kind]
+            y = {"x": x, "v": v, "a": a}[c.kind.removesuffix("_roof")]  # rigid: the roof moves with the layer
             out.append(y + p.get(f"offset_{c.name}", 0.0))
         return np.concatenate(out)
 
@@ -433,7 +442,13 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
     chi2_red = chi2 / dof if dof > 0 else math.nan
     J = res.jac
     try:
-        cov = np.linalg.pinv(J.T @ J)
+        # columns scaled to unit norm before the inversion: the parameters' units differ by many orders
+        # (a friction in N beside a displacement in m), and pinv's cutoff on the unscaled J^T J drops the
+        # direction of the small columns and returns a standard error near zero for a poorly scaled one
+        norms = np.linalg.norm(J, axis=0)
+        norms = np.where(norms > 0, norms, 1.0)
+        Js = J / norms
+        cov = np.linalg.pinv(Js.T @ Js, hermitian=True) / np.outer(norms, norms)
     except np.linalg.LinAlgError:
         cov = np.full((p, p), np.nan)
     scale = 1.0 if absolute else chi2_red

@@ -235,28 +235,50 @@ def _write_results_into(result: CaseResult, out: Path, *, figures: bool, report:
 
 
 def campaign_folder(campaign_file: str | Path, out: str | Path, *, overwrite: bool = False):
-    """The :class:`~quickrelease.runfolder.RunFolder` of a campaign's results (pre-flight: writes nothing)."""
+    """The :class:`~quickrelease.runfolder.RunFolder` of a campaign's results (pre-flight: writes nothing).
+
+    Its inputs are the campaign file and every file its tests name (``record``, ``case``) by their SHA-256:
+    an edited record is another run."""
+    import tomllib
+
     from .runfolder import RunFolder, _file_digest
 
-    return RunFolder(out, "campaign results", {"campaign_file": _file_digest(Path(campaign_file))},
+    path = Path(campaign_file)
+    files = {}
+    try:
+        tests = tomllib.loads(path.read_text(encoding="utf-8")).get("tests", [])
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        tests = []  # reported by the campaign's own reading
+    for i, test in enumerate(tests if isinstance(tests, list) else []):
+        for key in ("record", "case"):
+            name = test.get(key) if isinstance(test, dict) else None
+            if isinstance(name, str):
+                file = Path(name) if Path(name).is_absolute() else path.parent / name
+                files[f"tests[{i}].{key}"] = _file_digest(file)
+    return RunFolder(out, "campaign results", {"campaign_file": _file_digest(path), "files": files},
                      overwrite=overwrite)
 
 
 def write_campaign_results(result, out: str | Path, *, overwrite: bool = False) -> dict[str, Path]:
     """Write a campaign's results into ``out``: ``campaign.json``, ``figures/campaign_friction.png``/``.svg``
-    and the self-contained ``report.html`` (staged and moved into place as :func:`write_results` does);
-    returns the paths by name."""
-    from .campaign import campaign_figure
+    (a building campaign: ``figures/campaign_building``) and the self-contained ``report.html`` (staged and
+    moved into place as :func:`write_results` does); returns the paths by name."""
     from .export import write_json, write_text
     from .plots import save_figure
     from .report import render_campaign_report
 
+    if getattr(result, "kind", "device") == "building":
+        from .building_campaign import building_campaign_figure as figure
+        stem = "campaign_building"
+    else:
+        from .campaign import campaign_figure as figure
+        stem = "campaign_friction"
     folder = campaign_folder(result.source, out, overwrite=overwrite)
     with folder.staged() as work:
         paths = {"campaign": write_json(result.summary(), work / "campaign.json")}
-        fig = campaign_figure(result)
-        for fmt, path in save_figure(fig, work / "figures", "campaign_friction").items():
-            paths[f"campaign_friction.{fmt}"] = path
-        svg = paths["campaign_friction.svg"].read_text(encoding="utf-8")
-        paths["report"] = write_text(render_campaign_report(result, {"campaign_friction": svg}), work / "report.html")
+        fig = figure(result)
+        for fmt, path in save_figure(fig, work / "figures", stem).items():
+            paths[f"{stem}.{fmt}"] = path
+        svg = paths[f"{stem}.svg"].read_text(encoding="utf-8")
+        paths["report"] = write_text(render_campaign_report(result, {stem: svg}), work / "report.html")
     return {name: folder.final(path) for name, path in paths.items()}

@@ -1,0 +1,545 @@
+"""Campaigns of releases of one building: the isolation system against the release amplitude.
+
+A snap-back campaign releases one building several times from different pushed displacements d0 (or push
+forces P). Each release is fitted on its own (:func:`quickrelease.isolation_fit.fit_isolation`, with
+standard errors and 95% intervals); then, for each quantity of the isolation system, the law
+``q = a + b x`` across the campaign is fitted by weighted least squares (the device campaign's machinery,
+:func:`quickrelease.campaign.fit_line`: weights ``1 / SE^2``, the covariance inflated by the reduced
+chi-square when the tests scatter more than their standard errors say), with its 95% confidence band and
+a Student t test of ``b = 0`` (does the amplitude matter?). The variable x is the release amplitude
+``|d0|`` [m] (``displacement``), its logarithm ``ln(|d0| / 1 m)`` (``log_displacement``) or the push force
+P [N] (``force``).
+
+Quantities (per release, from the fitted model, SI):
+
+- ``period``: the linear model's period ``T = 2 pi sqrt(m / k)`` (the bilinear model's: of k1) [s];
+- ``secant_period``: ``2 pi sqrt(m / k_sec)``, ``k_sec = R(d0) / d0`` the bearings' secant stiffness at the
+  pushed state (:func:`quickrelease.building.pushed_state`; the sliders' friction is left out of it and
+  counted in the damping) [s]; equals ``period`` for the linear model;
+- ``damping_ratio``: the viscous damping ratio zeta [-] (bilinear: referred to k1);
+- ``friction``: the sliders' friction F_s [N];
+- ``equivalent_damping_ratio``: ``zeta_eq = E_D / (4 pi E_S)`` of one cycle of amplitude |d0| at the secant
+  frequency, ``E_S = k_sec d0^2 / 2`` and ``E_D = pi c omega_sec d0^2 + 4 F_s |d0| + 4 f_p (|d0| - d_y)``
+  (viscous, Coulomb and hysteretic loops; f_p = F_y (1 - k2 / k1), d_y = F_y / k1, the last term only
+  beyond d_y); for the linear model ``zeta_eq = zeta + 2 F_s / (pi k |d0|)``;
+- bilinear also ``stiffness_ratio`` k2 / k1 [-] and ``yield_force`` F_y [N].
+
+Physically, a linear spring with viscous damping and Coulomb sliders has constant T, zeta and F_s: a
+campaign of such a building finds no significant amplitude effect on them, while its equivalent damping
+falls with the amplitude (the friction's share, ``2 F_s / (pi k d0)``). A significant slope of F_s or T
+says the isolators are not what the model assumes (friction that depends on the pressure or the velocity,
+a stiffness that softens with the strain).
+
+Derived quantities carry the delta-method standard error (the gradient by central differences, the fit's
+covariance); a parameter whose interval is the profile likelihood's is weighted by the half-width of that
+interval over the Student t quantile.
+
+The releases share one building, so a release whose fit misfits its record (reduced chi-square above
+:data:`MISFIT_RESTART` with known noise: the fit's local minima, e.g. a wrong count of half-cycles before
+the sliders stick, or the bilinear model's friction traded against its yield force) is refitted from the
+estimates of each release that fits well, and the better fit kept (``restarted_from`` names its start).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy import stats
+
+from .building import pushed_state
+from .campaign import LinearLaw, fit_line, law_panel, weights_or_none
+from .errors import ParameterError, QuickReleaseError
+from .isolation_fit import BuildingChannel, IsolationFit, _isolation, fit_isolation
+
+__all__ = ["BuildingRelease", "ReleaseEstimates", "BuildingCampaignResult", "fit_building_campaign",
+           "building_campaign_figure", "derived_quantity", "BUILDING_VARIABLES", "QUANTITIES", "DEFAULT_QUANTITIES"]
+
+#: Regressors of the amplitude laws: (label, unit, scale for plots, plot unit).
+BUILDING_VARIABLES = {
+    "displacement": ("release amplitude |d0|", "m", 1e2, "cm"),
+    "log_displacement": ("ln(|d0| / 1 m)", "-", 1.0, "-"),
+    "force": ("push force P", "N", 1e-3, "kN"),
+}
+#: Quantities of the isolation system: (label, unit, scale for plots, plot unit, symbol).
+QUANTITIES = {
+    "period": ("period T", "s", 1.0, "s", "T"),
+    "secant_period": ("secant period at d0", "s", 1.0, "s", "T_sec"),
+    "damping_ratio": ("viscous damping ratio", "-", 1e2, "%", "zeta"),
+    "friction": ("slider friction F_s", "N", 1e-3, "kN", "F_s"),
+    "equivalent_damping_ratio": ("equivalent damping ratio at d0", "-", 1e2, "%", "zeta_eq"),
+    "stiffness_ratio": ("stiffness ratio k2/k1", "-", 1.0, "-", "k2/k1"),
+    "yield_force": ("yield force F_y", "N", 1e-3, "kN", "F_y"),
+}
+#: The quantities a campaign fits laws for, by model.
+DEFAULT_QUANTITIES = {
+    "linear": ("period", "damping_ratio", "friction", "equivalent_damping_ratio"),
+    "bilinear": ("secant_period", "damping_ratio", "friction", "equivalent_damping_ratio", "period",
+                 "stiffness_ratio", "yield_force"),
+}
+_FITTED = ("period", "damping_ratio", "friction", "stiffness_ratio", "yield_force")
+#: Reduced chi-square (known noise) above which a release is refitted from the other releases' estimates.
+MISFIT_RESTART = 1.3
+
+
+@dataclass(frozen=True, eq=False)
+class BuildingRelease:
+    """One release of the campaign: its records and what was pushed (SI)."""
+
+    name: str
+    channels: tuple[BuildingChannel, ...]
+    d0: float | None = None
+    """The pushed displacement [m]; None: from the record (the fit's d0). Given and a displacement channel
+    present, the fit still estimates d0 from the record and the law uses the estimate."""
+    force: float | None = None
+    """The push force P [N] (needed for laws in ``force``)."""
+    release_time: float | None = None
+    """Start value of the release instant [s, record time]; None: detected."""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "channels", tuple(self.channels))
+        if not self.channels:
+            raise ParameterError(f"{self.name}.channels", "none", "at least one channel of the isolation layer")
+        if self.d0 is not None and not (math.isfinite(self.d0) and self.d0 != 0.0):
+            raise ParameterError(f"{self.name}.d0", self.d0, "finite and non-zero", "m")
+        if self.force is not None and not (math.isfinite(self.force) and self.force > 0.0):
+            raise ParameterError(f"{self.name}.force", self.force, "(0, inf)", "N")
+
+
+def derived_quantity(name: str, model: str, mass: float, p: dict[str, float]) -> float:
+    """A quantity of the isolation system from the model's parameters ``p`` (fit_isolation's names, with
+    ``d0``), in SI: see the module's docstring for the equations."""
+    if name in ("period", "damping_ratio", "friction", "stiffness_ratio", "yield_force"):
+        return float(p[name])
+    iso = _isolation(model, mass, p)
+    d = abs(float(p["d0"]))
+    _, R0, _ = pushed_state(iso, d)
+    k_sec = R0 / d
+    if name == "secant_period":
+        return 2.0 * math.pi * math.sqrt(mass / k_sec)
+    if name == "equivalent_damping_ratio":
+        omega = math.sqrt(k_sec / mass)
+        hysteretic = 0.0
+        if iso.model == "bilinear":
+            d_y = float(iso.yield_force) / iso.stiffness
+            hysteretic = 4.0 * iso.plastic_yield * max(d - d_y, 0.0)
+        dissipated = math.pi * iso.damping * omega * d * d + 4.0 * iso.friction * d + hysteretic
+        return dissipated / (2.0 * math.pi * k_sec * d * d)
+    raise ParameterError("quantity", name, ", ".join(QUANTITIES))
+
+
+@dataclass(frozen=True, eq=False)
+class ReleaseEstimates:
+    """One release fitted: its amplitude and force, and each quantity with standard error and interval."""
+
+    name: str
+    d0: float
+    """The release amplitude used by the laws [m] (the fit's d0 where it estimated one, else the given)."""
+    d0_given: float | None
+    force: float | None
+    values: dict[str, float]
+    std_errors: dict[str, float]
+    """For the laws' weights: the Jacobian's standard error, or the profile interval's half-width over the
+    Student t quantile where the fit gave a profile interval."""
+    ci95: dict[str, tuple[float, float]]
+    interval_method: dict[str, str]
+    fit: IsolationFit = field(repr=False)
+    restarted_from: str | None = None
+    """The release whose estimates started this fit, when the first fit's misfit exceeded the noise and
+    the restart fitted better (:data:`MISFIT_RESTART`)."""
+
+    def value(self, variable: str) -> float:
+        if variable == "displacement":
+            return abs(self.d0)
+        if variable == "log_displacement":
+            return math.log(abs(self.d0))
+        if variable == "force":
+            if self.force is None:
+                raise QuickReleaseError(f"release {self.name} has no push force (give force, or drop 'force' "
+                                        "from variables)")
+            return float(self.force)
+        raise ParameterError("variable", variable, ", ".join(BUILDING_VARIABLES))
+
+    def summary(self) -> dict[str, Any]:
+        return _json_safe({
+            "name": self.name, "d0_m": self.d0, "d0_given_m": self.d0_given, "push_force_N": self.force,
+            "estimates": self.values, "std_errors": self.std_errors,
+            "ci95": {k: list(v) for k, v in self.ci95.items()}, "interval_method": self.interval_method,
+            "units": {k: QUANTITIES[k][1] for k in self.values}, "chi2_reduced": self.fit.chi2_reduced,
+            "converged": self.fit.converged, "warnings": list(self.fit.warnings),
+            "restarted_from": self.restarted_from})
+
+
+def _json_safe(value):
+    """NaN and infinities as None (JSON has none), recursively."""
+    if isinstance(value, dict):
+        return {k: _json_safe(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_safe(v) for v in value]
+    if isinstance(value, (float, np.floating)):
+        return float(value) if math.isfinite(value) else None
+    if isinstance(value, np.integer):
+        return int(value)
+    return value
+
+
+def _estimates(release: BuildingRelease, fit: IsolationFit, quantities: tuple[str, ...],
+               restarted_from: str | None = None) -> ReleaseEstimates:
+    """The release's quantities: fitted ones with the fit's intervals, derived ones by the delta method."""
+    params = dict(fit.estimates)
+    if "d0" not in params:
+        params["d0"] = float(release.d0)
+    tq = float(stats.t.ppf(0.975, max(fit.dof, 1)))
+    se_all = np.array([fit.std_errors[n] for n in fit.names])
+    cov = fit.correlation * np.outer(se_all, se_all)
+    values, ses, ci, method = {}, {}, {}, {}
+    for q in quantities:
+        if q in _FITTED and q in fit.estimates:
+            values[q] = fit.estimates[q]
+            ci[q] = tuple(fit.ci95[q])
+            method[q] = fit.interval_method[q]
+            ses[q] = (ci[q][1] - ci[q][0]) / (2.0 * tq) if method[q] == "profile" else fit.std_errors[q]
+            continue
+        values[q] = derived_quantity(q, fit.model, fit.mass, params)
+        grad = np.zeros(len(fit.names))
+        for i, n in enumerate(fit.names):  # central differences on the free parameters
+            if n.startswith("offset_") or n == "release_time":
+                continue
+            h = 1e-6 * max(abs(params[n]), se_all[i], 1e-12)
+            hi, lo = dict(params), dict(params)
+            hi[n] += h
+            lo[n] -= h
+            try:
+                grad[i] = (derived_quantity(q, fit.model, fit.mass, hi)
+                           - derived_quantity(q, fit.model, fit.mass, lo)) / (2.0 * h)
+            except ParameterError:  # at a bound (friction 0): one-sided
+                grad[i] = (derived_quantity(q, fit.model, fit.mass, hi) - values[q]) / h
+        ses[q] = math.sqrt(max(float(grad @ cov @ grad), 0.0))
+        ci[q] = (values[q] - tq * ses[q], values[q] + tq * ses[q])
+        method[q] = "delta"
+    return ReleaseEstimates(name=release.name, d0=params["d0"], d0_given=release.d0, force=release.force,
+                            values=values, std_errors=ses, ci95=ci, interval_method=method, fit=fit,
+                            restarted_from=restarted_from)
+
+
+def _fixed(release: BuildingRelease) -> dict[str, float] | None:
+    if release.d0 is not None and not any(c.kind in ("x", "x_roof") for c in release.channels):
+        return {"d0": float(release.d0)}  # no displacement channel: the given d0 is the release state
+    return None
+
+
+def _misfit(fit: IsolationFit) -> bool:
+    """The fit's misfit exceeds its noise (the warning of :func:`fit_isolation`): a local minimum, or a
+    model the record does not support."""
+    return fit.absolute_sigma and math.isfinite(fit.chi2_reduced) and fit.chi2_reduced > MISFIT_RESTART
+
+
+def _restart_misfits(releases, fits: list[IsolationFit], mass: float, model: str) -> dict[str, str]:
+    """Refit each release whose misfit exceeds its noise from the estimates of every release that fits
+    well (the campaign knows the building: the model's misfit has local minima, e.g. the count of
+    half-cycles before the sliders stick), keeping the lowest chi-square; ``fits`` is updated in place.
+    Returns {release: the release whose estimates started its kept fit}."""
+    good = [(r.name, f) for r, f in zip(releases, fits, strict=True) if not _misfit(f) and f.converged]
+    restarted = {}
+    for i, r in enumerate(releases):
+        if not _misfit(fits[i]):
+            continue
+        for name, other in good:
+            start = {n: other.estimates[n] for n in _FITTED if n in other.estimates}
+            try:
+                trial = fit_isolation(r.channels, mass, model, release_time=r.release_time, start=start,
+                                      fixed=_fixed(r))
+            except QuickReleaseError:
+                continue
+            if trial.chi2 < fits[i].chi2:
+                fits[i], restarted[r.name] = trial, name
+            if not _misfit(fits[i]):
+                break
+    return restarted
+
+
+@dataclass(frozen=True, eq=False)
+class BuildingCampaignResult:
+    """The releases of one building fitted one by one, and the laws of each quantity in each variable."""
+
+    title: str
+    source: str
+    model: str
+    mass: float
+    releases: list[ReleaseEstimates]
+    laws: dict[tuple[str, str], LinearLaw]
+    """(quantity, variable) -> law."""
+    variables: tuple[str, ...]
+    quantities: tuple[str, ...]
+    notes: str = ""
+
+    @property
+    def kind(self) -> str:
+        return "building"
+
+    def significant_effects(self) -> list[tuple[str, str]]:
+        """The (quantity, variable) pairs whose slope differs from 0 at the 5% level."""
+        return [key for key, law in self.laws.items() if law.significant]
+
+    def summary(self) -> dict[str, Any]:
+        """JSON-ready (no NaN): the keys of ``quickrelease campaign --json`` for a building campaign."""
+        laws = []
+        for law in self.laws.values():
+            y_unit, x_unit = QUANTITIES[law.quantity][1], BUILDING_VARIABLES[law.variable][1]
+            slope_unit = y_unit if x_unit == "-" else (f"1/{x_unit}" if y_unit == "-" else f"{y_unit}/{x_unit}")
+            laws.append({**law.summary(), "units": {"a": y_unit, "b": slope_unit}})
+        return _json_safe({"kind": "building", "title": self.title, "campaign": self.source, "model": self.model,
+                           "mass_kg": self.mass, "variables": list(self.variables),
+                           "quantities": list(self.quantities), "releases": [r.summary() for r in self.releases],
+                           "laws": laws,
+                           "significant_5pct": [f"{q} ~ {v}" for q, v in self.significant_effects()],
+                           "notes": self.notes})
+
+
+def fit_building_campaign(releases, mass: float, model: str = "linear", *, variables=("displacement",),
+                          quantities=None, start: dict[str, float] | None = None, title: str = "",
+                          source: str = "", notes: str = "") -> BuildingCampaignResult:
+    """Fit every release of one building, then the law of each quantity in each variable.
+
+    Parameters
+    ----------
+    releases : sequence of BuildingRelease
+        At least three releases (a law needs a degree of freedom), at different amplitudes (or forces).
+    mass : float
+        Mass carried by the isolation layer [kg], the same in every release.
+    model : {"linear", "bilinear"}
+    variables : sequence of str
+        Regressors of the laws: ``displacement`` (|d0| [m]), ``log_displacement`` (ln |d0|), ``force`` (P [N]).
+    quantities : sequence of str, optional
+        Default :data:`DEFAULT_QUANTITIES` of the model.
+    start : dict, optional
+        Start values of every fit (the design values; the bilinear fit needs them).
+
+    Raises
+    ------
+    ParameterError
+        For an unknown model, variable or quantity, or repeated release names.
+    QuickReleaseError
+        With fewer than three releases, a variable that is constant or missing, or a fit that fails (the
+        message names the release).
+    """
+    releases = list(releases)
+    if model not in DEFAULT_QUANTITIES:
+        raise ParameterError("model", model, ", ".join(DEFAULT_QUANTITIES))
+    variables = tuple(variables)
+    bad = [v for v in variables if v not in BUILDING_VARIABLES]
+    if bad or not variables:
+        raise ParameterError("variables", bad[0] if bad else "none", ", ".join(BUILDING_VARIABLES))
+    quantities = tuple(quantities) if quantities is not None else DEFAULT_QUANTITIES[model]
+    allowed = DEFAULT_QUANTITIES[model] + (("secant_period",) if model == "linear" else ())
+    bad = [q for q in quantities if q not in allowed]
+    if bad or not quantities:
+        raise ParameterError("quantities", bad[0] if bad else "none", ", ".join(allowed))
+    names = [r.name for r in releases]
+    if len(set(names)) != len(names):
+        raise ParameterError("releases", ", ".join(names), "distinct release names")
+    if len(releases) < 3:
+        raise QuickReleaseError(f"{len(releases)} release(s): an amplitude law needs at least 3")
+    # what can be checked before the fits
+    if "force" in variables:
+        missing = [r.name for r in releases if r.force is None]
+        if missing:
+            raise QuickReleaseError(f"release {missing[0]} has no push force (give force, or drop 'force' from "
+                                    "variables)")
+        if len({r.force for r in releases}) == 1:
+            raise QuickReleaseError("every release has the same push force: no law in force can be fitted")
+    if any(v != "force" for v in variables) and all(r.d0 is not None for r in releases) \
+            and len({abs(r.d0) for r in releases}) == 1:
+        raise QuickReleaseError("every release has the same pushed displacement d0: no law in the amplitude can be "
+                                "fitted")
+    fits = []
+    for r in releases:
+        try:
+            fits.append(fit_isolation(r.channels, mass, model, release_time=r.release_time, start=start,
+                                      fixed=_fixed(r)))
+        except QuickReleaseError as exc:
+            raise type(exc)(f"release {r.name}: {exc}") from None
+    restarts = _restart_misfits(releases, fits, mass, model)
+    estimates = [_estimates(r, fit, quantities, restarts.get(r.name)) for r, fit in zip(releases, fits, strict=True)]
+    laws = {}
+    for v in variables:
+        x = [r.value(v) for r in estimates]
+        if np.ptp(x) == 0:
+            raise QuickReleaseError(f"every release has the same {BUILDING_VARIABLES[v][0]}: no law in {v} can be "
+                                    "fitted")
+        for q in quantities:
+            laws[(q, v)] = fit_line(x, [r.values[q] for r in estimates],
+                                    weights_or_none(r.std_errors[q] for r in estimates), quantity=q, variable=v)
+    return BuildingCampaignResult(title=title or "Building campaign", source=source, model=model, mass=float(mass),
+                                  releases=estimates, laws=laws, variables=variables, quantities=quantities,
+                                  notes=notes)
+
+
+def building_campaign_figure(result: BuildingCampaignResult):
+    """Each quantity against each variable: the releases with their 95% intervals, the law and its band."""
+    from .plots import _figure, user_label
+
+    nq, nv = len(result.quantities), len(result.variables)
+    height = 2.9 * nv + 0.9  # [in]: 0.85 in for the titles above, 0.5 in for the labels below
+    fig = _figure(3.2 * nq + 0.6, height, left=0.06, right=0.98, bottom=0.5 / height, top=1 - 0.85 / height,
+                  wspace=0.35, hspace=0.6)
+    axes = np.atleast_2d(fig.subplots(nv, nq, squeeze=False))
+    for row, v in enumerate(result.variables):
+        x_label, _, x_scale, x_unit = BUILDING_VARIABLES[v]
+        x = [r.value(v) for r in result.releases]
+        for col, q in enumerate(result.quantities):
+            y_label, _, y_scale, y_unit, symbol = QUANTITIES[q]
+            y = np.array([r.values[q] for r in result.releases])
+            lo = np.array([r.ci95[q][0] for r in result.releases])
+            hi = np.array([r.ci95[q][1] for r in result.releases])
+            ax = axes[row, col]
+            slope_unit = f"{y_unit}/{x_unit}" if x_unit != "-" else y_unit
+            law_panel(ax, result.laws[(q, v)], x, y, np.vstack([y - lo, hi - y]).clip(min=0.0),
+                      [r.name for r in result.releases], x_scale=x_scale, y_scale=y_scale,
+                      x_label=f"{x_label} [{x_unit}]", y_label=f"{y_label} [{y_unit}]", slope_unit=slope_unit,
+                      name=symbol)
+            ax.ticklabel_format(axis="y", useOffset=False)
+            if row == 0 and col == 0:
+                ax.legend(fontsize=6, loc="best")
+    user_label(fig, "suptitle", f"{result.title}: the isolation system against the release amplitude "
+                                f"({result.model} model)")
+    return fig
+
+
+# -- the campaign file ------------------------------------------------------------------------------------------
+
+_TOP_KEYS = {"title", "notes", "variables", "building", "tests"}
+_TEST_KEYS = {"name", "record", "displacement", "force", "release_time"}
+#: Keys of a device campaign, refused beside [building] (a campaign is of the device or of the building).
+_DEVICE_TOP = {"device", "test", "record", "fit", "simulation"}
+_DEVICE_TEST = {"case", "alpha0", "alpha_final", "stop_time", "energy", "mass_model"}
+
+
+def load_building_campaign(path, data: dict[str, Any]) -> tuple[str, str, tuple[str, ...], str, float,
+                                                                 dict[str, float], list[BuildingRelease]]:
+    """Read a building campaign file (its parsed TOML ``data``): every release's record is read and checked
+    here, before any fit. Returns (title, notes, variables, model, mass, start values, releases).
+
+    Campaign file::
+
+        title = "..."
+        variables = ["displacement"]       # also "log_displacement", "force"
+        [building]                         # shared: model, mass, the design values (start values)
+        model = "linear"
+        mass = "400 t"
+        period = "2 s"
+        [building.record]                  # shared: time column and channel mapping of the records
+        time = "t_s"
+        [building.record.channels]
+        x = { column = "x_mm", unit = "mm" }
+
+        [[tests]]
+        name = "R1"
+        displacement = "50 mm"             # the pushed displacement d0, and/or force = "220 kN"
+        record = "records/R1.csv"          # the building's record of this release (relative to this file)
+        # release_time = "1 s"             # optional start value
+
+    Raises
+    ------
+    CaseFileError
+        A malformed file or test, a device key beside ``[building]`` (one line naming the file and key).
+    RecordError
+        A record file or column missing (one line naming the file and the column).
+    """
+    import copy
+    from pathlib import Path
+
+    from .building_case import load_building
+    from .case import CaseFileError, case_from_mapping
+    from .units import parse_quantity
+
+    path = Path(path)
+    source = str(path)
+    mixed = sorted(set(data) & _DEVICE_TOP)
+    if mixed:
+        raise CaseFileError(f"{source}: [{mixed[0]}] beside [building]: a campaign is of the device ([device], "
+                            "[record], [[tests]] with force and alpha0) or of the building ([building], [[tests]] "
+                            "with displacement or force and record), not both")
+    unknown = sorted(set(data) - _TOP_KEYS)
+    if unknown:
+        raise CaseFileError(f"{source}: unknown key {unknown[0]!r}; valid: {', '.join(sorted(_TOP_KEYS))}")
+    template = data["building"]
+    if not isinstance(template, dict):
+        raise CaseFileError(f"{source}: [building] is not a table")
+    if template.get("model", "linear") not in DEFAULT_QUANTITIES:
+        raise CaseFileError(f"{source}: [building] model = {template.get('model')!r}: a campaign fits the "
+                            f"{' or '.join(repr(m) for m in DEFAULT_QUANTITIES)} model")
+    if "displacement" in template:
+        raise CaseFileError(f"{source}: [building] displacement: give each release's own in [[tests]] "
+                            "displacement")
+    variables = data.get("variables", ["displacement"])
+    if not isinstance(variables, list) or not variables or any(v not in BUILDING_VARIABLES for v in variables):
+        raise CaseFileError(f"{source}: variables = {variables!r}: expected a list of {', '.join(BUILDING_VARIABLES)}")
+    tests = data.get("tests")
+    if not isinstance(tests, list) or not tests:
+        raise CaseFileError(f"{source}: missing [[tests]]: give one table per release (name, displacement or "
+                            "force, record)")
+    releases, names, start, mass = [], set(), {}, math.nan
+    for i, entry in enumerate(tests):
+        if not isinstance(entry, dict):
+            raise CaseFileError(f"{source}: tests[{i}] is not a table")
+        name = str(entry.get("name", f"R{i + 1}"))
+        where = f"{source}: test {name}"
+        if name in names:
+            raise CaseFileError(f"{where}: the name is used twice")
+        names.add(name)
+        device = sorted(set(entry) & _DEVICE_TEST)
+        if device:
+            raise CaseFileError(f"{where}: {device[0]!r} is a key of a device campaign, beside [building] (a "
+                                "campaign is of the device or of the building, not both)")
+        bad = sorted(set(entry) - _TEST_KEYS)
+        if bad:
+            raise CaseFileError(f"{where}: unknown key {bad[0]!r}; valid: {', '.join(sorted(_TEST_KEYS))}")
+        if "record" not in entry:
+            raise CaseFileError(f"{where}: missing key record (the building's record of this release, e.g. "
+                                "record = 'records/R1.csv')")
+        if "displacement" not in entry and "force" not in entry:
+            raise CaseFileError(f"{where}: give displacement (the pushed d0, e.g. '120 mm') or force (the push "
+                                "force, e.g. '500 kN')")
+        building = copy.deepcopy(template)
+        record = building.setdefault("record", {})
+        if not isinstance(record, dict):
+            raise CaseFileError(f"{source}: [building.record] is not a table")
+        record["file"] = entry["record"]
+        if "release_time" in entry:
+            record["release_time"] = entry["release_time"]
+        if "displacement" in entry:
+            building["displacement"] = entry["displacement"]
+        case = case_from_mapping({"title": name, "building": building}, source=where, base=path.parent,
+                                 require_test=False)
+        loaded = load_building(case)
+        force = None
+        if "force" in entry:
+            try:
+                force = parse_quantity(entry["force"], "force", "force")
+            except QuickReleaseError as exc:
+                raise CaseFileError(f"{where}: {exc}") from None
+            if not force > 0.0:
+                raise CaseFileError(f"{where}: force = {entry['force']!r}: expected a positive push force, e.g. "
+                                    "'500 kN'")
+        if not loaded.channels:
+            raise CaseFileError(f"{where}: [building.record.channels] maps no channel")
+        releases.append(BuildingRelease(name, loaded.channels, d0=loaded.d0, force=force,
+                                        release_time=loaded.release_time))
+        start = {k: v for k, v in loaded.start.items() if k != "d0"}  # d0: each release's own, from its record
+        mass = loaded.mass
+    if len(releases) < 3:
+        raise CaseFileError(f"{source}: {len(releases)} test(s): an amplitude law needs at least 3 releases")
+    title = str(data.get("title", path.stem))
+    return title, str(data.get("notes", "")), tuple(variables), str(template.get("model", "linear")), mass, \
+        start, releases
+
+
+def run_building_campaign(path, data: dict[str, Any]) -> BuildingCampaignResult:
+    """Read a building campaign file (:func:`load_building_campaign`) and fit it
+    (:func:`fit_building_campaign`)."""
+    title, notes, variables, model, mass, start, releases = load_building_campaign(path, data)
+    return fit_building_campaign(releases, mass, model, variables=variables, start=start or None, title=title,
+                                 source=str(path), notes=notes)
