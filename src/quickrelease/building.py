@@ -748,7 +748,8 @@ class TwoDOFVibration:
 
     @property
     def turning_points(self) -> np.ndarray:
-        """Base displacements at the turning points, d0 first [m]."""
+        """Base displacements at the turning points, d0 first [m]. A stiff storey can make the base chatter
+        (stick, break away, turn) within a storey period near a peak: each of those turns is listed."""
         out = [self.d0]
         for p in self.pieces:
             if p.kind == "slide" and p.end in ("reversal", "stick"):
