@@ -136,8 +136,8 @@ def test_matrix_exponential_fallback(monkeypatch):
 
     monkeypatch.setattr(building, "EIGEN_CONDITION", 0.0)
     b = TwoDOF(M, 0.75 * M, 2.0, 0.8, 0.02, 0.05 * M * G, 0.01)
-    t = np.linspace(0.0, 3.0, 301)
-    fv = free_vibration_2dof(b, 0.15, t_end=3.0)
+    t = np.linspace(0.0, 1.2, 121)
+    fv = free_vibration_2dof(b, 0.15, t_end=1.2)
     assert not fv.pieces[0].modal
     ref, _ = _reference(b, 0.15, t)
     assert np.max(np.abs(fv.state(t)[0] - ref["xb"])) < 1e-9 * 0.15

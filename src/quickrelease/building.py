@@ -625,8 +625,14 @@ class _Slide:
                 self.modal = True
         except np.linalg.LinAlgError:
             pass
-        self.rate = float(np.max(np.abs(lam)))
+        # the fastest oscillation sets the grid that brackets the events (an over-damped mode is monotone:
+        # its fast transient near tau = 0 is resolved by the grid's geometric start instead)
+        oscillating = np.abs(lam.imag) > 0.0
+        self.rate = float(np.max(np.abs(lam[oscillating]))) if np.any(oscillating) else float(np.min(np.abs(lam)))
         self.decay = float(np.min(-lam.real))
+        self.speed = float(np.sum(np.abs(self.Pv[0]))) if self.modal else float(np.max(np.abs(lam))) * float(
+            np.max(np.abs(self.w0)))
+        """A bound on |v_b| over the piece [m/s] (the scale of its rounding)."""
         self.t1, self.end = math.inf, ""
 
     def _evaluate(self, tau):
@@ -646,6 +652,22 @@ class _Slide:
 
     def state6(self, t):
         return self._evaluate(np.asarray(t, dtype=float) - self.t0)
+
+    def va(self, tau):
+        """Base velocity and acceleration at an array of tau."""
+        if self.modal:
+            E = np.exp(np.outer(self.lam, tau))
+            return (self.Pv[0] @ E).real, (self.Pa[0] @ E).real
+        vals = self._evaluate(tau)
+        return vals[2], vals[4]
+
+    def va1(self, tau: float) -> tuple[float, float]:
+        """Base velocity and acceleration at one tau (the root finder's fast path)."""
+        if self.modal:
+            e = np.exp(self.lam * tau)
+            return float((self.Pv[0] @ e).real), float((self.Pa[0] @ e).real)
+        vals = self._evaluate(tau)
+        return float(vals[2][0]), float(vals[4][0])
 
 
 class _Stick:
@@ -669,6 +691,15 @@ class _Stick:
         du = ec * self.du0 - es * (self.a * self.du0 + self.b * self.u0)
         return u, du, -(2.0 * self.a * du + self.b * u)
 
+    def drift1(self, tau: float) -> tuple[float, float, float]:
+        """u, u', u'' at one tau (q > 0: the storey is under-damped, zeta_s < 1)."""
+        w = math.sqrt(self.q)
+        e = math.exp(-self.a * tau)
+        ec, es = e * math.cos(w * tau), e * math.sin(w * tau) / w
+        u = ec * self.u0 + es * (self.du0 + self.a * self.u0)
+        du = ec * self.du0 - es * (self.a * self.du0 + self.b * self.u0)
+        return u, du, -(2.0 * self.a * du + self.b * u)
+
     def state6(self, t):
         tau = np.atleast_1d(np.asarray(t, dtype=float) - self.t0)
         u, du, ddu = self.drift(tau)
@@ -676,13 +707,15 @@ class _Stick:
         return (np.full(tau.shape, self.xb), self.xb + u, zero, du, zero, ddu)
 
 
-def _first_rise(F, Fp, hi: float, step: float, start_zero: bool) -> float | None:
+def _first_rise(FF, f, fp, hi: float, step: float, start_zero: bool, floor: float = 0.0) -> float | None:
     """The first tau in (0, hi] where F crosses from <= 0 to > 0 (F(0) <= 0), to machine precision.
 
-    F and its derivative Fp (vectorised) are sampled every ``step``; an interval whose ends are both <= 0
-    but where Fp falls from + to - (an interior maximum) is checked at the maximum (a brentq root of Fp),
-    so two crossings within one step are not missed. ``start_zero``: F(0) = 0 with F < 0 just after (a piece
-    that starts at a reversal), so the bracket's left end is moved off 0. Returns None if F stays <= 0.
+    ``FF(tau)`` gives F and its derivative F' on an array of tau; ``f``, ``fp`` the same at one tau (for
+    the root finder). F is sampled every ``step``; an interval whose ends are both <= 0 but where F' falls
+    from + to - (an interior maximum) is checked at the maximum (a brentq root of F'), so two crossings
+    within one step are not missed. ``start_zero``: F(0) = 0 with F < 0 just after (a piece that starts at
+    a reversal or a breakaway), so the bracket's left end is moved off 0, and values of F up to ``floor``
+    (its rounding level) within the first step count as <= 0. Returns None if F stays <= 0.
     """
     tol = dict(xtol=1e-300, rtol=4.0 * np.finfo(float).eps, maxiter=200)
     lo_chunk = 0.0
@@ -691,33 +724,34 @@ def _first_rise(F, Fp, hi: float, step: float, start_zero: bool) -> float | None
         hi_chunk = min(lo_chunk + chunk, hi)
         n = max(int(math.ceil((hi_chunk - lo_chunk) / step)), 1)
         tau = np.linspace(lo_chunk, hi_chunk, n + 1)
-        f = np.asarray(F(tau), dtype=float)
-        fp = np.asarray(Fp(tau), dtype=float)
-        if lo_chunk == 0.0 and start_zero:
-            f[0] = min(f[0], 0.0)
-        for i in range(1, tau.size):
+        if lo_chunk == 0.0:  # a geometric start resolves fast transients near 0
+            tau = np.concatenate([[0.0], tau[1] * 2.0 ** -np.arange(12.0, 0.0, -1.0), tau[1:]])
+        F, Fp = FF(tau)
+        if lo_chunk == 0.0 and start_zero:  # F(0) = 0 and F'(0) <= 0 by construction (rounding aside)
+            head = tau < tau[13]  # 0 and the geometric start
+            F[head] = np.where(F[head] <= floor, np.minimum(F[head], 0.0), F[head])
+            Fp[0] = min(Fp[0], 0.0)
+        rising = F[1:] > 0.0
+        peaked = (Fp[:-1] > 0.0) & (Fp[1:] < 0.0)
+        for i in np.nonzero(rising | peaked)[0] + 1:
             a, b = float(tau[i - 1]), float(tau[i])
-            if f[i] > 0.0:
-                bracket = (a, b)
-            elif fp[i - 1] > 0.0 > fp[i]:
-                tm = brentq(lambda s: float(Fp(np.array([s]))[0]), a, b, **tol)
-                if float(F(np.array([tm]))[0]) <= 0.0:
+            if not F[i] > 0.0:
+                tm = brentq(fp, a, b, **tol)
+                if f(tm) <= 0.0:
                     continue
-                bracket = (a, tm)
-            else:
-                continue
-            a, b = bracket
+                b = tm
             if a == 0.0 and start_zero:  # move off the root at 0: F < 0 just after it
                 h = 0.5 * b
-                while h > 1e-18 * b and float(F(np.array([h]))[0]) >= 0.0:
+                while h > 1e-18 * b and f(h) >= 0.0:
                     h *= 0.5
-                if float(F(np.array([h]))[0]) >= 0.0:
+                if f(h) >= 0.0:
                     return b
                 a = h
-            fa = float(F(np.array([a]))[0])
-            if fa > 0.0:
+            if f(a) > 0.0:
+                if start_zero and f(a) <= floor:
+                    continue
                 return a
-            return brentq(lambda s: float(F(np.array([s]))[0]), a, b, **tol)
+            return brentq(f, a, b, **tol)
         lo_chunk = hi_chunk
     return None
 
@@ -881,18 +915,22 @@ def free_vibration_2dof(building: TwoDOF, d0: float, t_end: float | None = None)
                 break
             Td = 2.0 * math.pi / math.sqrt(p.q)
 
-            def G(tau, p=p):
-                u, du, _ = p.drift(tau)
-                return holding_force(p.xb, u, du)
-
-            def Gp(tau, p=p):
-                _, du, ddu = p.drift(tau)
-                return -ks * du - cs * ddu
-
             found = []
-            for sign in (1.0, -1.0):  # G - F_s rising, or -G - F_s rising
-                tau = _first_rise(lambda s, sign=sign: sign * G(s) - Fs, lambda s, sign=sign: sign * Gp(s),
-                                  Td, Td / (2 * EVENT_GRID), False)
+            for sign in (1.0, -1.0):  # sign G - F_s rising: G reaches +F_s, or -F_s
+
+                def FF(tau, p=p, sign=sign):
+                    u, du, ddu = p.drift(tau)
+                    return sign * holding_force(p.xb, u, du) - Fs, sign * (-ks * du - cs * ddu)
+
+                def f(tau, p=p, sign=sign):
+                    u, du, _ = p.drift1(tau)
+                    return sign * holding_force(p.xb, u, du) - Fs
+
+                def fp(tau, p=p, sign=sign):
+                    _, du, ddu = p.drift1(tau)
+                    return sign * (-ks * du - cs * ddu)
+
+                tau = _first_rise(FF, f, fp, Td, Td / (2 * EVENT_GRID), False)
                 if tau is not None:
                     found.append((tau, sign))
             if not found:
@@ -914,8 +952,9 @@ def free_vibration_2dof(building: TwoDOF, d0: float, t_end: float | None = None)
         hi = horizon - t
         if not math.isfinite(hi):  # creeping without a reversal: give up once every mode has decayed by 1e-17
             hi = 40.0 / p.decay if p.decay > 0 else math.inf
-        tau = _first_rise(lambda s, p=p: -p.direction * p._evaluate(s)[2],
-                          lambda s, p=p: -p.direction * p._evaluate(s)[4], hi, step, True)
+        tau = _first_rise(lambda s, p=p: (-p.direction * p.va(s)[0], -p.direction * p.va(s)[1]),
+                          lambda s, p=p: -p.direction * p.va1(s)[0], lambda s, p=p: -p.direction * p.va1(s)[1],
+                          hi, step, True, 64.0 * np.finfo(float).eps * p.speed)
         if tau is None or t + tau >= horizon:
             break
         t1 = t + tau
