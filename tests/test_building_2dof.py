@@ -62,6 +62,11 @@ def test_stick_slip_is_exercised():
     fv = free_vibration_2dof(TwoDOF(M, ratio * M, 2.0, Ts, zeta, mu * M * G, zs), d0)
     ends = [p.end for p in fv.pieces]
     assert "breakaway" in ends and "reversal" in ends and math.isfinite(fv.stop_time)
+    # every piece lasts: no spurious event at a piece's start (a breakaway starts with a_b = 0)
+    assert min(p.t1 - p.t0 for p in fv.pieces[:-1]) > 1e-3
+    for p in fv.pieces[:-1]:  # the base slides the way each piece says
+        if p.kind == "slide":
+            assert np.sign(fv.state(0.5 * (p.t0 + p.t1))[1]) == p.direction
     assert fv.pieces[-1].kind == "stick" and fv.rest[0] == fv.pieces[-1].xb
     tail = np.linspace(fv.stop_time, fv.stop_time + 3.0, 50)
     assert np.all(fv.state(tail)[0] == fv.rest[0])  # the base is held while the roof still rings
