@@ -35,7 +35,8 @@ from scipy.optimize import brentq
 
 from .errors import ParameterError
 
-__all__ = ["Isolation", "FreeVibration", "free_vibration", "pushed_state", "MODELS"]
+__all__ = ["Isolation", "FreeVibration", "free_vibration", "pushed_state", "MODELS", "TwoDOF", "TwoDOFVibration",
+           "free_vibration_2dof"]
 
 #: Restoring-force models of the isolation layer.
 MODELS = ("linear", "bilinear")
@@ -390,8 +391,9 @@ def free_vibration(isolation: Isolation, d0: float, t_end: float | None = None) 
 
     Parameters
     ----------
-    isolation : Isolation
-        The isolation layer (:meth:`Isolation.linear` or :meth:`Isolation.bilinear`).
+    isolation : Isolation or TwoDOF
+        The isolation layer (:meth:`Isolation.linear` or :meth:`Isolation.bilinear`); a :class:`TwoDOF`
+        building is handed to :func:`free_vibration_2dof` (its result's ``state`` is the base's).
     d0 : float
         Displacement of the isolation layer at the release [m] (reached by a monotonic push).
     t_end : float, optional
@@ -402,6 +404,8 @@ def free_vibration(isolation: Isolation, d0: float, t_end: float | None = None) 
     -------
     FreeVibration
     """
+    if isinstance(isolation, TwoDOF):
+        return free_vibration_2dof(isolation, d0, t_end)
     iso = isolation
     d0 = float(d0)
     z0, R0, _ = pushed_state(iso, d0)
@@ -480,3 +484,494 @@ def _time_to_reach(piece: _Piece, level: float, tau_max: float) -> float | None:
         return float(piece.state(piece.t0 + tau)[0]) - level
 
     return brentq(gap, 0.0, hi, xtol=1e-300, rtol=4.0 * np.finfo(float).eps, maxiter=200)
+
+
+# -- the optional second degree of freedom: a flexible superstructure (2-DOF shear model) --------------------
+
+@dataclass(frozen=True)
+class TwoDOF:
+    """The isolated building as a 2-DOF shear model (SI units): the isolation layer (base) and the
+    superstructure lumped at the roof.
+
+    - base mass ``m_b = mass - m_s`` [kg] on the isolation layer: linear spring ``k = mass (2 pi / T)^2``
+      [N/m] (T the isolation period of the whole mass, as for the rigid model), viscous damper
+      ``c = 2 zeta sqrt(k mass)`` [N s/m] and Coulomb sliders ``F_s`` [N] (static = kinetic);
+    - roof mass ``m_s`` [kg], joined to the base by the storey stiffness ``k_s = m_s (2 pi / T_s)^2`` [N/m]
+      (T_s the fixed-base period of the superstructure) and damper ``c_s = 2 zeta_s sqrt(k_s m_s)`` [N s/m].
+
+    With x_b, x_s the displacements of base and roof [m] and ``u = x_s - x_b`` the storey drift, while the
+    base slides (direction ``s = sign(x_b_dot)``)
+
+        m_b x_b'' + c x_b' + k x_b - c_s u' - k_s u + F_s s = 0,
+        m_s x_s'' + c_s u' + k_s u = 0,
+
+    and while the sliders hold the base (x_b' = 0) the friction force ``f = -(k x_b - k_s u - c_s u')``
+    [N] keeps it in place as long as ``|k x_b - k_s u - c_s u'| <= F_s``, the superstructure vibrating on
+    a fixed base, ``m_s u'' + c_s u' + k_s u = 0``. As ``m_s -> 0`` or ``T_s -> 0`` it becomes the rigid
+    linear model ``Isolation.linear(mass, T, zeta, F_s)`` (:meth:`rigid`).
+    """
+
+    mass: float
+    """Whole mass carried by the isolators, m = m_b + m_s [kg]."""
+    superstructure_mass: float
+    """Superstructure mass lumped at the roof, m_s [kg], in (0, mass)."""
+    period: float
+    """Isolation period of the whole mass, T = 2 pi sqrt(m / k) [s]."""
+    superstructure_period: float
+    """Fixed-base period of the superstructure, T_s = 2 pi sqrt(m_s / k_s) [s]."""
+    damping_ratio: float = 0.0
+    """Viscous damping ratio of the isolation layer, zeta = c / (2 sqrt(k m)) [-], in [0, 1)."""
+    friction: float = 0.0
+    """Coulomb friction force of the sliders, F_s [N]."""
+    superstructure_damping_ratio: float = 0.0
+    """Damping ratio of the superstructure on a fixed base, zeta_s = c_s / (2 sqrt(k_s m_s)) [-], in [0, 1)."""
+
+    def __post_init__(self) -> None:
+        mass = _finite_positive("mass", self.mass, "kg")
+        ms = _finite_positive("superstructure_mass", self.superstructure_mass, "kg")
+        if not ms < mass:
+            raise ParameterError("superstructure_mass", ms, f"(0, mass) = (0, {mass:.6g}) kg", "kg")
+        _finite_positive("period", self.period, "s")
+        _finite_positive("superstructure_period", self.superstructure_period, "s")
+        _damping_ratio(self.damping_ratio)
+        zs = float(self.superstructure_damping_ratio)
+        if not (math.isfinite(zs) and 0.0 <= zs < 1.0):
+            raise ParameterError("superstructure_damping_ratio", zs, "[0, 1)")
+        _finite_nonnegative("friction", self.friction, "N")
+
+    model = "2dof"
+
+    @property
+    def base_mass(self) -> float:
+        """m_b = mass - m_s [kg]."""
+        return float(self.mass) - float(self.superstructure_mass)
+
+    @property
+    def stiffness(self) -> float:
+        """Isolation stiffness k = m (2 pi / T)^2 [N/m]."""
+        return float(self.mass) * (2.0 * math.pi / float(self.period)) ** 2
+
+    @property
+    def damping(self) -> float:
+        """Isolation damping coefficient c = 2 zeta sqrt(k m) [N s/m]."""
+        return 2.0 * float(self.damping_ratio) * math.sqrt(self.stiffness * float(self.mass))
+
+    @property
+    def superstructure_stiffness(self) -> float:
+        """Storey stiffness k_s = m_s (2 pi / T_s)^2 [N/m]."""
+        return float(self.superstructure_mass) * (2.0 * math.pi / float(self.superstructure_period)) ** 2
+
+    @property
+    def superstructure_damping(self) -> float:
+        """Storey damping coefficient c_s = 2 zeta_s sqrt(k_s m_s) [N s/m]."""
+        return 2.0 * float(self.superstructure_damping_ratio) * math.sqrt(
+            self.superstructure_stiffness * float(self.superstructure_mass))
+
+    def rigid(self) -> Isolation:
+        """The rigid-superstructure limit: ``Isolation.linear(mass, T, zeta, F_s)``."""
+        return Isolation.linear(self.mass, self.period, self.damping_ratio, self.friction)
+
+    def matrices(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Mass, damping and stiffness matrices M, C, K of the sliding base (dofs x_b, x_s; SI)."""
+        k, ks, c, cs = self.stiffness, self.superstructure_stiffness, self.damping, self.superstructure_damping
+        return (np.diag([self.base_mass, float(self.superstructure_mass)]),
+                np.array([[c + cs, -cs], [-cs, cs]]), np.array([[k + ks, -ks], [-ks, ks]]))
+
+    def summary(self) -> dict[str, Any]:
+        return {"model": "2dof", "mass_kg": float(self.mass), "period_s": float(self.period),
+                "damping_ratio": float(self.damping_ratio), "damping_N_s_m": self.damping,
+                "friction_N": float(self.friction), "stiffness_N_m": self.stiffness,
+                "superstructure_mass_kg": float(self.superstructure_mass),
+                "superstructure_period_s": float(self.superstructure_period),
+                "superstructure_damping_ratio": float(self.superstructure_damping_ratio),
+                "superstructure_stiffness_N_m": self.superstructure_stiffness}
+
+
+#: Grid points per period of the fastest mode used to bracket the events of the 2-DOF model.
+EVENT_GRID = 16
+#: Condition number of the eigenvector matrix above which a piece is evaluated by the matrix exponential.
+EIGEN_CONDITION = 1e7
+
+
+class _Slide:
+    """A sliding piece of the 2-DOF model: ``y' = A y + f`` with y = (x_b, x_s, v_b, v_s), in closed form
+    ``y(tau) = y_eq + sum_j V_j alpha_j exp(lambda_j tau)`` (eigen-decomposition of the 4x4 matrix A;
+    ``y_eq = (x_e, x_e, 0, 0)``, ``x_e = -F_s s / k``)."""
+
+    kind = "slide"
+
+    def __init__(self, b: TwoDOF, t0: float, y0, direction: float):
+        M, C, K = b.matrices()
+        Minv = np.diag(1.0 / np.diag(M))
+        A = np.zeros((4, 4))
+        A[0, 2] = A[1, 3] = 1.0
+        A[2:, :2] = -Minv @ K
+        A[2:, 2:] = -Minv @ C
+        self.A = A
+        self.t0, self.direction = float(t0), float(direction)
+        self.y0 = np.asarray(y0, dtype=float)
+        self.x_eq = -b.friction * direction / b.stiffness
+        self.y_eq = np.array([self.x_eq, self.x_eq, 0.0, 0.0])
+        self.w0 = self.y0 - self.y_eq
+        lam, V = np.linalg.eig(A)
+        self.lam = lam
+        self.modal = False
+        try:
+            cond = np.linalg.cond(V)
+            if cond < EIGEN_CONDITION:
+                alpha = np.linalg.solve(V, self.w0.astype(complex))
+                P = V[:2] * alpha  # position rows of each mode's contribution
+                self.P, self.Pv, self.Pa = P, P * lam, P * lam**2
+                self.modal = True
+        except np.linalg.LinAlgError:
+            pass
+        # the fastest oscillation sets the grid that brackets the events (an over-damped mode is monotone:
+        # its fast transient near tau = 0 is resolved by the grid's geometric start instead)
+        oscillating = np.abs(lam.imag) > 0.0
+        self.rate = float(np.max(np.abs(lam[oscillating]))) if np.any(oscillating) else float(np.min(np.abs(lam)))
+        self.decay = float(np.min(-lam.real))
+        self.speed = float(np.sum(np.abs(self.Pv[0]))) if self.modal else float(np.max(np.abs(lam))) * float(
+            np.max(np.abs(self.w0)))
+        """A bound on |v_b| over the piece [m/s] (the scale of its rounding)."""
+        self.t1, self.end = math.inf, ""
+
+    def _evaluate(self, tau):
+        """x_b, x_s, v_b, v_s, a_b, a_s at tau = t - t0 >= 0."""
+        tau = np.atleast_1d(np.asarray(tau, dtype=float))
+        if self.modal:
+            E = np.exp(np.outer(self.lam, tau))
+            pos = (self.P @ E).real
+            vel = (self.Pv @ E).real
+            acc = (self.Pa @ E).real
+            return (pos[0] + self.x_eq, pos[1] + self.x_eq, vel[0], vel[1], acc[0], acc[1])
+        from scipy.linalg import expm
+
+        Y = expm(self.A[None, :, :] * tau[:, None, None]) @ self.w0  # (n, 4)
+        acc = Y @ self.A.T  # the equilibrium y_eq adds A y_eq + f = 0
+        return (Y[:, 0] + self.x_eq, Y[:, 1] + self.x_eq, Y[:, 2], Y[:, 3], acc[:, 2], acc[:, 3])
+
+    def state6(self, t):
+        return self._evaluate(np.asarray(t, dtype=float) - self.t0)
+
+    def va(self, tau):
+        """Base velocity and acceleration at an array of tau."""
+        if self.modal:
+            E = np.exp(np.outer(self.lam, tau))
+            return (self.Pv[0] @ E).real, (self.Pa[0] @ E).real
+        vals = self._evaluate(tau)
+        return vals[2], vals[4]
+
+    def va1(self, tau: float) -> tuple[float, float]:
+        """Base velocity and acceleration at one tau (the root finder's fast path)."""
+        if self.modal:
+            e = np.exp(self.lam * tau)
+            return float((self.Pv[0] @ e).real), float((self.Pa[0] @ e).real)
+        vals = self._evaluate(tau)
+        return float(vals[2][0]), float(vals[4][0])
+
+
+class _Stick:
+    """A stuck piece of the 2-DOF model: the base held at x_b by the sliders, the storey drift
+    ``u = x_s - x_b`` in free vibration ``u'' + 2 a u' + b u = 0`` (a = c_s / (2 m_s), b = k_s / m_s)."""
+
+    kind = "stick"
+
+    def __init__(self, b: TwoDOF, t0: float, xb: float, u0: float, du0: float):
+        self.t0, self.xb, self.u0, self.du0 = float(t0), float(xb), float(u0), float(du0)
+        self.a = b.superstructure_damping / (2.0 * float(b.superstructure_mass))
+        self.b = b.superstructure_stiffness / float(b.superstructure_mass)
+        self.q = self.b - self.a**2
+        self.direction = 0.0
+        self.t1, self.end = math.inf, ""
+
+    def drift(self, tau):
+        """u, u', u'' at tau = t - t0 >= 0."""
+        ec, es = _ec_es(self.a, self.q, tau)
+        u = ec * self.u0 + es * (self.du0 + self.a * self.u0)
+        du = ec * self.du0 - es * (self.a * self.du0 + self.b * self.u0)
+        return u, du, -(2.0 * self.a * du + self.b * u)
+
+    def drift1(self, tau: float) -> tuple[float, float, float]:
+        """u, u', u'' at one tau (q > 0: the storey is under-damped, zeta_s < 1)."""
+        w = math.sqrt(self.q)
+        e = math.exp(-self.a * tau)
+        ec, es = e * math.cos(w * tau), e * math.sin(w * tau) / w
+        u = ec * self.u0 + es * (self.du0 + self.a * self.u0)
+        du = ec * self.du0 - es * (self.a * self.du0 + self.b * self.u0)
+        return u, du, -(2.0 * self.a * du + self.b * u)
+
+    def state6(self, t):
+        tau = np.atleast_1d(np.asarray(t, dtype=float) - self.t0)
+        u, du, ddu = self.drift(tau)
+        zero = np.zeros(tau.shape)
+        return (np.full(tau.shape, self.xb), self.xb + u, zero, du, zero, ddu)
+
+
+def _first_rise(FF, f, fp, hi: float, step: float, start_zero: bool, floor: float = 0.0) -> float | None:
+    """The first tau in (0, hi] where F crosses from <= 0 to > 0 (F(0) <= 0), to machine precision.
+
+    ``FF(tau)`` gives F and its derivative F' on an array of tau; ``f``, ``fp`` the same at one tau (for
+    the root finder). F is sampled every ``step``; an interval whose ends are both <= 0 but where F' falls
+    from + to - (an interior maximum) is checked at the maximum (a brentq root of F'), so two crossings
+    within one step are not missed. ``start_zero``: F(0) = 0 with F < 0 just after (a piece that starts at
+    a reversal or a breakaway), so the bracket's left end is moved off 0, and values of F up to ``floor``
+    (its rounding level) within the first step count as <= 0. Returns None if F stays <= 0.
+    """
+    tol = dict(xtol=1e-300, rtol=4.0 * np.finfo(float).eps, maxiter=200)
+    lo_chunk = 0.0
+    chunk = 2048 * step
+    while lo_chunk < hi:
+        hi_chunk = min(lo_chunk + chunk, hi)
+        n = max(int(math.ceil((hi_chunk - lo_chunk) / step)), 1)
+        tau = np.linspace(lo_chunk, hi_chunk, n + 1)
+        if lo_chunk == 0.0:  # a geometric start resolves fast transients near 0
+            tau = np.concatenate([[0.0], tau[1] * 2.0 ** -np.arange(12.0, 0.0, -1.0), tau[1:]])
+        F, Fp = FF(tau)
+        if lo_chunk == 0.0 and start_zero:  # F(0) = 0 and F'(0) <= 0 by construction (rounding aside)
+            head = tau < tau[13]  # 0 and the geometric start
+            F[head] = np.where(F[head] <= floor, np.minimum(F[head], 0.0), F[head])
+            Fp[0] = min(Fp[0], 0.0)
+        rising = F[1:] > 0.0
+        peaked = (Fp[:-1] > 0.0) & (Fp[1:] < 0.0)
+        for i in np.nonzero(rising | peaked)[0] + 1:
+            a, b = float(tau[i - 1]), float(tau[i])
+            if not F[i] > 0.0:
+                tm = brentq(fp, a, b, **tol)
+                if f(tm) <= 0.0:
+                    continue
+                b = tm
+            if a == 0.0 and start_zero:  # move off the root at 0: F < 0 just after it
+                h = 0.5 * b
+                while h > 1e-18 * b and f(h) >= 0.0:
+                    h *= 0.5
+                if f(h) >= 0.0:
+                    return b
+                a = h
+            if f(a) > 0.0:
+                if start_zero and f(a) <= floor:
+                    continue
+                return a
+            return brentq(f, a, b, **tol)
+        lo_chunk = hi_chunk
+    return None
+
+
+@dataclass(frozen=True, eq=False)
+class TwoDOFVibration:
+    """The free vibration of the 2-DOF building from the pushed state (SI units); exact piecewise closed
+    form. :meth:`state` gives the base (the isolation layer, as :meth:`FreeVibration.state`, so planning and
+    clearance use it for any model), :meth:`roof_state` the roof, :meth:`states` both."""
+
+    building: TwoDOF
+    d0: float
+    pieces: tuple = field(repr=False)
+    stop_time: float
+    """When the sliders hold the base for good [s] (inf: not within the horizon)."""
+    horizon: float
+    rest: tuple[float, float]
+    """(x_b, 0): where the base stops (the last piece's base position when it does not)."""
+
+    @property
+    def isolation(self) -> TwoDOF:
+        return self.building
+
+    @property
+    def reversal_times(self) -> np.ndarray:
+        """Times where the base velocity vanishes while sliding (reversals and sticks), 0 first [s]."""
+        return np.array([0.0] + [p.t1 for p in self.pieces if p.kind == "slide" and p.end in ("reversal", "stick")])
+
+    @property
+    def turning_points(self) -> np.ndarray:
+        """Base displacements at the turning points, d0 first [m]. A stiff storey can make the base chatter
+        (stick, break away, turn) within a storey period near a peak: each of those turns is listed."""
+        out = [self.d0]
+        for p in self.pieces:
+            if p.kind == "slide" and p.end in ("reversal", "stick"):
+                out.append(float(p.state6(p.t1)[0][0]))
+        return np.array(out)
+
+    def states(self, t) -> dict[str, np.ndarray]:
+        """x, v, a of the base (``x_b, v_b, a_b``) and of the roof (``x_s, v_s, a_s``) at times t [s]
+        [m, m/s, m/s^2]. Before the release both rest at d0; at an instant where an acceleration jumps the
+        value after it is returned."""
+        t = np.asarray(t, dtype=float)
+        shape = t.shape
+        t = t.ravel()
+        out = [np.full(t.shape, self.d0), np.full(t.shape, self.d0)] + [np.zeros(t.shape) for _ in range(4)]
+        starts = np.array([p.t0 for p in self.pieces])
+        index = np.searchsorted(starts, t, side="right") - 1
+        for i in np.unique(index[index >= 0]):
+            m = index == i
+            vals = self.pieces[i].state6(t[m])
+            for arr, v in zip(out, vals, strict=True):
+                arr[m] = v
+        keys = ("x_b", "x_s", "v_b", "v_s", "a_b", "a_s")
+        return {k: v.reshape(shape) for k, v in zip(keys, out, strict=True)}
+
+    def state(self, t):
+        """The base (isolation layer): x_b [m], v_b [m/s], a_b [m/s^2] at times t [s]."""
+        s = self.states(t)
+        return s["x_b"], s["v_b"], s["a_b"]
+
+    def roof_state(self, t):
+        """The roof: x_s [m], v_s [m/s], a_s [m/s^2] at times t [s]."""
+        s = self.states(t)
+        return s["x_s"], s["v_s"], s["a_s"]
+
+    def energies(self, t) -> dict[str, np.ndarray]:
+        """The energy balance at times t [J]: kinetic ``(m_b v_b^2 + m_s v_s^2) / 2``, stored
+        ``(k x_b^2 + k_s u^2) / 2``, friction ``F_s sum |dx_b|`` and viscous dissipation so far (``hysteretic``
+        is 0); their sum is ``initial = k d0^2 / 2``.
+
+        The viscous dissipation of a sliding piece is the drop of its invariant
+        ``(m_b v_b^2 + m_s v_s^2 + k (x_b - x_e)^2 + k_s u^2) / 2`` (x_e its equilibrium), of a stuck one the
+        drop of ``(m_s u'^2 + k_s u^2) / 2``: exact, since between events only the dampers change them.
+        """
+        b = self.building
+        k, ks, mb, ms = b.stiffness, b.superstructure_stiffness, b.base_mass, float(b.superstructure_mass)
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        s = self.states(t)
+        u = s["x_s"] - s["x_b"]
+        kinetic = 0.5 * mb * s["v_b"] ** 2 + 0.5 * ms * s["v_s"] ** 2
+        stored = 0.5 * k * s["x_b"] ** 2 + 0.5 * ks * u**2
+        friction = np.zeros(t.shape)
+        viscous = np.zeros(t.shape)
+
+        def invariant(p, vals):
+            xb, xs, vb, vs = vals[:4]
+            if p.kind == "slide":
+                return 0.5 * (mb * vb**2 + ms * vs**2 + k * (xb - p.x_eq) ** 2 + ks * (xs - xb) ** 2)
+            return 0.5 * (ms * vs**2 + ks * (xs - xb) ** 2)
+
+        for p in self.pieces:
+            tt = np.clip(t, p.t0, p.t1)
+            vals = p.state6(tt)
+            v0 = p.state6(np.array([p.t0]))
+            if p.kind == "slide":
+                friction += b.friction * np.abs(vals[0] - v0[0][0])
+            viscous += invariant(p, [v[0] for v in v0]) - invariant(p, vals)
+        return {"kinetic": kinetic, "stored": stored, "hysteretic": np.zeros(t.shape), "friction": friction,
+                "viscous": viscous, "initial": np.full(t.shape, 0.5 * k * self.d0**2)}
+
+    def summary(self) -> dict[str, Any]:
+        peaks = self.turning_points
+        return {**self.building.summary(), "d0_m": self.d0, "stop_time_s": self.stop_time,
+                "rest_displacement_m": self.rest[0], "half_cycles": int(peaks.size - 1),
+                "first_peak_m": float(peaks[1]) if peaks.size > 1 else None}
+
+
+def free_vibration_2dof(building: TwoDOF, d0: float, t_end: float | None = None) -> TwoDOFVibration:
+    """The 2-DOF building's free vibration after the release from the pushed state (SI units).
+
+    The jack pushes the base quasi-statically, so the superstructure rides on it undeformed (no inertia
+    force, no storey shear): at the release ``x_b = x_s = d0`` [m], at rest, the isolators holding
+    ``k d0`` and the sliders at most ``F_s``. The motion is followed piece by piece: while the base slides
+    the system is linear with constant coefficients (closed form, :class:`_Slide`); a piece ends where the
+    base velocity vanishes (a bracketed brentq root on the closed form), where the sliders either hold the
+    base (``|k x_b - k_s u - c_s u'| <= F_s``: a stuck piece, the superstructure vibrating on a fixed base)
+    or the sliding turns (direction ``-sign(k x_b - k_s u - c_s u')``). A stuck base breaks away where
+    ``|k x_b - k_s u - c_s u'|`` reaches F_s (a bracketed root over one damped period of the storey: the
+    excursion of that force shrinks by ``exp(-a T_d)`` every period, so none later if none in the first);
+    else it is held for good (``stop_time``) while the superstructure rings on.
+
+    Parameters
+    ----------
+    building : TwoDOF
+    d0 : float
+        Base (and roof) displacement at the release [m].
+    t_end : float, optional
+        Follow the motion up to this time [s]; by default until the base is held for good (needs F_s > 0).
+    """
+    b = building
+    d0 = float(d0)
+    if not math.isfinite(d0) or d0 == 0.0:
+        raise ParameterError("d0", d0, "finite and non-zero", "m")
+    if t_end is None:
+        if b.friction == 0.0:
+            raise ParameterError("t_end", None, "a finite time in (0, inf) s when the sliders have no friction "
+                                 "(the motion never ends)")
+        horizon = math.inf
+    else:
+        horizon = _finite_positive("t_end", t_end, "s")
+    k, ks, cs, Fs = b.stiffness, b.superstructure_stiffness, b.superstructure_damping, float(b.friction)
+    pieces: list = []
+    stop = math.inf
+
+    def holding_force(xb, u, du):  # what the sliders must resist to hold the base [N]
+        return k * xb - ks * u - cs * du
+
+    t, y = 0.0, np.array([d0, d0, 0.0, 0.0])
+    g = holding_force(d0, 0.0, 0.0)
+    stuck = abs(g) <= Fs
+    direction = -math.copysign(1.0, g)
+    while t < horizon:
+        if len(pieces) >= MAX_PIECES:
+            raise ParameterError("t_end", horizon, f"a span of at most {MAX_PIECES} pieces", "s")
+        if stuck:
+            p = _Stick(b, t, y[0], y[1] - y[0], y[3] - y[2])
+            pieces.append(p)
+            if p.u0 == 0.0 and p.du0 == 0.0:
+                stop = t
+                break
+            Td = 2.0 * math.pi / math.sqrt(p.q)
+
+            found = []
+            for sign in (1.0, -1.0):  # sign G - F_s rising: G reaches +F_s, or -F_s
+
+                def FF(tau, p=p, sign=sign):
+                    u, du, ddu = p.drift(tau)
+                    return sign * holding_force(p.xb, u, du) - Fs, sign * (-ks * du - cs * ddu)
+
+                def f(tau, p=p, sign=sign):
+                    u, du, _ = p.drift1(tau)
+                    return sign * holding_force(p.xb, u, du) - Fs
+
+                def fp(tau, p=p, sign=sign):
+                    _, du, ddu = p.drift1(tau)
+                    return sign * (-ks * du - cs * ddu)
+
+                tau = _first_rise(FF, f, fp, Td, Td / (2 * EVENT_GRID), False)
+                if tau is not None:
+                    found.append((tau, sign))
+            if not found:
+                stop = t
+                break
+            tau, sign = min(found)
+            t1 = t + tau
+            if t1 >= horizon:
+                break
+            u, du, _ = p.drift(tau)
+            p.t1, p.end = t1, "breakaway"
+            t, y = t1, np.array([p.xb, p.xb + float(u), 0.0, float(du)])
+            direction = -sign  # the base moves along the net force on it, -G (G = sign F_s here)
+            stuck = False
+            continue
+        p = _Slide(b, t, y, direction)
+        pieces.append(p)
+        step = 2.0 * math.pi / p.rate / EVENT_GRID
+        hi = horizon - t
+        if not math.isfinite(hi):  # creeping without a reversal: give up once every mode has decayed by 1e-17
+            hi = 40.0 / p.decay if p.decay > 0 else math.inf
+        tau = _first_rise(lambda s, p=p: (-p.direction * p.va(s)[0], -p.direction * p.va(s)[1]),
+                          lambda s, p=p: -p.direction * p.va1(s)[0], lambda s, p=p: -p.direction * p.va1(s)[1],
+                          hi, step, True, 64.0 * np.finfo(float).eps * p.speed)
+        if tau is None or t + tau >= horizon:
+            break
+        t1 = t + tau
+        xb, xs, vb, vs, _, _ = (float(v[0]) for v in p._evaluate(tau))
+        t, y = t1, np.array([xb, xs, 0.0, vs])
+        g = holding_force(xb, xs - xb, vs)
+        if abs(g) <= Fs:
+            p.t1, p.end = t1, "stick"
+            stuck = True
+        else:
+            p.t1, p.end = t1, "reversal"
+            direction = -math.copysign(1.0, g)
+    last = pieces[-1]
+    if last.kind == "stick":
+        rest_x = last.xb
+    elif math.isfinite(horizon):
+        rest_x = float(last.state6(np.array([horizon]))[0][0])
+    else:
+        rest_x = last.x_eq
+    return TwoDOFVibration(b, d0, tuple(pieces), stop, horizon, (rest_x, 0.0))

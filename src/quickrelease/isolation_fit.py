@@ -37,20 +37,25 @@ import numpy as np
 from scipy import stats
 from scipy.optimize import brentq, least_squares
 
-from .building import Isolation, free_vibration
+from .building import Isolation, TwoDOF, free_vibration
 from .errors import ParameterError, QuickReleaseError
 
 __all__ = ["BuildingChannel", "IsolationFit", "fit_isolation", "compare_models", "decay_check", "ljung_box",
            "CHANNEL_KINDS"]
 
-#: Channel kinds of the isolation layer (x, v, a) and of the roof (x_roof, v_roof, a_roof) and their SI units.
+#: Channel kinds of the isolation layer (x, v, a) and of the roof (x_roof, v_roof, a_roof; for the rigid
+#: models the roof moves with the layer), and their SI units.
 CHANNEL_KINDS = {"x": "m", "v": "m/s", "a": "m/s^2", "x_roof": "m", "v_roof": "m/s", "a_roof": "m/s^2"}
 _UNITS = {"period": "s", "damping_ratio": "-", "friction": "N", "stiffness_ratio": "-", "yield_force": "N",
-          "d0": "m", "release_time": "s"}
+          "superstructure_period": "s", "superstructure_damping_ratio": "-", "d0": "m", "release_time": "s"}
+#: Models :func:`fit_isolation` fits.
+FIT_MODELS = ("linear", "bilinear", "2dof")
 #: Relative standard error above which the profile-likelihood interval replaces the Jacobian's.
 PROFILE_RELATIVE_SE = 0.3
 #: Condition number of the correlation matrix above which the fit is reported as ill-conditioned.
 CONDITION_WARNING = 1e8
+#: Lower bound of the fitted fixed-base superstructure period [s] (a stiffer storey is the rigid model).
+SUPERSTRUCTURE_PERIOD_MIN = 0.02
 
 
 @dataclass(frozen=True, eq=False)
@@ -113,10 +118,12 @@ class IsolationFit:
     nfev: int
     warnings: tuple[str, ...] = ()
     channels: tuple[BuildingChannel, ...] = field(default=(), repr=False)
+    superstructure_mass: float | None = None
+    """The superstructure (roof) mass m_s [kg] given to the 2-DOF fit; None for the rigid models."""
 
-    def isolation(self) -> Isolation:
-        """The fitted isolation layer."""
-        return _isolation(self.model, self.mass, self.estimates)
+    def isolation(self) -> Isolation | TwoDOF:
+        """The fitted isolation layer (the :class:`~quickrelease.building.TwoDOF` building for ``2dof``)."""
+        return _isolation(self.model, self.mass, self.estimates, self.superstructure_mass)
 
     @property
     def release_time(self) -> float:
@@ -155,19 +162,34 @@ def _offset_kind(name: str, channels) -> str:
     return ""
 
 
-def _isolation(model: str, mass: float, p: dict[str, float]) -> Isolation:
+def _isolation(model: str, mass: float, p: dict[str, float], superstructure_mass: float | None = None) \
+        -> Isolation | TwoDOF:
     if model == "linear":
         return Isolation.linear(mass, p["period"], p["damping_ratio"], p["friction"])
+    if model == "2dof":
+        return TwoDOF(mass, superstructure_mass, p["period"], p["superstructure_period"], p["damping_ratio"],
+                      p["friction"], p["superstructure_damping_ratio"])
     k1 = mass * (2.0 * math.pi / p["period"]) ** 2
     return Isolation.bilinear(mass, k1, p["stiffness_ratio"] * k1, p["yield_force"], p["damping_ratio"],
                               p["friction"])
 
 
-def _channel_model(iso: Isolation, d0: float, t_r: float, kind: str, t: np.ndarray, t_last: float) -> np.ndarray:
+def _channel_model(iso: Isolation | TwoDOF, d0: float, t_r: float, kind: str, t: np.ndarray, t_last: float) \
+        -> np.ndarray:
     horizon = max(t_last - t_r, 1e-9)
     fv = free_vibration(iso, d0, t_end=horizon)
-    x, v, a = fv.state(t - t_r)
-    return {"x": x, "v": v, "a": a}[kind.removesuffix("_roof")]  # rigid superstructure: the roof moves with the layer
+    return _kind_values(fv, kind, t - t_r)
+
+
+def _kind_values(fv, kind: str, tau: np.ndarray) -> np.ndarray:
+    """The model's channel of ``kind`` at times tau after the release [SI]: the base (x, v, a) or the roof
+    (x_roof, v_roof, a_roof); a rigid model's roof moves with the isolation layer."""
+    if isinstance(fv.isolation, TwoDOF):
+        s = fv.states(tau)
+        return {"x": s["x_b"], "v": s["v_b"], "a": s["a_b"], "x_roof": s["x_s"], "v_roof": s["v_s"],
+                "a_roof": s["a_s"]}[kind]
+    x, v, a = fv.state(tau)
+    return {"x": x, "v": v, "a": a}[kind.removesuffix("_roof")]
 
 
 def ljung_box(residuals, lags: int = 20) -> float:
@@ -224,7 +246,7 @@ def _quiet_noise(ch: BuildingChannel, t_r: float) -> float | None:
 
 
 def _start(model: str, mass: float, channels: list[BuildingChannel], t_r: float, d0: float,
-           noise: dict[str, float]) -> dict[str, float]:
+           noise: dict[str, float], superstructure_mass: float | None = None) -> dict[str, float]:
     """Start values from the model-free decay analysis of the displacement channel, else generic ones."""
     from .decay import analyse_decay
 
@@ -247,7 +269,46 @@ def _start(model: str, mass: float, channels: list[BuildingChannel], t_r: float,
             pass
     if model == "bilinear":
         start.update(_bilinear_start(mass, xch, t_r, noise, start))
+    if model == "2dof":
+        start.update(_two_dof_start(mass, superstructure_mass, channels, t_r, start))
     return start
+
+
+def _two_dof_start(mass: float, ms: float, channels: list[BuildingChannel], t_r: float,
+                   linear: dict[str, float]) -> dict[str, float]:
+    """Start values of the 2-DOF model: the decay's period is the first mode's, w1 = 2 pi / T_1; the second
+    mode's w2 is the spectral peak of a roof (else base) acceleration, velocity or displacement above
+    1.5 w1 (Hann window). With r = m / m_b the modes satisfy ``w1^2 + w2^2 = r (w^2 + w_s^2)`` and
+    ``w1^2 w2^2 = r w^2 w_s^2`` (w = 2 pi / T the isolation's, w_s = 2 pi / T_s the storey's fixed-base
+    circular frequencies), so w^2 and w_s^2 are the roots of ``z^2 - (S / r) z + P / r = 0``."""
+    out = {"superstructure_period": 0.25 * linear["period"], "superstructure_damping_ratio": 0.02}
+    w1 = 2.0 * math.pi / linear["period"]
+    order = ("a_roof", "v_roof", "x_roof", "a", "v")
+    pick = sorted((c for c in channels if c.kind in order), key=lambda c: order.index(c.kind))
+    for ch in pick:
+        moving = ch.t >= t_r
+        if np.count_nonzero(moving) < 64:
+            continue
+        y = ch.values[moving] - float(np.mean(ch.values[moving]))
+        dt = float(np.median(np.diff(ch.t[moving])))
+        n = 1 << int(math.ceil(math.log2(4 * y.size)))
+        spec = np.abs(np.fft.rfft(y * np.hanning(y.size), n))
+        w = 2.0 * math.pi * np.fft.rfftfreq(n, dt)
+        band = w > 1.5 * w1
+        if not np.any(band) or not np.any(spec[band] > 0):
+            continue
+        w2 = float(w[band][int(np.argmax(spec[band]))])
+        r = mass / (mass - ms)
+        S, P = w1**2 + w2**2, w1**2 * w2**2
+        disc = (S / r) ** 2 - 4.0 * P / r
+        if disc <= 0.0:
+            break
+        lo, hi = 0.5 * (S / r - math.sqrt(disc)), 0.5 * (S / r + math.sqrt(disc))
+        if lo > 0.0:
+            out["period"] = 2.0 * math.pi / math.sqrt(lo)
+        out["superstructure_period"] = max(2.0 * math.pi / math.sqrt(hi), 2.0 * SUPERSTRUCTURE_PERIOD_MIN)
+        break
+    return out
 
 
 def _bilinear_start(mass: float, xch: BuildingChannel | None, t_r: float, noise: dict[str, float],
@@ -282,23 +343,30 @@ def _bilinear_start(mass: float, xch: BuildingChannel | None, t_r: float, noise:
 
 def fit_isolation(channels, mass: float, model: str = "linear", *, release_time: float | None = None,
                   fit_release_time: bool = True, start: dict[str, float] | None = None,
-                  fixed: dict[str, float] | None = None, profile: bool | None = None) -> IsolationFit:
+                  fixed: dict[str, float] | None = None, profile: bool | None = None,
+                  superstructure_mass: float | None = None) -> IsolationFit:
     """Fit the isolation system (:mod:`quickrelease.building`) to records of the isolation layer.
 
     Parameters
     ----------
     channels : sequence of BuildingChannel
         Displacement (x [m]), velocity (v [m/s]) and/or acceleration (a [m/s^2]) of the isolation layer,
-        each on its own time axis, the pre-release segment included where there is one.
+        and of the roof (x_roof [m], v_roof [m/s], a_roof [m/s^2]: the 2-DOF model's roof mass; the rigid
+        models' roof moves with the layer), each on its own time axis, the pre-release segment included
+        where there is one.
     mass : float
-        Mass carried by the isolation layer [kg].
-    model : {"linear", "bilinear"}
+        Mass carried by the isolation layer [kg] (the whole building).
+    model : {"linear", "bilinear", "2dof"}
+        ``2dof``: the flexible superstructure of :class:`quickrelease.building.TwoDOF`, parameters period
+        T [s] (of the whole mass on the isolators), damping_ratio, friction [N], superstructure_period T_s
+        [s] (fixed-base) and superstructure_damping_ratio; needs ``superstructure_mass``.
     release_time : float, optional
         Start value (or, with ``fit_release_time=False``, the value) of the release instant [s, record
         time]; detected where the record leaves its initial rest when not given.
     start, fixed : dict, optional
         Start values, and parameters held fixed (by name: period, damping_ratio, friction,
-        stiffness_ratio, yield_force, d0, release_time, offset_<channel>). The bilinear model's misfit has
+        stiffness_ratio, yield_force, superstructure_period, superstructure_damping_ratio, d0, release_time,
+        offset_<channel>). The bilinear model's misfit has
         local minima (the count of half-cycles before the sliders stick changes in jumps, and friction and
         yield force act alike on the soft branch): give the bearings' design values as start values (a
         start within about 30% of the truth converged in our tests; the start from the decay analysis alone
@@ -306,6 +374,9 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
     profile : bool, optional
         Profile-likelihood intervals: True for every physical parameter, False never, None (default) for
         those at a bound or with a relative standard error above ``PROFILE_RELATIVE_SE``.
+    superstructure_mass : float, optional
+        The roof mass m_s [kg] of the 2-DOF model, in (0, mass) (given, not fitted: the record fixes the
+        parameters per unit mass only).
 
     Returns
     -------
@@ -314,11 +385,19 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
     channels = list(channels)
     if not channels:
         raise ParameterError("channels", "none", "at least one channel of the isolation layer")
-    if model not in ("linear", "bilinear"):
-        raise ParameterError("model", model, "'linear' or 'bilinear'")
+    if model not in FIT_MODELS:
+        raise ParameterError("model", model, "'linear', 'bilinear' or '2dof'")
     mass = float(mass)
     if not (math.isfinite(mass) and mass > 0):
         raise ParameterError("mass", mass, "(0, inf)", "kg")
+    if model == "2dof":
+        ms = math.nan if superstructure_mass is None else float(superstructure_mass)
+        if not (math.isfinite(ms) and 0.0 < ms < mass):
+            raise ParameterError("superstructure_mass", superstructure_mass,
+                                 f"(0, mass) = (0, {mass:.6g}) kg (the 2dof model needs it)", "kg")
+        superstructure_mass = ms
+    else:
+        superstructure_mass = None
     names_seen = [c.name for c in channels]
     if len(set(names_seen)) != len(names_seen):
         raise ParameterError("channels", ", ".join(names_seen), "distinct channel names")
@@ -340,11 +419,12 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
         if ch.name not in noise:
             noise[ch.name], source[ch.name] = float(np.std(ch.values)) or 1.0, "residuals"
     # the pushed displacement and the offsets before the release
-    xch = next((c for c in channels if c.kind == "x"), None)
+    xch = next((c for c in channels if c.kind == "x"), None) or next(
+        (c for c in channels if c.kind == "x_roof"), None)  # the roof rests at d0 too before the release
     offsets0 = {}
     for ch in channels:
         pre = ch.values[ch.t < t_r0]
-        offsets0[ch.name] = float(np.median(pre)) if (pre.size >= 3 and ch.kind != "x") else 0.0
+        offsets0[ch.name] = float(np.median(pre)) if (pre.size >= 3 and ch.kind not in ("x", "x_roof")) else 0.0
     d0 = 0.0
     if xch is not None:
         pre = xch.values[xch.t < t_r0]
@@ -354,7 +434,7 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
     if d0 == 0.0:
         raise ParameterError("d0", d0, "a non-zero pushed displacement (give a displacement channel or fixed d0)",
                              "m")
-    p0 = _start(model, mass, channels, t_r0, d0, noise)
+    p0 = _start(model, mass, channels, t_r0, d0, noise, superstructure_mass)
     rest = p0.pop("rest", None)
     p0.update(d0=d0, release_time=t_r0)
     for ch in channels:
@@ -367,8 +447,9 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
         # half-cycles before the sliders stick); the law is exact for the linear model only
         p0[f"offset_{xch.name}"], p0["d0"] = rest, d0 - rest
     p0.update(start or {})
-    physical = ["period", "damping_ratio", "friction"] + (["stiffness_ratio", "yield_force"]
-                                                          if model == "bilinear" else [])
+    physical = ["period", "damping_ratio", "friction"] + {
+        "bilinear": ["stiffness_ratio", "yield_force"],
+        "2dof": ["superstructure_period", "superstructure_damping_ratio"]}.get(model, [])
     all_names = physical + ["d0", "release_time"] + [f"offset_{c.name}" for c in channels if c.offset]
     unknown = sorted(set(fixed) - set(all_names))
     if unknown:
@@ -377,20 +458,21 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
     values = {**p0, **fixed}
     dt = min(float(np.median(np.diff(c.t))) for c in channels)
     lower = {"period": 1e-3, "damping_ratio": 0.0, "friction": 0.0, "stiffness_ratio": 1e-4, "yield_force": 0.0,
+             "superstructure_period": SUPERSTRUCTURE_PERIOD_MIN, "superstructure_damping_ratio": 0.0,
              "d0": -math.inf, "release_time": t_r0 - 50 * dt}
     upper = {"period": 1e3, "damping_ratio": 0.95, "friction": math.inf, "stiffness_ratio": 0.9999,
-             "yield_force": math.inf, "d0": math.inf, "release_time": t_r0 + 50 * dt}
+             "yield_force": math.inf, "superstructure_period": 1e3, "superstructure_damping_ratio": 0.95,
+             "d0": math.inf, "release_time": t_r0 + 50 * dt}
     t_last = max(float(c.t[-1]) for c in channels)
     sig = np.concatenate([np.full(c.t.size, noise[c.name]) for c in channels])
     data = np.concatenate([c.values for c in channels])
 
     def model_vector(p: dict[str, float]) -> np.ndarray:
-        iso = _isolation(model, mass, p)
+        iso = _isolation(model, mass, p, superstructure_mass)
         fv = free_vibration(iso, p["d0"], t_end=max(t_last - p["release_time"], 1e-9))
         out = []
         for c in channels:
-            x, v, a = fv.state(c.t - p["release_time"])
-            y = {"x": x, "v": v, "a": a}[c.kind.removesuffix("_roof")]  # rigid: the roof moves with the layer
+            y = _kind_values(fv, c.kind, c.t - p["release_time"])
             out.append(y + p.get(f"offset_{c.name}", 0.0))
         return np.concatenate(out)
 
@@ -420,7 +502,7 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
     # the soft branch). Several splits of the dissipation are tried as starts and the best fit kept.
     starts = [dict(values)]
     if "friction" in names:
-        if model == "linear" and "damping_ratio" in names:
+        if model in ("linear", "2dof") and "damping_ratio" in names:
             k = mass * (2.0 * math.pi / values["period"]) ** 2
             starts.append({**values, "friction": max(values["friction"], 0.02 * k * abs(d0)),
                            "damping_ratio": 0.5 * values["damping_ratio"]})
@@ -513,7 +595,7 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
                         noise_source=source, residual_rms=rms, samples=samples, chi2=chi2, dof=dof,
                         chi2_reduced=chi2_red, absolute_sigma=absolute, aic=aic, bic=bic, whiteness_p=white,
                         converged=bool(res.success), nfev=int(res.nfev), warnings=tuple(warnings),
-                        channels=tuple(channels))
+                        channels=tuple(channels), superstructure_mass=superstructure_mass)
 
 
 def _profile_interval(name, names, est, lo_b, hi_b, se, target, solve) -> tuple[float, float]:
@@ -582,9 +664,14 @@ def decay_check(fit: IsolationFit) -> dict[str, Any]:
     offset = fit.offsets().get(xch.name, 0.0)
     analysis = analyse_decay(xch.t, xch.values - offset, release_time=fit.release_time, noise=fit.noise[xch.name])
     out: dict[str, Any] = {"analysis": analysis.summary(fit.mass), "rows": [], "notes": []}
-    if fit.model != "linear":
+    if fit.model == "bilinear":
         out["notes"].append("bilinear isolators follow no decay law: compare the equivalent period and damping "
                             "against the amplitude instead")
+        return out
+    if fit.model == "2dof":
+        out["notes"].append("the 2dof base decays in two coupled modes (and the roof can make the sliders stick "
+                            "and slip again): the single-mode decay law does not hold; compare the equivalent "
+                            "period and damping against the amplitude instead")
         return out
     if analysis.law is None:
         out["notes"].append("fewer than four half-cycles: no decay law")

@@ -1,0 +1,46 @@
+"""The 2-DOF isolation fit on a record made by the independent solve_ivp reference of the flexible building
+(tests/building_reference.py): base displacement (LVDT, 100 Hz) and roof acceleration (200 Hz, own clock),
+sensor zeros, noise, a pre-release segment and an unknown release instant."""
+
+import numpy as np
+import pytest
+from building_reference import reference_2dof
+
+from quickrelease.building import TwoDOF
+from quickrelease.errors import ParameterError
+from quickrelease.isolation_fit import BuildingChannel, compare_models, fit_isolation
+
+M, RATIO, G = 4.0e5, 0.75, 9.80665
+
+
+def test_flexible_building_fitted_back_and_preferred_over_linear():
+    T, zeta, Fs, Ts, zs, d0, t_r = 2.0, 0.04, 0.02 * M * G, 0.5, 0.03, 0.15, 0.731
+    b = TwoDOF(M, RATIO * M, T, Ts, zeta, Fs, zs)
+    rng = np.random.default_rng(1)
+    tx = np.arange(-1.0, 4.5, 1 / 100)
+    ta = np.arange(-1.0, 4.5, 1 / 200) + 0.0013
+    args = (M, RATIO * M, b.stiffness, b.damping, b.superstructure_stiffness, b.superstructure_damping, Fs, d0)
+    x = reference_2dof(*args, tx - t_r)[0]["xb"]
+    a = reference_2dof(*args, ta - t_r)[0]["as"]
+    channels = [BuildingChannel("lvdt", "x", tx, x + 0.004 + rng.normal(0, 2e-4, tx.size)),
+                BuildingChannel("roof", "a_roof", ta, a + 0.01 + rng.normal(0, 0.02, ta.size))]
+    fit = fit_isolation(channels, M, "2dof", superstructure_mass=RATIO * M, profile=False)
+    est = fit.estimates
+    assert est["period"] == pytest.approx(T, rel=0.01)
+    assert est["superstructure_period"] == pytest.approx(Ts, rel=0.01)
+    for name, truth in (("damping_ratio", zeta), ("friction", Fs), ("superstructure_damping_ratio", zs)):
+        assert est[name] == pytest.approx(truth, rel=0.05), name
+    assert 0.8 < fit.chi2_reduced < 1.25 and fit.converged
+    assert isinstance(fit.isolation(), TwoDOF) and fit.summary()["units"]["superstructure_period"] == "s"
+    linear = fit_isolation(channels, M, "linear", profile=False)  # its roof moves with the layer
+    table = compare_models([linear, fit])
+    assert table[0]["model"] == "2dof" and table[1]["delta_aic"] > 100
+
+
+def test_2dof_needs_the_superstructure_mass():
+    t = np.linspace(0, 1, 50)
+    ch = BuildingChannel("x", "x", t, np.cos(t))
+    with pytest.raises(ParameterError, match="superstructure_mass"):
+        fit_isolation([ch], M, "2dof", release_time=0.5)
+    with pytest.raises(ParameterError, match="superstructure_mass"):
+        fit_isolation([ch], M, "2dof", release_time=0.5, superstructure_mass=M)
