@@ -36,7 +36,6 @@ from typing import Any
 import numpy as np
 from scipy import stats
 from scipy.optimize import brentq, least_squares
-from scipy.optimize._numdiff import approx_derivative  # what least_squares' own jac="3-point" calls
 
 from .building import Isolation, free_vibration
 from .errors import ParameterError, QuickReleaseError
@@ -286,6 +285,16 @@ def _bilinear_start(mass: float, xch: BuildingChannel | None, t_r: float, noise:
             "yield_force": fp / (1.0 - k2 / k1), "friction": 0.5 * linear["friction"]}
 
 
+def _first_peak(xch: BuildingChannel, t_r: float, period: float, d0: float) -> float | None:
+    """|x| at the first turning point after the release (the extreme of the displacement channel, past
+    the static level, within a quarter to three quarters of a period after t_r) [m], or None."""
+    sel = (xch.t > t_r + 0.25 * period) & (xch.t < t_r + 0.75 * period)
+    if np.count_nonzero(sel) < 3:
+        return None
+    level = float(np.median(xch.values[xch.t < t_r])) - d0 if np.count_nonzero(xch.t < t_r) >= 3 else 0.0
+    return float(np.max(-math.copysign(1.0, d0) * (xch.values[sel] - level)))
+
+
 def fit_isolation(channels, mass: float, model: str = "linear", *, release_time: float | None = None,
                   fit_release_time: bool = True, start: dict[str, float] | None = None,
                   fixed: dict[str, float] | None = None, profile: bool | None = None) -> IsolationFit:
@@ -425,23 +434,38 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
         i0 += c.t.size
 
     def jacobian(theta, free=names, base=values):
+        # Central differences, guarded against the jumps of the record model: where a piece boundary (a
+        # reversal, where the friction force flips and the acceleration jumps; the stick) passes a sample
+        # inside the stencil, one one-sided difference holds the jump over h and the other does not. There
+        # the smaller one is the derivative (the jump would make the sample look infinitely informative
+        # and the standard errors far too small, as the optimiser likes to park a jump on a sample).
         theta = np.asarray(theta, dtype=float)
         J = np.zeros((data.size, len(free)))
-        nonlinear = [i for i, n in enumerate(free) if n not in rows_of]
-        if nonlinear:
-            lo = np.array([lower.get(free[i], -math.inf) for i in nonlinear])
-            hi = np.array([upper.get(free[i], math.inf) for i in nonlinear])
-
-            def sub_residuals(sub):
-                full = theta.copy()
-                full[nonlinear] = sub
-                return residuals(full, free, base)
-
-            J[:, nonlinear] = approx_derivative(sub_residuals, theta[nonlinear], method="3-point", rel_step=1e-4,
-                                                bounds=(lo, hi))
+        f0 = None
         for i, n in enumerate(free):
             if n in rows_of:
                 J[rows_of[n], i] = 1.0 / sig[rows_of[n]]
+                continue
+            if f0 is None:
+                f0 = residuals(theta, free, base)
+            x, lo, hi = theta[i], lower.get(n, -math.inf), upper.get(n, math.inf)
+            h = 1e-4 * max(1.0, abs(x))
+
+            def at(value, i=i):
+                moved = theta.copy()
+                moved[i] = value
+                return residuals(moved, free, base)
+
+            if x - h < lo or x + h > hi:  # one-sided, second order, into the feasible side
+                s_ = 1.0 if x + 2.0 * h <= hi else -1.0
+                f1, f2 = at(x + s_ * h), at(x + 2.0 * s_ * h)
+                d1, d2 = (f1 - f0) / (s_ * h), (f2 - f1) / (s_ * h)
+                J[:, i] = np.where(np.abs(d1 - d2) > 0.5 * (np.abs(d1) + np.abs(d2)),
+                                   np.where(np.abs(d1) < np.abs(d2), d1, d2), 1.5 * d1 - 0.5 * d2)
+            else:
+                dp, dm = (at(x + h) - f0) / h, (f0 - at(x - h)) / h
+                J[:, i] = np.where(np.abs(dp - dm) > 0.5 * (np.abs(dp) + np.abs(dm)),
+                                   np.where(np.abs(dp) < np.abs(dm), dp, dm), 0.5 * (dp + dm))
         return J
 
     # The sliders' stick ends the motion at one reversal or another, so the misfit jumps where the count
@@ -454,6 +478,16 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
             k = mass * (2.0 * math.pi / values["period"]) ** 2
             starts.append({**values, "friction": max(values["friction"], 0.02 * k * abs(d0)),
                            "damping_ratio": 0.5 * values["damping_ratio"]})
+            # and the first half-cycle's decrement d0 - |x1| taken by the sliders alone (2 F_s / k per
+            # half-cycle), by the damper alone (|x1| = d0 exp(-pi zeta)) and half by each: a start in the
+            # right basin where the decay analysis found no law
+            x1 = _first_peak(xch, values["release_time"], values["period"], d0) if xch is not None else None
+            if x1 is not None and 0.0 < x1 < abs(d0):
+                drop = abs(d0) - x1
+                for share in (1.0, 0.5, 0.0):
+                    zeta = -math.log1p(-(1.0 - share) * drop / abs(d0)) / math.pi
+                    starts.append({**values, "friction": share * 0.5 * k * drop,
+                                   "damping_ratio": float(np.clip(zeta, 0.002, 0.5))})
         elif model == "bilinear" and "yield_force" in names:
             total = values["friction"] + values["yield_force"]
             for share in (0.05, 0.2, 0.4):
