@@ -122,7 +122,7 @@ def test_coverage_linear_coulomb():
 def test_coverage_without_friction():
     """Friction truly 0, at its bound: the profile interval starts at 0 and holds the truth in the
     binomial band (a boundary: the likelihood ratio at 0 exceeds the quantile in ~2.5% of seeds)."""
-    n = 200 if SLOW else 30
+    n = 200 if SLOW else 24
     rows = _rows(K, K, math.inf, C, 0.0, D0, 6.0)
     truth = {**LINEAR_TRUTH, "friction": 0.0}
     covered, z, fits = _coverage(rows, truth, n)
@@ -135,7 +135,7 @@ def test_coverage_without_friction():
 def test_model_choice_on_linear_records_prefers_linear():
     """On linear + Coulomb records the bilinear model (two more parameters) does not win by AIC in more
     than 10% of the seeds."""
-    n = 50 if SLOW else 8
+    n = 50 if SLOW else 4
     rows = _rows(K, K, math.inf, C, FS, D0, 8.0)
     prefers_linear = 0
     for seed in range(n):

@@ -417,14 +417,14 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
         except ParameterError:  # outside the model's domain (e.g. held by friction at a bound): penalise
             return np.full(data.size, 1e6)
 
-    def solve(free, base, x0):
+    def solve(free, base, x0, tol=1e-12):
         lo = np.array([lower.get(n, -math.inf) for n in free])
         hi = np.array([upper.get(n, math.inf) for n in free])
         x0 = np.clip(np.asarray(x0, dtype=float), lo, hi)
         # central differences over a relative step of 1e-4: the misfit jumps where a piece boundary (a
         # stick, a yield) passes a sample, so a step near the rounding level would see those jumps
         return least_squares(residuals, x0, bounds=(lo, hi), args=(free, base), x_scale="jac", jac=jacobian,
-                             diff_step=1e-4, xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=400 * max(len(free), 1))
+                             diff_step=1e-4, xtol=tol, ftol=tol, gtol=tol, max_nfev=400 * max(len(free), 1))
 
     # the offsets enter linearly: their columns are exact (1 / sigma on their channel's rows), and only the
     # other parameters need the two model evaluations each of the central differences
@@ -579,11 +579,15 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
 def _profile_interval(name, names, est, lo_b, hi_b, se, target, solve) -> tuple[float, float]:
     """The interval of ``name`` where the profile chi-square (others re-fitted) stays below ``target``."""
     others = [n for n in names if n != name]
+    done = {est[name]: [est[n] for n in others]}  # refits so far: each starts from the nearest one
 
     def profile_chi2(value: float) -> float:
         base = dict(est)
         base[name] = value
-        res = solve(others, base, [est[n] for n in others])
+        near = min(done, key=lambda v: abs(v - value))
+        # the chi-square is compared with a target ~ chi2 + 4: a relative tolerance of 1e-10 is ample
+        res = solve(others, base, done[near], tol=1e-10)
+        done[value] = list(res.x)
         return float(res.fun @ res.fun)
 
     def edge(direction: int) -> float:
@@ -602,7 +606,7 @@ def _profile_interval(name, names, est, lo_b, hi_b, se, target, solve) -> tuple[
             inner, step = outer, 2.0 * step
         else:
             return bound
-        return brentq(lambda v: profile_chi2(v) - target, *sorted((inner, outer)), xtol=1e-6 * max(se, 1e-12))
+        return brentq(lambda v: profile_chi2(v) - target, *sorted((inner, outer)), xtol=1e-3 * max(se, 1e-12))
 
     return edge(-1), edge(+1)
 
