@@ -499,6 +499,19 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
             res = r_try
         if model == "linear" and absolute and 2.0 * res.cost <= 1.3 * max(data.size - len(names), 1):
             break  # misfit at the noise level: the other basins of the linear model lie far above it
+    if not absolute:
+        # a noise level taken from the residuals: weight each such channel by its own residual scatter
+        # and refit (twice; the weights settle at once). One global chi-square scale cannot correct
+        # channels whose first guesses (their spread) are wrong by different factors.
+        for _ in range(2):
+            i = 0
+            for ch in channels:
+                if source[ch.name] == "residuals":
+                    seg = res.fun[i:i + ch.t.size] * sig[i:i + ch.t.size]
+                    noise[ch.name] = float(np.sqrt(np.mean(seg**2))) or noise[ch.name]
+                    sig[i:i + ch.t.size] = noise[ch.name]
+                i += ch.t.size
+            res = solve(names, values, res.x)
     est = unpack(res.x)
     r = res.fun
     n_data = data.size
