@@ -22,8 +22,9 @@ Uncertainty: the covariance ``(J^T J)^-1`` of the weighted residuals, scaled by 
 unless the noise levels are known (given, or estimated from the quiet pre-release segment; a channel with
 neither is weighted by its own residual scatter, refitted), gives standard errors, 95% intervals (Student
 t) and correlations. J is by central differences guarded against the model's jumps (the acceleration jumps
-at each reversal; where one passes a sample inside the stencil the smaller one-sided difference is kept). Where a parameter sits at its bound (friction 0) or its
-relative standard error is large, the Jacobian's interval is replaced by a profile-likelihood interval
+at each reversal; where one passes a sample inside the stencil the smaller one-sided difference is kept).
+Where a parameter sits at its bound (friction 0) or its relative standard error is large, the Jacobian's
+interval is replaced by a profile-likelihood interval
 (the parameter fixed on a grid, the others re-fitted, the interval where the chi-square rises by the
 Student-t quantile squared times the residual variance). Models are compared by AIC and BIC on the same
 noise levels, and the residuals are tested for whiteness (Ljung-Box).
