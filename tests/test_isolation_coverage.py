@@ -4,7 +4,7 @@ event-located solve_ivp of tests/building_reference.py (never the fit's own mode
 Realistic records: 200 Hz, the base displacement (LVDT, noise 0.2 mm) and the floor acceleration (on its own
 clock, noise 0.02 m/s^2, sensor zero 0.01 m/s^2), a quiet segment before an unknown release instant. The
 coverage tests make one reference simulation per case and draw the noise per seed (the noise is what
-varies between seeds). Seeds in the ordinary run: 60 (linear + Coulomb), 24 (no friction), 10 (noise
+varies between seeds). Seeds in the ordinary run: 60 (linear + Coulomb), 16 (no friction), 6 (noise
 from the residuals), 2 (model choice on linear records); with QUICKRELEASE_SLOW=1: 200, 200, 200 and 50.
 The binomial band of a coverage count is the 0.05%-99.95% range of Binomial(n, 0.95) (for 200 seeds:
 179-198, i.e. 90%-99%).
@@ -91,7 +91,7 @@ def test_round_trip_bilinear_from_design_values_and_model_choice():
     period and stiffness ratio within 1%, damping, friction and yield force within 5%; the comparison
     prefers the bilinear model on its record."""
     k1, k2, Fy, zeta, Fs, d0 = 4.0e7, 4.0e6, 8.0e4, 0.03, 8.0e3, 0.2
-    rows = _rows(k1, k2, Fy * (1 - k2 / k1), 2 * zeta * math.sqrt(k1 * M), Fs, d0, 6.0)
+    rows = _rows(k1, k2, Fy * (1 - k2 / k1), 2 * zeta * math.sqrt(k1 * M), Fs, d0, 4.0)
     channels = _channels(rows, 11)
     T1 = 2 * math.pi * math.sqrt(M / k1)
     design = {"period": 1.2 * T1, "damping_ratio": 0.75 * zeta, "friction": 0.7 * Fs, "stiffness_ratio": 1.25 * k2 / k1,
@@ -124,7 +124,7 @@ def test_coverage_linear_coulomb():
 def test_coverage_without_friction():
     """Friction truly 0, at its bound: the profile interval starts at 0 and holds the truth in the
     binomial band (a boundary: the likelihood ratio at 0 exceeds the quantile in ~2.5% of seeds)."""
-    n = 200 if SLOW else 24
+    n = 200 if SLOW else 16
     rows = _rows(K, K, math.inf, C, 0.0, D0, 6.0)
     truth = {**LINEAR_TRUTH, "friction": 0.0}
     covered, z, fits = _coverage(rows, truth, n)
@@ -138,7 +138,7 @@ def test_coverage_with_noise_from_the_residuals():
     """A record that starts at the release (no quiet segment): the noise levels come from the residuals
     and the covariance is scaled by the reduced chi-square; the intervals keep their coverage and the
     z-scores their unit RMS."""
-    n = 200 if SLOW else 10
+    n = 200 if SLOW else 6
     tx, x, ta, a = _rows(K, K, math.inf, C, FS, D0, 8.0)
     keep_x, keep_a = tx > RELEASE, ta > RELEASE
     rows = (tx[keep_x], x[keep_x], ta[keep_a], a[keep_a])
