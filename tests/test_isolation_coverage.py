@@ -122,7 +122,7 @@ def test_coverage_linear_coulomb():
     assert sum(covered.values()) >= 0.92 * n * len(covered), covered
     for name, values in z.items():
         rms = float(np.sqrt(np.mean(np.square(values))))
-        lo, hi = _rms_band(len(values))  # for 60 seeds [0.76, 1.27]
+        lo, hi = _rms_band(len(values))  # for 60 seeds [0.71, 1.31]
         assert lo < rms < hi, (name, rms, (lo, hi))
 
 
@@ -154,7 +154,7 @@ def test_coverage_with_noise_from_the_residuals():
     assert all(lo <= covered[k] <= hi for k in truth), (covered, (lo, hi))
     for name in truth:
         rms = float(np.sqrt(np.mean(np.square(z[name]))))
-        lo, hi = _rms_band(len(z[name]))  # for 6 seeds [0.28, 2.0]: the unweighted fit gave 0.17
+        lo, hi = _rms_band(len(z[name]))  # for 6 seeds [0.22, 2.0]: the unweighted fit gave 0.17
         assert lo < rms < hi, (name, rms, (lo, hi))
 
 
