@@ -4,7 +4,7 @@ event-located solve_ivp of tests/building_reference.py (never the fit's own mode
 Realistic records: 200 Hz, the base displacement (LVDT, noise 0.2 mm) and the floor acceleration (on its own
 clock, noise 0.02 m/s^2, sensor zero 0.01 m/s^2), a quiet segment before an unknown release instant. The
 coverage tests make one reference simulation per case and draw the noise per seed (the noise is what
-varies between seeds). Seeds in the ordinary run: 60 (linear + Coulomb), 16 (no friction), 6 (noise
+varies between seeds). Seeds in the ordinary run: 60 (linear + Coulomb), 10 (no friction), 6 (noise
 from the residuals), 2 (model choice on linear records); with QUICKRELEASE_SLOW=1: 200, 200, 200 and 50.
 The binomial band of a coverage count is the 0.05%-99.95% range of Binomial(n, 0.95) (for 200 seeds:
 179-198, i.e. 90%-99%).
@@ -129,7 +129,7 @@ def test_coverage_linear_coulomb():
 def test_coverage_without_friction():
     """Friction truly 0, at its bound: the profile interval starts at 0 and holds the truth in the
     binomial band (a boundary: the likelihood ratio at 0 exceeds the quantile in ~2.5% of seeds)."""
-    n = 200 if SLOW else 16
+    n = 200 if SLOW else 10
     rows = _rows(K, K, math.inf, C, 0.0, D0, 6.0)
     truth = {**LINEAR_TRUTH, "friction": 0.0}
     covered, z, fits = _coverage(rows, truth, n)
