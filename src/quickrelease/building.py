@@ -316,6 +316,9 @@ class FreeVibration:
         return self.isolation.k2 * x + z
 
     def _evaluate(self, t):
+        # One vectorised closed-form evaluation per kind of piece (elastic, yielding: the pieces of a kind
+        # share a, b and q), each sample taking its piece's start state by a search on the start times;
+        # elementwise the same arithmetic as _Piece.state and _plastic_force.
         iso = self.isolation
         t = np.asarray(t, dtype=float)
         shape = t.shape
@@ -324,24 +327,38 @@ class FreeVibration:
         v = np.zeros(t.shape)
         acc = np.zeros(t.shape)
         z = np.full(t.shape, pushed_state(iso, self.d0)[0])
-        starts = np.array([p.t0 for p in self.pieces])
-        index = np.searchsorted(starts, t, side="right") - 1
-        for i in np.unique(index[index >= 0]):
-            piece = self.pieces[i]
-            m = index == i
-            if piece.end == "stick":
-                after = m & (t >= piece.t1)
-                during = m & ~after
-            else:
-                after, during = np.zeros_like(m), m
-            if np.any(during):
-                xs, vs = piece.state(t[during])
-                zs = _plastic_force(iso, piece, xs)
-                x[during], v[during], z[during] = xs, vs, zs
-                acc[during] = -(iso.damping * vs + iso.k2 * xs + zs + iso.friction * piece.direction) / iso.mass
-            if np.any(after):
+        pieces = self.pieces
+        if pieces:
+            starts = np.array([p.t0 for p in pieces])
+            index = np.searchsorted(starts, t, side="right") - 1
+            moving = index >= 0
+            last = pieces[-1]
+            if last.end == "stick":  # only the last piece sticks: at rest from its end on
+                after = (index == len(pieces) - 1) & (t >= last.t1)
+                moving &= ~after
                 x[after], z[after] = self.rest
                 v[after] = acc[after] = 0.0
+            t0, x0, v0, z0, x_eq, direction = (np.array([getattr(p, f) for p in pieces])
+                                               for f in ("t0", "x0", "v0", "z0", "x_eq", "direction"))
+            yielding = np.array([p.yielding for p in pieces])
+            for kind in (False, True):
+                if not np.any(yielding == kind):
+                    continue
+                first = pieces[int(np.argmax(yielding == kind))]
+                sel = moving & (yielding[np.maximum(index, 0)] == kind)
+                if not np.any(sel):
+                    continue
+                i = index[sel]
+                y0 = x0[i] - x_eq[i]
+                ec, es = _ec_es(first.a, first.q, t[sel] - t0[i])
+                xs = x_eq[i] + ec * y0 + es * (v0[i] + first.a * y0)
+                vs = ec * v0[i] - es * (first.a * v0[i] + first.b * y0)
+                if kind or iso.model == "linear":
+                    zs = z0[i]
+                else:
+                    zs = z0[i] + (iso.stiffness - iso.k2) * (xs - x0[i])
+                x[sel], v[sel], z[sel] = xs, vs, zs
+                acc[sel] = -(iso.damping * vs + iso.k2 * xs + zs + iso.friction * direction[i]) / iso.mass
         return x.reshape(shape), v.reshape(shape), acc.reshape(shape), z.reshape(shape)
 
     def energies(self, t) -> dict[str, np.ndarray]:
@@ -459,9 +476,9 @@ def free_vibration(isolation: Isolation, d0: float, t_end: float | None = None) 
 
 
 def _with_end(piece: _Piece, t1: float, end: str) -> _Piece:
-    from dataclasses import replace
-
-    return replace(piece, t1=t1, end=end)
+    out = object.__new__(_Piece)  # dataclasses.replace, without its per-call field checks (a hot path of fits)
+    out.__dict__.update(piece.__dict__, t1=t1, end=end)
+    return out
 
 
 def _time_to_reach(piece: _Piece, level: float, tau_max: float) -> float | None:

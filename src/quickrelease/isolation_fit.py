@@ -19,9 +19,12 @@ channel that has one (the sensor's zero). The mass m [kg] is given (the record f
 unit mass only).
 
 Uncertainty: the covariance ``(J^T J)^-1`` of the weighted residuals, scaled by the reduced chi-square
-unless the noise levels are known (given, or estimated from the quiet pre-release segment), gives standard
-errors, 95% intervals (Student t) and correlations. Where a parameter sits at its bound (friction 0) or its
-relative standard error is large, the Jacobian's interval is replaced by a profile-likelihood interval
+unless the noise levels are known (given, or estimated from the quiet pre-release segment; a channel with
+neither is weighted by its own residual scatter, refitted), gives standard errors, 95% intervals (Student
+t) and correlations. J is by central differences guarded against the model's jumps (the acceleration jumps
+at each reversal; where one passes a sample inside the stencil the smaller one-sided difference is kept).
+Where a parameter sits at its bound (friction 0) or its relative standard error is large, the Jacobian's
+interval is replaced by a profile-likelihood interval
 (the parameter fixed on a grid, the others re-fitted, the interval where the chi-square rises by the
 Student-t quantile squared times the residual variance). Models are compared by AIC and BIC on the same
 noise levels, and the residuals are tested for whiteness (Ljung-Box).
@@ -184,12 +187,17 @@ def _channel_model(iso: Isolation | TwoDOF, d0: float, t_r: float, kind: str, t:
 def _kind_values(fv, kind: str, tau: np.ndarray) -> np.ndarray:
     """The model's channel of ``kind`` at times tau after the release [SI]: the base (x, v, a) or the roof
     (x_roof, v_roof, a_roof); a rigid model's roof moves with the isolation layer."""
+    return _kind_table(fv, tau)[kind]
+
+
+def _kind_table(fv, tau: np.ndarray) -> dict[str, np.ndarray]:
+    """Every channel kind of the model at times tau after the release [SI] (one evaluation of the motion)."""
     if isinstance(fv.isolation, TwoDOF):
         s = fv.states(tau)
         return {"x": s["x_b"], "v": s["v_b"], "a": s["a_b"], "x_roof": s["x_s"], "v_roof": s["v_s"],
-                "a_roof": s["a_s"]}[kind]
+                "a_roof": s["a_s"]}
     x, v, a = fv.state(tau)
-    return {"x": x, "v": v, "a": a}[kind.removesuffix("_roof")]
+    return {"x": x, "v": v, "a": a, "x_roof": x, "v_roof": v, "a_roof": a}
 
 
 def ljung_box(residuals, lags: int = 20) -> float:
@@ -203,29 +211,38 @@ def ljung_box(residuals, lags: int = 20) -> float:
     lags = int(min(lags, n // 4))
     if lags < 1:
         return math.nan
-    denom = float(r @ r)
+    # einsum, not BLAS dot: OpenBLAS threads a dot of more than ~10^4 samples, which on a busy machine
+    # cost more than the fit's model evaluations
+    denom = float(np.einsum("i,i->", r, r))
     if denom == 0.0:
         return 1.0
-    rho = np.array([float(r[:-k] @ r[k:]) / denom for k in range(1, lags + 1)])
+    rho = np.array([float(np.einsum("i,i->", r[:-k], r[k:])) / denom for k in range(1, lags + 1)])
     q = n * (n + 2) * float(np.sum(rho**2 / (n - np.arange(1, lags + 1))))
     return float(stats.chi2.sf(q, lags))
 
 
 def _detect_release(channels: list[BuildingChannel]) -> float:
     """Where the record first leaves its initial rest: the first of four samples beyond eight scatters of
-    the first tenth of a channel (median, MAD), earliest over the channels [s]."""
+    the head of a channel (median, MAD), earliest over the channels [s]. The head is the first tenth of
+    the channel, shrunk while it holds the release (a hit inside it, or none at all because the motion in
+    it inflates the scatter: a long record after a short quiet segment)."""
     best = math.inf
     for ch in channels:
         n0 = max(10, ch.values.size // 10)
         if ch.values.size < n0 + 5:
             continue
-        head = ch.values[:n0]
-        level = float(np.median(head))
-        spread = 1.4826 * float(np.median(np.abs(head - level)))
-        spread = max(spread, 1e-12 * max(1.0, float(np.max(np.abs(ch.values)))))
-        away = np.abs(ch.values - level) > 8.0 * spread
-        run = away[:-3] & away[1:-2] & away[2:-1] & away[3:]
-        hits = np.nonzero(run)[0]
+        while True:
+            head = ch.values[:n0]
+            level = float(np.median(head))
+            spread = 1.4826 * float(np.median(np.abs(head - level)))
+            spread = max(spread, 1e-12 * max(1.0, float(np.max(np.abs(ch.values)))))
+            away = np.abs(ch.values - level) > 8.0 * spread
+            run = away[:-3] & away[1:-2] & away[2:-1] & away[3:]
+            hits = np.nonzero(run)[0]
+            if n0 > 10 and (hits.size == 0 or hits[0] + 1 < n0):
+                n0 = max(10, int(hits[0]) if hits.size else n0 // 2)
+                continue
+            break
         if hits.size:
             best = min(best, float(ch.t[max(int(hits[0]) - 1, 0)]))
     if not math.isfinite(best):
@@ -339,6 +356,16 @@ def _bilinear_start(mass: float, xch: BuildingChannel | None, t_r: float, noise:
         k2, fp = 0.2 * k1, 0.5 * float(k_eff[0]) * float(amp[0])
     return {"period": 2.0 * math.pi * math.sqrt(mass / k1), "stiffness_ratio": k2 / k1,
             "yield_force": fp / (1.0 - k2 / k1), "friction": 0.5 * linear["friction"]}
+
+
+def _first_peak(xch: BuildingChannel, t_r: float, period: float, d0: float) -> float | None:
+    """|x| at the first turning point after the release (the extreme of the displacement channel, past
+    the static level, within a quarter to three quarters of a period after t_r) [m], or None."""
+    sel = (xch.t > t_r + 0.25 * period) & (xch.t < t_r + 0.75 * period)
+    if np.count_nonzero(sel) < 3:
+        return None
+    level = float(np.median(xch.values[xch.t < t_r])) - d0 if np.count_nonzero(xch.t < t_r) >= 3 else 0.0
+    return float(np.max(-math.copysign(1.0, d0) * (xch.values[sel] - level)))
 
 
 def fit_isolation(channels, mass: float, model: str = "linear", *, release_time: float | None = None,
@@ -466,13 +493,17 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
     t_last = max(float(c.t[-1]) for c in channels)
     sig = np.concatenate([np.full(c.t.size, noise[c.name]) for c in channels])
     data = np.concatenate([c.values for c in channels])
+    # the model is evaluated once at the union of the channels' times (channels often share an axis)
+    t_all, where = np.unique(np.concatenate([c.t for c in channels]), return_inverse=True)
+    where = np.split(where.ravel(), np.cumsum([c.t.size for c in channels])[:-1])
 
     def model_vector(p: dict[str, float]) -> np.ndarray:
         iso = _isolation(model, mass, p, superstructure_mass)
         fv = free_vibration(iso, p["d0"], t_end=max(t_last - p["release_time"], 1e-9))
         out = []
-        for c in channels:
-            y = _kind_values(fv, c.kind, c.t - p["release_time"])
+        kinds = _kind_table(fv, t_all - p["release_time"])
+        for c, at in zip(channels, where, strict=True):
+            y = kinds[c.kind][at]
             out.append(y + p.get(f"offset_{c.name}", 0.0))
         return np.concatenate(out)
 
@@ -487,14 +518,56 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
         except ParameterError:  # outside the model's domain (e.g. held by friction at a bound): penalise
             return np.full(data.size, 1e6)
 
-    def solve(free, base, x0):
+    def solve(free, base, x0, tol=1e-12):
         lo = np.array([lower.get(n, -math.inf) for n in free])
         hi = np.array([upper.get(n, math.inf) for n in free])
         x0 = np.clip(np.asarray(x0, dtype=float), lo, hi)
         # central differences over a relative step of 1e-4: the misfit jumps where a piece boundary (a
         # stick, a yield) passes a sample, so a step near the rounding level would see those jumps
-        return least_squares(residuals, x0, bounds=(lo, hi), args=(free, base), x_scale="jac", jac="3-point",
-                             diff_step=1e-4, xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=400 * max(len(free), 1))
+        return least_squares(residuals, x0, bounds=(lo, hi), args=(free, base), x_scale="jac", jac=jacobian,
+                             diff_step=1e-4, xtol=tol, ftol=tol, gtol=tol, max_nfev=400 * max(len(free), 1))
+
+    # the offsets enter linearly: their columns are exact (1 / sigma on their channel's rows), and only the
+    # other parameters need the two model evaluations each of the central differences
+    rows_of, i0 = {}, 0
+    for c in channels:
+        rows_of[f"offset_{c.name}"] = slice(i0, i0 + c.t.size)
+        i0 += c.t.size
+
+    def jacobian(theta, free=names, base=values):
+        # Central differences, guarded against the jumps of the record model: where a piece boundary (a
+        # reversal, where the friction force flips and the acceleration jumps; the stick) passes a sample
+        # inside the stencil, one one-sided difference holds the jump over h and the other does not. There
+        # the smaller one is the derivative (the jump would make the sample look infinitely informative
+        # and the standard errors far too small, as the optimiser likes to park a jump on a sample).
+        theta = np.asarray(theta, dtype=float)
+        J = np.zeros((data.size, len(free)))
+        f0 = None
+        for i, n in enumerate(free):
+            if n in rows_of:
+                J[rows_of[n], i] = 1.0 / sig[rows_of[n]]
+                continue
+            if f0 is None:
+                f0 = residuals(theta, free, base)
+            x, lo, hi = theta[i], lower.get(n, -math.inf), upper.get(n, math.inf)
+            h = 1e-4 * max(1.0, abs(x))
+
+            def at(value, i=i):
+                moved = theta.copy()
+                moved[i] = value
+                return residuals(moved, free, base)
+
+            if x - h < lo or x + h > hi:  # one-sided, second order, into the feasible side
+                s_ = 1.0 if x + 2.0 * h <= hi else -1.0
+                f1, f2 = at(x + s_ * h), at(x + 2.0 * s_ * h)
+                d1, d2 = (f1 - f0) / (s_ * h), (f2 - f1) / (s_ * h)
+                J[:, i] = np.where(np.abs(d1 - d2) > 0.5 * (np.abs(d1) + np.abs(d2)),
+                                   np.where(np.abs(d1) < np.abs(d2), d1, d2), 1.5 * d1 - 0.5 * d2)
+            else:
+                dp, dm = (at(x + h) - f0) / h, (f0 - at(x - h)) / h
+                J[:, i] = np.where(np.abs(dp - dm) > 0.5 * (np.abs(dp) + np.abs(dm)),
+                                   np.where(np.abs(dp) < np.abs(dm), dp, dm), 0.5 * (dp + dm))
+        return J
 
     # The sliders' stick ends the motion at one reversal or another, so the misfit jumps where the count
     # of half-cycles changes and a local search can settle in the wrong count's basin; the friction is
@@ -506,6 +579,16 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
             k = mass * (2.0 * math.pi / values["period"]) ** 2
             starts.append({**values, "friction": max(values["friction"], 0.02 * k * abs(d0)),
                            "damping_ratio": 0.5 * values["damping_ratio"]})
+            # and the first half-cycle's decrement d0 - |x1| taken by the sliders alone (2 F_s / k per
+            # half-cycle), by the damper alone (|x1| = d0 exp(-pi zeta)) and half by each: a start in the
+            # right basin where the decay analysis found no law
+            x1 = _first_peak(xch, values["release_time"], values["period"], d0) if xch is not None else None
+            if x1 is not None and 0.0 < x1 < abs(d0):
+                drop = abs(d0) - x1
+                for share in (1.0, 0.5, 0.0):
+                    zeta = -math.log1p(-(1.0 - share) * drop / abs(d0)) / math.pi
+                    starts.append({**values, "friction": share * 0.5 * k * drop,
+                                   "damping_ratio": float(np.clip(zeta, 0.002, 0.5))})
         elif model == "bilinear" and "yield_force" in names:
             total = values["friction"] + values["yield_force"]
             for share in (0.05, 0.2, 0.4):
@@ -515,6 +598,21 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
         r_try = solve(names, values, [trial[n] for n in names])
         if res is None or r_try.cost < res.cost:
             res = r_try
+        if model == "linear" and absolute and 2.0 * res.cost <= 1.3 * max(data.size - len(names), 1):
+            break  # misfit at the noise level: the other basins of the linear model lie far above it
+    if not absolute:
+        # a noise level taken from the residuals: weight each such channel by its own residual scatter
+        # and refit (twice; the weights settle at once). One global chi-square scale cannot correct
+        # channels whose first guesses (their spread) are wrong by different factors.
+        for _ in range(2):
+            i = 0
+            for ch in channels:
+                if source[ch.name] == "residuals":
+                    seg = res.fun[i:i + ch.t.size] * sig[i:i + ch.t.size]
+                    noise[ch.name] = float(np.sqrt(np.mean(seg**2))) or noise[ch.name]
+                    sig[i:i + ch.t.size] = noise[ch.name]
+                i += ch.t.size
+            res = solve(names, values, res.x)
     est = unpack(res.x)
     r = res.fun
     n_data = data.size
@@ -601,11 +699,15 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
 def _profile_interval(name, names, est, lo_b, hi_b, se, target, solve) -> tuple[float, float]:
     """The interval of ``name`` where the profile chi-square (others re-fitted) stays below ``target``."""
     others = [n for n in names if n != name]
+    done = {est[name]: [est[n] for n in others]}  # refits so far: each starts from the nearest one
 
     def profile_chi2(value: float) -> float:
         base = dict(est)
         base[name] = value
-        res = solve(others, base, [est[n] for n in others])
+        near = min(done, key=lambda v: abs(v - value))
+        # the chi-square is compared with a target ~ chi2 + 4: a relative tolerance of 1e-10 is ample
+        res = solve(others, base, done[near], tol=1e-10)
+        done[value] = list(res.x)
         return float(res.fun @ res.fun)
 
     def edge(direction: int) -> float:
@@ -624,7 +726,7 @@ def _profile_interval(name, names, est, lo_b, hi_b, se, target, solve) -> tuple[
             inner, step = outer, 2.0 * step
         else:
             return bound
-        return brentq(lambda v: profile_chi2(v) - target, *sorted((inner, outer)), xtol=1e-6 * max(se, 1e-12))
+        return brentq(lambda v: profile_chi2(v) - target, *sorted((inner, outer)), xtol=1e-3 * max(se, 1e-12))
 
     return edge(-1), edge(+1)
 
