@@ -202,7 +202,8 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
         comparison = compare_models(compared)
         if len(comparison) > 1:
             best, second = comparison[0], comparison[1]
-            strength = "strongly" if second["delta_bic"] > 10 else "weakly" if second["delta_bic"] > 2 else "not clearly"
+            gap = second["delta_bic"]
+            strength = "strongly" if gap > 10 else "weakly" if gap > 2 else "not clearly"
             notes.append(f"the record {strength} supports the {best['model']} model (BIC lower by "
                          f"{second['delta_bic']:.3g} than {second['model']})")
             if not all(f.absolute_sigma for f in compared):
