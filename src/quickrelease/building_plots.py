@@ -37,8 +37,9 @@ def building_figures(result) -> dict[str, Any]:
     """The building's figures keyed by the stems of :data:`BUILDING_FIGURES` (the loop only with x and a)."""
     figs = {"building_fit": fit_figure(result)}
     if result.decay is not None:
-        figs["building_decay"] = decay_figure(result)
-        figs["building_amplitude"] = amplitude_figure(result)
+        model = model_decay(result)
+        figs["building_decay"] = decay_figure(result, model)
+        figs["building_amplitude"] = amplitude_figure(result, model)
     if result.loop is not None:
         figs["building_hysteresis"] = hysteresis_figure(result)
     return figs
@@ -92,7 +93,7 @@ def model_decay(result):
     xch = next((c for c in fit.channels if c.kind == "x"), None)
     if xch is None:
         return None
-    t = np.linspace(fit.release_time, float(xch.t[-1]), 20000)
+    t = np.linspace(fit.release_time, float(xch.t[-1]), 8000)
     x = fit.model_values(xch, t) - fit.offsets().get(xch.name, 0.0)
     try:
         return analyse_decay(t, x, noise=1e-9 * max(abs(float(x[0])), 1e-12))
@@ -131,7 +132,7 @@ def decay_envelope_data(result) -> dict[str, np.ndarray]:
     return out
 
 
-def decay_figure(result):
+def decay_figure(result, model=False):
     """Half-cycle amplitudes of the record with the two pure decay laws, the combined law and the model."""
     data = decay_envelope_data(result)
     fig = _figure(5.6, 3.6, left=0.14, bottom=0.14, top=0.88)
@@ -143,7 +144,7 @@ def decay_figure(result):
     for key, (label, color, ls) in styles.items():
         if key in data:
             ax.plot(data["n"], 1e3 * data[key], ls, color=color, lw=1.2, label=label)
-    model = model_decay(result)
+    model = model_decay(result) if model is False else model
     if model is not None and model.amplitude.size:
         ax.plot(np.arange(model.amplitude.size), 1e3 * model.amplitude, "x", ms=4, color=_COLORS["a"],
                 label=f"fitted {result.fit.model} model")
@@ -159,14 +160,14 @@ def decay_figure(result):
     return fig
 
 
-def amplitude_figure(result):
+def amplitude_figure(result, model=False):
     """Equivalent period and equivalent damping ratio against the amplitude, record and fitted model."""
     a = result.decay
     fig = _figure(7.0, 3.0, left=0.09, right=0.98, bottom=0.16, top=0.86, wspace=0.3)
     left, right = fig.subplots(1, 2)
     left.plot(1e3 * a.amplitude, a.equivalent_period, "o", ms=4, color=_COLORS["d"], label="record")
     right.plot(1e3 * a.damping_amplitude, a.equivalent_damping, "o", ms=4, color=_COLORS["d"], label="record")
-    model = model_decay(result)
+    model = model_decay(result) if model is False else model
     if model is not None and model.amplitude.size:
         label = f"fitted {result.fit.model} model"
         left.plot(1e3 * model.amplitude, model.equivalent_period, "x-", ms=4, lw=0.8, color=_COLORS["a"], label=label)
