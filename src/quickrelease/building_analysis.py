@@ -52,7 +52,9 @@ class BuildingResult:
     decay_check: dict[str, Any] = field(default_factory=dict)
     """:func:`~quickrelease.isolation_fit.decay_check` of the fit."""
     loop: dict[str, np.ndarray] | None = None
-    """Hysteresis loop: ``x`` [m] and ``force`` [N] measured (after the release), ``model_x``, ``model_force``."""
+    """Hysteresis loop: at the displacement channel's times ``t`` [s] after the release, ``x`` [m] and
+    ``force`` [N] measured (the acceleration interpolated onto ``t``), and the model's ``model_x``,
+    ``model_force`` on a fine grid."""
     warnings: tuple[str, ...] = ()
     """The fit's warnings and those of the cross-checks."""
     notes: tuple[str, ...] = ()
@@ -304,7 +306,7 @@ def _loop(fit: IsolationFit, channels, notes: list[str]) -> dict[str, np.ndarray
     mx = fit.model_values(xch, tm) - offsets.get(xch.name, 0.0)
     ma = fit.model_values(ach, tm) - offsets.get(ach.name, 0.0)
     model_x, model_force = hysteresis_loop(mx, ma, fit.mass)
-    return {"x": x, "force": force, "model_x": model_x, "model_force": model_force}
+    return {"t": t, "x": x, "force": force, "model_x": model_x, "model_force": model_force}
 
 
 def _model_channel(fit: IsolationFit, channel: BuildingChannel, n: int = _CURVE_POINTS):
