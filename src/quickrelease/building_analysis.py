@@ -278,10 +278,9 @@ def _bilinear_yield_warning(fit: IsolationFit) -> list[str]:
         return []
     if any(p.yielding and p.t0 < span for p in fv.pieces):
         return []
-    reached = float(np.max(np.abs(fv.restoring_force(np.linspace(0.0, span, 2000)))))
     return [f"yield_force: the fitted bilinear spring never yields after the release (F_y = {iso.yield_force:.4g} N, "
-            f"the spring's force after the release at most {reached:.4g} N): the record does not identify "
-            "yield_force and stiffness_ratio (k2); use the linear model"]
+            f"k2 = {iso.k2:.4g} N/m): the record does not identify yield_force and stiffness_ratio (k2); "
+            "use the linear model"]
 
 
 def _loop(fit: IsolationFit, channels, notes: list[str]) -> dict[str, np.ndarray] | None:
