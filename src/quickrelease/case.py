@@ -47,8 +47,8 @@ from .records import RecordSpec, parse_record_spec
 from .statics import StrainEnergy, strain_energy
 from .units import parse_quantity
 
-__all__ = ["Case", "CaseFileError", "Distribution", "FitOptions", "FuseSpec", "BuildingSpec", "PlanOptions",
-           "STANDARD_GRAVITY", "load_case", "CASE_SCHEMA", "UNCERTAIN_KEYS"]
+__all__ = ["Case", "CaseFileError", "Distribution", "FitOptions", "FuseSpec", "BuildingSpec", "BUILDING_MODELS",
+           "PlanOptions", "STANDARD_GRAVITY", "load_case", "CASE_SCHEMA", "UNCERTAIN_KEYS"]
 
 #: Entries that may be given with an uncertainty (a table with std, or low and high), and their
 #: names in :attr:`Case.uncertainty`.
@@ -100,21 +100,50 @@ class FuseSpec:
     """Relative tolerance on a single target force [-]."""
 
 
+#: Models of the isolated building (``[building] model``).
+BUILDING_MODELS = ("linear", "bilinear", "2dof")
+
+
 @dataclass(frozen=True)
 class BuildingSpec:
-    """The ``[building]`` table: a single-degree-of-freedom model of the isolated building (SI units)."""
+    """The ``[building]`` table: the isolated building (SI units).
 
-    period: float
-    """Isolation period T [s]."""
+    ``model`` is ``linear`` (period, damping ratio, slider friction), ``bilinear`` (rubber bearings as a
+    bilinear hysteretic spring k1, k2, F_y; damping ratio referred to k1; slider friction) or ``2dof``
+    (the linear isolation layer under a flexible superstructure: a second mass at the roof with its own
+    fixed-base period and damping). In planning the values are the assumed building, in ``synth`` the
+    truth, in a fit of the building's record the start values.
+    """
+
+    period: float | None = None
+    """Isolation period T = 2 pi sqrt(mass / k) [s] (linear and 2dof; None for bilinear)."""
     damping_ratio: float = 0.0
-    """Viscous damping ratio [-], in [0, 1)."""
+    """Viscous damping ratio [-], in [0, 1) (bilinear: referred to k1)."""
     mass: float | None = None
-    """Mass [kg] (or weight / g)."""
+    """Mass carried by the isolators, the whole building [kg] (or weight / g)."""
     friction: float | None = None
     """Coulomb friction of sliding isolators [N] (or friction_coefficient times the weight)."""
     friction_coefficient: float | None = None
     displacement: float | None = None
-    """Pushed displacement d0 [m]; else (P - friction) / k, k = mass (2 pi / T)^2."""
+    """Pushed displacement d0 [m]; else from the push force: (P - friction) / k (linear), the bilinear
+    push curve (bilinear)."""
+    model: str = "linear"
+    """``"linear"``, ``"bilinear"`` or ``"2dof"``."""
+    k1: float | None = None
+    """Initial stiffness of the bilinear bearings [N/m]."""
+    k2: float | None = None
+    """Post-yield stiffness of the bilinear bearings [N/m], in (0, k1)."""
+    yield_force: float | None = None
+    """Yield force of the bilinear bearings F_y [N]."""
+    superstructure_mass: float | None = None
+    """2dof: the superstructure's mass lumped at the roof [kg], part of ``mass`` (less than it)."""
+    superstructure_period: float | None = None
+    """2dof: the superstructure's fixed-base period [s]."""
+    superstructure_damping_ratio: float | None = None
+    """2dof: the superstructure's viscous damping ratio [-], in [0, 1)."""
+    record: RecordSpec | None = None
+    """The building's free-vibration record (``[building.record]``), read by
+    :func:`quickrelease.building_case.load_building`."""
 
     @property
     def friction_force(self) -> float:
@@ -124,6 +153,13 @@ class BuildingSpec:
         if self.friction_coefficient is not None:
             return self.friction_coefficient * self.mass * STANDARD_GRAVITY
         return 0.0
+
+    @property
+    def initial_period(self) -> float:
+        """Period of the isolation layer's (initial) stiffness [s]: T, or 2 pi sqrt(mass / k1) (bilinear)."""
+        if self.period is not None:
+            return self.period
+        return 2.0 * math.pi * math.sqrt(self.mass / self.k1)
 
 
 @dataclass(frozen=True)
@@ -168,6 +204,7 @@ _VALID = {
     ("building", "damping_ratio"): lambda x: 0.0 <= x < 1.0,
     ("building", "friction"): lambda x: x >= 0.0,
     ("building", "friction_coefficient"): lambda x: x >= 0.0,
+    ("building", "superstructure_damping_ratio"): lambda x: 0.0 <= x < 1.0,
 }
 
 #: section -> key -> (quantity kind or type, what is expected)
@@ -194,6 +231,7 @@ CASE_SCHEMA: dict[str, dict[str, tuple[str, str]]] = {
         "tolerance": ("dimensionless", "a fraction in (0, 1), e.g. 0.05"),
     },
     "building": {
+        "model": ("building_model", "'linear', 'bilinear' or '2dof'"),
         "period": ("time", "a positive period, e.g. '2.5 s'"),
         "damping_ratio": ("dimensionless", "a damping ratio in [0, 1), e.g. 0.1"),
         "mass": ("mass", "a positive mass, e.g. '1500 t'"),
@@ -201,6 +239,12 @@ CASE_SCHEMA: dict[str, dict[str, tuple[str, str]]] = {
         "friction": ("force", "a force >= 0 (sliding isolators), e.g. '150 kN'"),
         "friction_coefficient": ("dimensionless", "a friction coefficient >= 0 (times the weight), e.g. 0.01"),
         "displacement": ("length", "a positive pushed displacement d0, e.g. '50 mm'"),
+        "k1": ("stiffness", "a positive initial stiffness of the bilinear bearings, e.g. '40 MN/m'"),
+        "k2": ("stiffness", "a positive post-yield stiffness below k1, e.g. '4 MN/m'"),
+        "yield_force": ("force", "a positive yield force of the bilinear bearings, e.g. '120 kN'"),
+        "superstructure_mass": ("mass", "a positive mass below [building] mass (lumped at the roof), e.g. '500 t'"),
+        "superstructure_period": ("time", "a positive fixed-base period of the superstructure, e.g. '0.5 s'"),
+        "superstructure_damping_ratio": ("dimensionless", "a damping ratio in [0, 1), e.g. 0.02"),
     },
     "plan": {
         "samples": ("int", "an integer >= 2 (friction samples of the release envelope)"),
@@ -273,6 +317,8 @@ class Case:
     title: str = "quickrelease case"
     notes: str = ""
     source: str = "<case>"
+    has_test: bool = True
+    """False for a case of the building alone (no ``[test]``: alpha0 and E_S are NaN; see :func:`load_case`)."""
 
     @property
     def mass_factor(self) -> float:
@@ -358,6 +404,10 @@ def _entry(source: str, section: str, key: str, value: Any) -> Any:
         if value not in ("energy", "rk", "explicit"):
             raise _fail(source, where, value, expected)
         return value
+    if kind == "building_model":
+        if value not in BUILDING_MODELS:
+            raise _fail(source, where, value, expected)
+        return value
     if kind == "rk_method":
         if value not in ("DOP853", "RK45"):
             raise _fail(source, where, value, expected)
@@ -423,8 +473,12 @@ def _strip_name(reason: str, key: str, value: Any) -> str:
     return reason[len(prefix):] if reason.startswith(prefix) else reason
 
 
-def load_case(path: str | Path) -> Case:
+def load_case(path: str | Path, *, require_test: bool = True) -> Case:
     """Read and validate a case file.
+
+    With ``require_test=False`` a case of the building alone (``[building]`` with its record, no ``[test]``)
+    is valid too: its device test is absent (``has_test`` False, alpha0 and E_S NaN), for the commands that
+    analyse or synthesize the building only.
 
     Raises
     ------
@@ -435,10 +489,11 @@ def load_case(path: str | Path) -> Case:
     path = Path(path)
     source = str(path)
     data = read_toml(path, "case file", CaseFileError)
-    return case_from_mapping(data, source=source, base=path.parent)
+    return case_from_mapping(data, source=source, base=path.parent, require_test=require_test)
 
 
-def case_from_mapping(data: dict[str, Any], source: str = "<case>", base: Path | None = None) -> Case:
+def case_from_mapping(data: dict[str, Any], source: str = "<case>", base: Path | None = None, *,
+                      require_test: bool = True) -> Case:
     """Build a Case from the parsed TOML mapping (see :func:`load_case`)."""
     base = base or Path.cwd()
     sections = [s for s in CASE_SCHEMA if s] + ["record"]
@@ -457,11 +512,17 @@ def case_from_mapping(data: dict[str, Any], source: str = "<case>", base: Path |
         if section in ("device", "record"):
             continue
         for key, value in table.items():
+            if section == "building" and key == "record":  # [building.record]: parsed with [building]
+                continue
             if key not in CASE_SCHEMA[section]:
                 raise CaseFileError(f"{source}: unknown key [{section}] {key!r}; "
                                     f"valid: {', '.join(CASE_SCHEMA[section])}")
             values[f"{section}.{key}"] = _entry(source, section, key, value)
     device = _device(data.get("device", {}), source, base)
+    building = _building(values, data.get("building"), source, base)
+    if "test" not in data and not require_test and building is not None:  # a case of the building alone
+        return Case(device=device, alpha0=math.nan, stored_energy=math.nan, building=building, has_test=False,
+                    title=values.get("title", Path(source).stem), notes=values.get("notes", ""), source=source)
     if "test" not in data:
         raise CaseFileError(f"{source}: missing table [test] (force or energy, alpha0)")
     if "test.alpha0" not in values:
@@ -512,7 +573,6 @@ def case_from_mapping(data: dict[str, Any], source: str = "<case>", base: Path |
     sim = {k.split(".", 1)[1]: v for k, v in values.items() if k.startswith("simulation.")}
     fit = FitOptions(**{k.split(".", 1)[1]: v for k, v in values.items() if k.startswith("fit.")})
     fuse = _fuse(values, uncertainty, data.get("fuse"), source)
-    building = _building(values, data.get("building"), source)
     plan = PlanOptions(**{k.split(".", 1)[1]: v for k, v in values.items() if k.startswith("plan.")})
     return Case(
         device=device, alpha0=alpha0, stored_energy=E_S, push_force=P,
@@ -568,11 +628,32 @@ def _fuse(values: dict[str, Any], uncertainty: dict[str, Distribution], table: A
                     angles=values.get("fuse.angles", ()), target=target, tolerance=values.get("fuse.tolerance", 0.05))
 
 
-def _building(values: dict[str, Any], table: Any, source: str) -> BuildingSpec | None:
+#: The keys each building model uses beyond mass/weight, damping_ratio, friction, displacement.
+_MODEL_KEYS = {
+    "linear": ("period",),
+    "bilinear": ("k1", "k2", "yield_force"),
+    "2dof": ("period", "superstructure_mass", "superstructure_period", "superstructure_damping_ratio"),
+}
+#: Keys that only some models take.
+_MODEL_ONLY = {key for keys in _MODEL_KEYS.values() for key in keys}
+
+
+def _building(values: dict[str, Any], table: Any, source: str, base: Path) -> BuildingSpec | None:
+    """The ``[building]`` table (and ``[building.record]``): every inconsistency one line naming the key,
+    its value and what the model expects."""
     if table is None:
         return None
-    if "building.period" not in values:
-        raise CaseFileError(f"{source}: missing key [building] period (the isolation period, e.g. '2.5 s')")
+    model = values.get("building.model", "linear")
+    given = {key.split(".", 1)[1] for key in values if key.startswith("building.")}
+    for key in sorted(given & _MODEL_ONLY - set(_MODEL_KEYS[model])):
+        users = " or ".join(m for m, keys in _MODEL_KEYS.items() if key in keys)
+        raise CaseFileError(f"{source}: [building] {key} = {table[key]!r} with model = {model!r}: {key} belongs "
+                            f"to model = {users!r} (the {model} model takes "
+                            f"{', '.join(_MODEL_KEYS[model])})")
+    for key in _MODEL_KEYS[model]:
+        if key not in given and not (model == "2dof" and key == "superstructure_damping_ratio"):
+            raise CaseFileError(f"{source}: missing key [building] {key} for model = {model!r} "
+                                f"({CASE_SCHEMA['building'][key][1]})")
     mass = values.get("building.mass")
     if "building.weight" in values:
         if mass is not None:
@@ -582,9 +663,33 @@ def _building(values: dict[str, Any], table: Any, source: str) -> BuildingSpec |
         raise CaseFileError(f"{source}: [building] friction and friction_coefficient: give one of the two")
     if "building.friction_coefficient" in values and mass is None:
         raise CaseFileError(f"{source}: [building] friction_coefficient needs the mass or the weight")
+    if model != "linear" and mass is None:
+        raise CaseFileError(f"{source}: missing key [building] mass (or weight) for model = {model!r} (its "
+                            "stiffnesses act on the mass), e.g. '650 t'")
     if "building.displacement" not in values and mass is None:
         raise CaseFileError(f"{source}: [building] needs displacement (d0) or the mass or weight (d0 = P / k)")
-    return BuildingSpec(period=values["building.period"], damping_ratio=values.get("building.damping_ratio", 0.0),
+    k1, k2 = values.get("building.k1"), values.get("building.k2")
+    if k1 is not None and not k2 < k1:
+        raise _fail(source, "[building] k2", table["k2"], f"a post-yield stiffness in (0, k1) = (0, {k1:.6g}) N/m")
+    m_s = values.get("building.superstructure_mass")
+    if m_s is not None and not m_s < mass:
+        raise _fail(source, "[building] superstructure_mass", table["superstructure_mass"],
+                    f"a mass in (0, [building] mass) = (0, {mass:.6g}) kg (the superstructure is part of the "
+                    "building's mass)")
+    record = None
+    if "record" in table:
+        from .building_case import parse_building_record
+
+        try:
+            record = parse_building_record(table["record"], source, base)
+        except QuickReleaseError as exc:
+            raise CaseFileError(str(exc)) from None
+    return BuildingSpec(period=values.get("building.period"), damping_ratio=values.get("building.damping_ratio", 0.0),
                         mass=mass, friction=values.get("building.friction"),
                         friction_coefficient=values.get("building.friction_coefficient"),
-                        displacement=values.get("building.displacement"))
+                        displacement=values.get("building.displacement"), model=model, k1=k1, k2=k2,
+                        yield_force=values.get("building.yield_force"), superstructure_mass=m_s,
+                        superstructure_period=values.get("building.superstructure_period"),
+                        superstructure_damping_ratio=values.get("building.superstructure_damping_ratio",
+                                                                None if model != "2dof" else 0.0),
+                        record=record)

@@ -135,14 +135,19 @@ class FitResult:
                              self.mass_factor)
 
     def model_curves(self, n: int = 2000) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-        """The fitted model (with offsets) of every channel on a fine grid over the record [s, SI]."""
+        """The fitted model (with offsets) of every channel on a fine grid over the record [s, SI] (each
+        channel with the sampling window of its own time axis)."""
         if self.record is None:
             return np.empty(0), {}
-        t = np.linspace(float(self.record.t[0]), float(self.record.t[-1]), n)
-        window = self.record.sampling_interval()
-        curves = release_channels(list(self.record.channels), t, self.release_time, self.release(), window)
+        rec = self.record
+        t = np.linspace(min(float(rec.t[0]), *(float(ch.t[0]) for ch in rec.channels.values())),
+                        max(float(rec.t[-1]), rec.end), n)
         offsets = self.offsets()
-        return t, {name: values + offsets.get(name, 0.0) for name, values in curves.items()}
+        out = {}
+        for name, ch in rec.channels.items():
+            curve = release_channels([name], t, self.release_time, self.release(), ch.sampling_interval(rec.t))
+            out[name] = curve[name] + offsets.get(name, 0.0)
+        return t, out
 
     def offsets(self) -> dict[str, float]:
         return {n.removeprefix("offset_"): v for n, v in self.estimates.items() if n.startswith("offset_")}
@@ -229,6 +234,14 @@ class _Problem:
             raise QuickReleaseError(f"{case.source}: nothing to fit: give a [record], or [observations] with a "
                                     "scatter (e.g. stop_time = {value = \"1.05 s\", std = \"0.01 s\"})")
         self.index = {n: i for i, n in enumerate(self.names)}
+        #: (channels, time axis, sampling window) per time axis: the record's, and each channel's own
+        self.groups: list[tuple[list[str], np.ndarray, float]] = []
+        if record is not None:
+            shared = [n for n, ch in self.channels.items() if ch.own_axis is None]
+            if shared:
+                self.groups.append((shared, record.t, self.window))
+            self.groups += [([n], ch.own_axis, ch.sampling_interval(record.t)) for n, ch in self.channels.items()
+                            if ch.own_axis is not None]
         self.sigma: dict[str, float] = {}
         self.sigma_source: dict[str, str] = {}
 
@@ -247,9 +260,11 @@ class _Problem:
         fi = self.release(v)
         out: dict[str, np.ndarray] = {}
         if self.record is not None:
-            full = release_channels(list(self.channels), self.record.t, v["release_time"], fi, self.window)
-            for name, ch in self.channels.items():
-                out[name] = full[name][ch.index] + v.get(f"offset_{name}", 0.0)
+            for names, t, window in self.groups:  # channels on one time axis: one evaluation of the model
+                full = release_channels(names, t, v["release_time"], fi, window)
+                for name in names:
+                    ch = self.channels[name]
+                    out[name] = full[name][ch.index] + v.get(f"offset_{name}", 0.0)
         return out, fi
 
     def residuals(self, x: np.ndarray) -> np.ndarray:
@@ -278,12 +293,11 @@ def _noise(problem: _Problem, t_release: float) -> None:
     """Each channel's sigma: given, or the scatter of its pre-release samples (at rest), and at least
     :data:`NOISE_FLOOR` times the channel's largest value."""
     rec = problem.record
-    dt = rec.sampling_interval()
     for name, ch in problem.channels.items():
         if ch.spec.noise is not None:
             problem.sigma[name], problem.sigma_source[name] = ch.spec.noise, "given"
             continue
-        quiet = ch.values[ch.t < t_release - 3.0 * dt]
+        quiet = ch.values[ch.t < t_release - 3.0 * ch.sampling_interval(rec.t)]
         if quiet.size < 10:
             raise RecordError(f"{rec.file}: column {ch.spec.column!r} (channel {name}): only {quiet.size} samples "
                               f"before the release at {t_release:.4g} s, too few to estimate its noise: give "
@@ -304,11 +318,10 @@ def _noise(problem: _Problem, t_release: float) -> None:
 def _offset_starts(problem: _Problem, t_release: float) -> dict[str, float]:
     out = {}
     rec = problem.record
-    dt = rec.sampling_interval()
     for name, ch in problem.channels.items():
         if not ch.spec.offset:
             continue
-        quiet = ch.values[ch.t < t_release - 2.0 * dt]
+        quiet = ch.values[ch.t < t_release - 2.0 * ch.sampling_interval(rec.t)]
         base = float(np.mean(quiet)) if quiet.size else float(ch.values[0])
         out[f"offset_{name}"] = base - _rest_value(name, problem.case.alpha0)
     return out
@@ -356,7 +369,7 @@ def _read_stop_time(problem: _Problem, t_release: float) -> float | None:
         level = float(np.median(ch.values[-n_end:]))
         away = np.nonzero((np.abs(ch.values - level) > 6.0 * problem.sigma[name]) & (ch.t > t_release))[0]
         if away.size and away[-1] < ch.values.size - n_end:
-            return float(ch.t[away[-1]]) + 0.5 * problem.window - t_release
+            return float(ch.t[away[-1]]) + 0.5 * ch.sampling_interval(problem.record.t) - t_release
     return None
 
 

@@ -43,8 +43,8 @@ from .errors import ParameterError, QuickReleaseError
 __all__ = ["BuildingChannel", "IsolationFit", "fit_isolation", "compare_models", "decay_check", "ljung_box",
            "CHANNEL_KINDS"]
 
-#: Channel kinds of the isolation layer and their SI units.
-CHANNEL_KINDS = {"x": "m", "v": "m/s", "a": "m/s^2"}
+#: Channel kinds of the isolation layer (x, v, a) and of the roof (x_roof, v_roof, a_roof) and their SI units.
+CHANNEL_KINDS = {"x": "m", "v": "m/s", "a": "m/s^2", "x_roof": "m", "v_roof": "m/s", "a_roof": "m/s^2"}
 _UNITS = {"period": "s", "damping_ratio": "-", "friction": "N", "stiffness_ratio": "-", "yield_force": "N",
           "d0": "m", "release_time": "s"}
 #: Relative standard error above which the profile-likelihood interval replaces the Jacobian's.

@@ -20,7 +20,7 @@ import numpy as np
 
 from . import batch
 from ._validate import check_size
-from .building import FreeVibration, Isolation, free_vibration
+from .building import FreeVibration, Isolation, free_vibration, pushed_state
 from .case import BuildingSpec, Case, Distribution
 from .device import Device
 from .dynamics import angular_acceleration
@@ -448,26 +448,30 @@ def building_motion(t, d0: float, period: float, damping_ratio: float = 0.0, fri
 
 
 def building_isolation(building: BuildingSpec) -> Isolation:
-    """The ``[building]`` table as the linear isolation of :mod:`quickrelease.building` (k = m (2 pi / T)^2,
-    viscous damping ratio, Coulomb sliders). Without a mass the motion needs no friction (``a_f = F_s / m``):
-    a unit mass stands in when the friction is 0."""
-    friction = building.friction_force
-    mass = building.mass
-    if mass is None:
-        if friction > 0.0:
-            raise ParameterError("[building] mass", None, "given with the isolators' friction (the motion depends "
-                                 "on friction / mass)", "kg")
-        mass = 1.0
-    return Isolation.linear(mass, building.period, building.damping_ratio, friction)
+    """The ``[building]`` table as an isolation of :mod:`quickrelease.building`: linear (k = m (2 pi / T)^2,
+    viscous damping ratio, Coulomb sliders), bilinear (k1, k2, F_y, damping ratio, sliders), or for the 2dof
+    model the isolation layer with the superstructure taken as rigid on it (the whole mass on the layer's
+    period: the superstructure's own mode is left out of the clearance check). Without a mass (linear) the
+    motion needs no friction (``a_f = F_s / m``): a unit mass stands in when the friction is 0
+    (:func:`quickrelease.building_case.spec_isolation`)."""
+    from .building_case import spec_isolation
+
+    return spec_isolation(building)
 
 
 def pushed_displacement(push_force: float, building: BuildingSpec) -> float:
-    """The building's displacement under the push, d0 [m]: given, else ``(P - F_f) / k`` with
-    ``k = m (2 pi / T)^2`` (the jack pushes against the isolators' stiffness and friction)."""
+    """The building's displacement under the push, d0 [m]: given, else where the push ``P`` is held by the
+    isolators' friction and restoring force, ``P - F_f = R(d0)``: ``(P - F_f) / k`` with
+    ``k = m (2 pi / T)^2`` (linear, 2dof), and on the bilinear push curve ``(P - F_f) / k1`` up to the
+    yield force, ``d_y + (P - F_f - F_y) / k2`` beyond it (``d_y = F_y / k1``)."""
     if building.displacement is not None:
         return building.displacement
+    held = max(push_force - building.friction_force, 0.0)
+    if building.model == "bilinear":
+        k1, k2, F_y = building.k1, building.k2, building.yield_force
+        return held / k1 if held <= F_y else F_y / k1 + (held - F_y) / k2
     k = building.mass * (2.0 * math.pi / building.period) ** 2
-    return max(push_force - building.friction_force, 0.0) / k
+    return held / k
 
 
 #: What :class:`Clearance` says when the gap grows over the whole horizon (no minimum after it opens).
@@ -568,8 +572,8 @@ def clearance(release: FirstIntegral, building: BuildingSpec, d0: float, n: int 
     (the later approaches are smaller and the head has stopped, so none can close the gap) and ``note`` says
     so (:data:`GAP_GROWS`).
     """
-    period = building.period
     iso = building_isolation(building)
+    period = iso.period
     a_f = iso.friction / iso.mass
     t_stop = release.stop_time()
     horizon = max(1.5 * t_stop, period)
@@ -622,8 +626,8 @@ def clearance(release: FirstIntegral, building: BuildingSpec, d0: float, n: int 
     s0, c0 = math.sin(alpha0), math.cos(alpha0)
     rate0 = release.alpha_dot0
     acc0 = float(angular_acceleration(alpha0, rate0, release.F1, release.F2, release.m1, release.m2, L1, release.c))
-    w = 2.0 * math.pi / period
-    a_b0 = w * w * d0 - a_f  # the building's initial acceleration towards the device
+    R0 = pushed_state(iso, d0)[1] if d0 != 0.0 else 0.0
+    a_b0 = R0 / iso.mass - a_f  # the building's initial acceleration towards the device
     u_dot0 = L1 * s0 * rate0
     u_ddot0 = L1 * (c0 * rate0**2 + s0 * acc0)
     contact = first_contact is not None
@@ -636,7 +640,8 @@ def clearance(release: FirstIntegral, building: BuildingSpec, d0: float, n: int 
 
 def _gap_at(s: float, release: FirstIntegral, building: BuildingSpec, d0: float) -> float:
     """The gap at one instant s [s] (see :func:`clearance`) [m]."""
-    motion = free_vibration(building_isolation(building), d0, t_end=max(float(s), building.period))
+    iso = building_isolation(building)
+    motion = free_vibration(iso, d0, t_end=max(float(s), iso.period))
     return _Gap(release, motion, d0)(s)
 
 

@@ -335,7 +335,12 @@ class ChannelSpec:
     offset: bool = False
     """Estimate a constant offset of this channel."""
     file: Path | None = None
-    """A file of its own (time in the same column name), else the record's file."""
+    """A file of its own (time in the same column name unless ``time_column`` is given), else the record's file."""
+    time_column: str | None = None
+    """The time column of the channel's own file (its own time axis and sampling rate); None: the record's
+    time axis (the record's time column, row by row)."""
+    time_factor: float = 1.0
+    """SI value of one unit of ``time_column`` [s]."""
 
 
 @dataclass(frozen=True)
@@ -353,8 +358,17 @@ class RecordSpec:
     """The case file the mapping came from (for messages)."""
 
 
-_CHANNEL_KEYS = ("column", "unit", "noise", "offset", "scale", "file")
+_CHANNEL_KEYS = ("column", "unit", "noise", "offset", "scale", "file", "time")
 _RECORD_KEYS = ("file", "time", "release_time", "channels")
+
+
+def _time_spec(time: Any, where: str) -> tuple[str, float]:
+    """A ``time`` entry: a column name in seconds, or ``{column, unit}`` -> (column, SI value of its unit)."""
+    if isinstance(time, str):
+        return time, 1.0
+    if isinstance(time, dict) and set(time) <= {"column", "unit"} and isinstance(time.get("column"), str):
+        return time["column"], _unit_factor(str(time.get("unit", "s")), "time", f"{where}.unit")
+    raise RecordError(f"{where} = {time!r}: expected a column name or {{column = ..., unit = ...}}")
 
 
 def _unit_factor(unit: str, kind: str, where: str) -> float:
@@ -367,17 +381,26 @@ def _unit_factor(unit: str, kind: str, where: str) -> float:
         raise RecordError(f"{where} = {unit!r}: {reason}") from None
 
 
-def parse_record_spec(table: Any, source: str, base: Path) -> RecordSpec:
+def parse_record_spec(table: Any, source: str, base: Path, *, channels: dict[str, tuple[str, str, str]] | None = None,
+                      offsets: tuple[str, ...] | None = None, section: str = "record") -> RecordSpec:
     """Validate the ``[record]`` table of a case file.
 
     ``file`` (relative to the case file), ``time`` (a column name in seconds, or a table
     ``{column, unit}``), optional ``release_time`` (a start value), and ``[record.channels]``: for each
     channel of :data:`CHANNELS` a column name (SI unit) or a table with ``column`` and optionally
     ``unit``, ``noise`` (standard deviation, with units), ``offset`` (bool: estimate a constant offset;
-    default true for alpha, u, v), ``scale`` (a factor, e.g. -1 for a reversed sensor axis) and ``file``
-    (a separate file with the same time column).
+    default true for alpha, u, v), ``scale`` (a factor, e.g. -1 for a reversed sensor axis), ``file``
+    (a separate file; the record's time column, row by row, unless it gives its own) and ``time`` (with
+    ``file``: that file's own time column, a name or ``{column, unit}``; the channel then has its own time
+    axis, length and sampling rate).
+
+    ``channels`` (name -> (quantity kind, SI unit, description)), ``offsets`` (the channels with an offset
+    by default) and ``section`` (the table's name in messages) default to the device's record; the
+    building's record (``[building.record]``) passes its own.
     """
-    where = f"{source} [record]"
+    channels = CHANNELS if channels is None else channels
+    offsets = DISPLACEMENT_CHANNELS if offsets is None else offsets
+    where = f"{source} [{section}]"
     if not isinstance(table, dict):
         raise RecordError(f"{where}: expected a table")
     unknown = sorted(set(table) - set(_RECORD_KEYS))
@@ -390,14 +413,7 @@ def parse_record_spec(table: Any, source: str, base: Path) -> RecordSpec:
         raise RecordError(f"{where}: file = {table['file']!r}: expected a path")
     file = Path(table["file"])
     file = file if file.is_absolute() else base / file
-    time = table["time"]
-    if isinstance(time, str):
-        time_column, time_factor = time, 1.0
-    elif isinstance(time, dict) and set(time) <= {"column", "unit"} and isinstance(time.get("column"), str):
-        time_column = time["column"]
-        time_factor = _unit_factor(str(time.get("unit", "s")), "time", f"{where} time.unit")
-    else:
-        raise RecordError(f"{where}: time = {time!r}: expected a column name or {{column = ..., unit = ...}}")
+    time_column, time_factor = _time_spec(table["time"], f"{where} time")
     release = None
     if "release_time" in table:
         try:
@@ -406,18 +422,19 @@ def parse_record_spec(table: Any, source: str, base: Path) -> RecordSpec:
             raise RecordError(f"{where}: {exc}") from None
     channels_table = table["channels"]
     if not isinstance(channels_table, dict) or not channels_table:
-        raise RecordError(f"{where}: channels: expected a table mapping channels ({', '.join(CHANNELS)}) to columns")
-    channels = {}
+        raise RecordError(f"{where}: channels: expected a table mapping channels ({', '.join(channels)}) to columns")
+    specs = {}
     for name, entry in channels_table.items():
-        channels[name] = _channel_spec(name, entry, f"{where} channels.{name}", base)
-    return RecordSpec(file=file, time_column=time_column, time_factor=time_factor, channels=channels,
+        specs[name] = _channel_spec(name, entry, f"{where} channels.{name}", base, channels, offsets)
+    return RecordSpec(file=file, time_column=time_column, time_factor=time_factor, channels=specs,
                       release_time=release, source=source)
 
 
-def _channel_spec(name: str, entry: Any, where: str, base: Path) -> ChannelSpec:
-    if name not in CHANNELS:
-        raise RecordError(f"{where}: unknown channel {name!r}; valid: {', '.join(CHANNELS)}")
-    kind, si_unit, _ = CHANNELS[name]
+def _channel_spec(name: str, entry: Any, where: str, base: Path, channels: dict[str, tuple[str, str, str]],
+                  offsets: tuple[str, ...]) -> ChannelSpec:
+    if name not in channels:
+        raise RecordError(f"{where}: unknown channel {name!r}; valid: {', '.join(channels)}")
+    kind, si_unit, _ = channels[name]
     if isinstance(entry, str):
         entry = {"column": entry}
     if not isinstance(entry, dict):
@@ -440,15 +457,23 @@ def _channel_spec(name: str, entry: Any, where: str, base: Path) -> ChannelSpec:
             raise RecordError(f"{where}: {exc}") from None
         if not (math.isfinite(noise) and noise > 0):
             raise RecordError(f"{where}: noise = {entry['noise']!r}: expected a positive standard deviation")
-    offset = entry.get("offset", name in DISPLACEMENT_CHANNELS)
+    offset = entry.get("offset", name in offsets)
     if not isinstance(offset, bool):
         raise RecordError(f"{where}: offset = {offset!r}: expected true or false")
     file = None
     if "file" in entry:
-        file = Path(str(entry["file"]))
+        if not isinstance(entry["file"], str):
+            raise RecordError(f"{where}: file = {entry['file']!r}: expected a path")
+        file = Path(entry["file"])
         file = file if file.is_absolute() else base / file
+    time_column, time_factor = None, 1.0
+    if "time" in entry:
+        if file is None:
+            raise RecordError(f"{where}: time = {entry['time']!r} without file: a channel in the record's file "
+                              "shares its time column (give file = ... for a file with its own time axis)")
+        time_column, time_factor = _time_spec(entry["time"], f"{where}.time")
     return ChannelSpec(name=name, column=entry["column"], unit=unit, factor=factor * float(scale), noise=noise,
-                       offset=offset, file=file)
+                       offset=offset, file=file, time_column=time_column, time_factor=time_factor)
 
 
 # -- the data ------------------------------------------------------------------------------------------
@@ -463,9 +488,20 @@ class Channel:
     values: np.ndarray
     """Measured values [SI unit of the channel]."""
     index: np.ndarray
-    """Row of each sample in the record's time axis."""
+    """Row of each sample in the channel's time axis (:attr:`axis`)."""
     missing: int
     """Samples missing (NaN or empty) in this channel, skipped."""
+    own_axis: np.ndarray | None = None
+    """The channel's own time axis [s] (a file with its own time column and rate); None: the record's."""
+
+    def axis(self, record_t: np.ndarray) -> np.ndarray:
+        """The time axis :attr:`index` refers to: the channel's own, else the record's ``record_t`` [s]."""
+        return record_t if self.own_axis is None else self.own_axis
+
+    def sampling_interval(self, record_t: np.ndarray) -> float:
+        """Median time step of the channel's time axis [s]."""
+        t = self.axis(record_t)
+        return float(np.median(np.diff(t))) if t.size > 1 else float("nan")
 
     @property
     def name(self) -> str:
@@ -564,32 +600,35 @@ def _check_glitches(values: np.ndarray, empty: np.ndarray, rows: np.ndarray, pat
                           "(an empty cell is a missing sample)")
 
 
-def _time_axis(frame, spec: RecordSpec, path: Path) -> tuple[np.ndarray, np.ndarray]:
-    if spec.time_column not in frame.columns:
+def _time_axis(frame, column: str, factor: float, path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """The time column ``column`` of ``frame`` in seconds (rows with a time) and those rows; RecordError naming
+    the file and the column when it is missing, not numeric, shorter than two values or not increasing."""
+    if column not in frame.columns:
         columns = ", ".join(map(str, frame.columns))
-        raise RecordError(f"{path}: no time column {spec.time_column!r} (columns: {columns})")
-    t = _numeric(frame, spec.time_column, path) * spec.time_factor
+        raise RecordError(f"{path}: no time column {column!r} (columns: {columns})")
+    t = _numeric(frame, column, path) * factor
     rows = np.nonzero(np.isfinite(t))[0]
     if rows.size < 2:
-        raise RecordError(f"{path}: column {spec.time_column!r}: fewer than two time values")
+        raise RecordError(f"{path}: column {column!r}: fewer than two time values")
     tt = t[rows]
     steps = np.diff(tt)
     if np.any(steps <= 0):
         k = int(np.nonzero(steps <= 0)[0][0])
-        raise RecordError(f"{path}: column {spec.time_column!r}: time is not increasing at row {rows[k + 1] + 1} "
+        raise RecordError(f"{path}: column {column!r}: time is not increasing at row {rows[k + 1] + 1} "
                           f"({tt[k + 1]:.6g} s after {tt[k]:.6g} s)")
     return tt, rows
 
 
 def load_record(spec: RecordSpec) -> Record:
-    """Read the record a case file points to, as SI channels on one time axis.
+    """Read the record a case file points to, as SI channels on the record's time axis (or, for a channel in
+    a file with its own time column, on that file's time axis).
 
     Raises
     ------
     RecordError
         No time column, time not increasing, a column missing or not numeric, a unit of the wrong
-        dimension, a channel file of another length, an all-missing channel; the message names the file
-        and the column.
+        dimension, a channel file of another length (without its own time column), an all-missing
+        channel; the message names the file and the column.
     """
     frames: dict[Path, Any] = {}
 
@@ -599,25 +638,39 @@ def load_record(spec: RecordSpec) -> Record:
         return frames[path]
 
     main = frame_of(spec.file)
-    t, rows = _time_axis(main, spec, spec.file)
+    t, rows = _time_axis(main, spec.time_column, spec.time_factor, spec.file)
     notes = []
     dropped = int(len(main) - rows.size)
     if dropped:
         notes.append(f"{spec.file.name}: {dropped} row(s) without a time value dropped")
     channels = {}
+    own_axes: dict[tuple[Path, str, float], tuple[np.ndarray, np.ndarray]] = {}
     for name, cs in spec.channels.items():
         path = cs.file or spec.file
         frame = frame_of(path)
         if cs.column not in frame.columns:
             raise RecordError(f"{path}: no column {cs.column!r} for channel {name} "
                               f"(columns: {', '.join(map(str, frame.columns))})")
-        if cs.file is not None and len(frame) != len(main):
+        axis, axis_rows, own = t, rows, None
+        if cs.time_column is not None:  # the channel's own time axis: its file's time column
+            key = (path, cs.time_column, cs.time_factor)
+            if key not in own_axes:
+                own_axes[key] = _time_axis(frame, cs.time_column, cs.time_factor, path)
+                lost = int(len(frame) - own_axes[key][1].size)
+                if lost:
+                    notes.append(f"{path.name}: {lost} row(s) without a time value in column {cs.time_column!r} "
+                                 "dropped")
+            axis, axis_rows = own_axes[key]
+            own = axis
+        elif cs.file is not None and len(frame) != len(main):
             raise RecordError(f"{path}: column {cs.column!r} has {len(frame)} rows, the time column "
-                              f"{spec.time_column!r} of {spec.file.name} has {len(main)}")
-        raw = _numeric(frame, cs.column, path)[rows]
+                              f"{spec.time_column!r} of {spec.file.name} has {len(main)} (give the channel's "
+                              "own time column: time = ...)")
+        rows_ch = axis_rows
+        raw = _numeric(frame, cs.column, path)[rows_ch]
         with np.errstate(over="ignore", invalid="ignore"):
             values = raw * cs.factor
-        _check_glitches(values, np.isnan(raw), rows, path, cs.column, name)
+        _check_glitches(values, np.isnan(raw), rows_ch, path, cs.column, name)
         ok = np.isfinite(values)
         if not np.any(ok):
             raise RecordError(f"{path}: column {cs.column!r} (channel {name}): all values missing")
@@ -625,7 +678,7 @@ def load_record(spec: RecordSpec) -> Record:
         if missing:
             notes.append(f"{path.name}: column {cs.column!r}: {missing} missing sample(s) skipped (not interpolated)")
         idx = np.nonzero(ok)[0]
-        channels[name] = Channel(spec=cs, t=t[idx], values=values[idx], index=idx, missing=missing)
+        channels[name] = Channel(spec=cs, t=axis[idx], values=values[idx], index=idx, missing=missing, own_axis=own)
     return Record(file=spec.file, t=t, channels=channels, dropped_rows=dropped, release_time=spec.release_time,
                   notes=notes)
 

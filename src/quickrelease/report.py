@@ -384,7 +384,8 @@ def _plan_section(plan, svgs: dict[str, str]) -> str:
         verdict = ("<span class=\"flag\">CONTACT: the building reaches the front head "
                    f"(first at {_num(c.first_contact_time, '.3g')} s); {_num(1e3 * c.margin_needed, '.4g')} mm more "
                    "room is needed</span>" if c.contact else "no contact: the head stays clear of the building")
-        parts.append(f"<p>Building: T = {_num(b.period, '.4g')} s, ζ = {_num(b.damping_ratio, '.3g')}, isolator "
+        parts.append(f"<p>Building ({_e(b.model)}): T = {_num(b.initial_period, '.4g')} s, "
+                     f"ζ = {_num(b.damping_ratio, '.3g')}, isolator "
                      f"friction {_num(b.friction_force / 1e3, '.4g')} kN; pushed displacement d0 = "
                      f"{_num(1e3 * c.d0, '.4g')} mm; {_e(c.describe_minimum())}; "
                      f"largest approach {_num(1e3 * c.max_approach, '.4g')} mm. "
