@@ -72,7 +72,7 @@ class BuildingResult:
         out.update(physical_estimates(self.fit))
         out.update({"aic": self.fit.aic, "bic": self.fit.bic, "residual_rms": dict(self.fit.residual_rms),
                     "converged": self.fit.converged, "release_time_s": self.fit.release_time,
-                    "d0_m": self.fit.estimates.get("d0"), "warnings": list(self.warnings),
+                    "d0_m": self.fit.parameters.get("d0"), "warnings": list(self.warnings),
                     "notes": list(self.notes), "comparison": [_jsonable(r) for r in self.comparison],
                     "decay_check": _jsonable({k: v for k, v in self.decay_check.items() if k != "analysis"}),
                     "decay": None if self.decay is None else _jsonable(self.decay.summary(self.fit.mass)),
@@ -255,7 +255,7 @@ def _check_long_enough(fit: IsolationFit, prefix: str) -> None:
     try:
         from .building import free_vibration
 
-        stop = free_vibration(iso, fit.estimates.get("d0", 1.0), t_end=2.0 * period).stop_time
+        stop = free_vibration(iso, fit.parameters.get("d0", 1.0), t_end=2.0 * period).stop_time
     except (QuickReleaseError, TypeError, AttributeError):  # a model without the rigid closed form
         stop = math.inf
     if not span >= 0.999 * min(period, stop):
@@ -273,7 +273,7 @@ def _bilinear_yield_warning(fit: IsolationFit) -> list[str]:
     span = max(float(c.t[-1]) for c in fit.channels) - fit.release_time
     iso = fit.isolation()
     try:
-        fv = free_vibration(iso, fit.estimates["d0"], t_end=max(span, 1e-9))
+        fv = free_vibration(iso, fit.parameters["d0"], t_end=max(span, 1e-9))
     except QuickReleaseError:
         return []
     if any(p.yielding and p.t0 < span for p in fv.pieces):

@@ -584,7 +584,7 @@ def building_command(
 
     if model is not None and model not in MODELS:
         raise ParameterError("--model", model, ", ".join(MODELS))
-    case = load_case(case_file)
+    case = load_case(case_file, require_test=False)
     data = load_building(case)
     if not data.channels:
         raise QuickReleaseError(f"{case_file}: no [building.record]: the building command needs the building's "

@@ -113,22 +113,29 @@ class IsolationFit:
     nfev: int
     warnings: tuple[str, ...] = ()
     channels: tuple[BuildingChannel, ...] = field(default=(), repr=False)
+    fixed: dict[str, float] = field(default_factory=dict)
+    """Parameters held fixed in the fit (not in ``estimates``), by name."""
+
+    @property
+    def parameters(self) -> dict[str, float]:
+        """Every parameter of the fitted model: the estimates and those held fixed."""
+        return {**self.fixed, **self.estimates}
 
     def isolation(self) -> Isolation:
         """The fitted isolation layer."""
-        return _isolation(self.model, self.mass, self.estimates)
+        return _isolation(self.model, self.mass, self.parameters)
 
     @property
     def release_time(self) -> float:
-        return self.estimates["release_time"]
+        return self.parameters["release_time"]
 
     def offsets(self) -> dict[str, float]:
-        return {n.removeprefix("offset_"): v for n, v in self.estimates.items() if n.startswith("offset_")}
+        return {n.removeprefix("offset_"): v for n, v in self.parameters.items() if n.startswith("offset_")}
 
     def model_values(self, channel: BuildingChannel, t=None) -> np.ndarray:
         """The fitted model (with the channel's offset) at times t (default: the channel's) [SI]."""
         t = channel.t if t is None else np.asarray(t, dtype=float)
-        out = _channel_model(self.isolation(), self.estimates["d0"], self.release_time, channel.kind, t,
+        out = _channel_model(self.isolation(), self.parameters["d0"], self.release_time, channel.kind, t,
                              float(np.max(t)))
         return out + self.offsets().get(channel.name, 0.0)
 
@@ -137,7 +144,7 @@ class IsolationFit:
         corr = {f"{a}:{b}": float(self.correlation[i, j]) for i, a in enumerate(self.names)
                 for j, b in enumerate(self.names) if j > i}
         return {"model": self.model, "mass_kg": self.mass, "isolation": iso.summary(),
-                "estimates": self.estimates, "std_errors": self.std_errors,
+                "estimates": self.estimates, "fixed": self.fixed, "std_errors": self.std_errors,
                 "ci95": {k: list(v) for k, v in self.ci95.items()}, "interval_method": self.interval_method,
                 "units": {n: _UNITS.get(n, CHANNEL_KINDS.get(_offset_kind(n, self.channels), "")) for n in self.names},
                 "correlation": corr, "condition_number": self.condition_number, "noise": self.noise,
@@ -357,6 +364,7 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
     for ch in channels:
         if ch.offset:
             p0[f"offset_{ch.name}"] = offsets0[ch.name]
+    from_decay = dict(p0)  # the start of the model-free decay analysis, before the caller's start values
     p0.update(start or {})
     physical = ["period", "damping_ratio", "friction"] + (["stiffness_ratio", "yield_force"]
                                                           if model == "bilinear" else [])
@@ -410,6 +418,8 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
     # also traded against the damping (linear) and against the yield force (bilinear: both act alike on
     # the soft branch). Several splits of the dissipation are tried as starts and the best fit kept.
     starts = [dict(values)]
+    if model == "linear" and start:  # design values off by 15-25% can lead into the wrong basin: the decay's
+        starts.append({**from_decay, **fixed})  # start (cheap for the linear model) is tried beside them
     if "friction" in names:
         if model == "linear" and "damping_ratio" in names:
             k = mass * (2.0 * math.pi / values["period"]) ** 2
@@ -498,7 +508,7 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
                         noise_source=source, residual_rms=rms, samples=samples, chi2=chi2, dof=dof,
                         chi2_reduced=chi2_red, absolute_sigma=absolute, aic=aic, bic=bic, whiteness_p=white,
                         converged=bool(res.success), nfev=int(res.nfev), warnings=tuple(warnings),
-                        channels=tuple(channels))
+                        channels=tuple(channels), fixed={n: float(values[n]) for n in fixed})
 
 
 def _profile_interval(name, names, est, lo_b, hi_b, se, target, solve) -> tuple[float, float]:

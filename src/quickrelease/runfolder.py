@@ -109,14 +109,22 @@ def case_inputs(case: Any) -> dict[str, Any]:
         return d
 
     data = strip(data)
-    record = getattr(case, "record", None)
-    if record is not None:
-        data["record"]["file"] = {"name": Path(record.file).name, "sha256": _file_digest(record.file)}
-        for name, ch in (getattr(record, "channels", None) or {}).items():
-            file = getattr(ch, "file", None)
-            if file is not None:
-                data["record"]["channels"][name]["file"] = {"name": Path(file).name, "sha256": _file_digest(file)}
+    _record_digests(data.get("record"), getattr(case, "record", None))
+    building = getattr(case, "building", None)
+    if building is not None and isinstance(data.get("building"), dict):  # the building's record ([building.record])
+        _record_digests(data["building"].get("record"), getattr(building, "record", None))
     return data
+
+
+def _record_digests(data: Any, record: Any) -> None:
+    """Put the name and SHA-256 of a record's files (its own and its channels') in place of their paths."""
+    if record is None or not isinstance(data, dict):
+        return
+    data["file"] = {"name": Path(record.file).name, "sha256": _file_digest(record.file)}
+    for name, ch in (getattr(record, "channels", None) or {}).items():
+        file = getattr(ch, "file", None)
+        if file is not None:
+            data["channels"][name]["file"] = {"name": Path(file).name, "sha256": _file_digest(file)}
 
 
 def _flatten(data: Any, prefix: str = "") -> dict[str, Any]:

@@ -141,20 +141,19 @@ def identified_building(spec, building) -> tuple[Any, str]:
     note says so.
     """
     fit = building.fit
-    est = fit.estimates
-    d0 = abs(float(est["d0"])) if "d0" in est else spec.displacement
+    est = fit.parameters
+    d0 = abs(float(fit.parameters["d0"])) if "d0" in fit.parameters else spec.displacement
     changes: dict[str, Any] = {"damping_ratio": est.get("damping_ratio", spec.damping_ratio),
                                "friction": est.get("friction", spec.friction_force), "friction_coefficient": None,
                                "mass": fit.mass, "displacement": d0}
     fields = {f.name for f in dataclasses.fields(spec)}
     if fit.model == "linear":
-        changes["period"] = est["period"]
+        changes.update(period=est["period"], k1=None, k2=None, yield_force=None)
     elif fit.model == "bilinear" and {"k1", "k2", "yield_force"} <= fields:
         iso = fit.isolation()
-        changes.update(k1=iso.stiffness, k2=iso.k2, yield_force=float(iso.yield_force), period=iso.period)
-    elif fit.model == "2dof" and {"superstructure_mass", "superstructure_period"} <= fields and "period" in est:
-        changes.update({k: est[k] for k in ("period", "superstructure_period", "superstructure_damping_ratio")
-                        if k in est})
+        changes.update(period=None, k1=iso.stiffness, k2=iso.k2, yield_force=float(iso.yield_force))
+    elif fit.model == "2dof" and "period" in est:  # the clearance takes the superstructure as rigid on the layer
+        changes.update(period=est["period"], k1=None, k2=None, yield_force=None)
     else:
         return spec, (f"clearance checked with the assumed [building] values: the identified {fit.model} "
                       "isolation cannot be carried into the clearance check")
