@@ -46,7 +46,7 @@ def _write_record(folder, duration=20.0, t_release=T_RELEASE, seed=0, flat=False
                comments="", fmt="%.10g")
 
 
-def _building_toml(model="linear", x_unit="mm", period="2.3 s", extra=""):
+def _building_toml(model="linear", x_unit="mm", period="2.3 s", extra="", displacement="0.15 m"):
     """[building] with design values (start values, a little off the truth) and its record."""
     return f'''
 [building]
@@ -55,7 +55,7 @@ mass = "650 t"
 period = "{period}"
 damping_ratio = 0.05
 friction = "30 kN"
-displacement = "0.15 m"
+displacement = "{displacement}"
 {extra}
 [building.record]
 file = "x.csv"
@@ -202,12 +202,12 @@ def test_bilinear_that_never_yields_is_named_in_a_warning(yield_force, warned):
 
 def test_whole_test_run_uses_the_identified_building_for_the_clearance(tmp_path):
     """A case with the device part and a building record: run identifies the building, and the clearance
-    check uses it (period 2 s from the record, not the assumed 2.3 s), saying so."""
+    check uses it (period 2 s, d0 = 0.15 m from the record, not the assumed 2.3 s and 0.17 m), saying so."""
     from quickrelease.case import load_case
     from quickrelease.workflow import run_case, write_results
 
     _write_record(tmp_path, duration=12.0)
-    case = load_case(_case(tmp_path, _building_toml(), device=True))
+    case = load_case(_case(tmp_path, _building_toml(displacement="0.17 m"), device=True))
     result = run_case(case, state_diagram=False)
     assert result.building is not None and result.building.model == "linear"
     used = result.plan.case.building
