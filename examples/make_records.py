@@ -13,13 +13,20 @@
   and angles, u and v at 200 Hz. The friction of these synthetic tests follows a law chosen for the
   demonstration, not measured: F1 = 150 N + 0.17 N/kN * P at the hinges, F2 = 805 N on the rail
   (independent of the load). ``quickrelease campaign campaign.toml`` recovers it.
+* ``building_200Hz.csv`` and ``building_acc_100Hz.csv`` (for ``building.toml``): the building's free vibration
+  after the release (``[building]`` of building.toml: 800 t, T = 2.0 s, zeta = 5 %, sliders at 2 % of the
+  weight, d0 = 182.5 mm), released 2.05 s after the records start, 60 s long. The isolation layer's
+  displacement (an LVDT: 0.05 mm noise, +0.8 mm offset, 0.1 % missing samples) in mm at 200 Hz; the base
+  acceleration (an accelerometer on another logger: 0.002 g0 noise, +0.004 g0 offset) in g0 at 100 Hz with
+  its own time column. Made with ``quickrelease.synth.synthesize_building`` (``quickrelease synth
+  building.toml --building``), the units converted here.
 """
 
 from pathlib import Path
 
 from quickrelease.case import load_case
 from quickrelease.statics import strain_energy
-from quickrelease.synth import synthesize
+from quickrelease.synth import synthesize, synthesize_building
 
 HERE = Path(__file__).parent
 RECORDS = HERE / "records"
@@ -29,6 +36,28 @@ CAMPAIGN = [("T1", 1000, 0.22, 0.41), ("T2", 1300, 0.18, 0.55), ("T3", 1600, 0.2
             ("T4", 1900, 0.20, 0.62), ("T5", 2200, 0.24, 0.38), ("T6", 1450, 0.28, 0.50)]
 F1_LAW = (150.0, 0.17e-3)  # F1 = a + b P [N, N/N]
 F2_CONSTANT = 805.0
+G0 = 9.80665  # standard gravity [m/s^2]
+
+
+def write_columns(path: Path, columns: dict[str, list[float]]) -> None:
+    """A CSV with the given columns (10 significant digits; NaN as an empty cell)."""
+    names = list(columns)
+    rows = zip(*columns.values(), strict=True)
+    text = ",".join(names) + "\n" + "".join(
+        ",".join("" if v != v else f"{v:.10g}" for v in row) + "\n" for row in rows)
+    path.write_text(text)
+
+
+def building_records() -> None:
+    case = load_case(HERE / "building.toml")
+    common = {"release_time": 2.05, "duration": 60.0}
+    lvdt = synthesize_building(case, ["x"], rate=200.0, noise={"x": 0.05e-3}, offsets={"x": 0.8e-3}, missing=0.001,
+                               seed=7, **common)
+    write_columns(RECORDS / "building_200Hz.csv", {"t_s": list(lvdt.t), "x_iso_mm": list(1e3 * lvdt.data["x"])})
+    acc = synthesize_building(case, ["a"], rate=100.0, noise={"a": 0.002 * G0}, offsets={"a": 0.004 * G0}, seed=8,
+                              **common)
+    write_columns(RECORDS / "building_acc_100Hz.csv", {"t_acc_s": list(acc.t), "a_base_g": list(acc.data["a"] / G0)})
+    print("building_200Hz.csv, building_acc_100Hz.csv", lvdt.truth)
 
 
 def main() -> None:
@@ -47,6 +76,7 @@ def main() -> None:
                          release_time=release, seed=100 + k)
         syn.write_csv(RECORDS / f"campaign_{name}.csv")
         print(f"campaign_{name}.csv", {key: round(v, 6) for key, v in syn.truth.items()})
+    building_records()
 
 
 if __name__ == "__main__":

@@ -84,6 +84,8 @@ class Command:
     swap: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = field(default_factory=dict)
     #: option -> value classes left out (legitimate and slow: 100,000 uq samples)
     slow: dict[str, tuple[str, ...]] = field(default_factory=dict)
+    #: the command to invoke when the key names a variant (e.g. "synth-building": synth of a building case)
+    command: str | None = None
 
 
 #: Commands with options to fuzz; cheap baselines (each runs in well under a second when accepted).
@@ -98,8 +100,20 @@ COMMANDS: dict[str, Command] = {
                      {"--grid": "force={}:2000 kN:3"}, skip=("--scheduler",), lenient=("--workers",)),
     "synth": Command(("{case}", "--out", "record.csv", "--channels", "u", "--rate", "200 Hz", "--json"),
                      {"--noise": "u={}", "--offset": "u={}"}),
+    "synth-building": Command(("{building_case}", "--out", "record.csv", "--channels", "x", "--duration", "5 s",
+                               "--json"), {"--noise": "x={}", "--offset": "x={}"}, command="synth",
+                               skip=("--seed", "--jitter", "--missing")),  # checked as for the device (above)
     "demo": Command(("--out", "demo",), {}),
 }
+
+#: A case of the building alone (synth-building's baseline).
+BUILDING_CASE = """[building]
+mass = "650 t"
+period = "2.0 s"
+damping_ratio = 0.05
+friction_coefficient = 0.02
+displacement = "0.15 m"
+"""
 
 
 def _kind(param) -> str | None:
@@ -119,7 +133,7 @@ def _options(command: str):
     """(option name, 'int' | 'float' | 'str') for every fuzzable option of the command, from the app.
 
     Flags and paths are left to the other tests (the output-path tests cover paths)."""
-    cmd = COMMAND.commands[command]
+    cmd = COMMAND.commands[COMMANDS[command].command or command]
     for p in cmd.params:
         kind = _kind(p)
         name = max(p.opts, key=len)
@@ -155,7 +169,8 @@ def _invoke(command: str, option: str, value: str, cwd: Path):
     spec = COMMANDS[command]
     shutil.copy(_data("paper.toml"), cwd / "case.toml")
     shutil.copy(_data("uq_paper.toml"), cwd / "uq.toml")
-    base = [a.format(case="case.toml", uq_case="uq.toml") for a in spec.args]
+    (cwd / "building.toml").write_text(BUILDING_CASE)
+    base = [a.format(case="case.toml", uq_case="uq.toml", building_case="building.toml") for a in spec.args]
     drop, add = spec.swap.get(option, ((), ()))
     for name in (option, *drop):  # replace the baseline's value
         if name in base:
@@ -167,7 +182,7 @@ def _invoke(command: str, option: str, value: str, cwd: Path):
     old = os.getcwd()
     os.chdir(cwd)
     try:
-        result = runner.invoke(app, [command, *base, option, bad])
+        result = runner.invoke(app, [spec.command or command, *base, option, bad])
     finally:
         os.chdir(old)
     left = sorted(str(p.relative_to(cwd)) for p in cwd.rglob("*") if p.relative_to(cwd) not in before)

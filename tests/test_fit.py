@@ -501,3 +501,29 @@ def test_campaign_errors(tmp_path):
     path.write_text('[[tests]]\nname = "A"\nforse = "1 MN"\n')
     with pytest.raises(CaseFileError, match="test A: unknown key 'forse'"):
         run_campaign(path)
+
+
+def test_a_channel_in_its_own_file_at_its_own_rate(paper, tmp_path):
+    """The accelerometer logged by another acquisition: its own file, time column (ms) and rate (200 Hz
+    beside the 250 Hz displacements), its own length; the fit evaluates it on its own time axis."""
+    disp = synthesize(paper, ["u", "v"], rate=250.0, offsets={"u": 1.2e-3, "v": -2.5e-3}, release_time=0.43, seed=11)
+    acc = synthesize(paper, ["a_head"], rate=200.0, release_time=0.43, seed=12, duration=2.2)
+    disp.to_pandas().to_csv(tmp_path / "disp.csv", index=False)
+    (tmp_path / "acc.csv").write_text("t_acc_ms,acc_g\n" + "".join(
+        f"{float(1e3 * t)!r},{float(a / 9.80665)!r}\n" for t, a in zip(acc.t, acc.data["a_head"], strict=True)))
+    path = write_case(tmp_path, "disp.csv", {
+        "u": '{ column = "u_m" }', "v": '{ column = "v_m" }',
+        "a_head": '{ column = "acc_g", unit = "g0", file = "acc.csv", time = { column = "t_acc_ms", unit = "ms" } }'})
+    case = load_case(path)
+    record = load_record(case.record)
+    a = record.channels["a_head"]
+    assert a.t.size == acc.t.size != record.t.size and a.sampling_interval(record.t) == pytest.approx(5e-3)
+    fit = fit_record(case, record)
+    assert fit.F1 == pytest.approx(disp.truth["F1"], rel=0.02) and fit.F2 == pytest.approx(disp.truth["F2"], rel=0.01)
+    # the accelerometer's residuals are its noise: the model was evaluated at its own instants and window
+    assert fit.residual_rms["a_head"] == pytest.approx(acc.noise["a_head"], rel=0.1)
+    assert fit.residual_rms["u"] == pytest.approx(disp.noise["u"], rel=0.1)
+    # a time column beside a channel in the record's own file is refused, naming the key
+    bad = write_case(tmp_path, "disp.csv", {"u": '{ column = "u_m", time = "t_s" }'})
+    with pytest.raises(Exception, match=r"\[record\] channels.u: time = 't_s' without file"):
+        load_case(bad)

@@ -452,21 +452,23 @@ def sweep_command(
 @app.command()
 @_guard
 def synth(
-    case_file: Annotated[Path, typer.Argument(help="Case file: device, test set-up, and [friction] or [observations].")],
-    channels: Annotated[str, typer.Option("--channels", "-c", help="Comma list of alpha, alpha_dot, u, v, u_dot, v_dot, a_head, a_hinge.")] = "u,v,a_head",
-    rate: Annotated[str, typer.Option("--rate", help="Sampling rate, e.g. '500 Hz'.")] = "500 Hz",
-    noise: Annotated[list[str] | None, typer.Option("--noise", help="Noise std per channel, e.g. 'u=0.5 mm,a_head=0.05 m/s^2' (repeatable); defaults: alpha 0.002 rad, u and v 0.5 mm, velocities 5 mm/s, accelerations 0.05 m/s^2.")] = None,
+    case_file: Annotated[Path, typer.Argument(help="Case file: device, test set-up, and [friction] or [observations]; or [building] (with --building, or a case of the building alone).")],
+    channels: Annotated[str | None, typer.Option("--channels", "-c", help="Comma list of alpha, alpha_dot, u, v, u_dot, v_dot, a_head, a_hinge (default u,v,a_head); building: x, v, a, x_roof, v_roof, a_roof (default x,a).")] = None,
+    rate: Annotated[str | None, typer.Option("--rate", help="Sampling rate, e.g. '500 Hz' (default 500 Hz; building 200 Hz).")] = None,
+    noise: Annotated[list[str] | None, typer.Option("--noise", help="Noise std per channel, e.g. 'u=0.5 mm,a_head=0.05 m/s^2' (repeatable); defaults: alpha 0.002 rad, u and v 0.5 mm, velocities 5 mm/s, accelerations 0.05 m/s^2; building: x 0.05 mm, v 1 mm/s, a 0.002 g0.")] = None,
     offset: Annotated[list[str] | None, typer.Option("--offset", help="Constant offset per channel, e.g. 'u=2 mm,v=-3 mm' (repeatable).")] = None,
-    release_time: Annotated[str, typer.Option("--release-time", help="Release instant from the start of the record.")] = "0.5 s",
-    duration: Annotated[str | None, typer.Option("--duration", help="Record length (default: release + t_F + max(0.5 s, t_F/4)).")] = None,
+    release_time: Annotated[str | None, typer.Option("--release-time", help="Release instant from the start of the record (default 0.5 s; building 2 s).")] = None,
+    duration: Annotated[str | None, typer.Option("--duration", help="Record length (default: release + t_F + max(0.5 s, t_F/4); building: release + min(stop, 20 T) + 2 T).")] = None,
     seed: Annotated[int, typer.Option("--seed", help="Seed of the noise.")] = 0,
     jitter: Annotated[float, typer.Option("--jitter", help="Uneven sampling: instants shifted by up to +-jitter/2 intervals, in [0, 1).")] = 0.0,
     missing: Annotated[float, typer.Option("--missing", help="Share of missing samples per channel, in [0, 1).")] = 0.0,
+    building: Annotated[bool, typer.Option("--building", help="Synthesize the building's free vibration ([building]) instead of the device's release (implied by a case without [test]).")] = False,
     out: Annotated[Path, typer.Option("--out", "-o", help="Record file to write (CSV).")] = Path("record.csv"),
     case_out: Annotated[Path | None, typer.Option("--case-out", help="Also write a case file that fits this record.")] = None,
     as_json: JsonOpt = False,
 ) -> None:
-    """A synthetic record of the case's release (offsets, noise), and the precision a fit to it would have."""
+    """A synthetic record of the case's release (offsets, noise), and the precision a fit to it would have;
+    or (--building) of the building's free vibration after the release."""
     import os
 
     from .case import load_case
@@ -474,12 +476,16 @@ def synth(
     from .synth import case_toml, parse_channel_values, predicted_errors, synthesize
     from .units import parse_quantity
 
-    case = load_case(case_file)
-    names = [c.strip() for c in channels.split(",") if c.strip()]
-    syn = synthesize(case, names, rate=parse_quantity(rate, "frequency", "--rate"),
+    case = load_case(case_file, require_test=False)
+    if building or not case.has_test:
+        _synth_building(case, channels, rate, noise, offset, release_time, duration, seed, jitter, missing, out,
+                        case_out, as_json)
+        return
+    names = [c.strip() for c in ("u,v,a_head" if channels is None else channels).split(",") if c.strip()]
+    syn = synthesize(case, names, rate=parse_quantity("500 Hz" if rate is None else rate, "frequency", "--rate"),
                      noise=parse_channel_values(noise or [], "--noise"),
                      offsets=parse_channel_values(offset or [], "--offset"),
-                     release_time=parse_quantity(release_time, "time", "--release-time"),
+                     release_time=parse_quantity("0.5 s" if release_time is None else release_time, "time", "--release-time"),
                      duration=None if duration is None else parse_quantity(duration, "time", "--duration"),
                      seed=seed, jitter=jitter, missing=missing)
     pred = predicted_errors(case, syn)  # everything that can fail comes before the first file is written
@@ -508,6 +514,52 @@ def synth(
         _echo(f"Wrote {case_out}: quickrelease fit {case_out}")
     else:
         _echo("To fit it, add to a case file:\n" + table)
+
+
+def _synth_building(case, channels: str | None, rate: str | None, noise: list[str] | None, offset: list[str] | None,
+                    release_time: str | None, duration: str | None, seed: int, jitter: float, missing: float,
+                    out: Path, case_out: Path | None, as_json: bool) -> None:
+    """``synth`` of the building: a record of its free vibration from ``[building]`` (the truth)."""
+    import os
+
+    from .building_case import BUILDING_CHANNELS
+    from .export import write_text
+    from .synth import building_case_toml, parse_channel_values, synthesize_building
+    from .units import parse_quantity
+
+    if case.building is None:
+        raise QuickReleaseError(f"{case.source}: --building needs a [building] table (the building to simulate)")
+    names = [c.strip() for c in ("x,a" if channels is None else channels).split(",") if c.strip()]
+    syn = synthesize_building(case, names, rate=parse_quantity("200 Hz" if rate is None else rate, "frequency", "--rate"),
+                              noise=parse_channel_values(noise or [], "--noise", BUILDING_CHANNELS),
+                              offsets=parse_channel_values(offset or [], "--offset", BUILDING_CHANNELS),
+                              release_time=parse_quantity("2 s" if release_time is None else release_time, "time", "--release-time"),
+                              duration=None if duration is None else parse_quantity(duration, "time", "--duration"),
+                              seed=seed, jitter=jitter, missing=missing)
+    # everything that can fail comes before the first file is written
+    rel_file = out.name if case_out is None else os.path.relpath(out.resolve(), case_out.resolve().parent)
+    table = syn.record_table(rel_file)
+    case_text = None if case_out is None else building_case_toml(case, syn, table, f"The building's record {out.name}")
+    syn.write_csv(out)
+    if case_out is not None:
+        write_text(case_text, case_out)
+    summary = {"file": str(out), "rows": int(syn.t.size), "rate_Hz": syn.rate, "channels": names,
+               "truth": syn.truth, "noise": syn.noise, "offsets": syn.offsets, "seed": seed, "notes": syn.notes,
+               "case_file": None if case_out is None else str(case_out)}
+    if as_json:
+        _print_json(summary)
+        return
+    t = syn.truth
+    stop = "still moving at the end" if t["stop_time_s"] is None else f"sticks {t['stop_time_s']:.6g} s later"
+    _echo(f"Wrote {out} ({syn.t.size} rows at {syn.rate:g} Hz, channels {', '.join(names)}); {t['model']} isolation, "
+          f"T = {t['period_s']:.6g} s, zeta = {t['damping_ratio']:.4g}, F_s = {t['friction_N']:.6g} N; released from "
+          f"d0 = {1e3 * t['d0_m']:.6g} mm at {t['release_time_s']:g} s, {stop}")
+    for note in syn.notes:
+        _echo(f"note: {note}")
+    if case_out is not None:
+        _echo(f"Wrote {case_out}: quickrelease building {case_out}")
+    else:
+        _echo("To read it, add to a case file's [building]:\n" + table)
 
 
 @app.command("fit")

@@ -217,7 +217,7 @@ class MemberChecks:
     def summary(self) -> dict[str, Any]:
         return {"push_force_N": self.forces.P, "alpha0_rad": self.forces.alpha0, "fuse_stress_Pa": self.fuse_stress,
                 "utilisation": self.utilisation(),
-                "checks": [{"member": c.member, "check": c.check,  # a skipped check's unknown demand: null
+                "checks": [{"member": c.member, "check": c.check,  # a skipped check may have no demand (NaN)
                             "demand": c.demand if math.isfinite(c.demand) else None, "capacity": c.capacity,
                             "unit": c.unit, "utilisation": c.utilisation, "note": c.note} for c in self.checks],
                 "internal_forces_N": {"N1": self.forces.N1, "N2": self.forces.N2, "V2": self.forces.V2,

@@ -109,16 +109,16 @@ def case_inputs(case: Any) -> dict[str, Any]:
         return d
 
     data = strip(data)
-    _record_digests(data.get("record"), getattr(case, "record", None))
-    building = getattr(case, "building", None)
-    if building is not None and isinstance(data.get("building"), dict):  # the building's record ([building.record])
-        _record_digests(data["building"].get("record"), getattr(building, "record", None))
+    _digest_record(getattr(case, "record", None), data.get("record"))
+    building = getattr(case, "building", None)  # the building's record ([building.record]) likewise
+    if building is not None:
+        _digest_record(getattr(building, "record", None), data["building"].get("record"))
     return data
 
 
-def _record_digests(data: Any, record: Any) -> None:
-    """Put the name and SHA-256 of a record's files (its own and its channels') in place of their paths."""
-    if record is None or not isinstance(data, dict):
+def _digest_record(record: Any, data: dict[str, Any] | None) -> None:
+    """Replace the record's file paths in ``data`` (its canonical form) by their names and SHA-256."""
+    if record is None or data is None:
         return
     data["file"] = {"name": Path(record.file).name, "sha256": _file_digest(record.file)}
     for name, ch in (getattr(record, "channels", None) or {}).items():

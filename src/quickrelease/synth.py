@@ -19,12 +19,13 @@ import numpy as np
 
 from ._validate import BYTES_PER_SAMPLE, check_seed, check_size
 from .case import Case, FitOptions
-from .errors import ParameterError
+from .errors import ParameterError, QuickReleaseError
 from .identify import case_friction
 from .records import CHANNELS, DISPLACEMENT_CHANNELS, Channel, ChannelSpec, Record, release_channels
 from .solvers import FirstIntegral
 
-__all__ = ["DEFAULT_NOISE", "SyntheticRecord", "synthesize", "predicted_errors", "parse_channel_values", "case_toml"]
+__all__ = ["DEFAULT_NOISE", "SyntheticRecord", "synthesize", "predicted_errors", "parse_channel_values", "case_toml",
+           "BUILDING_NOISE", "SyntheticBuildingRecord", "synthesize_building", "building_case_toml"]
 
 #: Default noise standard deviations [SI]: video angle, gyroscope, draw-wire or LVDT displacements,
 #: velocity transducers, accelerometers (about 5 mg).
@@ -70,16 +71,7 @@ class SyntheticRecord:
 
     def write_csv(self, path: str | Path) -> Path:
         """Write the record as CSV (atomically); missing samples are empty fields."""
-        from .export import atomic_path
-
-        cols = self.columns()
-        names = list(cols)
-        with atomic_path(path) as tmp:
-            with open(tmp, "w", encoding="utf-8", newline="") as fh:
-                fh.write(",".join(names) + "\n")
-                for row in np.column_stack([cols[n] for n in names]):
-                    fh.write(",".join("" if not np.isfinite(v) else f"{v:.10g}" for v in row) + "\n")
-        return Path(path)
+        return _write_csv(self.columns(), path)
 
     def record_table(self, file: str) -> str:
         """The ``[record]`` table of a case file that reads this record (to paste into a case file)."""
@@ -100,6 +92,19 @@ class SyntheticRecord:
                                      missing=int(values.size - ok.size))
         return Record(file=Path("<synthetic>"), t=self.t, channels=channels,
                       release_time=self.truth["release_time"])
+
+
+def _write_csv(cols: dict[str, np.ndarray], path: str | Path) -> Path:
+    """Write columns of equal length as CSV (atomically); NaN as an empty field, 10 significant digits."""
+    from .export import atomic_path
+
+    names = list(cols)
+    with atomic_path(path) as tmp:
+        with open(tmp, "w", encoding="utf-8", newline="") as fh:
+            fh.write(",".join(names) + "\n")
+            for row in np.column_stack([cols[n] for n in names]):
+                fh.write(",".join("" if not np.isfinite(v) else f"{v:.10g}" for v in row) + "\n")
+    return Path(path)
 
 
 def synthesize(case: Case, channels: list[str] | tuple[str, ...], *, rate: float, noise: dict[str, float] | None = None,
@@ -210,10 +215,13 @@ def predicted_errors(case: Case, synthetic: SyntheticRecord, options: FitOptions
             "warnings": list(res.warnings)}
 
 
-def parse_channel_values(items: list[str] | tuple[str, ...], what: str) -> dict[str, float]:
-    """``["u=0.5 mm", "a_head=0.05 m/s^2,v=1mm"]`` -> {channel: SI value}; units per the channel's kind."""
+def parse_channel_values(items: list[str] | tuple[str, ...], what: str,
+                         channels: dict[str, tuple[str, str, str]] | None = None) -> dict[str, float]:
+    """``["u=0.5 mm", "a_head=0.05 m/s^2,v=1mm"]`` -> {channel: SI value}; units per the channel's kind
+    (``channels``: the device's :data:`~quickrelease.records.CHANNELS` unless given, e.g. the building's)."""
     from .units import parse_quantity
 
+    channels = CHANNELS if channels is None else channels
     out: dict[str, float] = {}
     for item in items:
         for part in item.split(","):
@@ -221,9 +229,9 @@ def parse_channel_values(items: list[str] | tuple[str, ...], what: str) -> dict[
                 continue
             name, sep, value = part.partition("=")
             name = name.strip()
-            if not sep or name not in CHANNELS:
-                raise ParameterError(what, part.strip(), f"CHANNEL=VALUE with CHANNEL one of {', '.join(CHANNELS)}")
-            out[name] = parse_quantity(value.strip(), CHANNELS[name][0], f"{what} {name}")
+            if not sep or name not in channels:
+                raise ParameterError(what, part.strip(), f"CHANNEL=VALUE with CHANNEL one of {', '.join(channels)}")
+            out[name] = parse_quantity(value.strip(), channels[name][0], f"{what} {name}")
     return out
 
 
@@ -260,4 +268,214 @@ def case_toml(case: Case, record_table: str, title: str) -> str:
     lines.append(f'alpha0 = "{case.alpha0!r} rad"')
     mm = case.mass_model
     lines.append(f"mass_model = {_toml_value(mm if isinstance(mm, str) else float(mm))}")
+    return "\n".join(lines) + "\n\n" + record_table
+
+
+# -- the building ----------------------------------------------------------------------------------------------
+
+#: Default noise standard deviations of the building's channels [SI]: an LVDT or draw-wire on the isolation
+#: layer (0.05 mm), a velocity transducer (1 mm/s), an accelerometer (2 mg).
+BUILDING_NOISE = {"x": 0.05e-3, "v": 1e-3, "a": 0.002 * 9.80665, "x_roof": 0.05e-3, "v_roof": 1e-3,
+                  "a_roof": 0.002 * 9.80665}
+
+
+def _building_column(name: str) -> str:
+    from .building_case import BUILDING_CHANNELS
+
+    return f"{name}_{BUILDING_CHANNELS[name][1].replace('/', '_').replace('^', '')}"
+
+
+@dataclass(frozen=True, eq=False)
+class SyntheticBuildingRecord:
+    """A synthetic record of the building's free vibration and the truth behind it (SI units)."""
+
+    t: np.ndarray
+    """Sample times from the start of the record [s]."""
+    data: dict[str, np.ndarray]
+    """Channel -> recorded values (offset and noise added; NaN where a sample is missing)."""
+    clean: dict[str, np.ndarray]
+    """Channel -> model values without offset and noise."""
+    truth: dict[str, Any]
+    """The building (model, mass_kg, period_s, damping_ratio, friction_N; bilinear k1_N_m, k2_N_m, Fy_N),
+    d0_m, release_time_s and stop_time_s (after the release; None: still moving at the end of the record)."""
+    noise: dict[str, float]
+    offsets: dict[str, float]
+    rate: float
+    """Sampling rate [Hz]."""
+    seed: int
+    notes: list[str] = field(default_factory=list)
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """The table as written: ``t_s`` and one column per channel, SI units in the names."""
+        return {"t_s": self.t, **{_building_column(n): v for n, v in self.data.items()}}
+
+    def write_csv(self, path: str | Path) -> Path:
+        """Write the record as CSV (atomically); missing samples are empty fields."""
+        return _write_csv(self.columns(), path)
+
+    def record_table(self, file: str) -> str:
+        """The ``[building.record]`` table of a case file that reads this record."""
+        from .building_case import BUILDING_CHANNELS
+
+        lines = ["[building.record]", f"file = {_toml_value(file)}", 'time = "t_s"', "", "[building.record.channels]"]
+        for name in self.data:
+            lines.append(f'{name} = {{ column = "{_building_column(name)}", unit = "{BUILDING_CHANNELS[name][1]}" }}')
+        return "\n".join(lines) + "\n"
+
+    def building_channels(self, *, noise_free: bool = False) -> list:
+        """The record as :func:`quickrelease.isolation_fit.fit_isolation` takes it (noise levels given, an
+        offset on every channel), missing samples left out."""
+        from .isolation_fit import BuildingChannel
+
+        out = []
+        for name, values in (self.clean if noise_free else self.data).items():
+            ok = np.isfinite(values)
+            out.append(BuildingChannel(name=name, kind=name, t=self.t[ok], values=values[ok], noise=self.noise[name],
+                                       offset=True))
+        return out
+
+
+def building_pushed_displacement(case: Case) -> float:
+    """The building's pushed displacement d0 [m]: ``[building] displacement``, else from the push force of
+    ``[test]`` (:func:`quickrelease.planning.pushed_displacement`)."""
+    from .planning import pushed_displacement
+
+    spec = case.building
+    if spec.displacement is not None:
+        return spec.displacement
+    if case.has_test and case.push_force is not None:
+        return pushed_displacement(case.push_force, spec)
+    raise ParameterError("[building] displacement", None, "given (the pushed displacement d0, e.g. '0.15 m'), or a "
+                         "[test] force to push the building with", "m")
+
+
+def synthesize_building(case: Case, channels: list[str] | tuple[str, ...], *, rate: float,
+                        noise: dict[str, float] | None = None, release_time: float = 2.0,
+                        duration: float | None = None, offsets: dict[str, float] | None = None, seed: int = 0,
+                        jitter: float = 0.0, missing: float = 0.0) -> SyntheticBuildingRecord:
+    """A synthetic record of the building's free vibration after the release, from ``[building]`` (the truth).
+
+    The isolation layer rests at the pushed displacement d0 until ``release_time``, then vibrates freely:
+    the exact closed form of :func:`quickrelease.building.free_vibration` (linear or bilinear isolation,
+    viscous damping, Coulomb sliders, sticking), sampled at the record's instants (point values). With the
+    rigid superstructure of these models the roof channels equal the layer's. Each channel gets a constant
+    offset and Gaussian noise; optionally jittered instants and missing samples.
+
+    Parameters
+    ----------
+    case : Case
+        With ``[building]`` (model linear or bilinear; 2dof is not simulated) and d0 (``displacement``, or
+        a ``[test]`` force).
+    channels : list of str
+        Channels of :data:`quickrelease.building_case.BUILDING_CHANNELS`.
+    rate : float
+        Sampling rate [Hz].
+    noise : dict, optional
+        Noise standard deviation per channel [SI], > 0; :data:`BUILDING_NOISE` for the others.
+    release_time : float
+        Release instant from the start of the record [s] (the pre-release segment at the pushed state).
+    duration : float, optional
+        Record length [s]; default: release + min(stop, 20 T) + 2 T (T the isolation's (initial) period).
+    offsets : dict, optional
+        Constant offset per channel [SI] (default 0).
+    seed : int
+        Seed of the noise, jitter and missing samples.
+    jitter : float
+        Sampling instants shifted by up to +-jitter/2 sampling intervals (uniform), in [0, 1).
+    missing : float
+        Share of samples missing (NaN) in each channel, in [0, 1).
+    """
+    from .building import free_vibration, pushed_state
+    from .building_case import BUILDING_CHANNELS, spec_isolation
+
+    spec = case.building
+    if spec is None:
+        raise QuickReleaseError(f"{case.source}: no [building] table (the building to simulate)")
+    if spec.model == "2dof":
+        raise QuickReleaseError(f"{case.source}: [building] model = '2dof': synth simulates 'linear' and 'bilinear' "
+                                "buildings (the 2-DOF building is not simulated yet)")
+    unknown = [c for c in channels if c not in BUILDING_CHANNELS]
+    if unknown or not channels or len(set(channels)) != len(channels):
+        what = f"unknown channel {unknown[0]!r}" if unknown else "no channel" if not channels else "a channel twice"
+        raise QuickReleaseError(f"channels = {','.join(channels)!r}: {what}; valid: distinct channels of the "
+                                f"building's record, {', '.join(BUILDING_CHANNELS)}")
+    if not (math.isfinite(rate) and rate > 0):
+        raise ParameterError("rate", rate, "(0, inf)", "Hz")
+    if not (math.isfinite(release_time) and release_time > 0):
+        raise ParameterError("release_time", release_time, "(0, inf)", "s")
+    if not 0.0 <= jitter < 1.0:
+        raise ParameterError("jitter", jitter, "[0, 1)")
+    if not 0.0 <= missing < 1.0:
+        raise ParameterError("missing", missing, "[0, 1)")
+    noise = {**BUILDING_NOISE, **(noise or {})}
+    for name in channels:
+        if not (math.isfinite(noise[name]) and noise[name] > 0):
+            raise ParameterError(f"noise of {name}", noise[name], "(0, inf) (the noise weights a fit)",
+                                 BUILDING_CHANNELS[name][1])
+    offsets = {name: float((offsets or {}).get(name, 0.0)) for name in channels}
+    for name, value in offsets.items():
+        if not math.isfinite(value):
+            raise ParameterError(f"offset of {name}", value, "finite values", BUILDING_CHANNELS[name][1])
+    iso = spec_isolation(spec)
+    d0 = building_pushed_displacement(case)
+    if not (math.isfinite(d0) and d0 > 0):
+        raise ParameterError("d0", d0, "(0, inf) (the push must move the building past its sliders' friction)", "m")
+    R0 = pushed_state(iso, d0)[1]
+    if abs(R0) <= iso.friction:
+        raise QuickReleaseError(f"{case.source}: [building] d0 = {d0:.6g} m: the sliders' friction F_s = "
+                                f"{iso.friction:.6g} N holds the building there (restoring force {R0:.6g} N <= F_s), "
+                                "so it never moves after the release: push it farther")
+    period = iso.period
+    motion = free_vibration(iso, d0, t_end=20.0 * period)
+    t_stop = motion.stop_time
+    if duration is None:
+        duration = release_time + min(t_stop, 20.0 * period) + 2.0 * period
+    if not (math.isfinite(duration) and duration > release_time):
+        raise ParameterError("duration", duration, f"(release_time, inf) = ({release_time:g}, inf)", "s")
+    if not rate * min(period, release_time) >= MIN_SAMPLES:  # noise before the release, the motion after
+        raise ParameterError("rate", rate, f"[{MIN_SAMPLES} / min(T, release_time), inf) = "
+                             f"[{MIN_SAMPLES / min(period, release_time):.4g}, inf) (T = {period:.4g} s)", "Hz")
+    check_seed("seed", seed)
+    samples = math.floor(duration * rate) + 1 if math.isfinite(duration * rate) else math.inf
+    check_size("duration x rate", f"{duration:g} s x {rate:g} Hz", samples,
+               f"samples of {len(channels)} channel(s)", BYTES_PER_SAMPLE * (len(channels) + 1))
+    rng = np.random.default_rng(seed)
+    n = int(samples)
+    t = np.arange(n) / rate
+    if jitter:
+        t = t + (rng.uniform(-0.5, 0.5, n) * jitter / rate)
+        t[0] = max(t[0], 0.0)
+    if duration - release_time > motion.horizon:
+        motion = free_vibration(iso, d0, t_end=duration - release_time)
+    x, v, a = motion.state(t - release_time)
+    layer = {"x": x, "v": v, "a": a}
+    clean = {name: layer[name.removesuffix("_roof")].copy() for name in channels}
+    data = {}
+    for name in channels:
+        values = clean[name] + offsets[name] + rng.normal(0.0, 1.0, n) * noise[name]
+        if missing:
+            values[rng.uniform(0.0, 1.0, n) < missing] = np.nan
+        data[name] = values
+    stop = float(motion.stop_time) if motion.stop_time <= duration - release_time else None
+    truth = {**iso.summary(), "d0_m": float(d0), "release_time_s": float(release_time), "stop_time_s": stop}
+    notes = [] if spec.mass is not None else ["no [building] mass: a unit mass (the motion depends on F_s / m only)"]
+    return SyntheticBuildingRecord(t=t, data=data, clean=clean, truth=truth, noise={c: noise[c] for c in channels},
+                                   offsets=offsets, rate=float(rate), seed=int(seed), notes=notes)
+
+
+def building_case_toml(case: Case, synthetic: SyntheticBuildingRecord, record_table: str, title: str) -> str:
+    """A case file (TOML text) of the building alone: ``[building]`` with the synthetic record's truth (SI
+    values, exactly as used) and the given ``[building.record]`` table."""
+    t = synthetic.truth
+    notes = _toml_value(f"Made by quickrelease synth from {case.source}")
+    lines = [f"title = {_toml_value(title)}", f"notes = {notes}", "", "[building]",
+             f"model = {_toml_value(t['model'])}"]
+    if case.building.mass is not None:
+        lines.append(f'mass = "{t["mass_kg"]!r} kg"')
+    if t["model"] == "bilinear":
+        lines += [f'k1 = "{t["k1_N_m"]!r} N/m"', f'k2 = "{t["k2_N_m"]!r} N/m"', f'yield_force = "{t["Fy_N"]!r} N"']
+    else:
+        lines.append(f'period = "{case.building.period!r} s"')
+    lines += [f"damping_ratio = {case.building.damping_ratio!r}", f'friction = "{t["friction_N"]!r} N"',
+              f'displacement = "{t["d0_m"]!r} m"']
     return "\n".join(lines) + "\n\n" + record_table
