@@ -237,3 +237,21 @@ def test_plan_json_with_a_skipped_member_check(tmp_path):
     skipped = checks["E2 axial + bending + shear (von Mises)"]
     assert skipped["demand"] is None and skipped["note"].startswith("skipped")
 
+
+
+def test_covariance_of_a_jacobian_with_columns_of_very_different_scales():
+    """Regression: ``pinv(J^T J)`` with a relative cut-off read the column of a parameter in small units (the
+    building example's friction, 1e5 N, beside offsets of 1e-3 m) as rank deficiency and gave it a variance
+    of 0, a zero-width interval. Against the identity ``(J^T J)^-1 = D^-1 (A^T A)^-1 D^-1`` for ``J = A D``."""
+    from quickrelease._lsq import jacobian_covariance
+
+    rng = np.random.default_rng(3)
+    U, _ = np.linalg.qr(rng.normal(size=(400, 4)))
+    V, _ = np.linalg.qr(rng.normal(size=(4, 4)))
+    A = U @ np.diag([2.2, 1.0, 0.4, 0.02]) @ V.T  # the example's singular values (columns at unit norm)
+    scales = np.array([1.4, 2.4e6, 1.5e6, 3.8e3])  # the example's column norms: friction, damping, d0, offset
+    J = A * scales
+    exact = np.linalg.inv(A.T @ A) / np.outer(scales, scales)
+    cov = jacobian_covariance(J)
+    assert np.allclose(np.sqrt(np.diag(cov)), np.sqrt(np.diag(exact)), rtol=1e-9, atol=0)
+    assert np.allclose(cov, exact, rtol=1e-9, atol=1e-12 * np.abs(exact).max())

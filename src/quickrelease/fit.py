@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from . import dynamics
+from ._lsq import jacobian_covariance
 from .case import Case, FitOptions
 from .device import Device
 from .errors import InfeasibleObservationError, QuickReleaseError
@@ -492,8 +493,7 @@ def fit_record(case: Case, record: Record | None = None, *, options: FitOptions 
     dof = m - p
     chi2 = float(r @ r)
     chi2_red = chi2 / dof if dof > 0 else None
-    JtJ = J.T @ J
-    cov = np.linalg.pinv(JtJ, rcond=1e-15, hermitian=True)
+    cov = jacobian_covariance(J)  # columns scaled first: F1, F2 [N], E_S [J], c, t_r [s], offsets
     if not options.absolute_sigma and chi2_red is not None:
         cov = cov * chi2_red
     se = np.sqrt(np.maximum(np.diag(cov), 0.0))

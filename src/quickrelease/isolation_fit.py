@@ -37,6 +37,7 @@ import numpy as np
 from scipy import stats
 from scipy.optimize import brentq, least_squares
 
+from ._lsq import jacobian_covariance
 from .building import Isolation, free_vibration
 from .errors import ParameterError, QuickReleaseError
 
@@ -442,8 +443,8 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
     chi2 = float(r @ r)
     chi2_red = chi2 / dof if dof > 0 else math.nan
     J = res.jac
-    try:
-        cov = np.linalg.pinv(J.T @ J)
+    try:  # columns scaled first: parameters in SI units span many orders of magnitude
+        cov = jacobian_covariance(J)
     except np.linalg.LinAlgError:
         cov = np.full((p, p), np.nan)
     scale = 1.0 if absolute else chi2_red
