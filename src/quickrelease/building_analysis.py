@@ -195,8 +195,9 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
         for other in MODELS:
             if other == model:
                 continue
-            try:  # the case's start values belong to its model: the others start from the decay analysis
-                compared.append(fit_isolation(channels, mass, other, release_time=release_time,
+            try:  # the case's start values belong to its model: the others start from the decay analysis; their
+                # intervals are not reported (AIC/BIC only), so no profile-likelihood re-fits
+                compared.append(fit_isolation(channels, mass, other, release_time=release_time, profile=False,
                                               start={k: v for k, v in (start or {}).items()
                                                      if k in ("d0", "release_time")} or None))
             except QuickReleaseError as exc:
