@@ -104,6 +104,7 @@ COMMANDS: dict[str, Command] = {
                                "--json"), {"--noise": "x={}", "--offset": "x={}"}, command="synth",
                                skip=("--seed", "--jitter", "--missing")),  # checked as for the device (above)
     "demo": Command(("--out", "demo",), {}),
+    "building": Command(("{building_case}", "--json"), {}),  # --model is checked before the case is read
 }
 
 #: A case of the building alone (synth-building's baseline).

@@ -19,7 +19,7 @@ from quickrelease.workflow import FIGURES, run_case, write_results
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
 #: The figures of the paper case (no record, no plan: see test_fit.py and test_planning.py for those).
-PAPER_FIGURES = [stem for stem in FIGURES if stem != "fit_channels" and not stem.startswith("plan_")]
+PAPER_FIGURES = [stem for stem in FIGURES if stem != "fit_channels" and not stem.startswith(("plan_", "building_"))]
 
 
 @pytest.fixture(scope="module")

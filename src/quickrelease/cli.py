@@ -292,7 +292,8 @@ def run_command(
     result = run_case(case)
     paths = write_results(result, out, overwrite=overwrite)
     if as_json:
-        _print_json({"release": result.summary(), "identification": result.identification_summary(),
+        extra = {} if result.building is None else {"building": result.building.summary()}
+        _print_json({"release": result.summary(), "identification": result.identification_summary(), **extra,
                      "files": {k: str(v) for k, v in paths.items()}})
         return
     rows = [(k, _fmt(v)) for k, v in result.summary().items()]
@@ -300,6 +301,15 @@ def run_command(
         i = result.identification
         rows = [("F1_N (identified)", _fmt(i.F1)), ("F2_N (identified)", _fmt(i.F2))] + rows
     _table(result.case.title, rows, ("quantity", "value"))
+    if result.building is not None:
+        _building_tables(result.building, result.building.summary(), f"{result.case.title}: the building")
+    if result.plan is not None and result.plan.clearance is not None and result.building is not None:
+        c = result.plan.clearance
+        _echo(f"Clearance: d0 = {1e3 * c.d0:.4g} mm, {c.describe_minimum()}: "
+              f"{'CONTACT' if c.contact else 'no contact'}")
+        for text in result.plan.notes:
+            if text.startswith("clearance checked with"):
+                _echo(f"note: {text}")
     _listing(paths, out)
 
 
@@ -607,6 +617,80 @@ def fit_command(
         _echo(f"note: {text}" if text in fit.notes else f"warning: {text}")
     if paths:
         _listing(paths, out)
+
+
+@app.command("building")
+@_guard
+def building_command(
+    case_file: Annotated[Path, typer.Argument(help="Case file with [building] and [building.record].")],
+    model: Annotated[str | None, typer.Option("--model", help="linear, bilinear or 2dof (default: the case's [building] model).")] = None,
+    compare: Annotated[bool, typer.Option("--compare", help="Also fit the other models; rank them by AIC/BIC and residual whiteness.")] = False,
+    out: Annotated[Path | None, typer.Option("--out", "-o", help="Also write summary.json, the figures and report.html here.")] = None,
+    overwrite: OverwriteOpt = False,
+    as_json: JsonOpt = False,
+) -> None:
+    """Identify the building's isolation system (period or k1/k2/F_y, damping, friction) from its free vibration."""
+    from .building_analysis import MODELS, analyse_building
+    from .building_case import load_building
+    from .case import load_case
+
+    if model is not None and model not in MODELS:
+        raise ParameterError("--model", model, ", ".join(MODELS))
+    case = load_case(case_file, require_test=False)
+    data = load_building(case)
+    if not data.channels:
+        raise QuickReleaseError(f"{case_file}: no [building.record]: the building command needs the building's "
+                                "free-vibration record")
+    if out is not None:
+        from .workflow import building_folder
+
+        building_folder(data, out, model=model, compare=compare, overwrite=overwrite)  # pre-flight
+    result = analyse_building(data, model=model, compare=compare)
+    paths = {}
+    if out is not None:
+        from .workflow import write_building_results
+
+        paths = write_building_results(result, data, out, model=model, compare=compare, title=case.title,
+                                       overwrite=overwrite)
+    summary = result.summary()
+    if as_json:
+        _print_json(summary)
+        return
+    _building_tables(result, summary, case.title)
+    if paths:
+        _listing(paths, out)
+
+
+def _building_tables(result, summary: dict[str, Any], title: str) -> None:
+    """The building's estimates, channels, comparison and decay cross-check as tables; notes and warnings."""
+    fit = result.fit
+    units = {"period_s": "s", "k1_N_m": "N/m", "k2_N_m": "N/m", "Fy_N": "N", "damping_ratio": "-", "friction_N": "N"}
+    rows = []
+    for key, unit in units.items():
+        if key in summary and summary[key] is not None:
+            ci = summary.get(f"{key}_ci95")
+            interval = "-" if not ci else f"[{_fmt(ci[0])}, {_fmt(ci[1])}]"
+            rows.append((key, f"{summary[key]:.6g}", interval, unit))
+    state = "converged" if fit.converged else "NOT converged"
+    _table(f"{title}: {fit.model} isolation model, {state}, reduced chi-square {fit.chi2_reduced:.4g}, "
+           f"AIC {fit.aic:.6g}, BIC {fit.bic:.6g}", rows, ("parameter", "estimate", "95% interval", "unit"))
+    _table("Channels", [(c.name, c.kind, str(fit.samples[c.name]), f"{fit.noise[c.name]:.3g}", fit.noise_source[c.name],
+                         f"{fit.residual_rms[c.name]:.3g}", f"{fit.whiteness_p[c.name]:.3g}") for c in fit.channels],
+           ("channel", "kind", "samples", "noise (SI)", "from", "rms residual", "whiteness p"))
+    if result.comparison:
+        _table("Model comparison (lowest BIC first)", [
+            (r["model"], str(r["parameters"]), f"{r['aic']:.6g}", f"{r['delta_aic']:.4g}", f"{r['bic']:.6g}",
+             f"{r['delta_bic']:.4g}") for r in result.comparison],
+            ("model", "parameters", "AIC", "dAIC", "BIC", "dBIC"))
+    rows = result.decay_check.get("rows", [])
+    if rows:
+        _table("Decay cross-check (model-free, combined decrement law)", [
+            (r["parameter"], f"{r['fit']:.6g}", f"{r['decay']:.6g}", f"{r['difference_in_se']:+.3g}") for r in rows],
+            ("parameter (SI)", "fit", "decay", "difference [SE]"))
+    for text in result.notes:
+        _echo(f"note: {text}")
+    for text in result.warnings:
+        _echo(f"warning: {text}")
 
 
 @app.command()

@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from . import dynamics
+from ._lsq import jacobian_covariance
 from .case import Case, FitOptions
 from .device import Device
 from .errors import InfeasibleObservationError, QuickReleaseError
@@ -492,12 +493,7 @@ def fit_record(case: Case, record: Record | None = None, *, options: FitOptions 
     dof = m - p
     chi2 = float(r @ r)
     chi2_red = chi2 / dof if dof > 0 else None
-    # columns scaled to unit norm before the inversion (parameters in N beside offsets in m: pinv's cutoff on
-    # the unscaled J^T J would drop the small columns' direction and give them a standard error near zero)
-    norms = np.linalg.norm(J, axis=0)
-    norms = np.where(norms > 0, norms, 1.0)
-    Js = J / norms
-    cov = np.linalg.pinv(Js.T @ Js, rcond=1e-15, hermitian=True) / np.outer(norms, norms)
+    cov = jacobian_covariance(J)  # columns scaled first: F1, F2 [N], E_S [J], c, t_r [s], offsets
     if not options.absolute_sigma and chi2_red is not None:
         cov = cov * chi2_red
     se = np.sqrt(np.maximum(np.diag(cov), 0.0))

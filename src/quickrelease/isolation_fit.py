@@ -40,6 +40,7 @@ import numpy as np
 from scipy import stats
 from scipy.optimize import brentq, least_squares
 
+from ._lsq import jacobian_covariance
 from .building import Isolation, TwoDOF, free_vibration
 from .errors import ParameterError, QuickReleaseError
 
@@ -123,22 +124,29 @@ class IsolationFit:
     channels: tuple[BuildingChannel, ...] = field(default=(), repr=False)
     superstructure_mass: float | None = None
     """The superstructure (roof) mass m_s [kg] given to the 2-DOF fit; None for the rigid models."""
+    fixed: dict[str, float] = field(default_factory=dict)
+    """Parameters held fixed in the fit (not in ``estimates``), by name."""
+
+    @property
+    def parameters(self) -> dict[str, float]:
+        """Every parameter of the fitted model: the estimates and those held fixed."""
+        return {**self.fixed, **self.estimates}
 
     def isolation(self) -> Isolation | TwoDOF:
         """The fitted isolation layer (the :class:`~quickrelease.building.TwoDOF` building for ``2dof``)."""
-        return _isolation(self.model, self.mass, self.estimates, self.superstructure_mass)
+        return _isolation(self.model, self.mass, self.parameters, self.superstructure_mass)
 
     @property
     def release_time(self) -> float:
-        return self.estimates["release_time"]
+        return self.parameters["release_time"]
 
     def offsets(self) -> dict[str, float]:
-        return {n.removeprefix("offset_"): v for n, v in self.estimates.items() if n.startswith("offset_")}
+        return {n.removeprefix("offset_"): v for n, v in self.parameters.items() if n.startswith("offset_")}
 
     def model_values(self, channel: BuildingChannel, t=None) -> np.ndarray:
         """The fitted model (with the channel's offset) at times t (default: the channel's) [SI]."""
         t = channel.t if t is None else np.asarray(t, dtype=float)
-        out = _channel_model(self.isolation(), self.estimates["d0"], self.release_time, channel.kind, t,
+        out = _channel_model(self.isolation(), self.parameters["d0"], self.release_time, channel.kind, t,
                              float(np.max(t)))
         return out + self.offsets().get(channel.name, 0.0)
 
@@ -147,7 +155,7 @@ class IsolationFit:
         corr = {f"{a}:{b}": float(self.correlation[i, j]) for i, a in enumerate(self.names)
                 for j, b in enumerate(self.names) if j > i}
         return {"model": self.model, "mass_kg": self.mass, "isolation": iso.summary(),
-                "estimates": self.estimates, "std_errors": self.std_errors,
+                "estimates": self.estimates, "fixed": self.fixed, "std_errors": self.std_errors,
                 "ci95": {k: list(v) for k, v in self.ci95.items()}, "interval_method": self.interval_method,
                 "units": {n: _UNITS.get(n, CHANNEL_KINDS.get(_offset_kind(n, self.channels), "")) for n in self.names},
                 "correlation": corr, "condition_number": self.condition_number, "noise": self.noise,
@@ -473,6 +481,7 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
         # that zero, and a start with the zero off by a few noise levels can settle in a wrong count of
         # half-cycles before the sliders stick); the law is exact for the linear model only
         p0[f"offset_{xch.name}"], p0["d0"] = rest, d0 - rest
+    from_decay = dict(p0)  # the start of the model-free decay analysis, before the caller's start values
     p0.update(start or {})
     physical = ["period", "damping_ratio", "friction"] + {
         "bilinear": ["stiffness_ratio", "yield_force"],
@@ -574,6 +583,8 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
     # also traded against the damping (linear) and against the yield force (bilinear: both act alike on
     # the soft branch). Several splits of the dissipation are tried as starts and the best fit kept.
     starts = [dict(values)]
+    if model == "linear" and start:  # design values off by 15-25% can lead into the wrong basin: the decay's
+        starts.append({**from_decay, **fixed})  # start (cheap for the linear model) is tried beside them
     if "friction" in names:
         if model in ("linear", "2dof") and "damping_ratio" in names:
             k = mass * (2.0 * math.pi / values["period"]) ** 2
@@ -621,14 +632,8 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
     chi2 = float(r @ r)
     chi2_red = chi2 / dof if dof > 0 else math.nan
     J = res.jac
-    try:
-        # columns scaled to unit norm before the inversion: the parameters' units differ by many orders
-        # (a friction in N beside a displacement in m), and pinv's cutoff on the unscaled J^T J drops the
-        # direction of the small columns and returns a standard error near zero for a poorly scaled one
-        norms = np.linalg.norm(J, axis=0)
-        norms = np.where(norms > 0, norms, 1.0)
-        Js = J / norms
-        cov = np.linalg.pinv(Js.T @ Js, hermitian=True) / np.outer(norms, norms)
+    try:  # columns scaled first: parameters in SI units span many orders of magnitude
+        cov = jacobian_covariance(J)
     except np.linalg.LinAlgError:
         cov = np.full((p, p), np.nan)
     scale = 1.0 if absolute else chi2_red
@@ -693,7 +698,8 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
                         noise_source=source, residual_rms=rms, samples=samples, chi2=chi2, dof=dof,
                         chi2_reduced=chi2_red, absolute_sigma=absolute, aic=aic, bic=bic, whiteness_p=white,
                         converged=bool(res.success), nfev=int(res.nfev), warnings=tuple(warnings),
-                        channels=tuple(channels), superstructure_mass=superstructure_mass)
+                        channels=tuple(channels), superstructure_mass=superstructure_mass,
+                        fixed={n: float(values[n]) for n in fixed})
 
 
 def _profile_interval(name, names, est, lo_b, hi_b, se, target, solve) -> tuple[float, float]:

@@ -7,6 +7,7 @@ report into a folder, each file atomically.
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import os
 from dataclasses import dataclass, field
@@ -22,7 +23,7 @@ from .solvers import simulate
 from .statics import StrainEnergy
 
 __all__ = ["CaseResult", "run_case", "write_results", "write_campaign_results", "render_figures", "FIGURES",
-           "results_folder", "campaign_folder"]
+           "results_folder", "campaign_folder", "building_folder", "write_building_results", "identified_building"]
 
 #: Figure stems and what they show.
 FIGURES = {
@@ -36,6 +37,10 @@ FIGURES = {
     "plan_utilisation": "Member checks at the planned push (Table 3's internal forces)",
     "plan_envelope": "Release envelope over the friction estimate: stroke, opening, time to stop, peak head velocity",
     "plan_gap": "Clearance: head retraction, the building's approach and the gap between them",
+    "building_fit": "Building record and fitted isolation model, each channel with its residuals",
+    "building_decay": "Decay envelope with the Coulomb, viscous and combined decay laws",
+    "building_amplitude": "Equivalent period and damping ratio of the building against the amplitude",
+    "building_hysteresis": "Hysteresis loop of the isolators: -m a against the displacement",
 }
 
 
@@ -56,6 +61,9 @@ class CaseResult:
     """The fit to the measured record (when the case has a ``[record]``)."""
     plan: PlanResult | None = None
     """The test plan (when the case has ``[fuse]`` or ``[building]``, or it was asked for)."""
+    building: Any = None
+    """The building's analysis (:class:`~quickrelease.building_analysis.BuildingResult`), when the case has a
+    ``[building.record]``."""
 
     def summary(self) -> dict[str, Any]:
         """The release summary: the keys of ``quickrelease simulate --json``."""
@@ -97,13 +105,65 @@ def run_case(case: Case, *, state_diagram: bool = True, plan: bool | None = None
                       simulate(E_S, case.alpha0, F1, F2, method="rk", **common))
         states.append(response if case.method == "explicit" else
                       simulate(E_S, case.alpha0, F1, F2, method="explicit", dt=case.dt, **common))
+    building = None
+    if _has_building_record(case):
+        from .building_analysis import analyse_building
+        from .building_case import load_building
+
+        building = analyse_building(load_building(case))
     plan = _wants_plan(case, plan)
     planned = None
     if plan:  # the friction found above (fitted or identified) is not searched for again
-        planned = plan_case(case if case.has_friction or case.friction_case is not None
-                            else case.replace(F1=F1, F2=F2))
+        plan_input = case if case.has_friction or case.friction_case is not None else case.replace(F1=F1, F2=F2)
+        note = None
+        if building is not None and case.building is not None:
+            spec, note = identified_building(case.building, building)
+            plan_input = plan_input.replace(building=spec)
+        planned = plan_case(plan_input)
+        if note is not None:
+            planned = dataclasses.replace(planned, notes=(*planned.notes, note))
     return CaseResult(case=case, response=response, strain=case.strain(), identification=ident,
-                      state_responses=states, fit=fit, plan=planned)
+                      state_responses=states, fit=fit, plan=planned, building=building)
+
+
+def _has_building_record(case: Case) -> bool:
+    """Whether the case file has a ``[building.record]`` (the whole test: the building is analysed too)."""
+    return case.building is not None and getattr(case.building, "record", None) is not None
+
+
+def identified_building(spec, building) -> tuple[Any, str]:
+    """The ``[building]`` spec with the identified isolation in place of the assumed values, for the clearance
+    check, and a note saying which values the check used.
+
+    The linear fit gives the period, damping ratio and slider friction (the mass is the case's; the pushed
+    displacement d0 is the one measured in the record). Where the spec cannot carry the fitted model (a
+    bilinear or 2-DOF fit on a spec that only knows the linear building), the assumed values stay and the
+    note says so.
+    """
+    fit = building.fit
+    est = fit.parameters
+    d0 = abs(float(fit.parameters["d0"])) if "d0" in fit.parameters else spec.displacement
+    changes: dict[str, Any] = {"damping_ratio": est.get("damping_ratio", spec.damping_ratio),
+                               "friction": est.get("friction", spec.friction_force), "friction_coefficient": None,
+                               "mass": fit.mass, "displacement": d0}
+    fields = {f.name for f in dataclasses.fields(spec)}
+    if fit.model == "linear":
+        changes.update(period=est["period"], k1=None, k2=None, yield_force=None)
+    elif fit.model == "bilinear" and {"k1", "k2", "yield_force"} <= fields:
+        iso = fit.isolation()
+        changes.update(period=None, k1=iso.stiffness, k2=iso.k2, yield_force=float(iso.yield_force))
+    elif fit.model == "2dof" and "period" in est:  # the clearance takes the superstructure as rigid on the layer
+        changes.update(period=est["period"], k1=None, k2=None, yield_force=None)
+    else:
+        return spec, (f"clearance checked with the assumed [building] values: the identified {fit.model} "
+                      "isolation cannot be carried into the clearance check")
+    if "model" in fields:
+        changes["model"] = fit.model
+    changes = {k: v for k, v in changes.items() if k in fields}
+    identified = dataclasses.replace(spec, **changes)
+    words = ", ".join(f"{k} = {v:.6g}" for k, v in changes.items() if isinstance(v, float))
+    return identified, (f"clearance checked with the building identified from its record ({fit.model} model: "
+                        f"{words}), not the assumed [building] values")
 
 
 def _wants_plan(case: Case, plan: bool | None) -> bool:
@@ -138,6 +198,10 @@ def render_figures(result: CaseResult) -> dict[str, Any]:
         figs["fit_channels"] = plots.fit_figure(result.fit)
     if result.plan is not None:
         figs.update(plan_figures(result.plan))
+    if result.building is not None:
+        from .building_plots import building_figures
+
+        figs.update(building_figures(result.building))
     return figs
 
 
@@ -204,6 +268,8 @@ def _write_results_into(result: CaseResult, out: Path, *, figures: bool, report:
             paths["fit"] = write_json(result.fit.summary(), out / "fit.json")
         if result.plan is not None:
             paths["plan"] = write_json(result.plan.summary(), out / "plan.json")
+        if result.building is not None:
+            paths["building"] = write_json(result.building.summary(), out / "building.json")
         paths["timeseries_csv"] = write_csv(result.response, out / "timeseries.csv")
         paths["timeseries_nc"] = write_netcdf(result.response, out / "timeseries.nc",
                                               attrs={"case": result.case.title})
@@ -232,6 +298,43 @@ def _write_results_into(result: CaseResult, out: Path, *, figures: bool, report:
 
         paths["report"] = write_text(render_report(result, svgs), out / "report.html")
     return paths
+
+
+def building_folder(result_or_data, out: str | Path, *, model: str | None = None, compare: bool = False,
+                    overwrite: bool = False):
+    """The :class:`~quickrelease.runfolder.RunFolder` of ``quickrelease building`` (pre-flight: writes nothing).
+
+    The fingerprint holds what the analysis depends on: the channels (their samples by SHA-256, not the
+    record's path), the mass, the model, the start values and the release time given, and ``compare``.
+    """
+    from .runfolder import RunFolder
+
+    data = result_or_data
+    inputs = {"channels": list(data.channels), "mass": data.mass, "model": model or data.model,
+              "start": dict(data.start or {}), "release_time": data.release_time, "compare": bool(compare)}
+    return RunFolder(out, "building results", inputs, overwrite=overwrite)
+
+
+def write_building_results(result, data, out: str | Path, *, model: str | None = None, compare: bool = False,
+                           title: str = "Building free-vibration test", overwrite: bool = False) -> dict[str, Path]:
+    """Write ``quickrelease building``'s results into ``out``: ``summary.json`` (the ``--json`` keys), the
+    building figures (``figures/<stem>.png``/``.svg``), ``report.html`` and ``manifest.json``, staged and
+    moved into place as :func:`write_results` does; returns the paths by name."""
+    from .building_plots import building_figures
+    from .export import write_json, write_text
+    from .plots import save_figure
+    from .report import render_building_report
+
+    folder = building_folder(data, out, model=model, compare=compare, overwrite=overwrite)
+    with folder.staged() as work:
+        paths = {"summary": write_json(result.summary(), work / "summary.json")}
+        svgs = {}
+        for stem, fig in building_figures(result).items():
+            for fmt, path in save_figure(fig, work / "figures", stem).items():
+                paths[f"{stem}.{fmt}"] = path
+            svgs[stem] = paths[f"{stem}.svg"].read_text(encoding="utf-8")
+        paths["report"] = write_text(render_building_report(result, svgs, title), work / "report.html")
+    return {name: folder.final(path) for name, path in paths.items()}
 
 
 def campaign_folder(campaign_file: str | Path, out: str | Path, *, overwrite: bool = False):
