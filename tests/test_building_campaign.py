@@ -322,14 +322,27 @@ def test_a_roof_channel_of_a_rigid_building_is_fitted_as_the_layer():
         assert abs(fit.estimates[name] - value) < 4 * fit.std_errors[name], (name, fit.estimates[name])
 
 
-def test_a_release_in_a_local_minimum_is_refitted_from_the_others():
-    """Design values far off (T 1.7 s, zeta 15 %, F_s 1 kN against 2.0 s, 3 %, 20 kN) leave the small
-    releases' fits 8 and 1.4 times the noise away (local minima); the campaign refits them from the release
-    that fits, and every friction then holds the truth."""
+def test_a_release_in_a_local_minimum_is_refitted_from_the_others(monkeypatch):
+    """A release whose first fit misfits its record (here: the first fits of R0 and R2 held at a friction of
+    1 kN against the true 20 kN, as a fit caught in a local minimum would be: many times the noise away) is
+    refitted from the estimates of the release that fits, and every friction then holds the truth. (The fit
+    itself now also tries the decay analysis' start beside far-off design values, so real local minima of
+    the linear model are rare; the campaign's restart is checked on a planted one.)"""
+    import quickrelease.building_campaign as bc
+
     releases = [BuildingRelease(f"R{i}", _record(d0, 2.0e4, 100 + i), d0=d0) for i, d0 in ((0, 0.05), (2, 0.13),
                                                                                              (4, 0.20))]
-    result = fit_building_campaign(releases, M, "linear", quantities=("friction",),
-                                   start={"period": 1.7, "damping_ratio": 0.15, "friction": 1.0e3})
+    design = {"period": 1.7, "damping_ratio": 0.15, "friction": 1.0e3}
+    stuck = {id(r.channels) for r in releases[:2]}
+    real = bc.fit_isolation
+
+    def first_fit_stuck(channels, *args, start=None, fixed=None, **kwargs):
+        if id(channels) in stuck and start is design:
+            fixed = {**(fixed or {}), "friction": 1.0e3}
+        return real(channels, *args, start=start, fixed=fixed, **kwargs)
+
+    monkeypatch.setattr(bc, "fit_isolation", first_fit_stuck)
+    result = fit_building_campaign(releases, M, "linear", quantities=("friction",), start=design)
     assert [r.restarted_from for r in result.releases] == ["R4", "R4", None]
     for r in result.releases:
         assert r.fit.chi2_reduced < 1.3 and abs(r.values["friction"] - 2.0e4) < 4 * r.std_errors["friction"], r.name

@@ -160,8 +160,9 @@ def test_coverage_with_noise_from_the_residuals():
 
 def test_model_choice_on_linear_records_prefers_linear():
     """On linear + Coulomb records the bilinear model (two more parameters) does not win by AIC in more
-    than 10% of the seeds."""
-    n = 50 if SLOW else 2
+    than 10% of the seeds (measured: 47 of 50 seeds, and 19 of the first 20; the CI's 10 seeds hold one that
+    prefers bilinear)."""
+    n = 50 if SLOW else 10
     rows = _rows(K, K, math.inf, C, FS, D0, 8.0)
     prefers_linear = 0
     for seed in range(n):
