@@ -370,6 +370,10 @@ def test_synth_of_a_2dof_building_against_solve_ivp(tmp_path):
     assert syn.clean["x"][0] == syn.clean["x_roof"][0] == 0.1
     assert np.max(np.abs(syn.clean["a_roof"] - syn.clean["a"])) > 0.1 * np.max(np.abs(syn.clean["a"]))
     assert syn.truth["superstructure_period_s"] == 0.5 and syn.truth["model"] == "2dof"
+    # pushed where the sliders hold it (k d0 = m pi^2 x 0.01 m = 64.1 kN <= F_s = 0.1 W = 637 kN): refused
+    held = _case(tmp_path, TWO_DOF_FRICTION.replace("0.01", "0.1").replace('"0.1 m"', '"0.01 m"'), "held.toml")
+    with pytest.raises(QuickReleaseError, match=r"F_s = 637000 N holds the building there \(restoring force 64108.9 N"):
+        synthesize_building(held, ["x", "a_roof"], rate=100.0)
 
 
 def test_synth_cli_writes_a_2dof_record_and_its_case(tmp_path, monkeypatch):

@@ -69,6 +69,8 @@ def spec_isolation(spec: BuildingSpec) -> Isolation:
     F_y, zeta, F_s)``; ``2dof``: the isolation layer with the superstructure taken as rigid on it, the whole
     mass on the layer's period T (the rigid-body mode; the superstructure's own mode is left out). Without
     a mass (linear only) a unit mass stands in when the friction is 0 (the motion depends on F_s / m only).
+    Planning's model (:func:`quickrelease.planning.building_isolation`); the 2dof building itself is
+    :func:`spec_building`'s.
     """
     friction = spec.friction_force
     mass = spec.mass
