@@ -9,9 +9,10 @@ import math
 
 import numpy as np
 import pytest
-from building_reference import reference
+from building_reference import reference, reference_2dof
 from typer.testing import CliRunner
 
+from quickrelease.building import TwoDOF
 from quickrelease.building_case import load_building
 from quickrelease.case import CaseFileError, load_case
 from quickrelease.cli import app
@@ -72,7 +73,8 @@ def test_the_three_models_parse_and_give_start_values(tmp_path):
     assert data.isolation == iso and data.channels == [] and data.d0 == 0.15
     two = _case(tmp_path, TWO_DOF)
     data = load_building(two)
-    assert data.model == "2dof" and data.isolation is None and data.mass == pytest.approx(6.37e6 / G, rel=1e-15)
+    assert data.model == "2dof" and isinstance(data.isolation, TwoDOF) and data.mass == pytest.approx(6.37e6 / G,
+                                                                                                        rel=1e-15)
     assert data.superstructure_mass == 5e5
     assert data.start == {"period": 2.0, "d0": 0.1, "superstructure_period": 0.5, "superstructure_damping_ratio": 0.02}
     # planning takes the 2-DOF building as rigid on its isolation layer, with the whole mass
@@ -248,10 +250,6 @@ def test_synth_cli_round_trip_and_bad_input(tmp_path, monkeypatch):
         r = runner.invoke(app, ["synth", "b.toml", "--out", "new.csv", "--case-out", "new.toml", *args])
         assert r.exit_code == 2 and message in r.stderr and r.stderr.count("\n") == 1, (args, r.stderr)
         assert not (tmp_path / "new.csv").exists() and not (tmp_path / "new.toml").exists()
-    (tmp_path / "two.toml").write_text(TWO_DOF)
-    r = runner.invoke(app, ["synth", "two.toml", "--out", "new.csv"])
-    assert r.exit_code == 2 and "model = '2dof': synth simulates 'linear' and 'bilinear'" in r.stderr
-    assert not (tmp_path / "new.csv").exists()
 
 
 def test_synth_refuses_a_push_the_sliders_hold(tmp_path):
@@ -332,3 +330,69 @@ def test_planning_says_it_takes_the_2dof_building_as_rigid(tmp_path):
     assert any("2dof building taken as rigid" in note for note in plan.notes)
     # d0 = (P - 0) / k with k = m (2 pi / T)^2 of the whole mass (no friction given)
     assert plan.clearance.d0 == pytest.approx(1598e3 / (6.37e6 / G * math.pi**2), rel=1e-12)
+
+
+# -- the 2dof building (issue 10, items 1 and 5) ---------------------------------------------------------------
+TWO_DOF_FRICTION = TWO_DOF.replace("displacement", 'damping_ratio = 0.05\nfriction_coefficient = 0.01\ndisplacement')
+
+
+def test_a_2dof_case_loads_to_its_twodof_building(tmp_path):
+    """Hand values: m = W / g, m_s = 500 t, k = m (2 pi / 2 s)^2 = m pi^2, k_s = m_s (2 pi / 0.5 s)^2 = 16 pi^2 m_s,
+    F_s = mu W = 0.01 x 6.37 MN; planning still takes the building as rigid on its isolation layer."""
+    case = _case(tmp_path, TWO_DOF_FRICTION)
+    b = load_building(case).isolation
+    m = 6.37e6 / G
+    assert isinstance(b, TwoDOF)
+    assert (b.mass, b.superstructure_mass, b.period, b.superstructure_period) == pytest.approx((m, 5e5, 2.0, 0.5),
+                                                                                             rel=1e-15)
+    assert (b.damping_ratio, b.superstructure_damping_ratio) == (0.05, 0.02)
+    assert b.friction == pytest.approx(0.01 * 6.37e6, rel=1e-15)
+    assert b.stiffness == pytest.approx(m * math.pi**2, rel=1e-14)
+    assert b.superstructure_stiffness == pytest.approx(16 * math.pi**2 * 5e5, rel=1e-14)
+    rigid = building_isolation(case.building)
+    assert rigid.model == "linear" and rigid.mass == b.mass and rigid.stiffness == pytest.approx(b.stiffness)
+
+
+def test_synth_of_a_2dof_building_against_solve_ivp(tmp_path):
+    """Noise-free 2dof record: every channel (base x, v, a; roof x_roof, v_roof, a_roof) against the independent
+    event-driven solve_ivp of tests/building_reference.py, to 1e-9 of the channel's peak; the base and the roof
+    rest at d0 before the release and part after it (the roof is not the base)."""
+    case = _case(tmp_path, TWO_DOF_FRICTION)
+    names = ["x", "v", "a", "x_roof", "v_roof", "a_roof"]
+    syn = synthesize_building(case, names, rate=100.0, release_time=0.5, duration=5.0)
+    m, ms = 6.37e6 / G, 5e5
+    k, ks = m * (2 * math.pi / 2.0) ** 2, ms * (2 * math.pi / 0.5) ** 2
+    ref, _ = reference_2dof(m, ms, k, 2 * 0.05 * math.sqrt(k * m), ks, 2 * 0.02 * math.sqrt(ks * ms), 0.01 * 6.37e6,
+                            0.1, syn.t - 0.5)
+    for name, key in zip(names, ("xb", "vb", "ab", "xs", "vs", "as"), strict=True):
+        peak = np.max(np.abs(ref[key]))
+        assert np.max(np.abs(syn.clean[name] - ref[key])) < 1e-9 * peak, name
+    assert syn.clean["x"][0] == syn.clean["x_roof"][0] == 0.1
+    assert np.max(np.abs(syn.clean["a_roof"] - syn.clean["a"])) > 0.1 * np.max(np.abs(syn.clean["a"]))
+    assert syn.truth["superstructure_period_s"] == 0.5 and syn.truth["model"] == "2dof"
+    # pushed where the sliders hold it (k d0 = m pi^2 x 0.01 m = 64.1 kN <= F_s = 0.1 W = 637 kN): refused
+    held = _case(tmp_path, TWO_DOF_FRICTION.replace("0.01", "0.1").replace('"0.1 m"', '"0.01 m"'), "held.toml")
+    with pytest.raises(QuickReleaseError, match=r"F_s = 637000 N holds the building there \(restoring force 64108.9 N"):
+        synthesize_building(held, ["x", "a_roof"], rate=100.0)
+
+
+def test_synth_cli_writes_a_2dof_record_and_its_case(tmp_path, monkeypatch):
+    """``synth --building`` on a 2dof case: the base's x and the roof's a_roof columns, the written case
+    parses back to the same building (superstructure keys included) and reads the record; bad input still
+    fails before anything is written."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "two.toml").write_text(TWO_DOF_FRICTION)
+    r = runner.invoke(app, ["synth", "two.toml", "--building", "--channels", "x,a_roof", "--rate", "100 Hz",
+                            "--duration", "5 s", "--out", "r.csv", "--case-out", "c.toml"])
+    assert r.exit_code == 0, r.output
+    header = (tmp_path / "r.csv").read_text().splitlines()[0]
+    assert header == "t_s,x_m,a_roof_m_s2"
+    case = load_case(tmp_path / "c.toml", require_test=False)
+    data = load_building(case)
+    assert data.isolation == load_building(_case(tmp_path, TWO_DOF_FRICTION, "two2.toml")).isolation
+    assert [ch.name for ch in data.channels] == ["x", "a_roof"]
+    r = runner.invoke(app, ["synth", "two.toml", "--channels", "x,a_roof", "--rate", "10 Hz", "--out", "new.csv",
+                            "--case-out", "new.toml"])
+    assert r.exit_code == 2 and "rate = 10 Hz is outside" in r.stderr and "higher mode T_2" in r.stderr, r.stderr
+    assert r.stderr.count("\n") == 1
+    assert not (tmp_path / "new.csv").exists() and not (tmp_path / "new.toml").exists()

@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .building import Isolation
+from .building import Isolation, TwoDOF
 from .errors import ParameterError, QuickReleaseError
 from .records import RecordSpec, load_record, parse_record_spec
 
@@ -39,7 +39,8 @@ if TYPE_CHECKING:
     from .case import BuildingSpec, Case
     from .isolation_fit import BuildingChannel
 
-__all__ = ["BUILDING_CHANNELS", "BuildingData", "load_building", "parse_building_record", "spec_isolation"]
+__all__ = ["BUILDING_CHANNELS", "BuildingData", "load_building", "parse_building_record", "spec_building",
+           "spec_isolation"]
 
 #: Channel name -> (quantity kind, SI unit, description) of the building's record.
 BUILDING_CHANNELS: dict[str, tuple[str, str, str]] = {
@@ -68,6 +69,8 @@ def spec_isolation(spec: BuildingSpec) -> Isolation:
     F_y, zeta, F_s)``; ``2dof``: the isolation layer with the superstructure taken as rigid on it, the whole
     mass on the layer's period T (the rigid-body mode; the superstructure's own mode is left out). Without
     a mass (linear only) a unit mass stands in when the friction is 0 (the motion depends on F_s / m only).
+    Planning's model (:func:`quickrelease.planning.building_isolation`); the 2dof building itself is
+    :func:`spec_building`'s.
     """
     friction = spec.friction_force
     mass = spec.mass
@@ -81,6 +84,23 @@ def spec_isolation(spec: BuildingSpec) -> Isolation:
     return Isolation.linear(mass, spec.period, spec.damping_ratio, friction)
 
 
+def spec_building(spec: BuildingSpec) -> Isolation | TwoDOF:
+    """The ``[building]`` values as the model they name (SI units): :func:`spec_isolation` for ``linear`` and
+    ``bilinear``; for ``2dof`` the :class:`~quickrelease.building.TwoDOF` building, ``TwoDOF(mass, m_s, T,
+    T_s, zeta, F_s, zeta_s)`` (``mass`` the whole mass on the isolators, ``m_s`` lumped at the roof, T the
+    isolation period of the whole mass, T_s the superstructure's fixed-base period). Planning keeps
+    :func:`spec_isolation` (the 2dof building rigid on its isolation layer)."""
+    if spec.model != "2dof":
+        return spec_isolation(spec)
+    if spec.mass is None:
+        raise ParameterError("[building] mass", None, "given for model = '2dof' (its stiffnesses act on the mass)",
+                             "kg")
+    return TwoDOF(mass=float(spec.mass), superstructure_mass=float(spec.superstructure_mass), period=float(spec.period),
+                  superstructure_period=float(spec.superstructure_period), damping_ratio=float(spec.damping_ratio),
+                  friction=float(spec.friction_force),
+                  superstructure_damping_ratio=float(spec.superstructure_damping_ratio or 0.0))
+
+
 @dataclass(frozen=True, eq=False)
 class BuildingData:
     """The building of a case: its ``[building]`` values and its record (SI units)."""
@@ -89,9 +109,9 @@ class BuildingData:
     """``"linear"``, ``"bilinear"`` or ``"2dof"``."""
     mass: float
     """Mass carried by the isolators, the whole building [kg]."""
-    isolation: Isolation | None
-    """The ``[building]`` values as a model of :mod:`quickrelease.building` (2dof: None, that module's models
-    are rigid; see ``start``)."""
+    isolation: Isolation | TwoDOF | None
+    """The ``[building]`` values as a model of :mod:`quickrelease.building` (:func:`spec_building`: an
+    :class:`~quickrelease.building.Isolation`, or for 2dof a :class:`~quickrelease.building.TwoDOF`)."""
     start: dict[str, float]
     """The ``[building]`` values given, as start values in :func:`quickrelease.isolation_fit.fit_isolation`'s
     parameter names: period [s] (bilinear: the initial period 2 pi sqrt(m / k1)), stiffness_ratio = k2 / k1,
@@ -154,7 +174,7 @@ def load_building(case: Case) -> BuildingData:
     if spec.mass is None:
         raise CaseFileError(f"{case.source}: missing key [building] mass (or weight): the building's record "
                             "fixes its parameters per unit mass only, e.g. mass = '650 t'")
-    isolation = None if spec.model == "2dof" else spec_isolation(spec)
+    isolation = spec_building(spec)
     channels: list[BuildingChannel] = []
     notes: list[str] = []
     release_time = None

@@ -551,8 +551,11 @@ def _synth_building(case, channels: str | None, rate: str | None, noise: list[st
         return
     t = syn.truth
     stop = "still moving at the end" if t["stop_time_s"] is None else f"sticks {t['stop_time_s']:.6g} s later"
+    sup = "" if t["model"] != "2dof" else (f" (superstructure {t['superstructure_mass_kg']:.6g} kg, T_s = "
+                                           f"{t['superstructure_period_s']:.6g} s, zeta_s = "
+                                           f"{t['superstructure_damping_ratio']:.4g})")
     _echo(f"Wrote {out} ({syn.t.size} rows at {syn.rate:g} Hz, channels {', '.join(names)}); {t['model']} isolation, "
-          f"T = {t['period_s']:.6g} s, zeta = {t['damping_ratio']:.4g}, F_s = {t['friction_N']:.6g} N; released from "
+          f"T = {t['period_s']:.6g} s, zeta = {t['damping_ratio']:.4g}, F_s = {t['friction_N']:.6g} N{sup}; released from "
           f"d0 = {1e3 * t['d0_m']:.6g} mm at {t['release_time_s']:g} s, {stop}")
     for note in syn.notes:
         _echo(f"note: {note}")

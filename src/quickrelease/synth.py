@@ -296,7 +296,8 @@ class SyntheticBuildingRecord:
     clean: dict[str, np.ndarray]
     """Channel -> model values without offset and noise."""
     truth: dict[str, Any]
-    """The building (model, mass_kg, period_s, damping_ratio, friction_N; bilinear k1_N_m, k2_N_m, Fy_N),
+    """The building (model, mass_kg, period_s, damping_ratio, friction_N; bilinear k1_N_m, k2_N_m, Fy_N; 2dof
+    superstructure_mass_kg, superstructure_period_s, superstructure_damping_ratio),
     d0_m, release_time_s and stop_time_s (after the release; None: still moving at the end of the record)."""
     noise: dict[str, float]
     offsets: dict[str, float]
@@ -357,15 +358,17 @@ def synthesize_building(case: Case, channels: list[str] | tuple[str, ...], *, ra
 
     The isolation layer rests at the pushed displacement d0 until ``release_time``, then vibrates freely:
     the exact closed form of :func:`quickrelease.building.free_vibration` (linear or bilinear isolation,
-    viscous damping, Coulomb sliders, sticking), sampled at the record's instants (point values). With the
-    rigid superstructure of these models the roof channels equal the layer's. Each channel gets a constant
-    offset and Gaussian noise; optionally jittered instants and missing samples.
+    viscous damping, Coulomb sliders, sticking; or the 2dof building, :class:`~quickrelease.building.TwoDOF`),
+    sampled at the record's instants (point values). The channels x, v, a are the isolation layer's (the
+    base), x_roof, v_roof, a_roof the roof's: the 2dof building's superstructure mass, for the rigid
+    superstructure of linear and bilinear the layer's. Each channel gets a constant offset and Gaussian noise;
+    optionally jittered instants and missing samples.
 
     Parameters
     ----------
     case : Case
-        With ``[building]`` (model linear or bilinear; 2dof is not simulated) and d0 (``displacement``, or
-        a ``[test]`` force).
+        With ``[building]`` (model linear, bilinear or 2dof) and d0 (``displacement``, or a ``[test]``
+        force).
     channels : list of str
         Channels of :data:`quickrelease.building_case.BUILDING_CHANNELS`.
     rate : float
@@ -376,6 +379,8 @@ def synthesize_building(case: Case, channels: list[str] | tuple[str, ...], *, ra
         Release instant from the start of the record [s] (the pre-release segment at the pushed state).
     duration : float, optional
         Record length [s]; default: release + min(stop, 20 T) + 2 T (T the isolation's (initial) period).
+        The rate must give 10 samples to the shortest of T, the release time and (2dof) the period of the
+        building's higher mode while the base slides.
     offsets : dict, optional
         Constant offset per channel [SI] (default 0).
     seed : int
@@ -385,15 +390,12 @@ def synthesize_building(case: Case, channels: list[str] | tuple[str, ...], *, ra
     missing : float
         Share of samples missing (NaN) in each channel, in [0, 1).
     """
-    from .building import free_vibration, pushed_state
-    from .building_case import BUILDING_CHANNELS, spec_isolation
+    from .building import TwoDOF, free_vibration, pushed_state
+    from .building_case import BUILDING_CHANNELS, spec_building
 
     spec = case.building
     if spec is None:
         raise QuickReleaseError(f"{case.source}: no [building] table (the building to simulate)")
-    if spec.model == "2dof":
-        raise QuickReleaseError(f"{case.source}: [building] model = '2dof': synth simulates 'linear' and 'bilinear' "
-                                "buildings (the 2-DOF building is not simulated yet)")
     unknown = [c for c in channels if c not in BUILDING_CHANNELS]
     if unknown or not channels or len(set(channels)) != len(channels):
         what = f"unknown channel {unknown[0]!r}" if unknown else "no channel" if not channels else "a channel twice"
@@ -416,11 +418,12 @@ def synthesize_building(case: Case, channels: list[str] | tuple[str, ...], *, ra
     for name, value in offsets.items():
         if not math.isfinite(value):
             raise ParameterError(f"offset of {name}", value, "finite values", BUILDING_CHANNELS[name][1])
-    iso = spec_isolation(spec)
+    iso = spec_building(spec)
+    two = isinstance(iso, TwoDOF)
     d0 = building_pushed_displacement(case)
     if not (math.isfinite(d0) and d0 > 0):
         raise ParameterError("d0", d0, "(0, inf) (the push must move the building past its sliders' friction)", "m")
-    R0 = pushed_state(iso, d0)[1]
+    R0 = pushed_state(iso.rigid() if two else iso, d0)[1]  # 2dof: the isolators hold k d0, the storey no shear
     if abs(R0) <= iso.friction:
         raise QuickReleaseError(f"{case.source}: [building] d0 = {d0:.6g} m: the sliders' friction F_s = "
                                 f"{iso.friction:.6g} N holds the building there (restoring force {R0:.6g} N <= F_s), "
@@ -432,9 +435,14 @@ def synthesize_building(case: Case, channels: list[str] | tuple[str, ...], *, ra
         duration = release_time + min(t_stop, 20.0 * period) + 2.0 * period
     if not (math.isfinite(duration) and duration > release_time):
         raise ParameterError("duration", duration, f"(release_time, inf) = ({release_time:g}, inf)", "s")
-    if not rate * min(period, release_time) >= MIN_SAMPLES:  # noise before the release, the motion after
-        raise ParameterError("rate", rate, f"[{MIN_SAMPLES} / min(T, release_time), inf) = "
-                             f"[{MIN_SAMPLES / min(period, release_time):.4g}, inf) (T = {period:.4g} s)", "Hz")
+    shortest, which = period, f"T = {period:.4g} s"
+    if two:  # the faster mode of the sliding base (M^-1 K), shorter than the superstructure's fixed-base T_s
+        M, _, K = iso.matrices()
+        shortest = 2.0 * math.pi / math.sqrt(float(np.max(np.linalg.eigvals(np.linalg.solve(M, K)).real)))
+        which += f", higher mode T_2 = {shortest:.4g} s"
+    if not rate * min(shortest, release_time) >= MIN_SAMPLES:  # noise before the release, the motion after
+        raise ParameterError("rate", rate, f"[{MIN_SAMPLES} / min(T{', T_2' if two else ''}, release_time), inf) = "
+                             f"[{MIN_SAMPLES / min(shortest, release_time):.4g}, inf) ({which})", "Hz")
     check_seed("seed", seed)
     samples = math.floor(duration * rate) + 1 if math.isfinite(duration * rate) else math.inf
     check_size("duration x rate", f"{duration:g} s x {rate:g} Hz", samples,
@@ -447,9 +455,14 @@ def synthesize_building(case: Case, channels: list[str] | tuple[str, ...], *, ra
         t[0] = max(t[0], 0.0)
     if duration - release_time > motion.horizon:
         motion = free_vibration(iso, d0, t_end=duration - release_time)
-    x, v, a = motion.state(t - release_time)
-    layer = {"x": x, "v": v, "a": a}
-    clean = {name: layer[name.removesuffix("_roof")].copy() for name in channels}
+    if two:
+        s = motion.states(t - release_time)
+        model = {"x": s["x_b"], "v": s["v_b"], "a": s["a_b"], "x_roof": s["x_s"], "v_roof": s["v_s"],
+                 "a_roof": s["a_s"]}
+    else:  # a rigid superstructure: the roof moves with the layer
+        x, v, a = motion.state(t - release_time)
+        model = {"x": x, "v": v, "a": a, "x_roof": x, "v_roof": v, "a_roof": a}
+    clean = {name: model[name].copy() for name in channels}
     data = {}
     for name in channels:
         values = clean[name] + offsets[name] + rng.normal(0.0, 1.0, n) * noise[name]
@@ -476,6 +489,10 @@ def building_case_toml(case: Case, synthetic: SyntheticBuildingRecord, record_ta
         lines += [f'k1 = "{t["k1_N_m"]!r} N/m"', f'k2 = "{t["k2_N_m"]!r} N/m"', f'yield_force = "{t["Fy_N"]!r} N"']
     else:
         lines.append(f'period = "{case.building.period!r} s"')
+    if t["model"] == "2dof":
+        lines += [f'superstructure_mass = "{t["superstructure_mass_kg"]!r} kg"',
+                  f'superstructure_period = "{t["superstructure_period_s"]!r} s"',
+                  f"superstructure_damping_ratio = {t['superstructure_damping_ratio']!r}"]
     lines += [f"damping_ratio = {case.building.damping_ratio!r}", f'friction = "{t["friction_N"]!r} N"',
               f'displacement = "{t["d0_m"]!r} m"']
     return "\n".join(lines) + "\n\n" + record_table
