@@ -139,3 +139,25 @@ def test_readme_building_example_runs_as_written(capsys):
     exec(compile(block, "README.md", "exec"), {})
     out = capsys.readouterr().out
     assert "11 half-cycles" in out and "zeta = 0.04000" in out and "F_s = 12000 N" in out
+
+
+def test_one_zero_crossing_per_half_cycle_and_none_from_the_noise_at_rest():
+    """A viscous decay (no sliders) that has died into the noise long before the record ends (60 s at 200 Hz,
+    amplitude 8e-5 m against a noise of 2e-4 m after 60 s): the noise about the rest makes hundreds of sign
+    changes, none a crossing of the motion; the analysis gives one crossing per half-cycle, at the hand
+    crossing times of x = d0 exp(-zeta w t) cos(w_d t - phi) / cos(phi), tan(phi) = zeta / sqrt(1 - zeta^2):
+    w_d t = phi + pi/2 + n pi."""
+    zeta, sigma = 0.04, 2e-4
+    c = 2 * zeta * math.sqrt(K * M)
+    t = np.arange(-1.0, 60.0, 1.0 / 200.0)
+    x, _ = reference(M, K, K, math.inf, c, 0.0, D0, t)
+    noisy = x + np.random.default_rng(5).normal(0.0, sigma, x.size)
+    assert zero_crossings(t, noisy).size > 200  # the raw sign changes: mostly noise
+    analysis = analyse_decay(t, noisy, release_time=0.0, noise=sigma)
+    n = analysis.zero_crossings.size
+    assert n == int(np.sum(analysis.peaks[:-1] * analysis.peaks[1:] < 0))  # one per half-cycle that crosses
+    assert 10 <= n <= analysis.peaks.size
+    wd = 2 * math.pi / T * math.sqrt(1 - zeta**2)
+    phi = math.atan(zeta / math.sqrt(1 - zeta**2))
+    hand = (phi + math.pi / 2 + math.pi * np.arange(n)) / wd
+    np.testing.assert_allclose(analysis.zero_crossings[:10], hand[:10], atol=2e-3)
