@@ -13,7 +13,7 @@ from __future__ import annotations
 from importlib.metadata import PackageNotFoundError, version
 
 from . import building, decay, dynamics, kinematics, statics
-from .building import FreeVibration, Isolation, free_vibration
+from .building import FreeVibration, Isolation, TwoDOF, free_vibration
 from .device import DEVICE_KEYS, Device, load_device, preset, preset_names
 from .dynamics import (
     MASS_MODELS,
@@ -54,6 +54,6 @@ __all__ = [
     "Response", "STOP_REASONS", "METHODS", "simulate", "stop_time",
     "InternalForces", "StrainEnergy", "fuse_force", "internal_forces", "push_force", "strain_energy",
     "parse_quantity", "dynamics", "kinematics", "statics", "__version__",
-    "building", "decay", "Isolation", "FreeVibration", "free_vibration",
+    "building", "decay", "Isolation", "TwoDOF", "FreeVibration", "free_vibration",
     "BuildingChannel", "IsolationFit", "fit_isolation", "compare_models",
 ]
