@@ -310,6 +310,12 @@ class FreeVibration:
         x, v, a, _ = self._evaluate(t)
         return x, v, a
 
+    def channels(self, t) -> dict[str, np.ndarray]:
+        """Every channel of the building's record at times t [s] (SI): x, v, a of the isolation layer, and
+        x_roof, v_roof, a_roof, equal to them (a rigid superstructure moves with the layer)."""
+        x, v, a = self.state(t)
+        return {"x": x, "v": v, "a": a, "x_roof": x, "v_roof": v, "a_roof": a}
+
     def restoring_force(self, t) -> np.ndarray:
         """The isolators' force R = k2 x + z [N] at times t (the spring alone, no damper, no sliders)."""
         x, _, _, z = self._evaluate(t)
@@ -397,10 +403,15 @@ class FreeVibration:
                 "viscous": viscous, "initial": np.full(t.shape, initial)}
 
     def summary(self) -> dict[str, Any]:
-        peaks = self.turning_points
-        return {**self.isolation.summary(), "d0_m": self.d0, "stop_time_s": self.stop_time,
-                "rest_displacement_m": self.rest[0], "half_cycles": int(peaks.size - 1),
-                "first_peak_m": float(peaks[1]) if peaks.size > 1 else None}
+        return _motion_summary(self.isolation, self)
+
+
+def _motion_summary(building, motion) -> dict[str, Any]:
+    """The building's values and its free vibration's: d0, stop time, rest, half-cycles, first peak (SI)."""
+    peaks = motion.turning_points
+    return {**building.summary(), "d0_m": motion.d0, "stop_time_s": motion.stop_time,
+            "rest_displacement_m": motion.rest[0], "half_cycles": int(peaks.size - 1),
+            "first_peak_m": float(peaks[1]) if peaks.size > 1 else None}
 
 
 def free_vibration(isolation: Isolation, d0: float, t_end: float | None = None) -> FreeVibration:
@@ -835,6 +846,13 @@ class TwoDOFVibration:
         s = self.states(t)
         return s["x_s"], s["v_s"], s["a_s"]
 
+    def channels(self, t) -> dict[str, np.ndarray]:
+        """Every channel of the building's record at times t [s] (SI): x, v, a of the base (isolation
+        layer) and x_roof, v_roof, a_roof of the roof (one evaluation of the motion)."""
+        s = self.states(t)
+        return {"x": s["x_b"], "v": s["v_b"], "a": s["a_b"], "x_roof": s["x_s"], "v_roof": s["v_s"],
+                "a_roof": s["a_s"]}
+
     def energies(self, t) -> dict[str, np.ndarray]:
         """The energy balance at times t [J]: kinetic ``(m_b v_b^2 + m_s v_s^2) / 2``, stored
         ``(k x_b^2 + k_s u^2) / 2``, friction ``F_s sum |dx_b|`` and viscous dissipation so far (``hysteretic``
@@ -871,10 +889,7 @@ class TwoDOFVibration:
                 "viscous": viscous, "initial": np.full(t.shape, 0.5 * k * self.d0**2)}
 
     def summary(self) -> dict[str, Any]:
-        peaks = self.turning_points
-        return {**self.building.summary(), "d0_m": self.d0, "stop_time_s": self.stop_time,
-                "rest_displacement_m": self.rest[0], "half_cycles": int(peaks.size - 1),
-                "first_peak_m": float(peaks[1]) if peaks.size > 1 else None}
+        return _motion_summary(self.building, self)
 
 
 def free_vibration_2dof(building: TwoDOF, d0: float, t_end: float | None = None) -> TwoDOFVibration:

@@ -50,7 +50,7 @@ import numpy as np
 from scipy import stats
 
 from .building import pushed_state
-from .campaign import LinearLaw, fit_line, law_panel, weights_or_none
+from .campaign import LinearLaw, fit_line, iter_tests, law_panel, weights_or_none
 from .errors import ParameterError, QuickReleaseError
 from .isolation_fit import BuildingChannel, IsolationFit, _isolation, fit_isolation
 
@@ -481,15 +481,8 @@ def load_building_campaign(path, data: dict[str, Any]) -> tuple[str, str, tuple[
     if not isinstance(tests, list) or not tests:
         raise CaseFileError(f"{source}: missing [[tests]]: give one table per release (name, displacement or "
                             "force, record)")
-    releases, names, start, mass = [], set(), {}, math.nan
-    for i, entry in enumerate(tests):
-        if not isinstance(entry, dict):
-            raise CaseFileError(f"{source}: tests[{i}] is not a table")
-        name = str(entry.get("name", f"R{i + 1}"))
-        where = f"{source}: test {name}"
-        if name in names:
-            raise CaseFileError(f"{where}: the name is used twice")
-        names.add(name)
+    releases, start, mass = [], {}, math.nan
+    for name, where, entry in iter_tests(tests, source, "R"):
         device = sorted(set(entry) & _DEVICE_TEST)
         if device:
             raise CaseFileError(f"{where}: {device[0]!r} is a key of a device campaign, beside [building] (a "

@@ -304,6 +304,21 @@ class CampaignResult:
                 "joint": {k: v.summary() for k, v in self.joint.items()}}
 
 
+def iter_tests(tests: list[Any], source: str, prefix: str):
+    """Each ``[[tests]]`` table of a campaign file as (name, where, table): a table, named (default: prefix
+    and its number) once only; ``where`` names the file and the test for messages. CaseFileError else."""
+    names = set()
+    for i, entry in enumerate(tests):
+        if not isinstance(entry, dict):
+            raise CaseFileError(f"{source}: tests[{i}] is not a table")
+        name = str(entry.get("name", f"{prefix}{i + 1}"))
+        where = f"{source}: test {name}"
+        if name in names:
+            raise CaseFileError(f"{where}: the name is used twice")
+        names.add(name)
+        yield name, where, entry
+
+
 def _campaign_cases(path: Path) -> tuple[dict[str, Any], list[tuple[str, Case]]]:
     data = read_toml(path, "campaign file", CaseFileError)
     source = str(path)
@@ -316,15 +331,7 @@ def _campaign_cases(path: Path) -> tuple[dict[str, Any], list[tuple[str, Case]]]
                             "...)")
     template = {k: data[k] for k in ("device", "test", "record", "fit", "simulation") if k in data}
     cases = []
-    names = set()
-    for i, entry in enumerate(tests):
-        if not isinstance(entry, dict):
-            raise CaseFileError(f"{source}: tests[{i}] is not a table")
-        name = str(entry.get("name", f"T{i + 1}"))
-        where = f"{source}: test {name}"
-        if name in names:
-            raise CaseFileError(f"{where}: the name is used twice")
-        names.add(name)
+    for name, where, entry in iter_tests(tests, source, "T"):
         bad = sorted(set(entry) - _TEST_KEYS)
         if bad:
             raise CaseFileError(f"{where}: unknown key {bad[0]!r}; valid: {', '.join(sorted(_TEST_KEYS))}")

@@ -189,23 +189,7 @@ def _channel_model(iso: Isolation | TwoDOF, d0: float, t_r: float, kind: str, t:
         -> np.ndarray:
     horizon = max(t_last - t_r, 1e-9)
     fv = free_vibration(iso, d0, t_end=horizon)
-    return _kind_values(fv, kind, t - t_r)
-
-
-def _kind_values(fv, kind: str, tau: np.ndarray) -> np.ndarray:
-    """The model's channel of ``kind`` at times tau after the release [SI]: the base (x, v, a) or the roof
-    (x_roof, v_roof, a_roof); a rigid model's roof moves with the isolation layer."""
-    return _kind_table(fv, tau)[kind]
-
-
-def _kind_table(fv, tau: np.ndarray) -> dict[str, np.ndarray]:
-    """Every channel kind of the model at times tau after the release [SI] (one evaluation of the motion)."""
-    if isinstance(fv.isolation, TwoDOF):
-        s = fv.states(tau)
-        return {"x": s["x_b"], "v": s["v_b"], "a": s["a_b"], "x_roof": s["x_s"], "v_roof": s["v_s"],
-                "a_roof": s["a_s"]}
-    x, v, a = fv.state(tau)
-    return {"x": x, "v": v, "a": a, "x_roof": x, "v_roof": v, "a_roof": a}
+    return fv.channels(t - t_r)[kind]
 
 
 def ljung_box(residuals, lags: int = 20) -> float:
@@ -510,7 +494,7 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
         iso = _isolation(model, mass, p, superstructure_mass)
         fv = free_vibration(iso, p["d0"], t_end=max(t_last - p["release_time"], 1e-9))
         out = []
-        kinds = _kind_table(fv, t_all - p["release_time"])
+        kinds = fv.channels(t_all - p["release_time"])
         for c, at in zip(channels, where, strict=True):
             y = kinds[c.kind][at]
             out.append(y + p.get(f"offset_{c.name}", 0.0))

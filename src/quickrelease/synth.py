@@ -37,8 +37,9 @@ DEFAULT_NOISE = {"alpha": 0.002, "alpha_dot": 0.01, "u": 0.5e-3, "v": 0.5e-3, "u
 MIN_SAMPLES = 10
 
 
-def _column(name: str) -> str:
-    return f"{name}_{CHANNELS[name][1].replace('/', '_').replace('^', '')}"
+def _column(name: str, channels: dict[str, tuple[str, str, str]] = CHANNELS) -> str:
+    """The column of a channel in a written record: its name and SI unit (``a_head_m_s2``)."""
+    return f"{name}_{channels[name][1].replace('/', '_').replace('^', '')}"
 
 
 @dataclass(frozen=True, eq=False)
@@ -282,7 +283,7 @@ BUILDING_NOISE = {"x": 0.05e-3, "v": 1e-3, "a": 0.002 * 9.80665, "x_roof": 0.05e
 def _building_column(name: str) -> str:
     from .building_case import BUILDING_CHANNELS
 
-    return f"{name}_{BUILDING_CHANNELS[name][1].replace('/', '_').replace('^', '')}"
+    return _column(name, BUILDING_CHANNELS)
 
 
 @dataclass(frozen=True, eq=False)
@@ -455,13 +456,7 @@ def synthesize_building(case: Case, channels: list[str] | tuple[str, ...], *, ra
         t[0] = max(t[0], 0.0)
     if duration - release_time > motion.horizon:
         motion = free_vibration(iso, d0, t_end=duration - release_time)
-    if two:
-        s = motion.states(t - release_time)
-        model = {"x": s["x_b"], "v": s["v_b"], "a": s["a_b"], "x_roof": s["x_s"], "v_roof": s["v_s"],
-                 "a_roof": s["a_s"]}
-    else:  # a rigid superstructure: the roof moves with the layer
-        x, v, a = motion.state(t - release_time)
-        model = {"x": x, "v": v, "a": a, "x_roof": x, "v_roof": v, "a_roof": a}
+    model = motion.channels(t - release_time)  # a rigid superstructure's roof moves with the layer
     clean = {name: model[name].copy() for name in channels}
     data = {}
     for name in channels:
