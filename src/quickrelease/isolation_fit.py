@@ -593,8 +593,9 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
         r_try = solve(names, values, [trial[n] for n in names])
         if res is None or r_try.cost < res.cost:
             res = r_try
-        if model == "linear" and absolute and 2.0 * res.cost <= 1.3 * max(data.size - len(names), 1):
-            break  # misfit at the noise level: the other basins of the linear model lie far above it
+        if model in ("linear", "2dof") and absolute and 2.0 * res.cost <= 1.3 * max(data.size - len(names), 1):
+            break  # misfit at the noise level: the other basins (of the linear model and of the 2dof base's
+            # sliders alike: another count of half-cycles before the stick) lie far above it
     if not absolute:
         # a noise level taken from the residuals: weight each such channel by its own residual scatter
         # and refit (twice; the weights settle at once). One global chi-square scale cannot correct
