@@ -15,6 +15,18 @@ def paper_device():
 PAPER_CASE = dict(E_S=2900.0, alpha0=0.2, F1=419.85, F2=804.57)
 
 
+#: The uq case of the paper's test (scattered push force, angles and stop time): used by the uq, output-folder
+#: and fault-injection tests.
+UQ_CASE = """
+title = "uq"
+[test]
+force = { value = "1598 kN", std = "16 kN" }
+alpha0 = { value = "0.2 rad", std = "0.005 rad" }
+[observations]
+alpha_final = { value = "0.7378 rad", std = "0.01 rad" }
+stop_time = { low = "1.04 s", high = "1.06 s" }
+"""
+
 #: Table 2 of the paper: bar and head masses [kg], bar length [m] (the paper device).
 TABLE2_M1, TABLE2_M2, TABLE2_L1 = "576.78", "531.69", "2.477"
 

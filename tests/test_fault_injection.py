@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import UQ_CASE
 
 from quickrelease.case import load_case
 from quickrelease.sweep import sweep
@@ -28,15 +29,6 @@ HAS_DASK = importlib.util.find_spec("dask") is not None and importlib.util.find_
     and importlib.util.find_spec("zarr") is not None
 HAS_ZARR = importlib.util.find_spec("zarr") is not None
 RNG = random.Random(20261123)
-UQ_CASE = """
-title = "uq"
-[test]
-force = { value = "1598 kN", std = "16 kN" }
-alpha0 = { value = "0.2 rad", std = "0.005 rad" }
-[observations]
-alpha_final = { value = "0.7378 rad", std = "0.01 rad" }
-stop_time = { low = "1.04 s", high = "1.06 s" }
-"""
 
 
 def _cmd(*args):

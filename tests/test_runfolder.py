@@ -8,6 +8,7 @@ import os
 from pathlib import Path
 
 import pytest
+from conftest import UQ_CASE
 from typer.testing import CliRunner
 
 from quickrelease import uq as uq_module
@@ -18,15 +19,6 @@ from quickrelease.uq import run_uq
 from quickrelease.workflow import run_case, write_results
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
-CASE = """
-title = "uq"
-[test]
-force = { value = "1598 kN", std = "16 kN" }
-alpha0 = { value = "0.2 rad", std = "0.005 rad" }
-[observations]
-alpha_final = { value = "0.7378 rad", std = "0.01 rad" }
-stop_time = { low = "1.04 s", high = "1.06 s" }
-"""
 SAMPLES, CHUNK, SEED = 2000, 500, 3  # four chunks
 
 
@@ -37,7 +29,7 @@ class Killed(BaseException):
 @pytest.fixture()
 def case_path(tmp_path):
     path = tmp_path / "uq.toml"
-    path.write_text(CASE)
+    path.write_text(UQ_CASE)
     return path
 
 
@@ -115,7 +107,7 @@ def test_uq_resume_with_other_inputs_is_refused(case_path, tmp_path, spy, change
     before = {p.name: p.read_bytes() for p in (staging / "chunks").iterdir()}
     kw = {"seed": SEED, "chunk": CHUNK, "samples": SAMPLES}
     if change == "case":  # the observation's std edited (issue 9, item 1: gave a mixed std F1 before)
-        case_path.write_text(CASE.replace('std = "0.01 rad"', 'std = "0.02 rad"'))
+        case_path.write_text(UQ_CASE.replace('std = "0.01 rad"', 'std = "0.02 rad"'))
     else:
         kw[change] += {"seed": 1, "chunk": 250, "samples": 500}[change]
     code, _, err = _cli(_uq_args(case_path, out, "--resume", **kw))

@@ -10,28 +10,20 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import UQ_CASE
 
 from quickrelease import identify_friction
 from quickrelease.case import CaseFileError, load_case
 from quickrelease.errors import QuickReleaseError
 from quickrelease.uq import run_uq, sensitivities
 
-CASE = """
-title = "uq"
-[test]
-force = { value = "1598 kN", std = "16 kN" }
-alpha0 = { value = "0.2 rad", std = "0.005 rad" }
-[observations]
-alpha_final = { value = "0.7378 rad", std = "0.01 rad" }
-stop_time = { low = "1.04 s", high = "1.06 s" }
-"""
 HAS_DASK = importlib.util.find_spec("dask") is not None and importlib.util.find_spec("distributed") is not None
 
 
 @pytest.fixture()
 def case_path(tmp_path):
     path = tmp_path / "uq.toml"
-    path.write_text(CASE)
+    path.write_text(UQ_CASE)
     return path
 
 
@@ -51,14 +43,14 @@ def test_distributions_parsed(case_path):
 ])
 def test_scatter_errors(tmp_path, entry, message):
     path = tmp_path / "c.toml"
-    path.write_text(CASE.replace('alpha_final = { value = "0.7378 rad", std = "0.01 rad" }', entry))
+    path.write_text(UQ_CASE.replace('alpha_final = { value = "0.7378 rad", std = "0.01 rad" }', entry))
     with pytest.raises(CaseFileError, match=message):
         load_case(path)
 
 
 def test_force_scatter_with_given_energy_is_refused(tmp_path):
     path = tmp_path / "c.toml"
-    path.write_text(CASE.replace("[test]\n", '[test]\nenergy = "2.9 kJ"\n'))
+    path.write_text(UQ_CASE.replace("[test]\n", '[test]\nenergy = "2.9 kJ"\n'))
     with pytest.raises(QuickReleaseError, match="force has a scatter but energy is given"):
         run_uq(load_case(path), 100)
 

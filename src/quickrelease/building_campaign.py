@@ -22,7 +22,14 @@ Quantities (per release, from the fitted model, SI):
   frequency, ``E_S = k_sec d0^2 / 2`` and ``E_D = pi c omega_sec d0^2 + 4 F_s |d0| + 4 f_p (|d0| - d_y)``
   (viscous, Coulomb and hysteretic loops; f_p = F_y (1 - k2 / k1), d_y = F_y / k1, the last term only
   beyond d_y); for the linear model ``zeta_eq = zeta + 2 F_s / (pi k |d0|)``;
-- bilinear also ``stiffness_ratio`` k2 / k1 [-] and ``yield_force`` F_y [N].
+- bilinear also ``stiffness_ratio`` k2 / k1 [-] and ``yield_force`` F_y [N];
+- 2dof (:class:`quickrelease.building.TwoDOF`, each release fitted with the superstructure's mass at the roof
+  given): ``period``, ``damping_ratio`` and ``friction`` are the isolation layer's (T of the whole mass on the
+  isolators), with laws as for the linear model, ``secant_period`` and ``equivalent_damping_ratio`` those of
+  the isolation layer under the whole mass (the linear model's formulas; the superstructure's own damping is
+  not in them); the superstructure's fixed-base period ``superstructure_period`` T_s [s] and damping ratio
+  ``superstructure_damping_ratio`` zeta_s [-] are reported per release with their intervals (laws for them
+  when asked for in ``quantities``).
 
 Physically, a linear spring with viscous damping and Coulomb sliders has constant T, zeta and F_s: a
 campaign of such a building finds no significant amplitude effect on them, while its equivalent damping
@@ -31,8 +38,20 @@ says the isolators are not what the model assumes (friction that depends on the 
 a stiffness that softens with the strain).
 
 Derived quantities carry the delta-method standard error (the gradient by central differences, the fit's
-covariance); a parameter whose interval is the profile likelihood's is weighted by the half-width of that
-interval over the Student t quantile.
+covariance). The laws weight each release by ``1 / sigma^2``, where sigma is the release's standard error:
+
+- a Jacobian interval: the fit's standard error (the interval is ``est +- t sigma``);
+- a profile-likelihood interval ``[lo, hi]`` (a parameter at a bound, or far from quadratic): each side that
+  the likelihood ends (where the profile chi-square has risen by ``t^2``) gives ``sigma_- = (est - lo) / t``
+  and ``sigma_+ = (hi - est) / t`` (the release's term ``((q - law) / sigma)^2`` in the law's chi-square
+  then equals the profile's rise where the law passes through that end), and sigma is their mean,
+  ``(hi - lo) / (2 t)`` for an interval within the bounds (not the Jacobian's standard error: that is the
+  curvature at the estimate, which the profile says is not the likelihood's width); a side cut by the
+  parameter's bound (:data:`quickrelease.isolation_fit.PARAMETER_BOUNDS`:
+  friction 0, damping 0) says nothing of the likelihood and is left out, so a friction at its bound 0 with
+  interval ``[0, hi]`` has ``sigma = (hi - est) / t``, not the half-width (which would halve sigma and
+  give that release four times its weight). With both sides cut the half-width stands (the record does not
+  determine the parameter); ``t`` is the Student quantile of the fit's degrees of freedom.
 
 The releases share one building, so a release whose fit misfits its record (reduced chi-square above
 :data:`MISFIT_RESTART` with known noise: the fit's local minima, e.g. a wrong count of half-cycles before
@@ -52,10 +71,11 @@ from scipy import stats
 from .building import pushed_state
 from .campaign import LinearLaw, fit_line, iter_tests, law_panel, weights_or_none
 from .errors import ParameterError, QuickReleaseError
-from .isolation_fit import BuildingChannel, IsolationFit, _isolation, fit_isolation
+from .isolation_fit import PARAMETER_BOUNDS, BuildingChannel, IsolationFit, _isolation, fit_isolation
 
 __all__ = ["BuildingRelease", "ReleaseEstimates", "BuildingCampaignResult", "fit_building_campaign",
-           "building_campaign_figure", "derived_quantity", "BUILDING_VARIABLES", "QUANTITIES", "DEFAULT_QUANTITIES"]
+           "building_campaign_figure", "derived_quantity", "law_standard_error", "BUILDING_VARIABLES", "QUANTITIES",
+           "DEFAULT_QUANTITIES", "REPORTED"]
 
 #: Regressors of the amplitude laws: (label, unit, scale for plots, plot unit).
 BUILDING_VARIABLES = {
@@ -72,14 +92,21 @@ QUANTITIES = {
     "equivalent_damping_ratio": ("equivalent damping ratio at d0", "-", 1e2, "%", "zeta_eq"),
     "stiffness_ratio": ("stiffness ratio k2/k1", "-", 1.0, "-", "k2/k1"),
     "yield_force": ("yield force F_y", "N", 1e-3, "kN", "F_y"),
+    "superstructure_period": ("superstructure period (fixed base)", "s", 1.0, "s", "T_s"),
+    "superstructure_damping_ratio": ("superstructure damping ratio", "-", 1e2, "%", "zeta_s"),
 }
 #: The quantities a campaign fits laws for, by model.
 DEFAULT_QUANTITIES = {
     "linear": ("period", "damping_ratio", "friction", "equivalent_damping_ratio"),
     "bilinear": ("secant_period", "damping_ratio", "friction", "equivalent_damping_ratio", "period",
                  "stiffness_ratio", "yield_force"),
+    "2dof": ("period", "damping_ratio", "friction", "equivalent_damping_ratio"),
 }
-_FITTED = ("period", "damping_ratio", "friction", "stiffness_ratio", "yield_force")
+#: Quantities reported per release beside those with laws, by model (with their intervals; no law unless
+#: asked for in ``quantities``).
+REPORTED = {"2dof": ("superstructure_period", "superstructure_damping_ratio")}
+_FITTED = ("period", "damping_ratio", "friction", "stiffness_ratio", "yield_force", "superstructure_period",
+           "superstructure_damping_ratio")
 #: Reduced chi-square (known noise) above which a release is refitted from the other releases' estimates.
 MISFIT_RESTART = 1.3
 
@@ -110,10 +137,11 @@ class BuildingRelease:
 
 def derived_quantity(name: str, model: str, mass: float, p: dict[str, float]) -> float:
     """A quantity of the isolation system from the model's parameters ``p`` (fit_isolation's names, with
-    ``d0``), in SI: see the module's docstring for the equations."""
-    if name in ("period", "damping_ratio", "friction", "stiffness_ratio", "yield_force"):
+    ``d0``), in SI: see the module's docstring for the equations (``2dof``: of its isolation layer under the
+    whole mass, the linear model's)."""
+    if name in _FITTED:
         return float(p[name])
-    iso = _isolation(model, mass, p)
+    iso = _isolation("linear" if model == "2dof" else model, mass, p)
     d = abs(float(p["d0"]))
     _, R0, _ = pushed_state(iso, d)
     k_sec = R0 / d
@@ -141,8 +169,8 @@ class ReleaseEstimates:
     force: float | None
     values: dict[str, float]
     std_errors: dict[str, float]
-    """For the laws' weights: the Jacobian's standard error, or the profile interval's half-width over the
-    Student t quantile where the fit gave a profile interval."""
+    """For the laws' weights: the Jacobian's standard error, or where the fit gave a profile interval the
+    standard error that interval implies (:func:`law_standard_error`: the far side alone at a bound)."""
     ci95: dict[str, tuple[float, float]]
     interval_method: dict[str, str]
     fit: IsolationFit = field(repr=False)
@@ -185,6 +213,21 @@ def _json_safe(value):
     return value
 
 
+def law_standard_error(estimate: float, interval: tuple[float, float], bounds: tuple[float, float],
+                       t_quantile: float) -> float:
+    """The standard error a profile-likelihood interval gives a law's weight (see the module's docstring):
+    the mean of ``(estimate - lo) / t`` and ``(hi - estimate) / t`` over the sides the likelihood ends,
+    leaving out a side that ends at the parameter's bound; the half-width over t when both do."""
+    lo, hi = (float(v) for v in interval)
+    sides = []
+    if lo > bounds[0]:
+        sides.append(estimate - lo)
+    if hi < bounds[1]:
+        sides.append(hi - estimate)
+    width = sum(sides) / len(sides) if sides else 0.5 * (hi - lo)
+    return width / t_quantile
+
+
 def _estimates(release: BuildingRelease, fit: IsolationFit, quantities: tuple[str, ...],
                restarted_from: str | None = None) -> ReleaseEstimates:
     """The release's quantities: fitted ones with the fit's intervals, derived ones by the delta method."""
@@ -200,7 +243,8 @@ def _estimates(release: BuildingRelease, fit: IsolationFit, quantities: tuple[st
             values[q] = fit.estimates[q]
             ci[q] = tuple(fit.ci95[q])
             method[q] = fit.interval_method[q]
-            ses[q] = (ci[q][1] - ci[q][0]) / (2.0 * tq) if method[q] == "profile" else fit.std_errors[q]
+            ses[q] = (law_standard_error(values[q], ci[q], PARAMETER_BOUNDS[q], tq) if method[q] == "profile"
+                      else fit.std_errors[q])
             continue
         values[q] = derived_quantity(q, fit.model, fit.mass, params)
         grad = np.zeros(len(fit.names))
@@ -236,7 +280,8 @@ def _misfit(fit: IsolationFit) -> bool:
     return fit.absolute_sigma and math.isfinite(fit.chi2_reduced) and fit.chi2_reduced > MISFIT_RESTART
 
 
-def _restart_misfits(releases, fits: list[IsolationFit], mass: float, model: str) -> dict[str, str]:
+def _restart_misfits(releases, fits: list[IsolationFit], mass: float, model: str,
+                     superstructure_mass: float | None = None) -> dict[str, str]:
     """Refit each release whose misfit exceeds its noise from the estimates of every release that fits
     well (the campaign knows the building: the model's misfit has local minima, e.g. the count of
     half-cycles before the sliders stick), keeping the lowest chi-square; ``fits`` is updated in place.
@@ -250,7 +295,7 @@ def _restart_misfits(releases, fits: list[IsolationFit], mass: float, model: str
             start = {n: other.estimates[n] for n in _FITTED if n in other.estimates}
             try:
                 trial = fit_isolation(r.channels, mass, model, release_time=r.release_time, start=start,
-                                      fixed=_fixed(r))
+                                      fixed=_fixed(r), superstructure_mass=superstructure_mass)
             except QuickReleaseError:
                 continue
             if trial.chi2 < fits[i].chi2:
@@ -274,10 +319,19 @@ class BuildingCampaignResult:
     variables: tuple[str, ...]
     quantities: tuple[str, ...]
     notes: str = ""
+    reported: tuple[str, ...] = ()
+    """Quantities reported per release without a law (2dof: the superstructure's period and damping)."""
+    superstructure_mass: float | None = None
+    """2dof: the superstructure's mass at the roof given to every fit [kg]."""
 
     @property
     def kind(self) -> str:
         return "building"
+
+    @property
+    def columns(self) -> tuple[str, ...]:
+        """Every quantity of each release: those with laws, then those reported."""
+        return self.quantities + self.reported
 
     def significant_effects(self) -> list[tuple[str, str]]:
         """The (quantity, variable) pairs whose slope differs from 0 at the 5% level."""
@@ -291,8 +345,9 @@ class BuildingCampaignResult:
             slope_unit = y_unit if x_unit == "-" else (f"1/{x_unit}" if y_unit == "-" else f"{y_unit}/{x_unit}")
             laws.append({**law.summary(), "units": {"a": y_unit, "b": slope_unit}})
         return _json_safe({"kind": "building", "title": self.title, "campaign": self.source, "model": self.model,
-                           "mass_kg": self.mass, "variables": list(self.variables),
-                           "quantities": list(self.quantities), "releases": [r.summary() for r in self.releases],
+                           "mass_kg": self.mass, "superstructure_mass_kg": self.superstructure_mass,
+                           "variables": list(self.variables), "quantities": list(self.quantities),
+                           "reported": list(self.reported), "releases": [r.summary() for r in self.releases],
                            "laws": laws,
                            "significant_5pct": [f"{q} ~ {v}" for q, v in self.significant_effects()],
                            "notes": self.notes})
@@ -300,7 +355,8 @@ class BuildingCampaignResult:
 
 def fit_building_campaign(releases, mass: float, model: str = "linear", *, variables=("displacement",),
                           quantities=None, start: dict[str, float] | None = None, title: str = "",
-                          source: str = "", notes: str = "") -> BuildingCampaignResult:
+                          source: str = "", notes: str = "", superstructure_mass: float | None = None
+                          ) -> BuildingCampaignResult:
     """Fit every release of one building, then the law of each quantity in each variable.
 
     Parameters
@@ -309,18 +365,21 @@ def fit_building_campaign(releases, mass: float, model: str = "linear", *, varia
         At least three releases (a law needs a degree of freedom), at different amplitudes (or forces).
     mass : float
         Mass carried by the isolation layer [kg], the same in every release.
-    model : {"linear", "bilinear"}
+    model : {"linear", "bilinear", "2dof"}
     variables : sequence of str
         Regressors of the laws: ``displacement`` (|d0| [m]), ``log_displacement`` (ln |d0|), ``force`` (P [N]).
     quantities : sequence of str, optional
         Default :data:`DEFAULT_QUANTITIES` of the model.
     start : dict, optional
         Start values of every fit (the design values; the bilinear fit needs them).
+    superstructure_mass : float, optional
+        The ``2dof`` model's superstructure mass at the roof [kg], in (0, mass): the same in every release.
 
     Raises
     ------
     ParameterError
-        For an unknown model, variable or quantity, or repeated release names.
+        For an unknown model, variable or quantity, repeated release names, or a 2dof campaign without a
+        superstructure mass in (0, mass).
     QuickReleaseError
         With fewer than three releases, a variable that is constant or missing, or a fit that fails (the
         message names the release).
@@ -332,8 +391,17 @@ def fit_building_campaign(releases, mass: float, model: str = "linear", *, varia
     bad = [v for v in variables if v not in BUILDING_VARIABLES]
     if bad or not variables:
         raise ParameterError("variables", bad[0] if bad else "none", ", ".join(BUILDING_VARIABLES))
+    if model == "2dof":
+        ms = math.nan if superstructure_mass is None else float(superstructure_mass)
+        if not (math.isfinite(ms) and 0.0 < ms < float(mass)):
+            raise ParameterError("superstructure_mass", superstructure_mass,
+                                 f"(0, mass) = (0, {float(mass):.6g}) kg (the 2dof model needs it)", "kg")
+        superstructure_mass = ms
+    else:
+        superstructure_mass = None
     quantities = tuple(quantities) if quantities is not None else DEFAULT_QUANTITIES[model]
-    allowed = DEFAULT_QUANTITIES[model] + (("secant_period",) if model == "linear" else ())
+    allowed = DEFAULT_QUANTITIES[model] + (("secant_period",) if model in ("linear", "2dof") else ()) \
+        + REPORTED.get(model, ())
     bad = [q for q in quantities if q not in allowed]
     if bad or not quantities:
         raise ParameterError("quantities", bad[0] if bad else "none", ", ".join(allowed))
@@ -358,11 +426,13 @@ def fit_building_campaign(releases, mass: float, model: str = "linear", *, varia
     for r in releases:
         try:
             fits.append(fit_isolation(r.channels, mass, model, release_time=r.release_time, start=start,
-                                      fixed=_fixed(r)))
+                                      fixed=_fixed(r), superstructure_mass=superstructure_mass))
         except QuickReleaseError as exc:
             raise type(exc)(f"release {r.name}: {exc}") from None
-    restarts = _restart_misfits(releases, fits, mass, model)
-    estimates = [_estimates(r, fit, quantities, restarts.get(r.name)) for r, fit in zip(releases, fits, strict=True)]
+    restarts = _restart_misfits(releases, fits, mass, model, superstructure_mass)
+    reported = tuple(q for q in REPORTED.get(model, ()) if q not in quantities)
+    estimates = [_estimates(r, fit, quantities + reported, restarts.get(r.name))
+                 for r, fit in zip(releases, fits, strict=True)]
     laws = {}
     for v in variables:
         x = [r.value(v) for r in estimates]
@@ -374,7 +444,7 @@ def fit_building_campaign(releases, mass: float, model: str = "linear", *, varia
                                     weights_or_none(r.std_errors[q] for r in estimates), quantity=q, variable=v)
     return BuildingCampaignResult(title=title or "Building campaign", source=source, model=model, mass=float(mass),
                                   releases=estimates, laws=laws, variables=variables, quantities=quantities,
-                                  notes=notes)
+                                  notes=notes, reported=reported, superstructure_mass=superstructure_mass)
 
 
 def building_campaign_figure(result: BuildingCampaignResult):
@@ -418,17 +488,19 @@ _DEVICE_TEST = {"case", "alpha0", "alpha_final", "stop_time", "energy", "mass_mo
 
 
 def load_building_campaign(path, data: dict[str, Any]) -> tuple[str, str, tuple[str, ...], str, float,
-                                                                 dict[str, float], list[BuildingRelease]]:
+                                                                 dict[str, float], list[BuildingRelease],
+                                                                 float | None]:
     """Read a building campaign file (its parsed TOML ``data``): every release's record is read and checked
-    here, before any fit. Returns (title, notes, variables, model, mass, start values, releases).
+    here, before any fit. Returns (title, notes, variables, model, mass, start values, releases,
+    superstructure mass (2dof; else None)).
 
     Campaign file::
 
         title = "..."
         variables = ["displacement"]       # also "log_displacement", "force"
         [building]                         # shared: model, mass, the design values (start values)
-        model = "linear"
-        mass = "400 t"
+        model = "linear"                   # or "bilinear" (k1, k2, yield_force), "2dof" (with
+        mass = "400 t"                     #   superstructure_mass, superstructure_period)
         period = "2 s"
         [building.record]                  # shared: time column and channel mapping of the records
         time = "t_s"
@@ -481,7 +553,7 @@ def load_building_campaign(path, data: dict[str, Any]) -> tuple[str, str, tuple[
     if not isinstance(tests, list) or not tests:
         raise CaseFileError(f"{source}: missing [[tests]]: give one table per release (name, displacement or "
                             "force, record)")
-    releases, start, mass = [], {}, math.nan
+    releases, start, mass, superstructure_mass = [], {}, math.nan, None
     for name, where, entry in iter_tests(tests, source, "R"):
         device = sorted(set(entry) & _DEVICE_TEST)
         if device:
@@ -522,17 +594,17 @@ def load_building_campaign(path, data: dict[str, Any]) -> tuple[str, str, tuple[
         releases.append(BuildingRelease(name, loaded.channels, d0=loaded.d0, force=force,
                                         release_time=loaded.release_time))
         start = {k: v for k, v in loaded.start.items() if k != "d0"}  # d0: each release's own, from its record
-        mass = loaded.mass
+        mass, superstructure_mass = loaded.mass, loaded.superstructure_mass
     if len(releases) < 3:
         raise CaseFileError(f"{source}: {len(releases)} test(s): an amplitude law needs at least 3 releases")
     title = str(data.get("title", path.stem))
     return title, str(data.get("notes", "")), tuple(variables), str(template.get("model", "linear")), mass, \
-        start, releases
+        start, releases, superstructure_mass
 
 
 def run_building_campaign(path, data: dict[str, Any]) -> BuildingCampaignResult:
     """Read a building campaign file (:func:`load_building_campaign`) and fit it
     (:func:`fit_building_campaign`)."""
-    title, notes, variables, model, mass, start, releases = load_building_campaign(path, data)
+    title, notes, variables, model, mass, start, releases, ms = load_building_campaign(path, data)
     return fit_building_campaign(releases, mass, model, variables=variables, start=start or None, title=title,
-                                 source=str(path), notes=notes)
+                                 source=str(path), notes=notes, superstructure_mass=ms)

@@ -753,7 +753,7 @@ def _building_campaign_tables(result) -> None:
     """The tables of a building campaign: each release's estimates, then the laws in the amplitude."""
     from .building_campaign import BUILDING_VARIABLES, QUANTITIES
 
-    qs = result.quantities
+    qs = result.columns  # the quantities with laws, then those reported per release (2dof: T_s, zeta_s)
     rows = []
     for r in result.releases:
         cells = [r.name, f"{abs(r.d0) * 1e2:.4g}", "" if r.force is None else f"{r.force / 1e3:.4g}"]

@@ -360,6 +360,14 @@ def _first_peak(xch: BuildingChannel, t_r: float, period: float, d0: float) -> f
     return float(np.max(-math.copysign(1.0, d0) * (xch.values[sel] - level)))
 
 
+#: The physical parameters' bounds in the fit [SI]: a profile interval that reaches one is cut there (its
+#: side is the bound's, not the likelihood's: e.g. friction at 0 gives [0, upper]).
+PARAMETER_BOUNDS = {"period": (1e-3, 1e3), "damping_ratio": (0.0, 0.95), "friction": (0.0, math.inf),
+                    "stiffness_ratio": (1e-4, 0.9999), "yield_force": (0.0, math.inf),
+                    "superstructure_period": (SUPERSTRUCTURE_PERIOD_MIN, 1e3),
+                    "superstructure_damping_ratio": (0.0, 0.95)}
+
+
 def fit_isolation(channels, mass: float, model: str = "linear", *, release_time: float | None = None,
                   fit_release_time: bool = True, start: dict[str, float] | None = None,
                   fixed: dict[str, float] | None = None, profile: bool | None = None,
@@ -477,12 +485,8 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
     names = [n for n in all_names if n not in fixed]
     values = {**p0, **fixed}
     dt = min(float(np.median(np.diff(c.t))) for c in channels)
-    lower = {"period": 1e-3, "damping_ratio": 0.0, "friction": 0.0, "stiffness_ratio": 1e-4, "yield_force": 0.0,
-             "superstructure_period": SUPERSTRUCTURE_PERIOD_MIN, "superstructure_damping_ratio": 0.0,
-             "d0": -math.inf, "release_time": t_r0 - 50 * dt}
-    upper = {"period": 1e3, "damping_ratio": 0.95, "friction": math.inf, "stiffness_ratio": 0.9999,
-             "yield_force": math.inf, "superstructure_period": 1e3, "superstructure_damping_ratio": 0.95,
-             "d0": math.inf, "release_time": t_r0 + 50 * dt}
+    lower = {**{n: b[0] for n, b in PARAMETER_BOUNDS.items()}, "d0": -math.inf, "release_time": t_r0 - 50 * dt}
+    upper = {**{n: b[1] for n, b in PARAMETER_BOUNDS.items()}, "d0": math.inf, "release_time": t_r0 + 50 * dt}
     t_last = max(float(c.t[-1]) for c in channels)
     sig = np.concatenate([np.full(c.t.size, noise[c.name]) for c in channels])
     data = np.concatenate([c.values for c in channels])
@@ -593,8 +597,9 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
         r_try = solve(names, values, [trial[n] for n in names])
         if res is None or r_try.cost < res.cost:
             res = r_try
-        if model == "linear" and absolute and 2.0 * res.cost <= 1.3 * max(data.size - len(names), 1):
-            break  # misfit at the noise level: the other basins of the linear model lie far above it
+        if model in ("linear", "2dof") and absolute and 2.0 * res.cost <= 1.3 * max(data.size - len(names), 1):
+            break  # misfit at the noise level: the other basins (of the linear model and of the 2dof base's
+            # sliders alike: another count of half-cycles before the stick) lie far above it
     if not absolute:
         # a noise level taken from the residuals: weight each such channel by its own residual scatter
         # and refit (twice; the weights settle at once). One global chi-square scale cannot correct

@@ -477,11 +477,11 @@ def _building_campaign_section(result, svgs: dict[str, str]) -> list[str]:
     parts = [f"<h2>The isolation system per release ({_e(result.model)} model, mass "
              f"{_num(result.mass / 1e3, '.4g')} t)</h2>"]
     head = "".join(f"<th>{_e(QUANTITIES[q][4])} [{_e(QUANTITIES[q][3])}] (95% interval)</th>"
-                   for q in result.quantities)
+                   for q in result.columns)
     rows = []
     for r in result.releases:
         cells = []
-        for q in result.quantities:
+        for q in result.columns:
             scale = QUANTITIES[q][2]
             lo, hi = r.ci95[q]
             cells.append(f"<td class=\"num\">{_num(r.values[q] * scale, '#.5g')} [{_num(lo * scale, '#.5g')}, "
