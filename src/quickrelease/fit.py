@@ -38,6 +38,7 @@ from .records import (
     DISPLACEMENT_CHANNELS,
     Record,
     RecordError,
+    ReleaseChannels,
     detect_release,
     load_record,
     release_channels,
@@ -52,6 +53,10 @@ CORRELATION_WARNING = 0.99
 RELATIVE_SE_WARNING = 0.25
 #: Condition number of the correlation matrix above which the fit is reported as ill-conditioned.
 CONDITION_WARNING = 1e8
+
+#: Rows of a time axis per chunk in the streamed stages of a fit: a stage that evaluates the model at more times
+#: than this never holds all its residuals or its Jacobian at once (:func:`_solve`).
+FIT_CHUNK_ROWS = 1 << 16
 
 _UNITS = {"F1": "N", "F2": "N", "energy": "J", "mass_factor": "-", "release_time": "s"}
 
@@ -248,10 +253,12 @@ class _Problem:
         #: a sampling window [s] the rate channels are modelled with when it is wider than their own: the
         #: first stages of the fit (:func:`_smoothing_windows`); 0 for the fit proper
         self.smoothing = 0.0
-        #: per time axis, the rows a coarse stage evaluates and each channel's positions among them; and each
-        #: channel's stride (:meth:`smooth`); None and {} for the fit proper
-        self.sub: list[tuple[np.ndarray, dict[str, np.ndarray]]] | None = None
+        #: each channel's stride in a coarse stage ({} for the fit proper); the stage's layout (:meth:`smooth`)
         self.sel: dict[str, int] = {}
+        self.layout: list[tuple[list[str], np.ndarray, float, dict[str, np.ndarray], dict[str, np.ndarray]]] = []
+        #: rows of a time axis per chunk of the streamed stages (:func:`_solve`)
+        self.chunk = FIT_CHUNK_ROWS
+        self.smooth(0.0)
 
     def values(self, x: np.ndarray) -> dict[str, float]:
         v = dict(self.fixed)
@@ -263,21 +270,17 @@ class _Problem:
                              v["mass_factor"])
 
     def model(self, x: np.ndarray) -> tuple[dict[str, np.ndarray], FirstIntegral]:
-        """Model values (with offsets) at each channel's samples, and the release."""
+        """Model values (with offsets) at each channel's samples of the current stage, and the release."""
         v = self.values(x)
         fi = self.release(v)
         out: dict[str, np.ndarray] = {}
-        if self.record is not None:
-            for g, (names, t, window) in enumerate(self.groups):  # one time axis: one evaluation of the model
-                if self.sub is None:
-                    full = release_channels(names, t, v["release_time"], fi, window)
-                    for name in names:
-                        out[name] = full[name][self.channels[name].index] + v.get(f"offset_{name}", 0.0)
-                    continue
-                rows, pos = self.sub[g]
-                full = release_channels(names, t[rows], v["release_time"], fi, max(window, self.smoothing))
-                for name in names:
-                    out[name] = full[name][pos[name]] + v.get(f"offset_{name}", 0.0)
+        for g, evaluate in enumerate(self._evaluators(v, fi)):  # one time axis: one table of the model
+            for name in self.layout[g][0]:
+                out[name] = np.empty(self.layout[g][4][name].size)
+            for a, b in self._spans(g):
+                full = evaluate(slice(a, b))
+                for name, lo, hi, local in self._pieces(g, a, b):
+                    out[name][lo:hi] = full[name][local] + v.get(f"offset_{name}", 0.0)
         return out, fi
 
     def smooth(self, width: float) -> None:
@@ -285,28 +288,138 @@ class _Problem:
         sample of each time axis, k = floor(width / (2 Delta)) (Delta its sampling interval): a coarse stage
         of the fit (:func:`_smoothing_windows`)."""
         self.smoothing = width
-        self.sub, self.sel = None, {}
-        if width <= 0.0:
-            return
-        self.sub = []
-        for names, _t, window in self.groups:
+        self.sel = {}
+        #: per time axis: its channels, the times the stage evaluates, the sampling window, and per channel
+        #: the position of each of its samples among those times and the samples' measured values
+        self.layout = []
+        for names, t, window in self.groups:
+            if width <= 0.0:
+                self.layout.append((names, t, window, {n: self.channels[n].index for n in names},
+                                    {n: self.channels[n].values for n in names}))
+                continue
             k = max(1, int(width / (2.0 * window))) if window > 0.0 else 1
             picked = {name: self.channels[name].index[::k] for name in names}
             rows = np.unique(np.concatenate(list(picked.values())))
-            self.sub.append((rows, {name: np.searchsorted(rows, r) for name, r in picked.items()}))
+            self.layout.append((names, t[rows], max(window, width),
+                                {name: np.searchsorted(rows, r) for name, r in picked.items()},
+                                {name: self.channels[name].values[::k] for name in names}))
             self.sel.update({name: k for name in names})
 
+    def rows(self) -> int:
+        """Times the current stage evaluates the model at, over all time axes."""
+        return sum(int(t.size) for _, t, _, _, _ in self.layout)
+
+    def size(self) -> int:
+        """Residuals of the current stage: samples of every channel, and the stop observations."""
+        return sum(int(data[n].size) for names, _, _, _, data in self.layout for n in names) + len(self.obs)
+
+    def _evaluators(self, v: dict[str, float], fi: FirstIntegral) -> list[ReleaseChannels]:
+        return [ReleaseChannels(names, t, v["release_time"], fi, window) for names, t, window, _, _ in self.layout]
+
+    def _spans(self, g: int):
+        """Row ranges [a, b) of time axis ``g``, :attr:`chunk` rows each (the last one the rest)."""
+        n = self.layout[g][1].size
+        for a in range(0, n, self.chunk):
+            yield a, min(a + self.chunk, n)
+
+    def _pieces(self, g: int, a: int, b: int) -> list[tuple[str, int, int, np.ndarray]]:
+        """Per channel of time axis ``g``: its samples lo:hi that lie in rows [a, b), and their rows - a."""
+        names, _, _, pos, _ = self.layout[g]
+        out = []
+        for name in names:
+            lo, hi = (int(i) for i in np.searchsorted(pos[name], (a, b)))
+            out.append((name, lo, hi, pos[name][lo:hi] - a))
+        return out
+
     def residuals(self, x: np.ndarray) -> np.ndarray:
+        """All weighted residuals at once (the dense path: a stage with at most :attr:`chunk` rows)."""
         model, fi = self.model(x)
-        parts = [(model[n] - ch.values[::self.sel.get(n, 1)]) / self.sigma[n] for n, ch in self.channels.items()]
+        data = {n: d for _, _, _, _, dd in self.layout for n, d in dd.items()}
+        parts = [(model[n] - data[n]) / self.sigma[n] for n in self.channels]
         if self.obs:
-            fitted = {"alpha_final": fi.alpha_final, "stop_time": fi.stop_time()}
-            parts.append(np.array([(fitted[n] - o) / s for n, (o, s) in self.obs.items()]))
-        return np.concatenate(parts)
+            parts.append(self._observed(fi))
+        return np.concatenate(parts) if parts else np.empty(0)
+
+    def _observed(self, fi: FirstIntegral) -> np.ndarray:
+        fitted = {"alpha_final": fi.alpha_final, "stop_time": fi.stop_time()}
+        return np.array([(fitted[n] - o) / s for n, (o, s) in self.obs.items()])
+
+    def blocks(self, xs: list[np.ndarray]):
+        """The weighted residuals of each parameter vector in ``xs``, :attr:`chunk` rows of a time axis at a
+        time: arrays of shape (len(xs), residuals of the chunk), each residual computed as by
+        :meth:`residuals`; the stop observations last. Memory: of order len(xs) x chunk x channels."""
+        prepared = []
+        for x in xs:
+            v = self.values(x)
+            fi = self.release(v)
+            prepared.append((v, fi, self._evaluators(v, fi)))
+        for g, (_, _, _, _, data) in enumerate(self.layout):
+            for a, b in self._spans(g):
+                pieces = self._pieces(g, a, b)
+                block = np.empty((len(xs), sum(hi - lo for _, lo, hi, _ in pieces)))
+                if not block.shape[1]:
+                    continue
+                for j, (v, _, evaluators) in enumerate(prepared):
+                    full = evaluators[g](slice(a, b))
+                    k = 0
+                    for name, lo, hi, local in pieces:
+                        model = full[name][local] + v.get(f"offset_{name}", 0.0)
+                        block[j, k:k + hi - lo] = (model - data[name][lo:hi]) / self.sigma[name]
+                        k += hi - lo
+                yield block
+        if self.obs:
+            yield np.array([self._observed(fi) for _, fi, _ in prepared])
 
     def cost(self, x: np.ndarray) -> float:
-        r = self.residuals(x)
-        return float(r @ r)
+        """Sum of the squared weighted residuals (in chunks: no vector of all residuals)."""
+        total = 0.0
+        for block in self.blocks([x]):
+            total += float(block[0] @ block[0])
+        return total
+
+    def compressed(self, x: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+        """R, (p + 1) x (p + 1) upper triangular with R^T R = A^T A for A = [r, J] (r the weighted residuals
+        at x, J their forward-difference Jacobian with scipy's steps and bound rules, as ``least_squares``
+        forms it), accumulated over chunks of rows by QR: ``R <- qr([R; A_chunk])``. Its first row is
+        ``(|r|, r^T J / |r|)`` (rows signed so the diagonal is >= 0): the weighted least-squares problem
+        ``|r + J d|^2 = (|r| + R[0, 1:] d)^2 + |R[1:, 1:] d|^2`` in p + 1 rows, exactly. Memory: of order
+        chunk x channels x (p + 1); model evaluations: p + 1 over the whole record."""
+        h = _forward_steps(x, lower, upper)
+        xs = [x]
+        for i in range(x.size):
+            x1 = x.copy()
+            x1[i] = x[i] + h[i]
+            xs.append(x1)
+        dx = np.array([(x[i] + h[i]) - x[i] for i in range(x.size)])
+        p = x.size
+        R = np.zeros((0, p + 1))
+        for block in self.blocks(xs):
+            A = np.empty((block.shape[1], p + 1))
+            A[:, 0] = block[0]
+            A[:, 1:] = ((block[1:] - block[0]) / dx[:, None]).T
+            R = np.linalg.qr(np.vstack([R, A]), mode="r")
+        out = np.zeros((p + 1, p + 1))
+        out[:R.shape[0]] = R
+        return out * np.where(np.diag(out) < 0.0, -1.0, 1.0)[:, None]
+
+
+def _forward_steps(x: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """The steps of scipy's 2-point finite differences (``approx_derivative``, ``least_squares`` default):
+    sqrt(eps) max(1, |x|), signed as x (0 as +), reversed where x + h leaves the bounds and -h does not,
+    else cut to the farther bound."""
+    h = math.sqrt(np.finfo(float).eps) * np.where(x >= 0.0, 1.0, -1.0) * np.maximum(1.0, np.abs(x))
+    if np.all((lower == -np.inf) & (upper == np.inf)):
+        return h
+    h = h.copy()
+    lower_dist, upper_dist = x - lower, upper - x
+    violated = (x + h < lower) | (x + h > upper)
+    fitting = np.abs(h) <= np.maximum(lower_dist, upper_dist)
+    h[violated & fitting] *= -1
+    forward = (upper_dist >= lower_dist) & ~fitting
+    h[forward] = upper_dist[forward]
+    backward = (upper_dist < lower_dist) & ~fitting
+    h[backward] = -lower_dist[backward]
+    return h
 
 
 def _rest_value(name: str, alpha0: float) -> float:
@@ -504,6 +617,41 @@ def _smoothing_windows(problem: _Problem, x0: np.ndarray) -> list[float]:
     return out
 
 
+def _solve(problem: _Problem, x0: np.ndarray, lower: np.ndarray, upper: np.ndarray, tol: float,
+           max_nfev: int):
+    """One stage: scipy's ``least_squares`` (trf, bounds, ``x_scale="jac"``, tolerances ``tol``) from ``x0``;
+    returns the result and the number of residuals m.
+
+    A stage that evaluates the model at no more than :attr:`_Problem.chunk` times sees every residual and
+    the m x p forward-difference Jacobian (the dense path). A longer one is streamed: the solver sees the
+    problem compressed to p + 1 rows, ``f = (|r|, 0, ..., 0)`` and ``J_c = R[:, 1:]`` with R from the chunked
+    QR of [r, J] (:meth:`_Problem.compressed`). Then ``|f|^2 = |r|^2``, ``J_c^T f = J^T r`` and
+    ``J_c^T J_c = J^T J``, so every quantity the trust-region steps, their acceptance, the x_scale, the
+    termination tests and the covariance use is the dense path's, up to rounding. (One exception: the
+    solver's rank test of the scaled Jacobian compares its smallest singular value with eps x rows x the
+    largest, and sees p + 1 rows instead of m; this matters only for a Jacobian singular to within 1e-16 m.)
+    The result's ``fun`` and ``jac`` are then f and J_c: ``fun @ fun`` is still the chi-square and
+    ``jac^T jac`` still J^T J. Each Jacobian costs p + 1 model evaluations (p on the dense path, which has
+    the residuals at x at hand); memory is of order chunk x channels x (p + 1), whatever the record's length.
+    """
+    from scipy.optimize import least_squares
+
+    options = dict(bounds=(lower, upper), x_scale="jac", method="trf", xtol=tol, ftol=tol, gtol=tol,
+                   max_nfev=max_nfev)
+    if problem.rows() <= problem.chunk:
+        res = least_squares(problem.residuals, x0, **options)
+        return res, int(res.fun.size)
+    p = x0.size
+
+    def norm_only(x):
+        f = np.zeros(p + 1)
+        f[0] = math.sqrt(problem.cost(x))
+        return f
+
+    res = least_squares(norm_only, x0, jac=lambda x: problem.compressed(x, lower, upper)[:, 1:], **options)
+    return res, problem.size()
+
+
 def fit_record(case: Case, record: Record | None = None, *, options: FitOptions | None = None) -> FitResult:
     """Fit the release model to a measured record (and/or stop observations with a scatter).
 
@@ -528,7 +676,6 @@ def fit_record(case: Case, record: Record | None = None, *, options: FitOptions 
     QuickReleaseError
         When there is nothing to fit.
     """
-    from scipy.optimize import least_squares
     from scipy.special import stdtrit
 
     options = options or case.fit
@@ -549,19 +696,17 @@ def fit_record(case: Case, record: Record | None = None, *, options: FitOptions 
     x_stage, nfev = x0, 0
     for w in _smoothing_windows(problem, x0):  # coarse to fine: see _smoothing_windows
         problem.smooth(w)
-        stage = least_squares(problem.residuals, x_stage, bounds=(lower, upper), x_scale="jac", method="trf",
-                              xtol=1e-6, ftol=1e-6, gtol=1e-6, max_nfev=50 * x0.size)
+        stage, _ = _solve(problem, x_stage, lower, upper, 1e-6, 50 * x0.size)
         x_stage, nfev = stage.x, nfev + stage.nfev
     problem.smooth(0.0)
     if not problem.cost(x_stage) <= problem.cost(x0):  # kept only where they lower the misfit of the fit proper
         x_stage = x0
-    res = least_squares(problem.residuals, x_stage, bounds=(lower, upper), x_scale="jac", method="trf",
-                        xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=200 * x0.size)
+    res, m = _solve(problem, x_stage, lower, upper, 1e-12, 200 * x0.size)
     x = res.x
     r = res.fun
     nfev += int(res.nfev)
     J = res.jac
-    m, p = J.shape
+    p = J.shape[1]
     dof = m - p
     chi2 = float(r @ r)
     chi2_red = chi2 / dof if dof > 0 else None

@@ -142,41 +142,71 @@ def release_channels(names, t, release_time: float, release, window: float = 0.0
 
 
 def _tabulated(names, s, fi, window: float) -> dict[str, np.ndarray]:
-    """:func:`release_channels` at a cost linear in the number of samples with a small constant.
+    """:func:`release_channels` at a cost linear in the number of samples with a small constant
+    (:class:`ReleaseChannels` on every sample)."""
+    return ReleaseChannels(names, s, 0.0, fi, window)(slice(None))
+
+
+class ReleaseChannels:
+    """:func:`release_channels` (``exact=False``) prepared once for a time axis ``t``, to evaluate on slices of it.
+
+    ``ReleaseChannels(names, t, release_time, release, window)(rows)[name]`` equals
+    ``release_channels(names, t, release_time, release, window)[name][rows]`` element by element: the
+    choices that depend on the whole axis (whether a channel table is built, the table itself) are made here,
+    and each sample is then computed on its own. A caller that walks the axis in slices (the record fit's
+    streamed stages, :mod:`quickrelease.fit`) needs memory of the order of a slice, not of the axis.
 
     Samples whose window lies entirely at rest before the release or after the stop take that rest's
     constant value; samples whose window lies entirely within the motion, where every channel is a smooth
     function of time, take it from a :class:`~quickrelease._statetable.ChannelTable` (piecewise degree-7
     polynomials on uniform cells, each channel within :data:`~quickrelease._statetable.CHANNEL_TOL` of its
     range, built from :func:`_direct`); the few samples whose window reaches across the release or the stop
-    are computed directly.
+    are computed directly. With fewer than :data:`_TABLE_MIN` samples within the motion every sample is
+    computed directly.
     """
-    from ._statetable import ChannelTable
 
-    t_stop = fi.stop_time()
-    lo, hi = window, t_stop - window
-    inside = (s > lo) & (s < hi)
-    if np.count_nonzero(inside) < _TABLE_MIN:
-        return _direct(names, s, fi, window, exact=False)
-    table = ChannelTable.build(lambda x: _direct(names, x, fi, window, exact=False), names, lo, hi)
-    if table is None:
-        return _direct(names, s, fi, window, exact=False)
-    pre = s <= -window
-    post = s > t_stop + window
-    edge = ~(inside | pre | post)
-    rest = _direct(names, np.array([-window - 1.0, t_stop + window + 1.0]), fi, window, exact=False)
-    values = table.values(s[inside])
-    out = {}
-    for name in names:
-        v = np.empty(s.shape)
-        v[pre], v[post] = rest[name][0], rest[name][1]
-        v[inside] = values[name]
-        out[name] = v
-    if np.any(edge):
-        direct = _direct(names, s[edge], fi, window, exact=False)
+    def __init__(self, names, t, release_time: float, release, window: float = 0.0) -> None:
+        from ._statetable import ChannelTable
+
+        self.names, self.t, self.release_time, self.fi, self.window = list(names), t, release_time, release, window
+        self.t_stop = release.stop_time()
+        lo, hi = window, self.t_stop - window
+        inside = 0
+        for i in range(0, np.size(t), _BLOCK):  # in blocks: no temporary of the axis' size
+            s = np.asarray(t[i:i + _BLOCK], dtype=float) - release_time
+            inside += int(np.count_nonzero((s > lo) & (s < hi)))
+        self.table = None
+        if inside >= _TABLE_MIN:
+            self.table = ChannelTable.build(lambda x: _direct(self.names, x, release, window, exact=False),
+                                            self.names, lo, hi)
+        if self.table is not None:  # the two rests' values
+            self.rest = _direct(self.names, np.array([-window - 1.0, self.t_stop + window + 1.0]), release, window,
+                                exact=False)
+
+    def __call__(self, rows) -> dict[str, np.ndarray]:
+        """The channels at the samples ``t[rows]`` (a slice or an index array)."""
+        names, fi, window = self.names, self.fi, self.window
+        s = np.asarray(self.t[rows], dtype=float) - self.release_time
+        if self.table is None:
+            return _direct(names, s, fi, window, exact=False)
+        t_stop = self.t_stop
+        inside = (s > window) & (s < t_stop - window)
+        pre = s <= -window
+        post = s > t_stop + window
+        edge = ~(inside | pre | post)
+        rest = self.rest
+        values = self.table.values(s[inside])
+        out = {}
         for name in names:
-            out[name][edge] = direct[name]
-    return out
+            v = np.empty(s.shape)
+            v[pre], v[post] = rest[name][0], rest[name][1]
+            v[inside] = values[name]
+            out[name] = v
+        if np.any(edge):
+            direct = _direct(names, s[edge], fi, window, exact=False)
+            for name in names:
+                out[name][edge] = direct[name]
+        return out
 
 
 def _direct(names, s, fi, window: float, exact: bool) -> dict[str, np.ndarray]:
