@@ -529,3 +529,31 @@ def test_near_the_geometric_limit_t_F_alpha_F_u_F_and_the_boundary_round_trip(k)
                 for F1_id, F2_id in ((ident.F1, ident.F2), (float(bi.F1), float(bi.F2))):
                     assert (F1_id if end == "F1 = 0" else F2_id) == 0.0  # the boundary itself, not 8e-12 N beside it
                     assert abs(max(F1_id, F2_id) / star - 1) < 1e-12, (k, kind)
+
+
+def test_fast_kernel_cache_flushed_when_the_modules_it_inlines_change(tmp_path):
+    """numba stamps a cached kernel with its own source file only (since 0.6x by a sha256 of its content, so touching
+    _fast.py, the earlier remedy, invalidated nothing: a stale stop_kernel then reported as creeping a release that
+    the numpy path stopped by friction). _fast keeps the sha256 of dynamics.py and _kernels.py beside its cache and
+    flushes the indexes of all its kernels when it differs."""
+    import types
+
+    from quickrelease import _fast
+
+    class Cache:
+        cache_path = str(tmp_path)
+        flushed = 0
+
+        def flush(self):
+            self.flushed += 1
+
+    kernels = [types.SimpleNamespace(_cache=Cache()) for _ in range(3)]
+    assert _fast._refresh_stale_cache(kernels, "sources 1")  # no stamp yet: flushed
+    assert [k._cache.flushed for k in kernels] == [1, 1, 1]
+    assert not _fast._refresh_stale_cache(kernels, "sources 1")  # unchanged: kept
+    assert _fast._refresh_stale_cache(kernels, "sources 2") and [k._cache.flushed for k in kernels] == [2, 2, 2]
+    # every kernel compiled from this file is covered, and the stamp of the installed cache is of today's sources
+    own = {v for v in vars(_fast).values() if hasattr(v, "py_func") and v.py_func.__code__.co_filename == _fast.__file__}
+    assert own and own <= set(_fast.KERNELS)
+    with open(f"{_fast.stop_kernel._cache.cache_path}/{_fast._STAMP_FILE}") as f:
+        assert f.read() == _fast._dependency_stamp()
