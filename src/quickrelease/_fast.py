@@ -10,6 +10,7 @@ Compiled on first use and cached on disk (``cache=True``).
 
 from __future__ import annotations
 
+import hashlib
 import math
 import os
 import types
@@ -22,23 +23,48 @@ from . import _kernels, dynamics
 _HALF_PI = 0.5 * math.pi
 
 
-def _refresh_stale_cache() -> None:
-    """Make this file at least as new as the modules whose functions it compiles in.
+#: The modules whose functions the kernels of this file compile in (inline): their sources stamp the cache.
+_DEPENDENCIES = (dynamics, _kernels)
+_STAMP_FILE = "_fast.dependencies.sha256"
 
-    numba stamps a cached function with its own source file only, and the kernels here inline functions
-    of :mod:`quickrelease.dynamics` and :mod:`quickrelease._kernels`: after an edit or a checkout that
-    changes those alone, the cached kernels would keep the old formulas (a stale kernel once made batch
-    and simulate differ by an ulp). Touching this file invalidates them; a read-only install is left as is.
+
+def _dependency_stamp() -> str:
+    """sha256 of the sources of :data:`_DEPENDENCIES` (what the cached kernels of this file were compiled from)."""
+    digest = hashlib.sha256()
+    for module in _DEPENDENCIES:
+        with open(module.__file__, "rb") as f:
+            digest.update(f.read())
+    return digest.hexdigest()
+
+
+def _refresh_stale_cache(kernels, stamp: str | None = None) -> bool:
+    """Drop the cached kernels of this file when the modules they inline have changed; True when it did.
+
+    numba stamps a cached function with its own source file only (its mtime and size in older releases, a
+    sha256 of its content since 0.6x), and the kernels here inline functions of :mod:`quickrelease.dynamics` and
+    :mod:`quickrelease._kernels`: after an edit or a checkout that changes those alone, the cached kernels would
+    keep the old formulas (a stale kernel once made batch and simulate differ by an ulp, and another reported a
+    release as creeping that the numpy path stopped by friction). So the sha256 of those sources is kept beside
+    the cache; where it differs (or is missing) the kernels' cache indexes are flushed and they recompile on first
+    use. (Touching this file, the earlier remedy, invalidates nothing once numba hashes the content.) A read-only
+    install is left as is.
     """
     try:
-        newest = max(os.stat(m.__file__).st_mtime for m in (dynamics, _kernels))
-        if newest > os.stat(__file__).st_mtime:
-            os.utime(__file__)
-    except OSError:
-        pass
-
-
-_refresh_stale_cache()
+        stamp = stamp or _dependency_stamp()
+        path = os.path.join(kernels[0]._cache.cache_path, _STAMP_FILE)
+        try:
+            with open(path) as f:
+                if f.read() == stamp:
+                    return False
+        except FileNotFoundError:
+            pass
+        for kernel in kernels:
+            kernel._cache.flush()
+        with open(path, "w") as f:
+            f.write(stamp)
+        return True
+    except (OSError, AttributeError):
+        return False
 
 
 def rules() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -48,12 +74,23 @@ def rules() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     return x16, w16, x24, w24
 
 
+def _jit(fn, **calls):
+    """``fn`` compiled as written (cached, nogil), the module-level functions it calls bound to compiled ones."""
+    if calls:
+        fn = types.FunctionType(fn.__code__, {**fn.__globals__, **calls}, fn.__name__, fn.__defaults__)
+    return njit(cache=True, nogil=True)(fn)
+
+
 #: The classifier of the stop and the cancellation-free sweep of Eq. 8, compiled from the very functions
 #: the numpy path calls (:mod:`quickrelease.dynamics`): one definition, the same rounding.
-_limit_margin = njit(cache=True, nogil=True)(dynamics.limit_margin_terms)
-_creeps = njit(cache=True, nogil=True)(dynamics.creeps_terms)
-_sweep = njit(cache=True, nogil=True)(dynamics.sweep_terms)
-_stop_cos = njit(cache=True, nogil=True)(dynamics.stop_cosine_terms)
+_one_minus_sin = _jit(dynamics.one_minus_sin_terms)
+_limit_margin = _jit(dynamics.limit_margin_terms, _limit_dissipation=_jit(
+    dynamics._limit_dissipation, one_minus_sin_terms=_one_minus_sin))
+_limit_sweep = _jit(dynamics.limit_sweep)
+_creeps = _jit(dynamics.creeps_terms)
+_stop_terms = _jit(dynamics._stop_terms, limit_margin_terms=_limit_margin)
+_sweep = _jit(dynamics.sweep_terms, _stop_terms=_stop_terms)
+_stop_cos = _jit(dynamics.stop_cosine_terms, _stop_terms=_stop_terms)
 _slack = njit(cache=True, nogil=True)(_kernels.feasible_slack)
 
 
@@ -92,8 +129,9 @@ def stop_kernel(E, sa0_in, ca0_in, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, ne
             aF_out[i] = _HALF_PI
             code_out[i] = 2
             continue
+        to_limit = _limit_sweep(a0[i])  # pi/2 - alpha0, two-term pi/2
         if Kl > 0.0:  # the rhombus becomes flat first: anchor pi/2
-            delta = _HALF_PI - a0[i]
+            delta = to_limit
             sm = math.sin(0.5 * delta)
             qm = math.sqrt(1.0 - sm * sm)
             ratio = Kl / (Kl + 2.0 * A * sm * sm + 2.0 * B * sm * qm)
@@ -117,9 +155,9 @@ def stop_kernel(E, sa0_in, ca0_in, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, ne
         else:  # friction stop at alpha_F (Eq. 8)
             s = (A * sa0 - B * ca0) / R + E[i] / R  # u of dynamics.sweep_terms, rounded the same way
             delta = _sweep(E[i], A, B, R, sa0, ca0)
-            if delta >= _HALF_PI - a0[i] or s >= 1.0:
+            if delta >= to_limit:
                 # a friction stop at pi/2 within rounding: sin, cos of alpha_F - phi there, as numpy does
-                delta = _HALF_PI - a0[i]
+                delta = to_limit
                 s = A / R
                 cb = B / R
             else:
@@ -284,3 +322,9 @@ def peak_accel_kernel(E, a0, aE, F1, F2, k, m2, L1, n, pu_out, pv_out):
         args = (E[i], s0, c0, A, B, F1[i], F2[i], k[i], m2[i], L1[i])
         pu_out[i] = _refined(best_u, ju, n, a0[i], h, *args, 0)
         pv_out[i] = _refined(best_v, jv, n, a0[i], h, *args, 1)
+
+
+#: Every kernel defined in this file (cached by numba under this file's name): flushed together when the
+#: modules they inline change (the functions compiled from dynamics and _kernels are stamped with their own files).
+KERNELS = (_tier, stop_kernel, identify_kernel, _refined, peak_accel_kernel)
+_refresh_stale_cache(KERNELS)

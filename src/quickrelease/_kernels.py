@@ -50,7 +50,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from .dynamics import creeps_terms, limit_margin_terms, stop_cosine_terms, sweep_terms
+from .dynamics import _limit_dissipation, creeps_terms, limit_margin_terms, limit_sweep, stop_cosine_terms, sweep_terms
 
 HALF_PI = 0.5 * math.pi
 
@@ -196,7 +196,8 @@ class Releases:
         A = 2.0 * F1 * L1
         B = 4.0 * F2 * L1
         R = np.hypot(A, B)
-        W_limit = A * (1.0 - sa0) + B * ca0
+        W_limit = _limit_dissipation(A, B, sa0, ca0)
+        to_limit = limit_sweep(alpha0)  # pi/2 - alpha0, two-term pi/2
         K_lim = limit_margin_terms(E_S, A, B, sa0, ca0)
         creep = creeps_terms(K_lim, E_S, A, B)
         K_lim = np.where(creep, 0.0, K_lim)  # the creeping motion: the margin is 0 (within its rounding)
@@ -205,14 +206,13 @@ class Releases:
             # Eq. 8: sin(alpha_F - phi) = sin(alpha0 - phi) + E_S/R, with cos(phi) = A/R, sin(phi) = B/R
             s = (A * sa0 - B * ca0) / R + E_S / R  # u of sweep_terms, rounded the same way: one alpha_F
             delta = sweep_terms(E_S, A, B, R, sa0, ca0)
-            at_flat = ~geo & ((delta >= HALF_PI - alpha0) | (s >= 1.0))
+            at_flat = ~geo & (delta >= to_limit)  # (u may round to 1 short of it: cb is exact there)
             if np.any(geo):
                 s = np.where(geo, 1.0, s)
             cb = stop_cosine_terms(E_S, A, B, R, sa0, ca0)  # cos(alpha_F - phi), no cancellation at u -> -1
             if np.any(at_flat):
                 # a friction stop at pi/2 within rounding: sin, cos of alpha_F - phi at alpha_F = pi/2
-                # (cos(phi), sin(phi)), consistent with the sweep pi/2 - alpha0 (cb from a rounded s
-                # would be ~1e-8 where it is 0)
+                # (cos(phi), sin(phi)), consistent with the sweep pi/2 - alpha0
                 s = np.where(at_flat, A / R, s)
                 cb = np.where(at_flat, B / R, cb)
             sin_a = (B * cb + A * s) / R
@@ -222,7 +222,7 @@ class Releases:
                 cos_a = np.where(geo, 0.0, cos_a)
                 cb = np.where(geo, 0.0, cb)
         regime = np.where(creep, REGIME_CREEP, geo.astype(np.int8)).astype(np.int8)
-        delta = np.where(geo, HALF_PI - alpha0, np.clip(delta, 0.0, HALF_PI - alpha0))
+        delta = np.where(geo, to_limit, np.clip(delta, 0.0, to_limit))
         anchor = np.minimum(alpha0 + delta, HALF_PI)
         sigma_m = np.sin(0.5 * delta)
         rel = cls(E_S, alpha0, F1, F2, k, m2, L1, A, B, R, W_limit, K_lim, regime, anchor, sin_a, cos_a,
@@ -392,7 +392,7 @@ class Releases:
         """E_S - W_F(alpha) without cancellation, for one case [J] (Eq. 9)."""
         alpha = np.asarray(alpha, dtype=float)
         if self.regime[case] != REGIME_FRICTION:
-            x = HALF_PI - alpha
+            x = limit_sweep(alpha)
             return self.K_lim[case] + 2.0 * self.A[case] * np.sin(0.5 * x) ** 2 \
                 + self.B[case] * np.sin(x)
         half = 0.5 * (self.anchor[case] - alpha)

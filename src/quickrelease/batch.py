@@ -332,7 +332,9 @@ def release(E_S, alpha0, F1, F2, c=2.0 / 3.0, m1=None, m2=None, L1=None, *, chun
         half_sum = alpha0[sl] + 0.5 * delta
         sigma_m = np.sin(0.5 * delta)
         out["u_final"][sl] = 2.0 * L1[sl] * np.sin(half_sum) * sigma_m  # Table 4, cancellation-free
-        out["v_final"][sl] = 2.0 * L1[sl] * np.cos(half_sum) * sigma_m
+        # cos of the half sum as the sine of its distance to pi/2 (cos(half_sum) would keep the rounding of the
+        # sum, 1.1e-16 rad, relative to itself: 1e-8 of v_F for a stop 1e-8 rad from pi/2)
+        out["v_final"][sl] = 2.0 * L1[sl] * np.sin(dynamics.limit_sweep(alpha0[sl]) - 0.5 * delta) * sigma_m
         sa0 = np.sin(alpha0[sl])
         ad0 = np.sqrt(E_S[sl] / (m2[sl] * L1[sl] ** 2 * (k[sl] + sa0 * sa0)))  # Eq. 6
         out["alpha_dot0"][sl] = ad0

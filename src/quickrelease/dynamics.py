@@ -114,20 +114,64 @@ def dissipated_energy(alpha, alpha0, F1, F2, L1):
     """Energy dissipated by friction from alpha0 to alpha (Eq. 7) [J].
 
     ``W_F = 2 F1 L1 (sin alpha - sin alpha0) + 4 F2 L1 (cos alpha0 - cos alpha)``,
-    evaluated with the half-angle products (no cancellation near alpha0).
+    evaluated with the half-angle products (no cancellation near alpha0, nor near pi/2: :func:`_half_angles`).
     """
-    h = np.sin(0.5 * (alpha - alpha0))
-    m = 0.5 * (alpha + alpha0)
-    return 4.0 * L1 * h * (F1 * np.cos(m) + 2.0 * F2 * np.sin(m))
+    h, cos_m, sin_m = _half_angles(alpha, alpha0)
+    return 4.0 * L1 * h * (F1 * cos_m + 2.0 * F2 * sin_m)
+
+
+def _half_angles(alpha, alpha0):
+    """``sin((alpha - alpha0)/2)`` and the cosine and sine of ``m = (alpha + alpha0)/2`` [-].
+
+    cos(m) and sin(m) come from those of alpha and of the half difference ``h = (alpha - alpha0)/2`` (exact):
+    ``cos(m) = cos(alpha) cos(h) + sin(alpha) sin(h)``, ``sin(m) = sin(alpha) cos(h) - cos(alpha) sin(h)``.
+    ``np.cos(0.5 * (alpha + alpha0))`` would carry the rounding of the sum (up to 1.1e-16 rad) relative to a
+    cosine of about pi/2 - m: 1e-11 of itself for angles 1e-5 rad from pi/2 (F1* of Eq. 11 with it).
+    """
+    half = 0.5 * (alpha - alpha0)
+    h, ch = np.sin(half), np.cos(half)
+    sa, ca = np.sin(alpha), np.cos(alpha)
+    return h, ca * ch + sa * h, sa * ch - ca * h
+
+
+#: pi/2 as the sum of two floats: ``PIO2_HI`` = fl(pi/2) = HALF_PI, 6.1e-17 below pi/2, and ``PIO2_LO`` the rest
+#: (to 1e-33). An angle's distance to the flat rhombus is ``(PIO2_HI - a) + PIO2_LO`` (:func:`limit_sweep`).
+PIO2_HI = 1.5707963267948966
+PIO2_LO = 6.123233995736766e-17
+
+
+def limit_sweep(alpha):
+    """``pi/2 - alpha`` to an ulp of itself [rad]: the sweep to the flat rhombus (two-term pi/2).
+
+    ``PIO2_HI - alpha`` is exact by Sterbenz for alpha in [pi/4, pi] (and rounded once, to a result above pi/4,
+    below), and ``PIO2_LO`` adds the 6.1e-17 rad by which fl(pi/2) falls short of pi/2. ``HALF_PI - alpha`` alone
+    is short by those 6.1e-17 rad: a relative error of 6e-9 of a sweep of 1e-8 rad, and of t_F with it.
+    Pure arithmetic (compiled as is by :mod:`quickrelease._fast`).
+    """
+    return (PIO2_HI - alpha) + PIO2_LO
+
+
+def one_minus_sin_terms(sin_a, cos_a):
+    """``1 - sin(a)`` to a few ulps of itself, from sin(a) and cos(a) (a in [0, pi/2]) [-].
+
+    ``cos^2(a) / (1 + sin(a))`` where sin(a) >= 1/2, ``1 - sin(a)`` below (there >= 1/2: no cancellation).
+    The textbook ``1 - sin(a)`` is exact by Sterbenz but keeps the rounding of sin(a), half an ulp of 1 (1.1e-16),
+    relative to a result that is ``x^2 / 2`` for a = pi/2 - x: 2e-6 of itself at x = 1e-5. cos(a) near pi/2 is
+    known to an ulp of itself, so the quotient is too. The mirror image of :func:`stop_cosine_terms` (there
+    ``1 + u`` for u near -1). Pure arithmetic, no branch (compiled as is by :mod:`quickrelease._fast`).
+    """
+    near = (sin_a >= 0.5) * 1.0  # both branches finite: 1 + sin(a) >= 1
+    return near * (cos_a * cos_a / (1.0 + sin_a)) + (1.0 - near) * (1.0 - sin_a)
 
 
 def _limit_dissipation(A, B, sin_alpha0, cos_alpha0):
     """W_F(pi/2) from ``A = 2 F1 L1``, ``B = 4 F2 L1`` and sin, cos of alpha0 (Eq. 7) [J].
 
-    Pure arithmetic (no call), so the compiled kernels (:mod:`quickrelease._fast`) compile this very
-    function: every method rounds W_F(pi/2) the same way.
+    ``A (1 - sin alpha0) + B cos alpha0``, every term >= 0 and each to a few ulps of itself
+    (:func:`one_minus_sin_terms`). Pure arithmetic (no trigonometric call), so the compiled kernels
+    (:mod:`quickrelease._fast`) compile this very function: every method rounds W_F(pi/2) the same way.
     """
-    return A * (1.0 - sin_alpha0) + B * cos_alpha0
+    return A * one_minus_sin_terms(sin_alpha0, cos_alpha0) + B * cos_alpha0
 
 
 def limit_margin_terms(E_S, A, B, sin_alpha0, cos_alpha0):
@@ -138,15 +182,20 @@ def limit_margin_terms(E_S, A, B, sin_alpha0, cos_alpha0):
     kernels, compiled or not) takes ``stopped_by`` from this one expression, evaluated on the same
     floating-point inputs, so they cannot disagree on a stop within rounding of pi/2: there the
     classification is a convention (both answers describe a device that comes to rest at the flat
-    rhombus), and this is the one place it is made.
+    rhombus), and this is the one place it is made. W_F(pi/2) is known to a few ulps of itself, so the margin
+    is within a few ulps of ``E_S + W_F(pi/2)`` of the exact margin of the float inputs (not of ``A``: a release
+    from near pi/2, where ``W_F(pi/2) << A``, is classified as exactly as any other).
     """
-    return E_S - (A * (1.0 - sin_alpha0) + B * cos_alpha0)  # W_F(pi/2) as in _limit_dissipation
+    return E_S - _limit_dissipation(A, B, sin_alpha0, cos_alpha0)
 
 
-#: Rounding allowance of the margin E_S - W_F(pi/2), as a share of ``E_S + A + B``: its computed value
-#: (:func:`limit_margin_terms`) is within ``eps (E_S + 3 A + 3 B)`` or so of the exact margin of the float
-#: inputs (A, B, sin and cos of alpha0 each rounded once, 1 - sin alpha0 exact by Sterbenz, the final
-#: difference exact where it matters); 4 eps covers that with room.
+#: Rounding allowance of the margin E_S - W_F(pi/2), as a share of ``E_S + W_F(pi/2)``: its computed value
+#: (:func:`limit_margin_terms`) is within about ``4.5 eps W_F(pi/2)`` of the exact margin of the float inputs
+#: (A, B, sin and cos of alpha0 each rounded once, 1 - sin alpha0 from them to 3 eps of itself by
+#: :func:`one_minus_sin_terms`, the products and the sum each rounded once, the final difference exact by Sterbenz
+#: where the margin is small); 4 eps of ``E_S + W_F(pi/2)`` (8 eps of E_S there) covers that with room. (Before
+#: ``1 - sin alpha0`` was computed from a rounded sin alpha0, the error was up to ``eps A``, and the band was
+#: ``4 eps (E_S + A + B)``: 10^5 times wider than the rounding for a release from 1e-5 rad short of pi/2.)
 MARGIN_RTOL = 4.0 * 2.220446049250313e-16
 
 
@@ -160,15 +209,15 @@ def creeps_terms(margin, E_S, A, B):
     t_F is finite, ``tau (ln(2 x0) + ln(A / (2 |K_lim|)) / 2)`` to leading order (the flat rhombus reached for
     K_lim > 0, a friction stop at ``x_F = sqrt(2 |K_lim| / A)`` for K_lim < 0): it grows without bound as the
     margin vanishes. The rule: where the margin lies within its rounding allowance
-    ``rho = MARGIN_RTOL (E_S + A + B)`` of 0, t_F of the float inputs is not determined by what the code can
-    compute (every value from about ``tau (ln(2 x0) + ln(A / (2 rho)) / 2)``, some 15-19 tau, up to infinity
-    is consistent with it), and the release is reported as creeping: ``stop_time = inf``,
+    ``rho = MARGIN_RTOL (E_S + W_F(pi/2))`` (``W_F(pi/2) = E_S - margin``) of 0, t_F of the float inputs is not
+    determined by what the code can compute (every value from about ``tau (ln(2 x0) + ln(A / (2 rho)) / 2)``, at
+    least 16.5 tau, up to infinity is consistent with it), and the release is reported as creeping: ``stop_time = inf``,
     ``alpha_final = pi/2`` (the limit), ``stopped_by = "creeps_to_limit"``. Rail friction resolves the
     approach (K ~ B x, finite arrival) once ``B^2 > 2 A rho``; below that it is as if B were 0.
     Pure arithmetic (compiled as is by :mod:`quickrelease._fast`): the one place this is decided, used by
     every method next to :func:`limit_margin_terms`.
     """
-    rho = MARGIN_RTOL * E_S + MARGIN_RTOL * A + MARGIN_RTOL * B  # no overflow for inputs near the float range
+    rho = MARGIN_RTOL * E_S + (MARGIN_RTOL * E_S - MARGIN_RTOL * margin)  # E_S + W_F(pi/2), without overflow
     return (abs(margin) <= rho) & (B <= np.sqrt(2.0 * A) * np.sqrt(rho))
 
 
@@ -199,11 +248,34 @@ def reaches_geometric_limit(E_S, alpha0, F1, F2, L1):
     return (margin > 0.0) & ~creeps_terms(margin, E_S, 2.0 * F1 * L1, 4.0 * F2 * L1)
 
 
-def _phase(F1, F2, L1):
-    """Amplitude R and phase phi with ``A sin(a) - B cos(a) = R sin(a - phi)``, A = 2 F1 L1, B = 4 F2 L1."""
-    A = 2.0 * F1 * L1
-    B = 4.0 * F2 * L1
-    return np.hypot(A, B), np.arctan2(B, A)
+def _stop_terms(E_S, A, B, R, sin_alpha0, cos_alpha0):
+    """``(s, cv, e, u, cu)`` of a friction stop (Eq. 8) [-]: the sines and cosines of :func:`sweep_terms`.
+
+    ``s = sin(alpha0 - phi)``, ``cv = cos(alpha0 - phi)``, ``e = E_S / R``, ``u = s + e = sin(alpha_F - phi)``
+    and ``cu = cos(alpha_F - phi) = sqrt((1 - u)(1 + u)) >= 0``, cu to a few ulps of itself at both ends of u:
+
+    - ``1 - u`` from the classifier's margin ``K_lim`` (:func:`limit_margin_terms`):
+      ``R (1 - u) = R - A sin(alpha0) + B cos(alpha0) - E_S = B^2 / (R + A) - K_lim`` (``R - A = B^2 / (R + A)``),
+      both terms >= 0 for a friction stop (K_lim <= 0). The textbook ``1 - (s + e)`` keeps the rounding of
+      sin(alpha0), an absolute 1.1e-16, relative to ``1 - u = x_F^2 / 2`` for a stop at pi/2 - x_F with little rail
+      friction (4e-7 of cu at x_F = 1e-5, and a stop within 1.5e-8 rad of pi/2 rounds to u = 1). With B = 0,
+      ``R (1 - u) = -K_lim`` exactly: the stop angle is consistent with its classification.
+    - ``1 + u = cv^2 / (1 - s) + e`` for s < 0 (``cv^2 = 1 - s^2``; every term >= 0): the textbook ``1 + u``
+      rounds to an absolute ulp where u is near -1 (rail friction, phi near pi/2, with a small alpha0:
+      ``cu = sin(alpha_F)``, 1.7e-3 for E_S = 0.1 J, alpha0 = 1e-4 rad, F2 = 7255 N), a relative ``eps / cu^2``
+      of cu (1.5e-11 there), which moved alpha_F and t_F by 2e-11 to 3e-11.
+
+    Pure arithmetic and one square root (compiled as is by :mod:`quickrelease._fast`, with the functions it calls).
+    """
+    s = (A * sin_alpha0 - B * cos_alpha0) / R
+    cv = (A * cos_alpha0 + B * sin_alpha0) / R
+    e = E_S / R
+    u = s + e
+    one_minus_u = (B * (B / (R + A)) - limit_margin_terms(E_S, A, B, sin_alpha0, cos_alpha0)) / R
+    neg = (s < 0.0) * 1.0  # 1 + s = cv^2 / (1 - s) for s < 0 (there 1 - s >= 1)
+    one_plus_u = neg * (cv * cv / np.maximum(1.0 - s, 1.0) + e) + (1.0 - neg) * (1.0 + u)
+    cu = np.sqrt(np.maximum(one_minus_u * one_plus_u, 0.0))
+    return s, cv, e, u, cu
 
 
 def sweep_terms(E_S, A, B, R, sin_alpha0, cos_alpha0):
@@ -212,22 +284,16 @@ def sweep_terms(E_S, A, B, R, sin_alpha0, cos_alpha0):
     With ``s = sin(alpha0 - phi)``, ``cv = cos(alpha0 - phi)`` (both from A, B, R: no call) and
     ``e = E_S / R``, Eq. 8 reads ``sin(alpha_F - phi) = u = s + e``; then
     ``delta = arcsin(u) - arcsin(s) = atan2(N, D)`` with ``D = cos(delta) = cu cv + u s``,
-    ``cu = sqrt((1 - u)(1 + u))`` and ``N = sin(delta) = u cv - s cu = e (cv + s (u + s) / (cu + cv))``
+    ``cu = cos(alpha_F - phi)`` and ``N = sin(delta) = u cv - s cu = e (cv + s (u + s) / (cu + cv))``
     (using ``cv - cu = (u^2 - s^2) / (cu + cv)``): for a small sweep ``N ~ e / cv``, every term of the
     same sign, so delta keeps full relative accuracy however small it is (alpha_F - alpha0 computed from a
-    rounded alpha_F would carry an absolute error of about 1e-16 rad). ``cu`` is
-    :func:`stop_cosine_terms` (not ``sqrt((1 - u)(1 + u))``, which loses ``eps / cu^2`` of cu when u is
-    near -1: rail friction with a small alpha0). Pure arithmetic and one square root and atan2 (compiled
-    as is by :mod:`quickrelease._fast`). Meaningful for the friction regime (``limit_margin_terms <= 0``);
-    the geometric limit's sweep is ``pi/2 - alpha0``.
+    rounded alpha_F would carry an absolute error of about 1e-16 rad). ``cu`` is that of :func:`_stop_terms`
+    (not ``sqrt((1 - u)(1 + u))``, which loses ``eps / cu^2`` of cu when u is near -1 or +1: rail friction with a
+    small alpha0, or a stop near pi/2 with little rail friction). Pure arithmetic and one square root and atan2
+    (compiled as is by :mod:`quickrelease._fast`). Meaningful for the friction regime
+    (``limit_margin_terms <= 0``); the geometric limit's sweep is ``pi/2 - alpha0`` (:func:`limit_sweep`).
     """
-    s = (A * sin_alpha0 - B * cos_alpha0) / R
-    cv = (A * cos_alpha0 + B * sin_alpha0) / R
-    e = E_S / R
-    u = s + e
-    neg = (s < 0.0) * 1.0  # stop_cosine_terms, inline for numba
-    one_plus_u = neg * (cv * cv / np.maximum(1.0 - s, 1.0) + e) + (1.0 - neg) * (1.0 + u)
-    cu = np.sqrt(np.maximum((1.0 - u) * one_plus_u, 0.0))
+    s, cv, e, u, cu = _stop_terms(E_S, A, B, R, sin_alpha0, cos_alpha0)
     N = e * (cv + s * (u + s) / (cu + cv))
     D = cu * cv + u * s
     return np.arctan2(N, D)
@@ -236,30 +302,18 @@ def sweep_terms(E_S, A, B, R, sin_alpha0, cos_alpha0):
 def stop_cosine_terms(E_S, A, B, R, sin_alpha0, cos_alpha0):
     """``cos(alpha_F - phi)`` of a friction stop (Eq. 8) to a few ulps of itself, cu >= 0 [-].
 
-    With s, cv, e, u as in :func:`sweep_terms`, ``cu^2 = (1 - u)(1 + u)`` with ``1 + u = cv^2 / (1 - s) + e``
-    for s < 0 (``cv^2 = 1 - s^2``; every term >= 0).
-    The textbook ``(1 - u)(1 + u)`` rounds ``1 + u`` to an absolute ulp: where u is near -1 (rail
-    friction, phi near pi/2, with a small alpha0: ``cu = sin(alpha_F)``, 1.7e-3 for E_S = 0.1 J,
-    alpha0 = 1e-4 rad, F2 = 7255 N) that is a relative error ``eps / cu^2`` of cu (1.5e-11 there), which
-    moved alpha_F and t_F by 2e-11 to 3e-11. For s >= 0 the textbook form is kept bit for bit: there
-    ``R (1 - u)`` is the classifier's ``-limit_margin_terms`` rounded the same way (a stop at pi/2 with
-    F2 << F1 stays consistent with its classification). Pure arithmetic, no branch (compiled as is by
-    :mod:`quickrelease._fast`).
+    See :func:`_stop_terms` (``1 - u`` from the classifier's margin, ``1 + u`` from ``cv^2 / (1 - s)``).
+    Pure arithmetic, no branch (compiled as is by :mod:`quickrelease._fast`).
     """
-    s = (A * sin_alpha0 - B * cos_alpha0) / R
-    cv = (A * cos_alpha0 + B * sin_alpha0) / R
-    e = E_S / R
-    u = s + e
-    neg = (s < 0.0) * 1.0  # 1 + s = cv^2 / (1 - s) for s < 0; as before for s >= 0
-    one_plus_u = neg * (cv * cv / np.maximum(1.0 - s, 1.0) + e) + (1.0 - neg) * (1.0 + u)
-    return np.sqrt(np.maximum((1.0 - u) * one_plus_u, 0.0))
+    return _stop_terms(E_S, A, B, R, sin_alpha0, cos_alpha0)[4]
 
 
 def sweep_angle(E_S, alpha0, F1, F2, L1):
     """The angle swept from release to the end of the motion, ``alpha_F - alpha0`` [rad] (Eq. 8).
 
     Cancellation-free (see :func:`sweep_terms`): accurate to a few ulps of itself even for sweeps of
-    1e-12 rad and below; ``pi/2 - alpha0`` where the device reaches the geometric limit; never negative.
+    1e-12 rad and below, and for stops within 1e-8 rad of pi/2; ``pi/2 - alpha0`` (:func:`limit_sweep`) where
+    the device reaches the geometric limit; never negative.
     """
     A = 2.0 * F1 * L1
     B = 4.0 * F2 * L1
@@ -269,7 +323,8 @@ def sweep_angle(E_S, alpha0, F1, F2, L1):
     limit = (margin > 0.0) | creeps_terms(margin, E_S, A, B)  # the sweep to pi/2: reached, or its limit
     with np.errstate(divide="ignore", invalid="ignore"):
         delta = sweep_terms(E_S, A, B, R, sa0, ca0)
-    delta = np.where(limit, HALF_PI - alpha0, np.clip(delta, 0.0, HALF_PI - alpha0))
+    to_limit = limit_sweep(alpha0)
+    delta = np.where(limit, to_limit, np.clip(delta, 0.0, to_limit))
     return float(delta) if np.ndim(delta) == 0 else delta
 
 
@@ -298,10 +353,11 @@ def remaining_energy(alpha, alpha_F, F1, F2, L1):
     Uses ``E_S - W_F(alpha) = W_F(alpha_F) - W_F(alpha)
     = 2 R cos((alpha_F + alpha)/2 - phi) sin((alpha_F - alpha)/2)``, which is exact
     to rounding even as alpha approaches alpha_F (no cancellation). alpha_F must be
-    the stop angle of Eq. 8 (possibly beyond pi/2 for a virtual stop).
+    the stop angle of Eq. 8 (possibly beyond pi/2 for a virtual stop). ``R cos(m - phi) = A cos(m) + B sin(m)``
+    (A = 2 F1 L1, B = 4 F2 L1) with cos(m), sin(m) of :func:`_half_angles`: no cancellation near pi/2 either.
     """
-    R, phi = _phase(F1, F2, L1)
-    return 2.0 * R * np.cos(0.5 * (alpha_F + alpha) - phi) * np.sin(0.5 * (alpha_F - alpha))
+    h, cos_m, sin_m = _half_angles(alpha_F, alpha)
+    return 2.0 * (2.0 * F1 * L1 * cos_m + 4.0 * F2 * L1 * sin_m) * h
 
 
 def friction_limits(E_S, alpha0, alpha_F, L1):
@@ -315,9 +371,8 @@ def friction_limits(E_S, alpha0, alpha_F, L1):
     dict
         ``{"F1_max": F1*, "F2_max": F2*}``.
     """
-    h = np.sin(0.5 * (alpha_F - alpha0))
-    m = 0.5 * (alpha_F + alpha0)
+    h, cos_m, sin_m = _half_angles(alpha_F, alpha0)  # no cancellation near alpha0 or near pi/2
     return {
-        "F1_max": E_S / (4.0 * L1 * np.cos(m) * h),
-        "F2_max": E_S / (8.0 * L1 * np.sin(m) * h),
+        "F1_max": E_S / (4.0 * L1 * cos_m * h),
+        "F2_max": E_S / (8.0 * L1 * sin_m * h),
     }
