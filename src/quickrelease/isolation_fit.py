@@ -41,15 +41,15 @@ from scipy import stats
 from scipy.optimize import brentq, least_squares
 
 from ._lsq import jacobian_covariance
-from .building import Isolation, TwoDOF, free_vibration
+from .building import RECORD_CHANNELS, Isolation, TwoDOF, free_vibration
 from .errors import ParameterError, QuickReleaseError
 
 __all__ = ["BuildingChannel", "IsolationFit", "fit_isolation", "compare_models", "decay_check", "ljung_box",
            "CHANNEL_KINDS"]
 
 #: Channel kinds of the isolation layer (x, v, a) and of the roof (x_roof, v_roof, a_roof; for the rigid
-#: models the roof moves with the layer), and their SI units.
-CHANNEL_KINDS = {"x": "m", "v": "m/s", "a": "m/s^2", "x_roof": "m", "v_roof": "m/s", "a_roof": "m/s^2"}
+#: models the roof moves with the layer), and their SI units (from :data:`quickrelease.building.RECORD_CHANNELS`).
+CHANNEL_KINDS = {name: unit for name, (_, unit, _) in RECORD_CHANNELS.items()}
 _UNITS = {"period": "s", "damping_ratio": "-", "friction": "N", "stiffness_ratio": "-", "yield_force": "N",
           "superstructure_period": "s", "superstructure_damping_ratio": "-", "d0": "m", "release_time": "s"}
 #: Models :func:`fit_isolation` fits.

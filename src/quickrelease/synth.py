@@ -13,11 +13,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
 from ._validate import BYTES_PER_SAMPLE, check_seed, check_size
+from .building import RECORD_CHANNELS
 from .case import Case, FitOptions
 from .errors import ParameterError, QuickReleaseError
 from .identify import case_friction
@@ -43,8 +44,9 @@ def _column(name: str, channels: dict[str, tuple[str, str, str]] = CHANNELS) -> 
 
 
 @dataclass(frozen=True, eq=False)
-class SyntheticRecord:
-    """A synthetic record and the truth behind it (SI units)."""
+class _Synthetic:
+    """What the device's and the building's synthetic records share: the samples, the truth, how they were
+    made, and the record as written (a CSV table and the case-file table that reads it)."""
 
     t: np.ndarray
     """Sample times from the start of the record [s]."""
@@ -52,8 +54,7 @@ class SyntheticRecord:
     """Channel -> recorded values (offset and noise added; NaN where a sample is missing)."""
     clean: dict[str, np.ndarray]
     """Channel -> model values without offset and noise."""
-    truth: dict[str, float]
-    """F1, F2 [N], energy [J], mass_factor, alpha0, release_time, stop_time [s], alpha_final [rad]."""
+    truth: dict[str, Any]
     noise: dict[str, float]
     offsets: dict[str, float]
     rate: float
@@ -61,9 +62,14 @@ class SyntheticRecord:
     seed: int
     notes: list[str] = field(default_factory=list)
 
+    #: Channel name -> (quantity kind, SI unit, description) of the record's channels.
+    _CHANNELS: ClassVar[dict[str, tuple[str, str, str]]] = CHANNELS
+    #: The case file's table that reads the record.
+    _SECTION: ClassVar[str] = "record"
+
     def columns(self) -> dict[str, np.ndarray]:
         """The table as written: ``t_s`` and one column per channel, SI units in the names."""
-        return {"t_s": self.t, **{_column(n): v for n, v in self.data.items()}}
+        return {"t_s": self.t, **{_column(n, self._CHANNELS): v for n, v in self.data.items()}}
 
     def to_pandas(self):
         import pandas as pd
@@ -75,11 +81,21 @@ class SyntheticRecord:
         return _write_csv(self.columns(), path)
 
     def record_table(self, file: str) -> str:
-        """The ``[record]`` table of a case file that reads this record (to paste into a case file)."""
-        lines = ["[record]", f"file = {_toml_value(file)}", 'time = "t_s"', "", "[record.channels]"]
+        """The ``[record]`` (device) or ``[building.record]`` (building) table of a case file that reads this
+        record (to paste into a case file)."""
+        sec, channels = self._SECTION, self._CHANNELS
+        lines = [f"[{sec}]", f"file = {_toml_value(file)}", 'time = "t_s"', "", f"[{sec}.channels]"]
         for name in self.data:
-            lines.append(f'{name} = {{ column = "{_column(name)}", unit = "{CHANNELS[name][1]}" }}')
+            lines.append(f'{name} = {{ column = "{_column(name, channels)}", unit = "{channels[name][1]}" }}')
         return "\n".join(lines) + "\n"
+
+
+@dataclass(frozen=True, eq=False)
+class SyntheticRecord(_Synthetic):
+    """A synthetic record of the device's release and the truth behind it (SI units)."""
+
+    truth: dict[str, float]
+    """F1, F2 [N], energy [J], mass_factor, alpha0, release_time, stop_time [s], alpha_final [rad]."""
 
     def record(self, *, noise_free: bool = False) -> Record:
         """The record as :func:`quickrelease.fit.fit_record` takes it (noise levels given, offsets estimated
@@ -274,55 +290,25 @@ def case_toml(case: Case, record_table: str, title: str) -> str:
 
 # -- the building ----------------------------------------------------------------------------------------------
 
-#: Default noise standard deviations of the building's channels [SI]: an LVDT or draw-wire on the isolation
-#: layer (0.05 mm), a velocity transducer (1 mm/s), an accelerometer (2 mg).
-BUILDING_NOISE = {"x": 0.05e-3, "v": 1e-3, "a": 0.002 * 9.80665, "x_roof": 0.05e-3, "v_roof": 1e-3,
-                  "a_roof": 0.002 * 9.80665}
-
-
-def _building_column(name: str) -> str:
-    from .building_case import BUILDING_CHANNELS
-
-    return _column(name, BUILDING_CHANNELS)
+#: Default noise standard deviation per quantity kind of the building's channels [SI]: an LVDT or draw-wire
+#: (0.05 mm), a velocity transducer (1 mm/s), an accelerometer (2 mg).
+BUILDING_NOISE_BY_KIND = {"length": 0.05e-3, "velocity": 1e-3, "acceleration": 0.002 * 9.80665}
+#: Default noise standard deviations of the building's channels [SI] (on the isolation layer and at the roof),
+#: by the kind of each channel of :data:`quickrelease.building.RECORD_CHANNELS`.
+BUILDING_NOISE = {name: BUILDING_NOISE_BY_KIND[kind] for name, (kind, _, _) in RECORD_CHANNELS.items()}
 
 
 @dataclass(frozen=True, eq=False)
-class SyntheticBuildingRecord:
+class SyntheticBuildingRecord(_Synthetic):
     """A synthetic record of the building's free vibration and the truth behind it (SI units)."""
 
-    t: np.ndarray
-    """Sample times from the start of the record [s]."""
-    data: dict[str, np.ndarray]
-    """Channel -> recorded values (offset and noise added; NaN where a sample is missing)."""
-    clean: dict[str, np.ndarray]
-    """Channel -> model values without offset and noise."""
     truth: dict[str, Any]
     """The building (model, mass_kg, period_s, damping_ratio, friction_N; bilinear k1_N_m, k2_N_m, Fy_N; 2dof
     superstructure_mass_kg, superstructure_period_s, superstructure_damping_ratio),
     d0_m, release_time_s and stop_time_s (after the release; None: still moving at the end of the record)."""
-    noise: dict[str, float]
-    offsets: dict[str, float]
-    rate: float
-    """Sampling rate [Hz]."""
-    seed: int
-    notes: list[str] = field(default_factory=list)
 
-    def columns(self) -> dict[str, np.ndarray]:
-        """The table as written: ``t_s`` and one column per channel, SI units in the names."""
-        return {"t_s": self.t, **{_building_column(n): v for n, v in self.data.items()}}
-
-    def write_csv(self, path: str | Path) -> Path:
-        """Write the record as CSV (atomically); missing samples are empty fields."""
-        return _write_csv(self.columns(), path)
-
-    def record_table(self, file: str) -> str:
-        """The ``[building.record]`` table of a case file that reads this record."""
-        from .building_case import BUILDING_CHANNELS
-
-        lines = ["[building.record]", f"file = {_toml_value(file)}", 'time = "t_s"', "", "[building.record.channels]"]
-        for name in self.data:
-            lines.append(f'{name} = {{ column = "{_building_column(name)}", unit = "{BUILDING_CHANNELS[name][1]}" }}')
-        return "\n".join(lines) + "\n"
+    _CHANNELS: ClassVar[dict[str, tuple[str, str, str]]] = RECORD_CHANNELS
+    _SECTION: ClassVar[str] = "building.record"
 
     def building_channels(self, *, noise_free: bool = False) -> list:
         """The record as :func:`quickrelease.isolation_fit.fit_isolation` takes it (noise levels given, an
