@@ -26,7 +26,8 @@ from .records import CHANNELS, DISPLACEMENT_CHANNELS, Channel, ChannelSpec, Reco
 from .solvers import FirstIntegral
 
 __all__ = ["DEFAULT_NOISE", "SyntheticRecord", "synthesize", "predicted_errors", "parse_channel_values", "case_toml",
-           "BUILDING_NOISE", "SyntheticBuildingRecord", "synthesize_building", "building_case_toml"]
+           "BUILDING_NOISE", "SyntheticBuildingRecord", "synthesize_building", "building_case_toml",
+           "predicted_building_errors"]
 
 #: Default noise standard deviations [SI]: video angle, gyroscope, draw-wire or LVDT displacements,
 #: velocity transducers, accelerometers (about 5 mg).
@@ -312,15 +313,51 @@ class SyntheticBuildingRecord(_Synthetic):
 
     def building_channels(self, *, noise_free: bool = False) -> list:
         """The record as :func:`quickrelease.isolation_fit.fit_isolation` takes it (noise levels given, an
-        offset on every channel), missing samples left out."""
+        offset on every channel), missing samples left out (noise-free: the model values on the samples the
+        record has)."""
         from .isolation_fit import BuildingChannel
 
         out = []
         for name, values in (self.clean if noise_free else self.data).items():
-            ok = np.isfinite(values)
+            ok = np.isfinite(self.data[name])
             out.append(BuildingChannel(name=name, kind=name, t=self.t[ok], values=values[ok], noise=self.noise[name],
                                        offset=True))
         return out
+
+    def fit_parameters(self) -> dict[str, float]:
+        """The truth in :func:`quickrelease.isolation_fit.fit_isolation`'s parameter names (SI): period
+        (bilinear: the initial period 2 pi sqrt(m / k1)), damping_ratio, friction, bilinear stiffness_ratio =
+        k2 / k1 and yield_force, 2dof superstructure_period and superstructure_damping_ratio, d0, release_time
+        and offset_<channel>."""
+        t = self.truth
+        p = {"period": t["period_s"], "damping_ratio": t["damping_ratio"], "friction": t["friction_N"]}
+        if t["model"] == "bilinear":
+            p.update(stiffness_ratio=t["k2_N_m"] / t["k1_N_m"], yield_force=t["Fy_N"])
+        if t["model"] == "2dof":
+            p.update(superstructure_period=t["superstructure_period_s"],
+                     superstructure_damping_ratio=t["superstructure_damping_ratio"])
+        p.update(d0=t["d0_m"], release_time=t["release_time_s"])
+        p.update({f"offset_{name}": value for name, value in self.offsets.items()})
+        return {k: float(v) for k, v in p.items()}
+
+
+def predicted_building_errors(synthetic: SyntheticBuildingRecord):
+    """Standard errors a fit to such a record of the building would have: the Cramer-Rao bound at the truth.
+
+    :func:`quickrelease.isolation_fit.predicted_isolation_errors` on the record's channels (its sample times,
+    missing samples left out, and its noise levels as the known weights, an offset on every channel) at the
+    true parameters of the synthetic record's model: ``(J^T W J)^-1`` with W = 1 / noise^2.
+
+    Returns
+    -------
+    quickrelease.isolation_fit.IsolationPrecision
+    """
+    from .isolation_fit import predicted_isolation_errors
+
+    t = synthetic.truth
+    return predicted_isolation_errors(synthetic.building_channels(noise_free=True), t["mass_kg"], t["model"],
+                                      synthetic.fit_parameters(),
+                                      superstructure_mass=t.get("superstructure_mass_kg"))
 
 
 def building_pushed_displacement(case: Case) -> float:
