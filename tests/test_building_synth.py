@@ -10,6 +10,7 @@ simulation of tests/building_reference.py.
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -177,6 +178,21 @@ def test_missing_samples_cost_precision(tmp_path):
         ratio = half.std_errors[f"offset_{name}"] / full.std_errors[f"offset_{name}"]
         assert ratio == pytest.approx(math.sqrt(syn.t.size / kept), rel=0.05), name
     assert half.std_errors["period"] > 1.3 * full.std_errors["period"]
+
+
+def test_the_device_prediction_also_uses_the_samples_the_record_has():
+    """The same fault class on the device's synth: its prediction (a fit to the noise-free record) took every
+    sample, as if none were missing (F1's standard error identical with half the samples gone)."""
+    from quickrelease.synth import predicted_errors, synthesize
+
+    case = load_case(Path(__file__).parent.parent / "examples" / "building.toml")
+    kw = dict(rate=500.0, seed=2)
+    full = predicted_errors(case, synthesize(case, ["u", "v"], **kw))
+    syn = synthesize(case, ["u", "v"], missing=0.5, **kw)
+    half = predicted_errors(case, syn)
+    kept = sum(np.count_nonzero(np.isfinite(v)) for v in syn.data.values()) / (2 * syn.t.size)
+    for key in ("F1_se_N", "F2_se_N"):  # white noise on every channel alike: the information scales with n
+        assert half[key] / full[key] == pytest.approx(math.sqrt(1 / kept), rel=0.05), key
 
 
 def test_synth_cli_prints_and_writes_the_prediction(tmp_path, monkeypatch):

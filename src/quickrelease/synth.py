@@ -100,10 +100,11 @@ class SyntheticRecord(_Synthetic):
 
     def record(self, *, noise_free: bool = False) -> Record:
         """The record as :func:`quickrelease.fit.fit_record` takes it (noise levels given, offsets estimated
-        on displacement channels)."""
+        on displacement channels), missing samples left out (noise-free: the model values on the samples the
+        record has)."""
         channels = {}
         for name, values in (self.clean if noise_free else self.data).items():
-            ok = np.nonzero(np.isfinite(values))[0]
+            ok = np.nonzero(np.isfinite(self.data[name]))[0]
             spec = ChannelSpec(name=name, column=_column(name), unit=CHANNELS[name][1], factor=1.0,
                                noise=self.noise[name], offset=name in DISPLACEMENT_CHANNELS)
             channels[name] = Channel(spec=spec, t=self.t[ok], values=values[ok], index=ok,
