@@ -468,7 +468,7 @@ def synth(
     as_json: JsonOpt = False,
 ) -> None:
     """A synthetic record of the case's release (offsets, noise), and the precision a fit to it would have;
-    or (--building) of the building's free vibration after the release."""
+    or (--building) of the building's free vibration after the release, and the precision of its isolation fit."""
     import os
 
     from .case import load_case

@@ -28,6 +28,9 @@ interval is replaced by a profile-likelihood interval
 (the parameter fixed on a grid, the others re-fitted, the interval where the chi-square rises by the
 Student-t quantile squared times the residual variance). Models are compared by AIC and BIC on the same
 noise levels, and the residuals are tested for whiteness (Ljung-Box).
+
+:func:`predicted_isolation_errors` gives the standard errors such a fit would have before there is a record
+(the Cramer-Rao bound ``(J^T W J)^-1`` at the truth, the same model and Jacobian, W = 1 / noise^2).
 """
 
 from __future__ import annotations

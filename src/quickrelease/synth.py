@@ -6,6 +6,8 @@ release instant to well after the stop, and adds what real records have: a const
 Gaussian noise, optionally jitter of the sampling instants (uneven sampling) and missing samples.
 :func:`predicted_errors` answers the planning question directly: the standard errors of F1 and F2 a fit
 to such a record would have (the Cramer-Rao bound: the fit's covariance at the truth, noise-free).
+:func:`synthesize_building` makes the building's record, and :func:`predicted_building_errors` the precision
+of the building's fit (the Cramer-Rao bound at the truth from the fit's own model and Jacobian).
 """
 
 from __future__ import annotations
