@@ -232,3 +232,38 @@ def test_the_building_channels_come_from_one_table():
     rigid = free_vibration(Isolation.linear(1e5, 2.0, 0.05, 1e3), 0.1, t_end=3.0)
     two = free_vibration(TwoDOF(2e5, 1e5, 2.0, 0.5, 0.05, 1e3, 0.02), 0.1, t_end=3.0)
     assert list(rigid.channels(t)) == list(two.channels(t)) == list(RECORD_CHANNELS)
+
+
+def test_a_parameter_such_a_record_cannot_see_is_not_determined():
+    """A bilinear building pushed below its yield displacement (d0 = 10 mm < F_y / k1 = 25 mm) never yields:
+    F_y has no effect on its record, so its standard error is infinite (the pseudo-inverse alone says 0, a
+    false precision), with a warning naming it; None in JSON."""
+    m, k1 = 4e5, 4e7
+    t = np.arange(401) / 100.0
+    ch = [BuildingChannel("x", "x", t, np.zeros_like(t), noise=5e-5)]
+    pred = predicted_isolation_errors(ch, m, "bilinear", {
+        "period": 2 * math.pi * math.sqrt(m / k1), "stiffness_ratio": 0.1, "yield_force": 1e6,
+        "damping_ratio": 0.03, "friction": 2e4, "d0": 0.01, "release_time": 1.0037})
+    assert pred.std_errors["yield_force"] == math.inf and pred.physical()["Fy_N"]["se"] == math.inf
+    assert "yield_force has no effect on such a record: it is not determined" in pred.warnings
+    assert pred.summary()["parameters"]["Fy_N"]["se"] is None and pred.summary()["std_errors"]["yield_force"] is None
+    json.dumps(pred.summary(), allow_nan=False)
+
+
+@pytest.mark.parametrize("factor", [1e-250, 1e250])
+def test_standard_errors_scale_with_the_noise_over_the_float_range(factor):
+    """The covariance is proportional to the noise variance (W = 1 / sigma^2): every standard error scales with
+    sigma, for noise levels near either end of the float range too (no overflow or underflow on the way)."""
+    t = np.arange(451) / 50.0
+    params = {"period": 2.0, "damping_ratio": 0.03, "friction": 3e4, "d0": 0.1, "release_time": 1.0037}
+
+    def chans(f):
+        return [BuildingChannel("x", "x", t, np.zeros_like(t), noise=5e-4 * f),
+                BuildingChannel("v", "v", t, np.zeros_like(t), noise=2e-3 * f)]
+
+    ref = predicted_isolation_errors(chans(1.0), 650e3, "linear", params)
+    far = predicted_isolation_errors(chans(factor), 650e3, "linear", params)
+    for n in ref.names:
+        assert far.std_errors[n] == pytest.approx(factor * ref.std_errors[n], rel=1e-9), n
+    for key, row in far.physical().items():
+        assert row["se"] == pytest.approx(factor * ref.physical()[key]["se"], rel=1e-9), key

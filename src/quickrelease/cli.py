@@ -520,6 +520,7 @@ def _synth_building(case, channels: str | None, rate: str | None, noise: list[st
                     release_time: str | None, duration: str | None, seed: int, jitter: float, missing: float,
                     out: Path, case_out: Path | None, as_json: bool) -> None:
     """``synth`` of the building: a record of its free vibration from ``[building]`` (the truth)."""
+    import math
     import os
 
     from .building_case import BUILDING_CHANNELS
@@ -561,8 +562,9 @@ def _synth_building(case, channels: str | None, rate: str | None, noise: list[st
     for note in syn.notes:
         _echo(f"note: {note}")
     _table(f"Precision of a {t['model']} fit to it (Cramer-Rao bound)",
-           [(key, f"{row['truth']:.6g} {row['unit']}".rstrip(" -"), f"{row['se']:.4g} {row['unit']}".rstrip(" -"),
-             "" if row["relative_se"] is None else f"{100 * row['relative_se']:.3g}%")
+           [(key, f"{row['truth']:.6g} {row['unit']}".rstrip(" -"),
+             f"{row['se']:.4g} {row['unit']}".rstrip(" -") if math.isfinite(row["se"]) else "not determined",
+             "" if row["relative_se"] is None or not math.isfinite(row["se"]) else f"{100 * row['relative_se']:.3g}%")
             for key, row in pred.physical().items()], ("parameter", "truth", "standard error", "relative"))
     for warning in pred.warnings:
         _echo(f"warning: {warning}")

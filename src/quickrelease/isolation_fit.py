@@ -777,12 +777,16 @@ class IsolationPrecision:
     parameters: dict[str, float]
     """The truth at which the information is evaluated, every parameter (free and fixed)."""
     covariance: np.ndarray
-    """``(J^T W J)^-1`` [SI^2], in the order of ``names``."""
+    """``(J^T W J)^-1`` [SI^2], in the order of ``names`` (inf where it exceeds the float range)."""
     std_errors: dict[str, float]
+    """inf for a parameter that has no effect on such a record."""
     correlation: np.ndarray
     condition_number: float
     units: dict[str, str]
     warnings: tuple[str, ...] = ()
+    noise_scale: float = 1.0
+    """The largest noise level s; ``unit_covariance`` is the covariance for the noise levels over s."""
+    unit_covariance: np.ndarray | None = field(default=None, repr=False)
 
     def physical(self) -> dict[str, dict[str, Any]]:
         """The building's parameters with their predicted standard errors, keyed as the building's JSON:
@@ -790,15 +794,21 @@ class IsolationPrecision:
         and ``Fy_N``), ``damping_ratio``, ``friction_N``, 2dof ``superstructure_period_s`` and
         ``superstructure_damping_ratio``, then ``d0_m``, ``release_time_s`` and ``offset_<channel>``; each
         ``{"truth", "se", "relative_se" (None where the truth is 0 or a time on the record's clock), "unit"}``
-        (parameters held fixed are left out)."""
+        (parameters held fixed are left out; ``se`` inf where not determined; :meth:`summary` gives None)."""
         p, index = self.parameters, {n: i for i, n in enumerate(self.names)}
 
-        def row(value: float, gradient: dict[str, float], unit: str, relative: bool = True) -> dict[str, Any]:
+        def row(value: float, gradient: dict[str, float], unit_name: str, relative: bool = True) -> dict[str, Any]:
             g = np.zeros(len(self.names))
             for name, d in gradient.items():
                 g[index[name]] = d
-            se = float(math.sqrt(max(float(g @ self.covariance @ g), 0.0)))
-            return {"truth": float(value), "se": se, "unit": unit,
+            if any(math.isinf(self.std_errors[name]) for name, d in gradient.items() if d != 0):
+                se = math.inf
+            else:
+                unit = self.covariance / self.noise_scale / self.noise_scale if self.unit_covariance is None \
+                    else self.unit_covariance
+                with np.errstate(over="ignore"):
+                    se = float(self.noise_scale * math.sqrt(max(float(g @ unit @ g), 0.0)))
+            return {"truth": float(value), "se": se, "unit": unit_name,
                     "relative_se": se / abs(value) if relative and value != 0 else None}
 
         out: dict[str, dict[str, Any]] = {}
@@ -829,8 +839,17 @@ class IsolationPrecision:
         corr = {f"{a}:{b}": float(self.correlation[i, j]) for i, a in enumerate(self.names)
                 for j, b in enumerate(self.names) if j > i}
         return {"method": "Cramer-Rao bound: (J^T W J)^-1 at the truth, W = 1 / noise^2",
-                "model": self.model, "parameters": self.physical(), "std_errors": self.std_errors,
-                "correlation": corr, "condition_number": self.condition_number, "warnings": list(self.warnings)}
+                "model": self.model,
+                "parameters": {k: {kk: _finite(vv) if isinstance(vv, float) else vv for kk, vv in row.items()}
+                               for k, row in self.physical().items()},
+                "std_errors": {n: _finite(v) for n, v in self.std_errors.items()},
+                "correlation": corr, "condition_number": _finite(self.condition_number),
+                "warnings": list(self.warnings)}
+
+
+def _finite(value: float) -> float | None:
+    """A float for JSON: None where it is not finite (a standard error beyond the float range, or infinite)."""
+    return float(value) if math.isfinite(value) else None
 
 
 def predicted_isolation_errors(channels, mass: float, model: str, parameters: dict[str, float], *,
@@ -881,26 +900,40 @@ def predicted_isolation_errors(channels, mass: float, model: str, parameters: di
         raise ParameterError("fixed", unknown[0], ", ".join(all_names))
     names = [n for n in all_names if n not in fixed]
     lower, upper = _bounds(channels, values["release_time"])
-    misfit = _Misfit(channels, {c.name: float(c.noise) for c in channels}, float(mass), model, superstructure_mass,
-                     lower, upper)
-    J = misfit.jacobian(np.array([values[n] for n in names]), names, values)  # weighted: rows / sigma_i
-    cov = jacobian_covariance(J)
-    se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    # the noise levels relative to the largest, s: J (and so the information) stays in the float range for
+    # noise levels of any size, and the covariance is s^2 times that of the relative levels
+    s = max(float(c.noise) for c in channels)
+    misfit = _Misfit(channels, {c.name: float(c.noise) / s for c in channels}, float(mass), model,
+                     superstructure_mass, lower, upper)
+    J = misfit.jacobian(np.array([values[n] for n in names]), names, values)  # weighted: rows / (sigma_i / s)
+    if not np.all(np.isfinite(J)):
+        levels = ", ".join(f"{c.name} = {c.noise:.3g} {CHANNEL_KINDS[c.kind]}" for c in channels)
+        raise ParameterError("noise", levels, "levels whose ratios keep the information J^T W J in the float range")
+    unseen = [n for n, norm in zip(names, np.linalg.norm(J, axis=0), strict=True) if norm == 0.0]
+    unit_cov = jacobian_covariance(J)
+    with np.errstate(over="ignore"):
+        cov = (unit_cov * s) * s
+        se = s * np.sqrt(np.clip(np.diag(unit_cov), 0.0, None))
+    for n in unseen:  # no information at all: not determined (the pseudo-inverse would say 0)
+        se[names.index(n)] = math.inf
     with np.errstate(invalid="ignore", divide="ignore"):
-        corr = cov / np.outer(se, se)
+        corr = unit_cov / np.outer(np.sqrt(np.diag(unit_cov)), np.sqrt(np.diag(unit_cov)))
     corr = np.where(np.isfinite(corr), corr, 0.0)
     cond = float(np.linalg.cond(corr))
-    warnings = []
+    warnings = [f"{n} has no effect on such a record: it is not determined" for n in unseen]
     if cond > CONDITION_WARNING:
         warnings.append(f"ill-conditioned (condition number of the correlations {cond:.2g}): some combination of "
                         "parameters is not determined by such a record")
     for n, s_ in zip(names, se, strict=True):
-        if n in _physical_names(model) and values[n] != 0 and s_ / abs(values[n]) > PROFILE_RELATIVE_SE:
-            warnings.append(f"{n} would be poorly determined (standard error {s_ / abs(values[n]):.0%} of the truth)")
+        if (n in _physical_names(model) and n not in unseen and values[n] != 0
+                and s_ / abs(values[n]) > PROFILE_RELATIVE_SE):
+            warnings.append(f"{n} would be poorly determined (standard error {100 * s_ / abs(values[n]):.3g}% of the "
+                            "truth)")
     units = {n: _UNITS.get(n, CHANNEL_KINDS.get(_offset_kind(n, channels), "")) for n in names}
     return IsolationPrecision(model=model, mass=float(mass), names=tuple(names), parameters=values, covariance=cov,
                               std_errors={n: float(v) for n, v in zip(names, se, strict=True)}, correlation=corr,
-                              condition_number=cond, units=units, warnings=tuple(warnings))
+                              condition_number=cond, units=units, warnings=tuple(warnings), noise_scale=s,
+                              unit_covariance=unit_cov)
 
 
 def compare_models(fits) -> list[dict[str, Any]]:
