@@ -36,10 +36,23 @@ from scipy.optimize import brentq
 from .errors import ParameterError
 
 __all__ = ["Isolation", "FreeVibration", "free_vibration", "pushed_state", "MODELS", "TwoDOF", "TwoDOFVibration",
-           "free_vibration_2dof"]
+           "free_vibration_2dof", "RECORD_CHANNELS"]
 
 #: Restoring-force models of the isolation layer.
 MODELS = ("linear", "bilinear")
+
+#: The channels of the building's record: name -> (quantity kind, SI unit, description). The one table of
+#: them: the keys of :meth:`FreeVibration.channels` and :meth:`TwoDOFVibration.channels`; the record reader
+#: (:data:`quickrelease.building_case.BUILDING_CHANNELS`), the fit (:data:`quickrelease.isolation_fit.CHANNEL_KINDS`)
+#: and synth (:data:`quickrelease.synth.BUILDING_NOISE`, per quantity kind) derive theirs from it.
+RECORD_CHANNELS: dict[str, tuple[str, str, str]] = {
+    "x": ("length", "m", "displacement of the isolation layer (e.g. an LVDT)"),
+    "v": ("velocity", "m/s", "velocity of the isolation layer"),
+    "a": ("acceleration", "m/s^2", "acceleration of the isolation layer (base)"),
+    "x_roof": ("length", "m", "displacement of the top of the superstructure"),
+    "v_roof": ("velocity", "m/s", "velocity of the top of the superstructure"),
+    "a_roof": ("acceleration", "m/s^2", "acceleration of the top of the superstructure"),
+}
 
 #: Most pieces (half-cycles and yield events) one free vibration may have.
 MAX_PIECES = 1_000_000

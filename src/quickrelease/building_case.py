@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .building import Isolation, TwoDOF
+from .building import RECORD_CHANNELS, Isolation, TwoDOF
 from .errors import ParameterError, QuickReleaseError
 from .records import RecordSpec, load_record, parse_record_spec
 
@@ -42,15 +42,9 @@ if TYPE_CHECKING:
 __all__ = ["BUILDING_CHANNELS", "BuildingData", "load_building", "parse_building_record", "spec_building",
            "spec_isolation"]
 
-#: Channel name -> (quantity kind, SI unit, description) of the building's record.
-BUILDING_CHANNELS: dict[str, tuple[str, str, str]] = {
-    "x": ("length", "m", "displacement of the isolation layer (e.g. an LVDT)"),
-    "v": ("velocity", "m/s", "velocity of the isolation layer"),
-    "a": ("acceleration", "m/s^2", "acceleration of the isolation layer (base)"),
-    "x_roof": ("length", "m", "displacement of the top of the superstructure"),
-    "v_roof": ("velocity", "m/s", "velocity of the top of the superstructure"),
-    "a_roof": ("acceleration", "m/s^2", "acceleration of the top of the superstructure"),
-}
+#: Channel name -> (quantity kind, SI unit, description) of the building's record (the table of
+#: :data:`quickrelease.building.RECORD_CHANNELS`).
+BUILDING_CHANNELS: dict[str, tuple[str, str, str]] = RECORD_CHANNELS
 #: Fewest valid samples of a channel (a fit needs the rest before the release and the motion after it).
 MIN_SAMPLES = 10
 

@@ -468,7 +468,7 @@ def synth(
     as_json: JsonOpt = False,
 ) -> None:
     """A synthetic record of the case's release (offsets, noise), and the precision a fit to it would have;
-    or (--building) of the building's free vibration after the release."""
+    or (--building) of the building's free vibration after the release, and the precision of its isolation fit."""
     import os
 
     from .case import load_case
@@ -520,11 +520,12 @@ def _synth_building(case, channels: str | None, rate: str | None, noise: list[st
                     release_time: str | None, duration: str | None, seed: int, jitter: float, missing: float,
                     out: Path, case_out: Path | None, as_json: bool) -> None:
     """``synth`` of the building: a record of its free vibration from ``[building]`` (the truth)."""
+    import math
     import os
 
     from .building_case import BUILDING_CHANNELS
     from .export import write_text
-    from .synth import building_case_toml, parse_channel_values, synthesize_building
+    from .synth import building_case_toml, parse_channel_values, predicted_building_errors, synthesize_building
     from .units import parse_quantity
 
     if case.building is None:
@@ -537,6 +538,7 @@ def _synth_building(case, channels: str | None, rate: str | None, noise: list[st
                               duration=None if duration is None else parse_quantity(duration, "time", "--duration"),
                               seed=seed, jitter=jitter, missing=missing)
     # everything that can fail comes before the first file is written
+    pred = predicted_building_errors(syn)
     rel_file = out.name if case_out is None else os.path.relpath(out.resolve(), case_out.resolve().parent)
     table = syn.record_table(rel_file)
     case_text = None if case_out is None else building_case_toml(case, syn, table, f"The building's record {out.name}")
@@ -545,7 +547,7 @@ def _synth_building(case, channels: str | None, rate: str | None, noise: list[st
         write_text(case_text, case_out)
     summary = {"file": str(out), "rows": int(syn.t.size), "rate_Hz": syn.rate, "channels": names,
                "truth": syn.truth, "noise": syn.noise, "offsets": syn.offsets, "seed": seed, "notes": syn.notes,
-               "case_file": None if case_out is None else str(case_out)}
+               "predicted": pred.summary(), "case_file": None if case_out is None else str(case_out)}
     if as_json:
         _print_json(summary)
         return
@@ -559,6 +561,13 @@ def _synth_building(case, channels: str | None, rate: str | None, noise: list[st
           f"d0 = {1e3 * t['d0_m']:.6g} mm at {t['release_time_s']:g} s, {stop}")
     for note in syn.notes:
         _echo(f"note: {note}")
+    _table(f"Precision of a {t['model']} fit to it (Cramer-Rao bound)",
+           [(key, f"{row['truth']:.6g} {row['unit']}".rstrip(" -"),
+             f"{row['se']:.4g} {row['unit']}".rstrip(" -") if math.isfinite(row["se"]) else "not determined",
+             "" if row["relative_se"] is None or not math.isfinite(row["se"]) else f"{100 * row['relative_se']:.3g}%")
+            for key, row in pred.physical().items()], ("parameter", "truth", "standard error", "relative"))
+    for warning in pred.warnings:
+        _echo(f"warning: {warning}")
     if case_out is not None:
         _echo(f"Wrote {case_out}: quickrelease building {case_out}")
     else:

@@ -28,6 +28,9 @@ interval is replaced by a profile-likelihood interval
 (the parameter fixed on a grid, the others re-fitted, the interval where the chi-square rises by the
 Student-t quantile squared times the residual variance). Models are compared by AIC and BIC on the same
 noise levels, and the residuals are tested for whiteness (Ljung-Box).
+
+:func:`predicted_isolation_errors` gives the standard errors such a fit would have before there is a record
+(the Cramer-Rao bound ``(J^T W J)^-1`` at the truth, the same model and Jacobian, W = 1 / noise^2).
 """
 
 from __future__ import annotations
@@ -41,15 +44,15 @@ from scipy import stats
 from scipy.optimize import brentq, least_squares
 
 from ._lsq import jacobian_covariance
-from .building import Isolation, TwoDOF, free_vibration
+from .building import RECORD_CHANNELS, Isolation, TwoDOF, free_vibration
 from .errors import ParameterError, QuickReleaseError
 
 __all__ = ["BuildingChannel", "IsolationFit", "fit_isolation", "compare_models", "decay_check", "ljung_box",
-           "CHANNEL_KINDS"]
+           "CHANNEL_KINDS", "IsolationPrecision", "predicted_isolation_errors"]
 
 #: Channel kinds of the isolation layer (x, v, a) and of the roof (x_roof, v_roof, a_roof; for the rigid
-#: models the roof moves with the layer), and their SI units.
-CHANNEL_KINDS = {"x": "m", "v": "m/s", "a": "m/s^2", "x_roof": "m", "v_roof": "m/s", "a_roof": "m/s^2"}
+#: models the roof moves with the layer), and their SI units (from :data:`quickrelease.building.RECORD_CHANNELS`).
+CHANNEL_KINDS = {name: unit for name, (_, unit, _) in RECORD_CHANNELS.items()}
 _UNITS = {"period": "s", "damping_ratio": "-", "friction": "N", "stiffness_ratio": "-", "yield_force": "N",
           "superstructure_period": "s", "superstructure_damping_ratio": "-", "d0": "m", "release_time": "s"}
 #: Models :func:`fit_isolation` fits.
@@ -368,6 +371,108 @@ PARAMETER_BOUNDS = {"period": (1e-3, 1e3), "damping_ratio": (0.0, 0.95), "fricti
                     "superstructure_damping_ratio": (0.0, 0.95)}
 
 
+def _physical_names(model: str) -> list[str]:
+    """The physical parameters of a model (in the fit's order)."""
+    return ["period", "damping_ratio", "friction"] + {
+        "bilinear": ["stiffness_ratio", "yield_force"],
+        "2dof": ["superstructure_period", "superstructure_damping_ratio"]}.get(model, [])
+
+
+def _parameter_names(model: str, channels) -> list[str]:
+    """Every parameter of a fit of ``model`` to ``channels``: the physical ones, d0, the release time and an
+    offset per channel that has one."""
+    return _physical_names(model) + ["d0", "release_time"] + [f"offset_{c.name}" for c in channels if c.offset]
+
+
+def _bounds(channels, t_r0: float) -> tuple[dict[str, float], dict[str, float]]:
+    """The fit's bounds (lower, upper) of each parameter; the release time within 50 samples of ``t_r0``."""
+    dt = min(float(np.median(np.diff(c.t))) for c in channels)
+    lower = {**{n: b[0] for n, b in PARAMETER_BOUNDS.items()}, "d0": -math.inf, "release_time": t_r0 - 50 * dt}
+    upper = {**{n: b[1] for n, b in PARAMETER_BOUNDS.items()}, "d0": math.inf, "release_time": t_r0 + 50 * dt}
+    return lower, upper
+
+
+def _unpack(theta, free, base) -> dict[str, float]:
+    p = dict(base)
+    p.update(zip(free, (float(v) for v in theta), strict=True))
+    return p
+
+
+class _Misfit:
+    """The weighted residuals ``(model + offset - measured) / sigma`` of the channels, stacked, and their
+    Jacobian: what :func:`fit_isolation` minimises and :func:`predicted_isolation_errors` evaluates at the
+    truth."""
+
+    def __init__(self, channels, noise: dict[str, float], mass: float, model: str,
+                 superstructure_mass: float | None, lower: dict[str, float], upper: dict[str, float]) -> None:
+        self.channels, self.mass, self.model, self.superstructure_mass = channels, mass, model, superstructure_mass
+        self.lower, self.upper = lower, upper
+        self.t_last = max(float(c.t[-1]) for c in channels)
+        self.sig = np.concatenate([np.full(c.t.size, noise[c.name]) for c in channels])
+        self.data = np.concatenate([c.values for c in channels])
+        # the model is evaluated once at the union of the channels' times (channels often share an axis)
+        t_all, where = np.unique(np.concatenate([c.t for c in channels]), return_inverse=True)
+        self.t_all = t_all
+        self.where = np.split(where.ravel(), np.cumsum([c.t.size for c in channels])[:-1])
+        # the offsets enter linearly: their columns are exact (1 / sigma on their channel's rows), and only the
+        # other parameters need the two model evaluations each of the central differences
+        self.rows_of, i0 = {}, 0
+        for c in channels:
+            self.rows_of[f"offset_{c.name}"] = slice(i0, i0 + c.t.size)
+            i0 += c.t.size
+
+    def model_vector(self, p: dict[str, float]) -> np.ndarray:
+        iso = _isolation(self.model, self.mass, p, self.superstructure_mass)
+        fv = free_vibration(iso, p["d0"], t_end=max(self.t_last - p["release_time"], 1e-9))
+        out = []
+        kinds = fv.channels(self.t_all - p["release_time"])
+        for c, at in zip(self.channels, self.where, strict=True):
+            y = kinds[c.kind][at]
+            out.append(y + p.get(f"offset_{c.name}", 0.0))
+        return np.concatenate(out)
+
+    def residuals(self, theta, free, base) -> np.ndarray:
+        try:
+            return (self.model_vector(_unpack(theta, free, base)) - self.data) / self.sig
+        except ParameterError:  # outside the model's domain (e.g. held by friction at a bound): penalise
+            return np.full(self.data.size, 1e6)
+
+    def jacobian(self, theta, free, base) -> np.ndarray:
+        # Central differences, guarded against the jumps of the record model: where a piece boundary (a
+        # reversal, where the friction force flips and the acceleration jumps; the stick) passes a sample
+        # inside the stencil, one one-sided difference holds the jump over h and the other does not. There
+        # the smaller one is the derivative (the jump would make the sample look infinitely informative
+        # and the standard errors far too small, as the optimiser likes to park a jump on a sample).
+        theta = np.asarray(theta, dtype=float)
+        J = np.zeros((self.data.size, len(free)))
+        f0 = None
+        for i, n in enumerate(free):
+            if n in self.rows_of:
+                J[self.rows_of[n], i] = 1.0 / self.sig[self.rows_of[n]]
+                continue
+            if f0 is None:
+                f0 = self.residuals(theta, free, base)
+            x, lo, hi = theta[i], self.lower.get(n, -math.inf), self.upper.get(n, math.inf)
+            h = 1e-4 * max(1.0, abs(x))
+
+            def at(value, i=i):
+                moved = theta.copy()
+                moved[i] = value
+                return self.residuals(moved, free, base)
+
+            if x - h < lo or x + h > hi:  # one-sided, second order, into the feasible side
+                s_ = 1.0 if x + 2.0 * h <= hi else -1.0
+                f1, f2 = at(x + s_ * h), at(x + 2.0 * s_ * h)
+                d1, d2 = (f1 - f0) / (s_ * h), (f2 - f1) / (s_ * h)
+                J[:, i] = np.where(np.abs(d1 - d2) > 0.5 * (np.abs(d1) + np.abs(d2)),
+                                   np.where(np.abs(d1) < np.abs(d2), d1, d2), 1.5 * d1 - 0.5 * d2)
+            else:
+                dp, dm = (at(x + h) - f0) / h, (f0 - at(x - h)) / h
+                J[:, i] = np.where(np.abs(dp - dm) > 0.5 * (np.abs(dp) + np.abs(dm)),
+                                   np.where(np.abs(dp) < np.abs(dm), dp, dm), 0.5 * (dp + dm))
+        return J
+
+
 def fit_isolation(channels, mass: float, model: str = "linear", *, release_time: float | None = None,
                   fit_release_time: bool = True, start: dict[str, float] | None = None,
                   fixed: dict[str, float] | None = None, profile: bool | None = None,
@@ -475,45 +580,25 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
         p0[f"offset_{xch.name}"], p0["d0"] = rest, d0 - rest
     from_decay = dict(p0)  # the start of the model-free decay analysis, before the caller's start values
     p0.update(start or {})
-    physical = ["period", "damping_ratio", "friction"] + {
-        "bilinear": ["stiffness_ratio", "yield_force"],
-        "2dof": ["superstructure_period", "superstructure_damping_ratio"]}.get(model, [])
-    all_names = physical + ["d0", "release_time"] + [f"offset_{c.name}" for c in channels if c.offset]
+    physical = _physical_names(model)
+    all_names = _parameter_names(model, channels)
     unknown = sorted(set(fixed) - set(all_names))
     if unknown:
         raise ParameterError("fixed", unknown[0], ", ".join(all_names))
     names = [n for n in all_names if n not in fixed]
     values = {**p0, **fixed}
-    dt = min(float(np.median(np.diff(c.t))) for c in channels)
-    lower = {**{n: b[0] for n, b in PARAMETER_BOUNDS.items()}, "d0": -math.inf, "release_time": t_r0 - 50 * dt}
-    upper = {**{n: b[1] for n, b in PARAMETER_BOUNDS.items()}, "d0": math.inf, "release_time": t_r0 + 50 * dt}
-    t_last = max(float(c.t[-1]) for c in channels)
-    sig = np.concatenate([np.full(c.t.size, noise[c.name]) for c in channels])
-    data = np.concatenate([c.values for c in channels])
-    # the model is evaluated once at the union of the channels' times (channels often share an axis)
-    t_all, where = np.unique(np.concatenate([c.t for c in channels]), return_inverse=True)
-    where = np.split(where.ravel(), np.cumsum([c.t.size for c in channels])[:-1])
-
-    def model_vector(p: dict[str, float]) -> np.ndarray:
-        iso = _isolation(model, mass, p, superstructure_mass)
-        fv = free_vibration(iso, p["d0"], t_end=max(t_last - p["release_time"], 1e-9))
-        out = []
-        kinds = fv.channels(t_all - p["release_time"])
-        for c, at in zip(channels, where, strict=True):
-            y = kinds[c.kind][at]
-            out.append(y + p.get(f"offset_{c.name}", 0.0))
-        return np.concatenate(out)
+    lower, upper = _bounds(channels, t_r0)
+    misfit = _Misfit(channels, noise, mass, model, superstructure_mass, lower, upper)
+    sig, data = misfit.sig, misfit.data
 
     def unpack(theta, free=names, base=values) -> dict[str, float]:
-        p = dict(base)
-        p.update(zip(free, (float(v) for v in theta), strict=True))
-        return p
+        return _unpack(theta, free, base)
 
     def residuals(theta, free=names, base=values) -> np.ndarray:
-        try:
-            return (model_vector(unpack(theta, free, base)) - data) / sig
-        except ParameterError:  # outside the model's domain (e.g. held by friction at a bound): penalise
-            return np.full(data.size, 1e6)
+        return misfit.residuals(theta, free, base)
+
+    def jacobian(theta, free=names, base=values):
+        return misfit.jacobian(theta, free, base)
 
     def solve(free, base, x0, tol=1e-12):
         lo = np.array([lower.get(n, -math.inf) for n in free])
@@ -523,48 +608,6 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
         # stick, a yield) passes a sample, so a step near the rounding level would see those jumps
         return least_squares(residuals, x0, bounds=(lo, hi), args=(free, base), x_scale="jac", jac=jacobian,
                              diff_step=1e-4, xtol=tol, ftol=tol, gtol=tol, max_nfev=400 * max(len(free), 1))
-
-    # the offsets enter linearly: their columns are exact (1 / sigma on their channel's rows), and only the
-    # other parameters need the two model evaluations each of the central differences
-    rows_of, i0 = {}, 0
-    for c in channels:
-        rows_of[f"offset_{c.name}"] = slice(i0, i0 + c.t.size)
-        i0 += c.t.size
-
-    def jacobian(theta, free=names, base=values):
-        # Central differences, guarded against the jumps of the record model: where a piece boundary (a
-        # reversal, where the friction force flips and the acceleration jumps; the stick) passes a sample
-        # inside the stencil, one one-sided difference holds the jump over h and the other does not. There
-        # the smaller one is the derivative (the jump would make the sample look infinitely informative
-        # and the standard errors far too small, as the optimiser likes to park a jump on a sample).
-        theta = np.asarray(theta, dtype=float)
-        J = np.zeros((data.size, len(free)))
-        f0 = None
-        for i, n in enumerate(free):
-            if n in rows_of:
-                J[rows_of[n], i] = 1.0 / sig[rows_of[n]]
-                continue
-            if f0 is None:
-                f0 = residuals(theta, free, base)
-            x, lo, hi = theta[i], lower.get(n, -math.inf), upper.get(n, math.inf)
-            h = 1e-4 * max(1.0, abs(x))
-
-            def at(value, i=i):
-                moved = theta.copy()
-                moved[i] = value
-                return residuals(moved, free, base)
-
-            if x - h < lo or x + h > hi:  # one-sided, second order, into the feasible side
-                s_ = 1.0 if x + 2.0 * h <= hi else -1.0
-                f1, f2 = at(x + s_ * h), at(x + 2.0 * s_ * h)
-                d1, d2 = (f1 - f0) / (s_ * h), (f2 - f1) / (s_ * h)
-                J[:, i] = np.where(np.abs(d1 - d2) > 0.5 * (np.abs(d1) + np.abs(d2)),
-                                   np.where(np.abs(d1) < np.abs(d2), d1, d2), 1.5 * d1 - 0.5 * d2)
-            else:
-                dp, dm = (at(x + h) - f0) / h, (f0 - at(x - h)) / h
-                J[:, i] = np.where(np.abs(dp - dm) > 0.5 * (np.abs(dp) + np.abs(dm)),
-                                   np.where(np.abs(dp) < np.abs(dm), dp, dm), 0.5 * (dp + dm))
-        return J
 
     # The sliders' stick ends the motion at one reversal or another, so the misfit jumps where the count
     # of half-cycles changes and a local search can settle in the wrong count's basin; the friction is
@@ -724,6 +767,178 @@ def _profile_interval(name, names, est, lo_b, hi_b, se, target, solve) -> tuple[
         return brentq(lambda v: profile_chi2(v) - target, *sorted((inner, outer)), xtol=1e-3 * max(se, 1e-12))
 
     return edge(-1), edge(+1)
+
+
+@dataclass(frozen=True, eq=False)
+class IsolationPrecision:
+    """The precision a fit of :func:`fit_isolation` to a record would have: the Cramer-Rao bound at the truth
+    (SI units; :func:`predicted_isolation_errors`)."""
+
+    model: str
+    mass: float
+    names: tuple[str, ...]
+    """The fit's free parameters (its names: period, damping_ratio, friction, ..., d0, release_time,
+    offset_<channel>)."""
+    parameters: dict[str, float]
+    """The truth at which the information is evaluated, every parameter (free and fixed)."""
+    covariance: np.ndarray
+    """``(J^T W J)^-1`` [SI^2], in the order of ``names`` (inf where it exceeds the float range)."""
+    std_errors: dict[str, float]
+    """inf for a parameter that has no effect on such a record."""
+    correlation: np.ndarray
+    condition_number: float
+    units: dict[str, str]
+    warnings: tuple[str, ...] = ()
+    noise_scale: float = 1.0
+    """The largest noise level s; ``unit_covariance`` is the covariance for the noise levels over s."""
+    unit_covariance: np.ndarray | None = field(default=None, repr=False)
+
+    def physical(self) -> dict[str, dict[str, Any]]:
+        """The building's parameters with their predicted standard errors, keyed as the building's JSON:
+        ``period_s`` (bilinear: ``k1_N_m = m (2 pi / T1)^2`` and ``k2_N_m = (k2/k1) k1`` by the delta method,
+        and ``Fy_N``), ``damping_ratio``, ``friction_N``, 2dof ``superstructure_period_s`` and
+        ``superstructure_damping_ratio``, then ``d0_m``, ``release_time_s`` and ``offset_<channel>``; each
+        ``{"truth", "se", "relative_se" (None where the truth is 0 or a time on the record's clock), "unit"}``
+        (parameters held fixed are left out; ``se`` inf where not determined; :meth:`summary` gives None)."""
+        p, index = self.parameters, {n: i for i, n in enumerate(self.names)}
+
+        def row(value: float, gradient: dict[str, float], unit_name: str, relative: bool = True) -> dict[str, Any]:
+            g = np.zeros(len(self.names))
+            for name, d in gradient.items():
+                g[index[name]] = d
+            if any(math.isinf(self.std_errors[name]) for name, d in gradient.items() if d != 0):
+                se = math.inf
+            else:
+                unit = self.covariance / self.noise_scale / self.noise_scale if self.unit_covariance is None \
+                    else self.unit_covariance
+                with np.errstate(over="ignore"):
+                    se = float(self.noise_scale * math.sqrt(max(float(g @ unit @ g), 0.0)))
+            return {"truth": float(value), "se": se, "unit": unit_name,
+                    "relative_se": se / abs(value) if relative and value != 0 else None}
+
+        out: dict[str, dict[str, Any]] = {}
+        if self.model == "bilinear":
+            if "period" in index or "stiffness_ratio" in index:
+                T1, r = p["period"], p["stiffness_ratio"]
+                k1 = self.mass * (2.0 * math.pi / T1) ** 2
+                d_T = {"period": -2.0 * k1 / T1} if "period" in index else {}
+                out["k1_N_m"] = row(k1, d_T, "N/m")
+                out["k2_N_m"] = row(r * k1, {**{n: r * d for n, d in d_T.items()},
+                                             **({"stiffness_ratio": k1} if "stiffness_ratio" in index else {})}, "N/m")
+            keys = {"yield_force": "Fy_N"}
+        else:
+            keys = {"period": "period_s"}
+        keys.update(damping_ratio="damping_ratio", friction="friction_N",
+                    superstructure_period="superstructure_period_s",
+                    superstructure_damping_ratio="superstructure_damping_ratio", d0="d0_m",
+                    release_time="release_time_s")
+        for name, key in keys.items():
+            if name in index:
+                out[key] = row(p[name], {name: 1.0}, self.units[name], relative=name != "release_time")
+        for name in self.names:
+            if name.startswith("offset_"):
+                out[name] = row(p[name], {name: 1.0}, self.units[name])
+        return out
+
+    def summary(self) -> dict[str, Any]:
+        corr = {f"{a}:{b}": float(self.correlation[i, j]) for i, a in enumerate(self.names)
+                for j, b in enumerate(self.names) if j > i}
+        return {"method": "Cramer-Rao bound: (J^T W J)^-1 at the truth, W = 1 / noise^2",
+                "model": self.model,
+                "parameters": {k: {kk: _finite(vv) if isinstance(vv, float) else vv for kk, vv in row.items()}
+                               for k, row in self.physical().items()},
+                "std_errors": {n: _finite(v) for n, v in self.std_errors.items()},
+                "correlation": corr, "condition_number": _finite(self.condition_number),
+                "warnings": list(self.warnings)}
+
+
+def _finite(value: float) -> float | None:
+    """A float for JSON: None where it is not finite (a standard error beyond the float range, or infinite)."""
+    return float(value) if math.isfinite(value) else None
+
+
+def predicted_isolation_errors(channels, mass: float, model: str, parameters: dict[str, float], *,
+                               superstructure_mass: float | None = None,
+                               fixed: tuple[str, ...] | list[str] = ()) -> IsolationPrecision:
+    """The standard errors a fit of ``model`` (:func:`fit_isolation`, noise levels given) to records on these
+    channels would have, at the true ``parameters``: the Cramer-Rao bound.
+
+    The Fisher information of the weighted least-squares problem with Gaussian noise of known standard
+    deviations sigma_i is ``I = J^T W J``, with J the derivatives of the channel models (the fit's own model
+    and its guarded central differences, :class:`_Misfit`) with respect to the free parameters and
+    ``W = diag(1 / sigma_i^2)``; the covariance is ``I^-1`` (:func:`quickrelease._lsq.jacobian_covariance`).
+    Only the channels' sample times, noise levels and offset flags enter, not their values.
+
+    Parameters
+    ----------
+    channels : sequence of BuildingChannel
+        The record's channels, each with its ``noise`` given [SI].
+    mass : float
+        Mass on the isolators [kg].
+    model : {"linear", "bilinear", "2dof"}
+    parameters : dict
+        The truth, in the fit's parameter names [SI]: period, damping_ratio, friction (bilinear also
+        stiffness_ratio, yield_force; 2dof superstructure_period, superstructure_damping_ratio), d0,
+        release_time [s, record time], and offset_<channel> (default 0; they enter linearly).
+    superstructure_mass : float, optional
+        2dof: the roof mass [kg].
+    fixed : sequence of str
+        Parameters the fit would hold fixed (not estimated).
+    """
+    channels = list(channels)
+    if not channels:
+        raise ParameterError("channels", "none", "at least one channel of the isolation layer")
+    if model not in FIT_MODELS:
+        raise ParameterError("model", model, "'linear', 'bilinear' or '2dof'")
+    for ch in channels:
+        if ch.noise is None:
+            raise ParameterError(f"{ch.name}.noise", None, "given (the noise weights the information)",
+                                 CHANNEL_KINDS[ch.kind])
+    all_names = _parameter_names(model, channels)
+    values = {n: 0.0 for n in all_names if n.startswith("offset_")}
+    values.update({n: float(v) for n, v in parameters.items() if n in all_names})
+    missing = [n for n in all_names if n not in values]
+    if missing:
+        raise ParameterError("parameters", missing[0], ", ".join(all_names))
+    unknown = sorted(set(fixed) - set(all_names))
+    if unknown:
+        raise ParameterError("fixed", unknown[0], ", ".join(all_names))
+    names = [n for n in all_names if n not in fixed]
+    lower, upper = _bounds(channels, values["release_time"])
+    # the noise levels relative to the largest, s: J (and so the information) stays in the float range for
+    # noise levels of any size, and the covariance is s^2 times that of the relative levels
+    s = max(float(c.noise) for c in channels)
+    misfit = _Misfit(channels, {c.name: float(c.noise) / s for c in channels}, float(mass), model,
+                     superstructure_mass, lower, upper)
+    J = misfit.jacobian(np.array([values[n] for n in names]), names, values)  # weighted: rows / (sigma_i / s)
+    if not np.all(np.isfinite(J)):
+        levels = ", ".join(f"{c.name} = {c.noise:.3g} {CHANNEL_KINDS[c.kind]}" for c in channels)
+        raise ParameterError("noise", levels, "levels whose ratios keep the information J^T W J in the float range")
+    unseen = [n for n, norm in zip(names, np.linalg.norm(J, axis=0), strict=True) if norm == 0.0]
+    unit_cov = jacobian_covariance(J)
+    with np.errstate(over="ignore"):
+        cov = (unit_cov * s) * s
+        se = s * np.sqrt(np.clip(np.diag(unit_cov), 0.0, None))
+    for n in unseen:  # no information at all: not determined (the pseudo-inverse would say 0)
+        se[names.index(n)] = math.inf
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = unit_cov / np.outer(np.sqrt(np.diag(unit_cov)), np.sqrt(np.diag(unit_cov)))
+    corr = np.where(np.isfinite(corr), corr, 0.0)
+    cond = float(np.linalg.cond(corr))
+    warnings = [f"{n} has no effect on such a record: it is not determined" for n in unseen]
+    if cond > CONDITION_WARNING:
+        warnings.append(f"ill-conditioned (condition number of the correlations {cond:.2g}): some combination of "
+                        "parameters is not determined by such a record")
+    for n, s_ in zip(names, se, strict=True):
+        if (n in _physical_names(model) and n not in unseen and values[n] != 0
+                and s_ / abs(values[n]) > PROFILE_RELATIVE_SE):
+            warnings.append(f"{n} would be poorly determined (standard error {100 * s_ / abs(values[n]):.3g}% of the "
+                            "truth)")
+    units = {n: _UNITS.get(n, CHANNEL_KINDS.get(_offset_kind(n, channels), "")) for n in names}
+    return IsolationPrecision(model=model, mass=float(mass), names=tuple(names), parameters=values, covariance=cov,
+                              std_errors={n: float(v) for n, v in zip(names, se, strict=True)}, correlation=corr,
+                              condition_number=cond, units=units, warnings=tuple(warnings), noise_scale=s,
+                              unit_covariance=unit_cov)
 
 
 def compare_models(fits) -> list[dict[str, Any]]:

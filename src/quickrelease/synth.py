@@ -6,6 +6,8 @@ release instant to well after the stop, and adds what real records have: a const
 Gaussian noise, optionally jitter of the sampling instants (uneven sampling) and missing samples.
 :func:`predicted_errors` answers the planning question directly: the standard errors of F1 and F2 a fit
 to such a record would have (the Cramer-Rao bound: the fit's covariance at the truth, noise-free).
+:func:`synthesize_building` makes the building's record, and :func:`predicted_building_errors` the precision
+of the building's fit (the Cramer-Rao bound at the truth from the fit's own model and Jacobian).
 """
 
 from __future__ import annotations
@@ -13,11 +15,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
 from ._validate import BYTES_PER_SAMPLE, check_seed, check_size
+from .building import RECORD_CHANNELS
 from .case import Case, FitOptions
 from .errors import ParameterError, QuickReleaseError
 from .identify import case_friction
@@ -25,7 +28,8 @@ from .records import CHANNELS, DISPLACEMENT_CHANNELS, Channel, ChannelSpec, Reco
 from .solvers import FirstIntegral
 
 __all__ = ["DEFAULT_NOISE", "SyntheticRecord", "synthesize", "predicted_errors", "parse_channel_values", "case_toml",
-           "BUILDING_NOISE", "SyntheticBuildingRecord", "synthesize_building", "building_case_toml"]
+           "BUILDING_NOISE", "SyntheticBuildingRecord", "synthesize_building", "building_case_toml",
+           "predicted_building_errors"]
 
 #: Default noise standard deviations [SI]: video angle, gyroscope, draw-wire or LVDT displacements,
 #: velocity transducers, accelerometers (about 5 mg).
@@ -43,8 +47,9 @@ def _column(name: str, channels: dict[str, tuple[str, str, str]] = CHANNELS) -> 
 
 
 @dataclass(frozen=True, eq=False)
-class SyntheticRecord:
-    """A synthetic record and the truth behind it (SI units)."""
+class _Synthetic:
+    """What the device's and the building's synthetic records share: the samples, the truth, how they were
+    made, and the record as written (a CSV table and the case-file table that reads it)."""
 
     t: np.ndarray
     """Sample times from the start of the record [s]."""
@@ -52,8 +57,7 @@ class SyntheticRecord:
     """Channel -> recorded values (offset and noise added; NaN where a sample is missing)."""
     clean: dict[str, np.ndarray]
     """Channel -> model values without offset and noise."""
-    truth: dict[str, float]
-    """F1, F2 [N], energy [J], mass_factor, alpha0, release_time, stop_time [s], alpha_final [rad]."""
+    truth: dict[str, Any]
     noise: dict[str, float]
     offsets: dict[str, float]
     rate: float
@@ -61,9 +65,14 @@ class SyntheticRecord:
     seed: int
     notes: list[str] = field(default_factory=list)
 
+    #: Channel name -> (quantity kind, SI unit, description) of the record's channels.
+    _CHANNELS: ClassVar[dict[str, tuple[str, str, str]]] = CHANNELS
+    #: The case file's table that reads the record.
+    _SECTION: ClassVar[str] = "record"
+
     def columns(self) -> dict[str, np.ndarray]:
         """The table as written: ``t_s`` and one column per channel, SI units in the names."""
-        return {"t_s": self.t, **{_column(n): v for n, v in self.data.items()}}
+        return {"t_s": self.t, **{_column(n, self._CHANNELS): v for n, v in self.data.items()}}
 
     def to_pandas(self):
         import pandas as pd
@@ -75,18 +84,29 @@ class SyntheticRecord:
         return _write_csv(self.columns(), path)
 
     def record_table(self, file: str) -> str:
-        """The ``[record]`` table of a case file that reads this record (to paste into a case file)."""
-        lines = ["[record]", f"file = {_toml_value(file)}", 'time = "t_s"', "", "[record.channels]"]
+        """The ``[record]`` (device) or ``[building.record]`` (building) table of a case file that reads this
+        record (to paste into a case file)."""
+        sec, channels = self._SECTION, self._CHANNELS
+        lines = [f"[{sec}]", f"file = {_toml_value(file)}", 'time = "t_s"', "", f"[{sec}.channels]"]
         for name in self.data:
-            lines.append(f'{name} = {{ column = "{_column(name)}", unit = "{CHANNELS[name][1]}" }}')
+            lines.append(f'{name} = {{ column = "{_column(name, channels)}", unit = "{channels[name][1]}" }}')
         return "\n".join(lines) + "\n"
+
+
+@dataclass(frozen=True, eq=False)
+class SyntheticRecord(_Synthetic):
+    """A synthetic record of the device's release and the truth behind it (SI units)."""
+
+    truth: dict[str, float]
+    """F1, F2 [N], energy [J], mass_factor, alpha0, release_time, stop_time [s], alpha_final [rad]."""
 
     def record(self, *, noise_free: bool = False) -> Record:
         """The record as :func:`quickrelease.fit.fit_record` takes it (noise levels given, offsets estimated
-        on displacement channels)."""
+        on displacement channels), missing samples left out (noise-free: the model values on the samples the
+        record has)."""
         channels = {}
         for name, values in (self.clean if noise_free else self.data).items():
-            ok = np.nonzero(np.isfinite(values))[0]
+            ok = np.nonzero(np.isfinite(self.data[name]))[0]
             spec = ChannelSpec(name=name, column=_column(name), unit=CHANNELS[name][1], factor=1.0,
                                noise=self.noise[name], offset=name in DISPLACEMENT_CHANNELS)
             channels[name] = Channel(spec=spec, t=self.t[ok], values=values[ok], index=ok,
@@ -274,67 +294,73 @@ def case_toml(case: Case, record_table: str, title: str) -> str:
 
 # -- the building ----------------------------------------------------------------------------------------------
 
-#: Default noise standard deviations of the building's channels [SI]: an LVDT or draw-wire on the isolation
-#: layer (0.05 mm), a velocity transducer (1 mm/s), an accelerometer (2 mg).
-BUILDING_NOISE = {"x": 0.05e-3, "v": 1e-3, "a": 0.002 * 9.80665, "x_roof": 0.05e-3, "v_roof": 1e-3,
-                  "a_roof": 0.002 * 9.80665}
-
-
-def _building_column(name: str) -> str:
-    from .building_case import BUILDING_CHANNELS
-
-    return _column(name, BUILDING_CHANNELS)
+#: Default noise standard deviation per quantity kind of the building's channels [SI]: an LVDT or draw-wire
+#: (0.05 mm), a velocity transducer (1 mm/s), an accelerometer (2 mg).
+BUILDING_NOISE_BY_KIND = {"length": 0.05e-3, "velocity": 1e-3, "acceleration": 0.002 * 9.80665}
+#: Default noise standard deviations of the building's channels [SI] (on the isolation layer and at the roof),
+#: by the kind of each channel of :data:`quickrelease.building.RECORD_CHANNELS`.
+BUILDING_NOISE = {name: BUILDING_NOISE_BY_KIND[kind] for name, (kind, _, _) in RECORD_CHANNELS.items()}
 
 
 @dataclass(frozen=True, eq=False)
-class SyntheticBuildingRecord:
+class SyntheticBuildingRecord(_Synthetic):
     """A synthetic record of the building's free vibration and the truth behind it (SI units)."""
 
-    t: np.ndarray
-    """Sample times from the start of the record [s]."""
-    data: dict[str, np.ndarray]
-    """Channel -> recorded values (offset and noise added; NaN where a sample is missing)."""
-    clean: dict[str, np.ndarray]
-    """Channel -> model values without offset and noise."""
     truth: dict[str, Any]
     """The building (model, mass_kg, period_s, damping_ratio, friction_N; bilinear k1_N_m, k2_N_m, Fy_N; 2dof
     superstructure_mass_kg, superstructure_period_s, superstructure_damping_ratio),
     d0_m, release_time_s and stop_time_s (after the release; None: still moving at the end of the record)."""
-    noise: dict[str, float]
-    offsets: dict[str, float]
-    rate: float
-    """Sampling rate [Hz]."""
-    seed: int
-    notes: list[str] = field(default_factory=list)
 
-    def columns(self) -> dict[str, np.ndarray]:
-        """The table as written: ``t_s`` and one column per channel, SI units in the names."""
-        return {"t_s": self.t, **{_building_column(n): v for n, v in self.data.items()}}
-
-    def write_csv(self, path: str | Path) -> Path:
-        """Write the record as CSV (atomically); missing samples are empty fields."""
-        return _write_csv(self.columns(), path)
-
-    def record_table(self, file: str) -> str:
-        """The ``[building.record]`` table of a case file that reads this record."""
-        from .building_case import BUILDING_CHANNELS
-
-        lines = ["[building.record]", f"file = {_toml_value(file)}", 'time = "t_s"', "", "[building.record.channels]"]
-        for name in self.data:
-            lines.append(f'{name} = {{ column = "{_building_column(name)}", unit = "{BUILDING_CHANNELS[name][1]}" }}')
-        return "\n".join(lines) + "\n"
+    _CHANNELS: ClassVar[dict[str, tuple[str, str, str]]] = RECORD_CHANNELS
+    _SECTION: ClassVar[str] = "building.record"
 
     def building_channels(self, *, noise_free: bool = False) -> list:
         """The record as :func:`quickrelease.isolation_fit.fit_isolation` takes it (noise levels given, an
-        offset on every channel), missing samples left out."""
+        offset on every channel), missing samples left out (noise-free: the model values on the samples the
+        record has)."""
         from .isolation_fit import BuildingChannel
 
         out = []
         for name, values in (self.clean if noise_free else self.data).items():
-            ok = np.isfinite(values)
+            ok = np.isfinite(self.data[name])
             out.append(BuildingChannel(name=name, kind=name, t=self.t[ok], values=values[ok], noise=self.noise[name],
                                        offset=True))
         return out
+
+    def fit_parameters(self) -> dict[str, float]:
+        """The truth in :func:`quickrelease.isolation_fit.fit_isolation`'s parameter names (SI): period
+        (bilinear: the initial period 2 pi sqrt(m / k1)), damping_ratio, friction, bilinear stiffness_ratio =
+        k2 / k1 and yield_force, 2dof superstructure_period and superstructure_damping_ratio, d0, release_time
+        and offset_<channel>."""
+        t = self.truth
+        p = {"period": t["period_s"], "damping_ratio": t["damping_ratio"], "friction": t["friction_N"]}
+        if t["model"] == "bilinear":
+            p.update(stiffness_ratio=t["k2_N_m"] / t["k1_N_m"], yield_force=t["Fy_N"])
+        if t["model"] == "2dof":
+            p.update(superstructure_period=t["superstructure_period_s"],
+                     superstructure_damping_ratio=t["superstructure_damping_ratio"])
+        p.update(d0=t["d0_m"], release_time=t["release_time_s"])
+        p.update({f"offset_{name}": value for name, value in self.offsets.items()})
+        return {k: float(v) for k, v in p.items()}
+
+
+def predicted_building_errors(synthetic: SyntheticBuildingRecord):
+    """Standard errors a fit to such a record of the building would have: the Cramer-Rao bound at the truth.
+
+    :func:`quickrelease.isolation_fit.predicted_isolation_errors` on the record's channels (its sample times,
+    missing samples left out, and its noise levels as the known weights, an offset on every channel) at the
+    true parameters of the synthetic record's model: ``(J^T W J)^-1`` with W = 1 / noise^2.
+
+    Returns
+    -------
+    quickrelease.isolation_fit.IsolationPrecision
+    """
+    from .isolation_fit import predicted_isolation_errors
+
+    t = synthetic.truth
+    return predicted_isolation_errors(synthetic.building_channels(noise_free=True), t["mass_kg"], t["model"],
+                                      synthetic.fit_parameters(),
+                                      superstructure_mass=t.get("superstructure_mass_kg"))
 
 
 def building_pushed_displacement(case: Case) -> float:
