@@ -119,10 +119,11 @@ def reference_2dof(m, ms, k, c, ks, cs, Fs, d0, t_out):
         sol = solve_ivp(rhs, (t, t_end), y, method="DOP853", rtol=1e-13, atol=1e-16 * abs(d0), events=events,
                         dense_output=True)
         seg = (t_out >= t) & (t_out <= sol.t[-1])
-        q = sol.sol(t_out[seg])
-        acc = rhs(0.0, q)  # the right-hand sides are written elementwise: they take the rows of samples too
-        for n, row in zip(names, (q[0], q[1], q[2], q[3], acc[2], acc[3], q[4], q[5]), strict=True):
-            out[n][seg] = row
+        if seg.any():  # a piece shorter than a sampling interval (a stiff storey's stick) holds no sample
+            q = sol.sol(t_out[seg])
+            acc = rhs(0.0, q)  # the right-hand sides are written elementwise: they take the rows of samples too
+            for n, row in zip(names, (q[0], q[1], q[2], q[3], acc[2], acc[3], q[4], q[5]), strict=True):
+                out[n][seg] = row
         t, y = sol.t[-1], sol.y[:, -1].copy()
         if sol.status != 1:
             break
