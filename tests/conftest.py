@@ -5,6 +5,18 @@ import pytest
 from quickrelease import preset
 
 
+@pytest.fixture(autouse=True)
+def _matplotlib_settings_unchanged():
+    """Every test: the package's figure functions draw in their own style and leave the user's matplotlib
+    settings (rcParams) exactly as they found them (issue 11)."""
+    import matplotlib
+
+    before = dict(matplotlib.rcParams)
+    yield
+    changed = sorted(k for k, v in matplotlib.rcParams.items() if before.get(k) != v)
+    assert not changed, f"rcParams changed: {changed}"
+
+
 @pytest.fixture(scope="session")
 def paper_device():
     return preset("paper")

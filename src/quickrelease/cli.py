@@ -12,7 +12,7 @@ import sys
 from collections.abc import Callable
 from functools import wraps
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 import typer
 from typer.core import TyperGroup
@@ -66,17 +66,36 @@ class _OneLineErrors(TyperGroup):
 
 app = typer.Typer(
     cls=_OneLineErrors,
-    add_completion=False,
     no_args_is_help=True,
     pretty_exceptions_enable=False,
+    # "markdown", not Typer's default "rich": Rich markup would swallow the case file's table names
+    # ([observations], [record], [[tests]]) in every help text.
+    rich_markup_mode="markdown",
+    context_settings={"help_option_names": ["-h", "--help"]},
     help="Dynamics of the pushing and quick-release device: simulate a release, identify friction.",
 )
+
+
+def _version_callback(value: bool) -> None:
+    if value:
+        from . import __version__
+
+        typer.echo(f"quickrelease {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _main_options(
+    version: Annotated[bool, typer.Option("--version", callback=_version_callback, is_eager=True,
+                                          help="Print the version and exit.")] = False,
+) -> None:
+    """Dynamics of the pushing and quick-release device: simulate a release, identify friction."""
 
 DeviceOpt = Annotated[Path | None, typer.Option("--device", help="Device TOML file (Table 2 keys); default: the paper's device.")]
 ForceOpt = Annotated[str | None, typer.Option("--force", "-P", help="Push force P at release, e.g. '1598 kN' (SI number: N).")]
 EnergyOpt = Annotated[str | None, typer.Option("--energy", help="Stored strain energy E_S, e.g. '2.90 kJ' (SI number: J).")]
 Alpha0Opt = Annotated[str | None, typer.Option("--alpha0", help="Angle of the bars with the loading axis at release, e.g. '0.2' or '11.46 deg'.")]
-MassOpt = Annotated[str | None, typer.Option("--mass-model", help="distributed (c = 2/3, default), lumped (c = 1) or a number c.")]
+MassOpt = Annotated[str | None, typer.Option("--mass-model", metavar="<distributed|lumped|C>", help="distributed (c = 2/3, default), lumped (c = 1) or a number c.")]
 JsonOpt = Annotated[bool, typer.Option("--json", help="Print one JSON object instead of a table.")]
 
 
@@ -134,7 +153,7 @@ def _table(title: str, rows: list[tuple[str, ...]], headers: tuple[str, ...]) ->
         table.add_column(escape(_clean(h)))
     for row in rows:
         table.add_row(*(escape(_clean(str(cell))) for cell in row))
-    Console(width=140).print(table)
+    Console().print(table)  # the terminal's width (80 columns when not a terminal)
 
 
 def _fmt(value: Any) -> str:
@@ -195,10 +214,10 @@ def simulate(
     force: ForceOpt = None,
     energy: EnergyOpt = None,
     alpha0: Alpha0Opt = None,
-    f1: Annotated[str | None, typer.Option("--f1", help="Friction at the central hinges F1, e.g. '420 N' (default 0).")] = None,
-    f2: Annotated[str | None, typer.Option("--f2", help="Friction at the rail supports F2, e.g. '0.8 kN' (default 0).")] = None,
+    f1: Annotated[str | None, typer.Option("--f1", help="Friction at the central hinges F1, e.g. '420 N' (default 0, noted on stderr).")] = None,
+    f2: Annotated[str | None, typer.Option("--f2", help="Friction at the rail supports F2, e.g. '0.8 kN' (default 0, noted on stderr).")] = None,
     mass_model: MassOpt = None,
-    method: Annotated[str | None, typer.Option("--method", help="energy (default), rk or explicit.")] = None,
+    method: Annotated[Literal["energy", "rk", "explicit"] | None, typer.Option("--method", help="Solver: the energy first integral (default), Runge-Kutta, or the paper's explicit scheme (Table 6).")] = None,
     dt: Annotated[str | None, typer.Option("--dt", help="Time step of the explicit method, e.g. '1e-4 s'.")] = None,
     as_json: JsonOpt = False,
 ) -> None:
@@ -222,6 +241,10 @@ def simulate(
     response = run(case.stored_energy, case.alpha0, case.F1 or 0.0, case.F2 or 0.0, device=case.device,
                    mass_model=case.mass_model, method=case.method, dt=case.dt, n_points=case.n_points,
                    rk_method=case.rk_method)
+    if case_file is None:  # no case file: a friction left out is zero, and the user is told so
+        for flag, given, name in (("--f1", f1, "F1"), ("--f2", f2, "F2")):
+            if given is None:
+                _echo(f"note: {flag} not given: {name} = 0 N (frictionless)", err=True)
     summary = {"push_force_N": case.push_force, **response.summary(), "device": case.device.name}
     if as_json:
         _print_json(summary)
@@ -230,7 +253,9 @@ def simulate(
 
     words = {"stopped_by": f"{response.stopped_by}: {STOP_REASONS[response.stopped_by]}",
              "stop_time_s": "inf (never arrives)"} if response.stopped_by == "creeps_to_limit" else {}
-    _table("Release", [(k, words.get(k, _fmt(v))) for k, v in summary.items()], ("quantity", "value"))
+    from .display import label, value_text
+
+    _table("Release", [(label(k), words.get(k, value_text(k, v))) for k, v in summary.items()], ("quantity", "value"))
 
 
 @app.command()
@@ -262,7 +287,9 @@ def identify(
     if as_json:
         _print_json(summary)
         return
-    _table("Identified friction (Eq. 11-13)", [(k, _fmt(v)) for k, v in summary.items()], ("quantity", "value"))
+    from .display import quantity_rows
+
+    _table("Identified friction (Eq. 11-13)", quantity_rows(summary), ("quantity", "value"))
 
 
 OutOpt = Annotated[Path, typer.Option("--out", "-o", help="Output folder (created if needed).")]
@@ -296,10 +323,13 @@ def run_command(
         _print_json({"release": result.summary(), "identification": result.identification_summary(), **extra,
                      "files": {k: str(v) for k, v in paths.items()}})
         return
-    rows = [(k, _fmt(v)) for k, v in result.summary().items()]
+    from .display import label, quantity_rows, value_text
+
+    rows = quantity_rows(result.summary())
     if result.identification is not None:
         i = result.identification
-        rows = [("F1_N (identified)", _fmt(i.F1)), ("F2_N (identified)", _fmt(i.F2))] + rows
+        rows = [(f"{label('F1_N')} (identified)", value_text("F1_N", i.F1)),
+                (f"{label('F2_N')} (identified)", value_text("F2_N", i.F2))] + rows
     _table(result.case.title, rows, ("quantity", "value"))
     if result.building is not None:
         _building_tables(result.building, result.building.summary(), f"{result.case.title}: the building")
@@ -335,6 +365,7 @@ def report(
 def demo(
     out: OutOpt = Path("quickrelease-demo"),
     overwrite: OverwriteOpt = False,
+    as_json: JsonOpt = False,
 ) -> None:
     """The paper's test: E_S from Eq. 2 at P = 1598 kN, alpha0 = 0.2 rad; Table 7 identified; paper vs us.
 
@@ -355,6 +386,11 @@ def demo(
     results_folder(case, out, overwrite=overwrite)  # pre-flight
     dev = preset("paper")
     cmp = reproduce_table7(dev, mass_model=mass_model)
+    if as_json:
+        paths = write_results(run_case(case), out, overwrite=overwrite)
+        _print_json({"device": dev.name, "mass_model": mass_model, **cmp.summary(), "out": str(out),
+                     "files": sorted(str(p) for p in paths.values())})
+        return
     _echo(f"Device: {dev.name} (Table 2); mass model: {mass_model}")
     terms = [(k, f"{v:.2f}") for k, v in cmp.E_S_breakdown.items()]
     terms.append(("total E_S", f"{cmp.E_S_eq2:.2f}"))
@@ -376,7 +412,7 @@ def uq(
     samples: Annotated[int, typer.Option("--samples", "-n", help="Monte Carlo samples.")] = 100_000,
     seed: Annotated[int, typer.Option("--seed", help="Seed (results depend on seed and chunk size only).")] = 0,
     chunk: Annotated[int, typer.Option("--chunk", help="Samples per chunk (bounds memory).")] = 1_000_000,
-    backend: Annotated[str, typer.Option("--backend", help="numpy (default) or dask.")] = "numpy",
+    backend: Annotated[Literal["numpy", "dask"], typer.Option("--backend", help="Where the samples are computed: this process, or a Dask cluster.")] = "numpy",
     scheduler: Annotated[str | None, typer.Option("--scheduler", help="Dask scheduler address; default: a LocalCluster.")] = None,
     workers: Annotated[int, typer.Option("--workers", help="Workers of the LocalCluster.")] = 2,
     out: Annotated[Path | None, typer.Option("--out", "-o", help="Folder for chunks, uq.json and the corner figure.")] = None,
@@ -415,7 +451,7 @@ def sweep_command(
     case_file: Annotated[Path, typer.Argument(help="Case file: the inputs not swept, and the device.")],
     grid: Annotated[list[str], typer.Option("--grid", "-g", help="NAME=start:stop:count (with units), e.g. 'force=500 kN:3000 kN:26'; repeat for more dimensions.")],
     out: Annotated[Path, typer.Option("--out", "-o", help="Output .nc (NetCDF) or .zarr; heat maps beside it.")] = Path("sweep.nc"),
-    backend: Annotated[str, typer.Option("--backend", help="numpy (default) or dask (needs --out *.zarr).")] = "numpy",
+    backend: Annotated[Literal["numpy", "dask"], typer.Option("--backend", help="Where the grid is computed: this process, or a Dask cluster (needs --out *.zarr).")] = "numpy",
     scheduler: Annotated[str | None, typer.Option("--scheduler", help="Dask scheduler address; default: a LocalCluster.")] = None,
     workers: Annotated[int, typer.Option("--workers", help="Workers of the LocalCluster.")] = 2,
     resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted dask sweep in --out (same inputs only).")] = False,
@@ -445,8 +481,10 @@ def sweep_command(
     if as_json:
         _print_json(summary)
         return
+    from .display import quantity_rows
+
     _table(f"Sweep over {' x '.join(f'{k} ({v})' for k, v in summary['dims'].items())}",
-           [(k, _fmt(v)) for k, v in summary.items() if k not in ("dims",)], ("quantity", "value (min, max)"))
+           quantity_rows(summary, skip=("dims",)), ("quantity", "value (min, max)"))
 
 
 @app.command()
@@ -626,7 +664,7 @@ def fit_command(
 @_guard
 def building_command(
     case_file: Annotated[Path, typer.Argument(help="Case file with [building] and [building.record].")],
-    model: Annotated[str | None, typer.Option("--model", help="linear, bilinear or 2dof (default: the case's [building] model).")] = None,
+    model: Annotated[Literal["linear", "bilinear", "2dof"] | None, typer.Option("--model", help="Isolation model (default: the case's [building] model).")] = None,
     compare: Annotated[bool, typer.Option("--compare", help="Also fit the other models; rank them by AIC/BIC and residual whiteness.")] = False,
     out: Annotated[Path | None, typer.Option("--out", "-o", help="Also write summary.json, the figures and report.html here.")] = None,
     overwrite: OverwriteOpt = False,
@@ -859,7 +897,9 @@ def bench(
     if as_json:
         _print_json(result)
         return
-    _table("quickrelease bench", [(k, _fmt(v)) for k, v in result.items()], ("quantity", "value"))
+    from .display import quantity_rows
+
+    _table("quickrelease bench", quantity_rows(result), ("quantity", "value"))
 
 
 def main() -> None:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from functools import lru_cache
 from importlib import resources
 from typing import Any
@@ -143,6 +143,19 @@ class PaperComparison:
         if c0 <= t.value <= c1:
             return f"{lumped}; feasible with c = {self.mass_factor:.4g} ([{c0:.4f}, {c1:.4f}] s)"
         return f"{lumped}; infeasible with c = {self.mass_factor:.4g} too"
+
+    def summary(self) -> dict[str, Any]:
+        """Every computed value (SI; intervals as two-element lists), the printed Table 7 values as
+        ``printed_<name>`` (SI) and the side-by-side ``table7`` rows: what ``quickrelease demo --json`` prints."""
+        out: dict[str, Any] = {f"printed_{k}": v.value for k, v in self.printed.items()}
+        for f in fields(self):
+            if f.name == "printed":
+                continue
+            value = getattr(self, f.name)
+            out[f.name] = list(value) if isinstance(value, tuple) else value
+        out["table7"] = [dict(zip(("quantity", "paper", "quickrelease", "note"), row, strict=True))
+                         for row in self.rows()]
+        return out
 
     def rows(self) -> list[tuple[str, str, str, str]]:
         """(quantity, paper, ours, note) rows for a side-by-side table."""

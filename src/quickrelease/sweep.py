@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from . import batch
+from ._style import styled
 from ._validate import check_size, check_workers
 from .case import Case
 from .errors import ParameterError, QuickReleaseError
@@ -151,6 +152,22 @@ def _dataset(case: Case, grids: dict[str, np.ndarray], data: dict[str, np.ndarra
     return xr.Dataset(variables, coords=coords, attrs=attrs)
 
 
+def _check_optional(out: str | Path | None, backend: str) -> None:
+    """The optional packages the output and the backend need, checked before any work (one line, no traceback
+    after minutes of computing)."""
+    from importlib.util import find_spec
+
+    needs = []
+    if out is not None and Path(out).suffix == ".zarr":
+        needs.append("zarr")
+    if backend == "dask":
+        needs += ["dask", "distributed"]
+    missing = [name for name in needs if find_spec(name) is None]
+    if missing:
+        raise QuickReleaseError(f"{'the dask backend' if backend == 'dask' else f'--out {out}'} needs "
+                                f"{', '.join(missing)}: pip install 'quickrelease[dask]'")
+
+
 def sweep(case: Case, grids: dict[str, np.ndarray], *, backend: str = "numpy", out: str | Path | None = None,
           scheduler: str | None = None, workers: int = 2, block_rows: int | None = None, resume: bool = False,
           overwrite: bool = False, log: Any = None):
@@ -186,6 +203,7 @@ def sweep(case: Case, grids: dict[str, np.ndarray], *, backend: str = "numpy", o
         raise ParameterError("out", str(out), "a path ending in .nc (NetCDF) or .zarr (Zarr)")
     if resume and backend != "dask":
         raise ParameterError("resume", True, "the dask backend (a numpy sweep is written whole or not at all)")
+    _check_optional(out, backend)
     check_workers("workers", workers)
     points = math.prod(g.size for g in grids.values())
     if backend == "numpy":  # the whole grid is in memory (the dask backend streams blocks to disk)
@@ -302,14 +320,15 @@ _TITLES = {"stop_time": "stop time $t_F$", "alpha_final": r"final angle $\alpha_
            "v_final": "hinge opening $v_F$", "peak_u_dot": "peak head velocity", "peak_v_dot": "peak hinge velocity"}
 
 
-def heatmap_figure(ds) -> Any:
+@styled
+def heatmap_figure(ds, fig=None) -> Any:
     """Heat maps of t_F, alpha_F, u_F, v_F and the peak velocities over the first two grid dimensions
     (other dimensions at their first value); line plots for a one-dimensional sweep."""
     from .plots import _figure
 
     names = list(ds.dims)
     keys = ["stop_time", "alpha_final", "u_final", "v_final", "peak_u_dot", "peak_v_dot"]
-    fig = _figure(9.0, 5.6, left=0.08, right=0.97, bottom=0.1, top=0.9, wspace=0.45, hspace=0.45)
+    fig = _figure(9.0, 5.6, fig=fig, left=0.08, right=0.97, bottom=0.1, top=0.9, wspace=0.45, hspace=0.45)
     axes = fig.subplots(2, 3)
     sel = {n: 0 for n in names[2:]}
     for ax, key in zip(axes.flat, keys, strict=True):

@@ -206,8 +206,13 @@ def render_figures(result: CaseResult) -> dict[str, Any]:
 
 
 def _svg_text(fig: Any) -> str:
+    import matplotlib
+
+    from ._style import STYLE
+
     buf = io.StringIO()
-    fig.savefig(buf, format="svg", metadata={"Date": None})
+    with matplotlib.rc_context(STYLE):  # the svg settings (text as text, stable ids) are read at save time
+        fig.savefig(buf, format="svg", metadata={"Date": None})
     return buf.getvalue()
 
 
@@ -281,8 +286,12 @@ def _write_results_into(result: CaseResult, out: Path, *, figures: bool, report:
         pngs = {stem: out / "figures" / f"{stem}.png" for stem in figs} if figures else {}
 
         def write_pngs() -> None:
+            import matplotlib
+
+            from ._style import STYLE
+
             for stem, path in pngs.items():
-                with atomic_path(path) as tmp:
+                with atomic_path(path) as tmp, matplotlib.rc_context(STYLE):
                     figs[stem].savefig(tmp, format="png", dpi=150)
 
         child = _start_in_child(write_pngs) if pngs else None
