@@ -215,7 +215,8 @@ def test_lumped_is_slower_than_distributed():
 
 def test_to_pandas_columns(solutions):
     df = solutions["energy"].to_pandas()
-    assert list(df.columns)[:4] == ["t_s", "alpha_rad", "alpha_dot_rad_s", "alpha_ddot_rad_s2"]
+    assert df.index.name == "t_s" and np.array_equal(df.index.to_numpy(), solutions["energy"].t)
+    assert list(df.columns)[:3] == ["alpha_rad", "alpha_dot_rad_s", "alpha_ddot_rad_s2"]
     assert len(df) == 1001
     assert df["E_K_J"].iloc[0] == pytest.approx(2900.0, rel=1e-14)
 
