@@ -46,6 +46,7 @@ import numpy as np
 from ._style import styled
 from .case import Case, CaseFileError, case_from_mapping, load_case
 from .device import read_toml
+from .display import Summarised
 from .errors import QuickReleaseError
 from .fit import FitResult, fit_record, observation_sigma
 
@@ -283,8 +284,8 @@ def fit_joint(tests: list[CampaignTest], friction: str, variables: tuple[str, ..
                     chi2_reduced=red, weighted=se is not None)
 
 
-@dataclass(frozen=True, eq=False)
-class CampaignResult:
+@dataclass(frozen=True, eq=False, repr=False)
+class CampaignResult(Summarised):
     """Friction per test and the laws fitted over the campaign."""
 
     title: str

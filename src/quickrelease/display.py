@@ -120,3 +120,46 @@ def quantity_rows(summary: Mapping[str, Any], skip: Iterable[str] = ()) -> list[
     """(name, value with unit) rows of a summary dictionary for a two-column table."""
     left_out = set(skip)
     return [(label(k), value_text(k, v)) for k, v in summary.items() if k not in left_out]
+
+
+def _shown(value: Any) -> bool:
+    """Whether a summary value fits a one-line repr: a scalar, a string, or a short list of numbers."""
+    if value is None or isinstance(value, (bool, int, float, str)):
+        return True
+    return isinstance(value, (list, tuple)) and len(value) <= 4 and all(isinstance(v, (int, float)) for v in value)
+
+
+def short_repr(name: str, summary: Mapping[str, Any], keys: Iterable[str] = ()) -> str:
+    """``Name(F1=419.85 N, F2=804.57 N, ...)``: the chosen (else the first five) scalar entries of a summary,
+    rounded, with units; never the whole device or the arrays."""
+    chosen = [k for k in keys if k in summary] or [k for k, v in summary.items() if _shown(v)][:5]
+    inner = ", ".join(f"{split_key(k)[0]}={value_text(k, summary[k])}" for k in chosen)
+    return f"{name}({inner})"
+
+
+def summary_html(name: str, summary: Mapping[str, Any]) -> str:
+    """An HTML table of a summary for notebooks (``_repr_html_``): human names and values with units;
+    nested entries (per-channel tables, lists of tests) summarised by their size."""
+    import html
+
+    rows = []
+    for key, value in summary.items():
+        text = value_text(key, value) if _shown(value) else f"({len(value)} entries)" \
+            if isinstance(value, (dict, list, tuple)) else str(value)
+        rows.append(f"<tr><th style=\"text-align:left\">{html.escape(label(key))}</th>"
+                    f"<td style=\"text-align:left\">{html.escape(text)}</td></tr>")
+    return f"<table><caption style=\"text-align:left\"><b>{html.escape(name)}</b></caption>{''.join(rows)}</table>"
+
+
+class Summarised:
+    """Mixin of the result types: a short ``repr`` and a notebook table (``_repr_html_``), both from the
+    type's ``summary()``. Dataclasses using it are declared with ``repr=False`` so this repr is kept."""
+
+    #: Summary keys the repr shows (default: the first five scalar entries).
+    _repr_keys: tuple[str, ...] = ()
+
+    def __repr__(self) -> str:
+        return short_repr(type(self).__name__, self.summary(), self._repr_keys)  # type: ignore[attr-defined]
+
+    def _repr_html_(self) -> str:
+        return summary_html(type(self).__name__, self.summary())  # type: ignore[attr-defined]

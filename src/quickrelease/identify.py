@@ -21,6 +21,7 @@ from ._kernels import feasible_slack
 from ._roots import brent
 from ._validate import check_angle, check_positive
 from .device import Device, preset
+from .display import Summarised
 from .errors import InfeasibleObservationError, ParameterError, QuickReleaseError
 from .solvers import FirstIntegral
 from .statics import strain_energy
@@ -28,9 +29,11 @@ from .statics import strain_energy
 __all__ = ["Identification", "identify_friction", "stop_time_on_line", "case_friction"]
 
 
-@dataclass(frozen=True)
-class Identification:
+@dataclass(frozen=True, repr=False)
+class Identification(Summarised):
     """Friction forces identified from a stop observation (Eq. 11-13), with the inputs."""
+
+    _repr_keys = ("F1_N", "F2_N", "stop_time_s", "alpha_final_rad")
 
     F1: float
     """Friction at the central hinges [N]."""

@@ -19,6 +19,7 @@ from typing import Any
 from . import dynamics
 from ._roots import brent
 from .device import Device, preset
+from .display import Summarised
 from .identify import identify_friction, stop_time_on_line
 from .solvers import simulate
 from .statics import strain_energy
@@ -67,8 +68,8 @@ def printed_table7() -> dict[str, PrintedValue]:
     return out
 
 
-@dataclass(frozen=True)
-class PaperComparison:
+@dataclass(frozen=True, repr=False)
+class PaperComparison(Summarised):
     """Our numbers beside the paper's for the Table 7 test, with what explains the gaps.
 
     All values SI. ``rows()`` gives the side-by-side table the CLI and README show.

@@ -24,6 +24,7 @@ from ._validate import check_size
 from .building import FreeVibration, Isolation, free_vibration, pushed_state
 from .case import BuildingSpec, Case, Distribution
 from .device import Device
+from .display import Summarised
 from .dynamics import angular_acceleration
 from .errors import ParameterError, QuickReleaseError
 from .identify import case_friction
@@ -670,8 +671,8 @@ def _refine_minimum(f, a: float, b: float, tol: float = 1e-10) -> float:
 
 # -- the plan ----------------------------------------------------------------------------------------------------
 
-@dataclass(frozen=True, eq=False)
-class PlanResult:
+@dataclass(frozen=True, eq=False, repr=False)
+class PlanResult(Summarised):
     """Everything :func:`plan_case` found for a case."""
 
     case: Case

@@ -10,6 +10,7 @@ import numpy as np
 
 from . import dynamics, kinematics
 from .device import Device
+from .display import Summarised
 
 __all__ = ["Response", "STOP_REASONS", "TIME_HISTORIES"]
 
@@ -42,7 +43,7 @@ STOP_REASONS = {
 
 
 @dataclass(frozen=True, eq=False)
-class Response:
+class Response(Summarised):
     """Time history and summary of one release.
 
     Arrays share the time axis ``t`` (shape ``(n,)``). Angles in rad, lengths in m,

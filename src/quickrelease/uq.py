@@ -26,6 +26,7 @@ from . import batch
 from ._style import styled
 from ._validate import check_seed, check_size, check_workers
 from .case import Case
+from .display import Summarised
 from .errors import ParameterError, QuickReleaseError
 from .statics import strain_energy_coefficient
 
@@ -148,8 +149,8 @@ def _percentiles(hist: np.ndarray, edges: np.ndarray, qs=PERCENTILES) -> list[fl
     return out
 
 
-@dataclass(frozen=True)
-class UQResult:
+@dataclass(frozen=True, repr=False)
+class UQResult(Summarised):
     """Monte Carlo distribution of the identified friction, with local sensitivities."""
 
     samples: int

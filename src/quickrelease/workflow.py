@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from .case import Case
+from .display import Summarised
 from .fit import FitResult, fit_record
 from .identify import Identification, case_friction, identify_friction
 from .planning import PlanResult, plan_case, plan_figures
@@ -44,8 +45,8 @@ FIGURES = {
 }
 
 
-@dataclass(frozen=True)
-class CaseResult:
+@dataclass(frozen=True, repr=False)
+class CaseResult(Summarised):
     """Everything a case produced."""
 
     case: Case
