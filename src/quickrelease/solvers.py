@@ -39,6 +39,7 @@ from ._validate import HALF_PI, check_angle, check_nonnegative, check_positive, 
 from .device import Device, preset
 from .errors import ParameterError
 from .response import Response
+from .units import si_scalar
 
 __all__ = ["METHODS", "simulate", "stop_time", "FirstIntegral"]
 
@@ -219,6 +220,8 @@ def stop_time(E_S: float, alpha0: float, F1: float, F2: float, *,
               device: Device | None = None, mass_model: str | float = "distributed") -> float:
     """Time from release to the end of the motion, t_F, by the energy solution (Eq. 10) [s].
 
+    Quantity arguments are SI numbers, strings with units or pint Quantities.
+
     Parameters
     ----------
     E_S : float
@@ -234,7 +237,7 @@ def stop_time(E_S: float, alpha0: float, F1: float, F2: float, *,
     """
     device = device or preset("paper")
     c = dynamics.mass_factor(mass_model)
-    _check_release(E_S, alpha0, F1, F2)
+    E_S, alpha0, F1, F2 = _release_args(E_S, alpha0, F1, F2)
     return FirstIntegral(E_S, alpha0, F1, F2, device.m1, device.m2, device.L1, c).stop_time()
 
 
@@ -255,6 +258,14 @@ def _unresolved(fi: FirstIntegral, derived: str) -> None:
     others = ", ".join(f"{k} = {v:.6g} {u}".rstrip() for k, (v, u) in inputs.items() if k != worst)
     raise ParameterError(worst, inputs[worst][0], f"the range the release model resolves in floating point "
                          f"(with {others}, alpha0 = {fi.alpha0:.6g} rad it gives {derived})", inputs[worst][1])
+
+
+def _release_args(E_S, alpha0, F1, F2) -> tuple[float, float, float, float]:
+    """The release's arguments as SI floats (numbers, strings with units or pint Quantities), checked."""
+    E_S, alpha0 = si_scalar(E_S, "energy", "E_S"), si_scalar(alpha0, "angle", "alpha0")
+    F1, F2 = si_scalar(F1, "force", "F1"), si_scalar(F2, "force", "F2")
+    _check_release(E_S, alpha0, F1, F2)
+    return E_S, alpha0, F1, F2
 
 
 def _check_release(E_S, alpha0, F1, F2) -> None:
@@ -496,11 +507,16 @@ def simulate(E_S: float, alpha0: float, F1: float = 0.0, F2: float = 0.0, *,
     rk_method : {"DOP853", "RK45"}
         Runge-Kutta scheme of ``rk``.
 
+    Numbers are SI; every quantity argument also takes a string with units (``"2.9 kJ"``) or a pint
+    Quantity (``2.9 * ureg.kJ``), converted at the boundary.
+
     Returns
     -------
     Response
     """
-    _check_release(E_S, alpha0, F1, F2)
+    E_S, alpha0, F1, F2 = _release_args(E_S, alpha0, F1, F2)
+    dt = None if dt is None else si_scalar(dt, "time", "dt")
+    t_end = None if t_end is None else si_scalar(t_end, "time", "t_end")
     if method not in _SOLVERS:
         raise ParameterError("method", method, "'" + "', '".join(METHODS) + "'")
     if not isinstance(n_points, int | np.integer) or n_points < 2:

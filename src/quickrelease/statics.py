@@ -25,6 +25,7 @@ import numpy as np
 from ._validate import check_angle, check_positive
 from .device import Device
 from .errors import ParameterError
+from .units import si_scalar
 
 __all__ = [
     "push_force",
@@ -118,6 +119,7 @@ def internal_forces(push: float, alpha0: float, device: Device) -> InternalForce
     device : Device
         Supplies L2 for the bending moment.
     """
+    push, alpha0 = si_scalar(push, "force", "P"), si_scalar(alpha0, "angle", "alpha0")
     check_positive("P", push, "N")
     check_angle("alpha0", alpha0)
     P = float(push)
@@ -216,7 +218,10 @@ def strain_energy(push: float, alpha0: float, device: Device) -> StrainEnergy:
     -------
     StrainEnergy
         The six terms; ``.total`` is E_S [J].
+
+    ``push`` and ``alpha0`` also take strings with units or pint Quantities.
     """
+    push, alpha0 = si_scalar(push, "force", "P"), si_scalar(alpha0, "angle", "alpha0")
     f = internal_forces(push, alpha0, device)
     d = device
     limit = strain_energy_limit(alpha0, d)
