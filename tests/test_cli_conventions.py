@@ -132,3 +132,15 @@ def test_tables_follow_the_terminal_width():
     r = runner.invoke(app, ["simulate", "--alpha0", "0.2", "--force", "1598 kN", "--f1", "420", "--f2", "800"],
                       env={"COLUMNS": "60"})
     assert max(len(line) for line in r.stdout.splitlines()) <= 60
+
+
+def test_file_outputs_are_named_file(tmp_path):
+    """--out is a folder in every command; sweep and synth write a file, named by --file (-f); --out still
+    works there, with a note."""
+    for name in ("sweep", "synth"):
+        r = runner.invoke(app, [name, "--help"], env=WIDE)
+        assert "--file" in r.output and "--out" not in r.output
+    r = runner.invoke(app, ["synth", "examples/paper.toml", "-c", "u", "--rate", "100 Hz", "-f", str(tmp_path / "a.csv")])
+    assert r.exit_code == 0 and (tmp_path / "a.csv").is_file() and "note" not in r.stderr
+    r = runner.invoke(app, ["synth", "examples/paper.toml", "-c", "u", "--rate", "100 Hz", "--out", str(tmp_path / "b.csv")])
+    assert r.exit_code == 0 and (tmp_path / "b.csv").is_file() and "now --file" in r.stderr

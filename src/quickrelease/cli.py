@@ -162,6 +162,15 @@ def _fmt(value: Any) -> str:
     return str(value)
 
 
+def _file_option(file: Path, out_old: Path | None, command: str) -> Path:
+    """The output file of ``sweep`` and ``synth``: ``--file`` (``--out`` names a folder in every other command;
+    here it is still accepted, with a note)."""
+    if out_old is None:
+        return file
+    _echo(f"note: {command} writes a file: its option is now --file (-f); --out still works for now", err=True)
+    return out_old
+
+
 CaseArg = Annotated[Path | None, typer.Argument(help="Case file (TOML); flags override its entries.",
                                                  show_default=False)]
 
@@ -450,11 +459,12 @@ def uq(
 def sweep_command(
     case_file: Annotated[Path, typer.Argument(help="Case file: the inputs not swept, and the device.")],
     grid: Annotated[list[str], typer.Option("--grid", "-g", help="NAME=start:stop:count (with units), e.g. 'force=500 kN:3000 kN:26'; repeat for more dimensions.")],
-    out: Annotated[Path, typer.Option("--out", "-o", help="Output .nc (NetCDF) or .zarr; heat maps beside it.")] = Path("sweep.nc"),
-    backend: Annotated[Literal["numpy", "dask"], typer.Option("--backend", help="Where the grid is computed: this process, or a Dask cluster (needs --out *.zarr).")] = "numpy",
+    file: Annotated[Path, typer.Option("--file", "-f", help="Output file: .nc (NetCDF) or .zarr (Zarr store); the heat maps beside it.")] = Path("sweep.nc"),
+    out_old: Annotated[Path | None, typer.Option("--out", "-o", hidden=True, help="Old name of --file.")] = None,
+    backend: Annotated[Literal["numpy", "dask"], typer.Option("--backend", help="Where the grid is computed: this process, or a Dask cluster (needs --file *.zarr).")] = "numpy",
     scheduler: Annotated[str | None, typer.Option("--scheduler", help="Dask scheduler address; default: a LocalCluster.")] = None,
     workers: Annotated[int, typer.Option("--workers", help="Workers of the LocalCluster.")] = 2,
-    resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted dask sweep in --out (same inputs only).")] = False,
+    resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted dask sweep in --file (same inputs only).")] = False,
     block_rows: Annotated[int | None, typer.Option("--block-rows", help="Rows of the first grid per Dask block (default: about 10^6 points a block).")] = None,
     overwrite: OverwriteOpt = False,
     as_json: JsonOpt = False,
@@ -464,6 +474,7 @@ def sweep_command(
     from .plots import save_figure
     from .sweep import heatmap_figure, parse_grid, sweep
 
+    out = _file_option(file, out_old, "sweep")
     grids = dict(parse_grid(g) for g in grid)
     ds = sweep(load_case(case_file), grids, backend=backend, out=out, scheduler=scheduler, workers=workers,
                block_rows=block_rows, resume=resume, overwrite=overwrite, log=lambda line: _echo(f"note: {line}", err=True))
@@ -501,7 +512,8 @@ def synth(
     jitter: Annotated[float, typer.Option("--jitter", help="Uneven sampling: instants shifted by up to +-jitter/2 intervals, in [0, 1).")] = 0.0,
     missing: Annotated[float, typer.Option("--missing", help="Share of missing samples per channel, in [0, 1).")] = 0.0,
     building: Annotated[bool, typer.Option("--building", help="Synthesize the building's free vibration ([building]) instead of the device's release (implied by a case without [test]).")] = False,
-    out: Annotated[Path, typer.Option("--out", "-o", help="Record file to write (CSV).")] = Path("record.csv"),
+    file: Annotated[Path, typer.Option("--file", "-f", help="Record file to write (CSV).")] = Path("record.csv"),
+    out_old: Annotated[Path | None, typer.Option("--out", "-o", hidden=True, help="Old name of --file.")] = None,
     case_out: Annotated[Path | None, typer.Option("--case-out", help="Also write a case file that fits this record.")] = None,
     as_json: JsonOpt = False,
 ) -> None:
@@ -509,6 +521,7 @@ def synth(
     or (--building) of the building's free vibration after the release."""
     import os
 
+    out = _file_option(file, out_old, "synth")
     from .case import load_case
     from .export import write_text
     from .synth import case_toml, parse_channel_values, predicted_errors, synthesize
