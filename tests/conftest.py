@@ -24,7 +24,7 @@ def paper_device():
 
 #: The release identified from Table 7's printed inputs (E_S = 2900 J, t_F = 1.05 s), rounded to 0.01 N:
 #: a realistic friction pair for solver tests (the solvers do not depend on how it was found).
-PAPER_CASE = dict(E_S=2900.0, alpha0=0.2, F1=419.85, F2=804.57)
+PAPER_CASE = dict(stored_energy=2900.0, alpha0=0.2, F1=419.85, F2=804.57)
 
 
 #: Table 2 of the paper: bar and head masses [kg], bar length [m] (the paper device).

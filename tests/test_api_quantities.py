@@ -33,13 +33,13 @@ def test_numpy_scalars_are_numbers():
 
 
 @pytest.mark.parametrize("kwargs, name", [
-    (dict(E_S=2.9 * ureg.kN), "E_S"),
+    (dict(stored_energy=2.9 * ureg.kN), "E_S"),
     (dict(alpha0=0.2 * ureg.m), "alpha0"),
     (dict(F1=400 * ureg.J), "F1"),
     (dict(F2="800 kg"), "F2"),
 ])
 def test_a_wrong_dimension_names_the_parameter(kwargs, name):
-    args = dict(E_S=2900.0, alpha0=0.2, F1=400.0, F2=800.0) | kwargs
+    args = dict(stored_energy=2900.0, alpha0=0.2, F1=400.0, F2=800.0) | kwargs
     with pytest.raises(UnitError, match=rf"^{name} = .*expected"):
         qr.simulate(**args)
 
@@ -58,3 +58,18 @@ def test_identify_strain_energy_and_final_angle_take_quantities():
     assert qr.strain_energy(1598 * ureg.kN, 0.2, dev).total == qr.strain_energy(1598e3, 0.2, dev).total
     assert qr.final_angle(2900.0, 0.2, 400.0, 800.0, dev.L1 * 1000 * ureg.mm) == pytest.approx(
         qr.final_angle(2900.0, 0.2, 400.0, 800.0, dev.L1), rel=1e-15)
+
+
+def test_one_vocabulary_old_names_still_work_with_a_warning():
+    """stored_energy and push_force everywhere (as identify_friction, Case and the JSON keys); the old
+    keyword names E_S= and push= still work, with a DeprecationWarning."""
+    ref = qr.simulate(stored_energy=2900.0, alpha0=0.2, F1=400.0, F2=800.0)
+    with pytest.warns(DeprecationWarning, match=r"simulate\(E_S=...\) is now simulate\(stored_energy=...\)"):
+        old = qr.simulate(E_S=2900.0, alpha0=0.2, F1=400.0, F2=800.0)
+    assert old.stop_time == ref.stop_time
+    with pytest.warns(DeprecationWarning, match="push_force"):
+        assert qr.strain_energy(push=1598e3, alpha0=0.2).total == qr.strain_energy(push_force=1598e3, alpha0=0.2).total
+    with pytest.raises(TypeError, match="both"):
+        qr.stop_time(E_S=1.0, stored_energy=1.0, alpha0=0.2, F1=0.0, F2=0.0)
+    # the paper's device is the default device everywhere
+    assert qr.strain_energy(1598e3, 0.2).total == qr.strain_energy(1598e3, 0.2, qr.preset("paper")).total

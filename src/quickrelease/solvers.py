@@ -35,7 +35,7 @@ from ._kernels import Releases
 from ._roots import brent
 from ._statetable import StateTable
 from ._timemap import TimeMap
-from ._validate import HALF_PI, check_angle, check_nonnegative, check_positive, check_size
+from ._validate import HALF_PI, check_angle, check_nonnegative, check_positive, check_size, renamed
 from .device import Device, preset
 from .errors import ParameterError
 from .response import Response
@@ -216,7 +216,8 @@ class FirstIntegral:
         return (alpha, alpha_dot, alpha_ddot) if acceleration else (alpha, alpha_dot)
 
 
-def stop_time(E_S: float, alpha0: float, F1: float, F2: float, *,
+@renamed(E_S="stored_energy")
+def stop_time(stored_energy: float, alpha0: float, F1: float, F2: float, *,
               device: Device | None = None, mass_model: str | float = "distributed") -> float:
     """Time from release to the end of the motion, t_F, by the energy solution (Eq. 10) [s].
 
@@ -224,8 +225,8 @@ def stop_time(E_S: float, alpha0: float, F1: float, F2: float, *,
 
     Parameters
     ----------
-    E_S : float
-        Stored strain energy [J].
+    stored_energy : float
+        Stored strain energy E_S [J].
     alpha0 : float
         Angle at release [rad], in (0, pi/2).
     F1, F2 : float
@@ -237,7 +238,7 @@ def stop_time(E_S: float, alpha0: float, F1: float, F2: float, *,
     """
     device = device or preset("paper")
     c = dynamics.mass_factor(mass_model)
-    E_S, alpha0, F1, F2 = _release_args(E_S, alpha0, F1, F2)
+    E_S, alpha0, F1, F2 = _release_args(stored_energy, alpha0, F1, F2)
     return FirstIntegral(E_S, alpha0, F1, F2, device.m1, device.m2, device.L1, c).stop_time()
 
 
@@ -475,7 +476,8 @@ def _solve_explicit(fi: FirstIntegral, dt: float | None = None, max_steps: int =
 _SOLVERS = {"energy": _solve_energy, "rk": _solve_rk, "explicit": _solve_explicit}
 
 
-def simulate(E_S: float, alpha0: float, F1: float = 0.0, F2: float = 0.0, *,
+@renamed(E_S="stored_energy")
+def simulate(stored_energy: float, alpha0: float, F1: float = 0.0, F2: float = 0.0, *,
              device: Device | None = None, mass_model: str | float = "distributed",
              method: str = "energy", dt: float | None = None, n_points: int = 1001,
              t_end: float | None = None, rtol: float = RK_RTOL, atol: float | None = None,
@@ -484,8 +486,8 @@ def simulate(E_S: float, alpha0: float, F1: float = 0.0, F2: float = 0.0, *,
 
     Parameters
     ----------
-    E_S : float
-        Strain energy stored before release [J] (e.g. ``strain_energy(P, alpha0, device).total``).
+    stored_energy : float
+        Strain energy E_S stored before release [J] (e.g. ``strain_energy(P, alpha0, device).total``).
     alpha0 : float
         Angle of the bars with the loading axis at release [rad], in (0, pi/2).
     F1, F2 : float
@@ -514,7 +516,7 @@ def simulate(E_S: float, alpha0: float, F1: float = 0.0, F2: float = 0.0, *,
     -------
     Response
     """
-    E_S, alpha0, F1, F2 = _release_args(E_S, alpha0, F1, F2)
+    E_S, alpha0, F1, F2 = _release_args(stored_energy, alpha0, F1, F2)
     dt = None if dt is None else si_scalar(dt, "time", "dt")
     t_end = None if t_end is None else si_scalar(t_end, "time", "t_end")
     if method not in _SOLVERS:
