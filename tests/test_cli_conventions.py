@@ -144,3 +144,30 @@ def test_file_outputs_are_named_file(tmp_path):
     assert r.exit_code == 0 and (tmp_path / "a.csv").is_file() and "note" not in r.stderr
     r = runner.invoke(app, ["synth", "examples/paper.toml", "-c", "u", "--rate", "100 Hz", "--out", str(tmp_path / "b.csv")])
     assert r.exit_code == 0 and (tmp_path / "b.csv").is_file() and "now --file" in r.stderr
+
+
+def test_long_commands_show_a_spinner_on_a_terminal_only(tmp_path):
+    """On a terminal, a long command says what it is doing on stderr; its results (stdout) stay clean."""
+    import os
+    import pty
+
+    master, slave = pty.openpty()
+    try:
+        r = subprocess.run([sys.executable, "-m", "quickrelease", "sweep", "examples/paper.toml", "--grid",
+                            "alpha0=0.1:0.3:3", "--file", str(tmp_path / "s.nc"), "--json"],
+                           stdout=subprocess.PIPE, stderr=slave, timeout=600, env={**os.environ, "COLUMNS": "100"})
+        os.close(slave)
+        seen = b""
+        while True:
+            try:
+                chunk = os.read(master, 65536)
+            except OSError:
+                break
+            if not chunk:
+                break
+            seen += chunk
+    finally:
+        os.close(master)
+    assert r.returncode == 0
+    assert json.loads(r.stdout)["dims"] == {"alpha0": 3}  # stdout is the JSON alone
+    assert b"sweeping the grid" in seen

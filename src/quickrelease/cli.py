@@ -7,9 +7,10 @@ stderr and exit with code 2.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from functools import wraps
 from pathlib import Path
 from typing import Annotated, Any, Literal
@@ -137,6 +138,22 @@ def _energy(device, force: str | None, energy: str | None, alpha0: float) -> tup
         return parse_quantity(energy, "energy", "--energy"), None
     P = parse_quantity(force, "force", "--force")
     return strain_energy(P, alpha0, device).total, P
+
+
+@contextlib.contextmanager
+def _busy(what: str) -> Iterator[None]:
+    """A spinner with ``what`` on stderr while a long computation runs, when stderr is a terminal (never in
+    pipes, files or tests); it is gone before the command prints its results."""
+    if not sys.stderr.isatty():
+        yield
+        return
+    from rich.console import Console
+    from rich.live import Live
+    from rich.spinner import Spinner
+
+    with Live(Spinner("dots", text=_clean(what)), console=Console(stderr=True), transient=True,
+              redirect_stdout=False, redirect_stderr=False, refresh_per_second=8):
+        yield
 
 
 def _print_json(data: dict[str, Any]) -> None:
@@ -476,9 +493,11 @@ def sweep_command(
 
     out = _file_option(file, out_old, "sweep")
     grids = dict(parse_grid(g) for g in grid)
-    ds = sweep(load_case(case_file), grids, backend=backend, out=out, scheduler=scheduler, workers=workers,
-               block_rows=block_rows, resume=resume, overwrite=overwrite, log=lambda line: _echo(f"note: {line}", err=True))
-    figs = save_figure(heatmap_figure(ds), out.parent, out.name.rsplit(".", 1)[0] + "_heatmaps")
+    with _busy("sweeping the grid"):
+        ds = sweep(load_case(case_file), grids, backend=backend, out=out, scheduler=scheduler, workers=workers,
+                   block_rows=block_rows, resume=resume, overwrite=overwrite,
+                   log=lambda line: _echo(f"note: {line}", err=True))
+        figs = save_figure(heatmap_figure(ds), out.parent, out.name.rsplit(".", 1)[0] + "_heatmaps")
     summary = {"file": str(out), "dims": {k: int(v) for k, v in ds.sizes.items()},
                "stop_time_s": [float(ds.stop_time.min()),  # creeping cases (stopped_by 2, t_F = inf): counted apart
                                float(ds.stop_time.where(ds.stopped_by != 2).max())],
@@ -634,14 +653,16 @@ def fit_command(
 
         if out is not None:
             results_folder(case, out, overwrite=overwrite)  # pre-flight
-        result = run_case(case)
-        fit = result.fit
-        paths = write_results(result, out, overwrite=overwrite) if out is not None else {}
+        with _busy("fitting the record"):
+            result = run_case(case)
+            fit = result.fit
+            paths = write_results(result, out, overwrite=overwrite) if out is not None else {}
     else:
         from .runfolder import RunFolder, case_inputs
 
         folder = RunFolder(out, "fit", {"case": case_inputs(case)}, overwrite=overwrite) if out is not None else None
-        fit = fit_record(case)
+        with _busy("fitting the record"):
+            fit = fit_record(case)
         paths = {}
         if folder is not None:
             from .export import write_json
@@ -699,7 +720,8 @@ def building_command(
         from .workflow import building_folder
 
         building_folder(data, out, model=model, compare=compare, overwrite=overwrite)  # pre-flight
-    result = analyse_building(data, model=model, compare=compare)
+    with _busy(f"fitting the {model or data.model} isolation model"):
+        result = analyse_building(data, model=model, compare=compare)
     paths = {}
     if out is not None:
         from .workflow import write_building_results
@@ -762,10 +784,11 @@ def campaign(
 
     if out is not None:
         campaign_folder(campaign_file, out, overwrite=overwrite)  # pre-flight
-    result = run_campaign(campaign_file)
-    paths = {}
-    if out is not None:
-        paths = write_campaign_results(result, out, overwrite=overwrite)
+    with _busy("fitting every test of the campaign"):
+        result = run_campaign(campaign_file)
+        paths = {}
+        if out is not None:
+            paths = write_campaign_results(result, out, overwrite=overwrite)
     if as_json:
         _print_json(result.summary())
         return
@@ -848,7 +871,8 @@ def plan(
     case = load_case(case_file)
     if out is not None:
         results_folder(case, out, plan=True, overwrite=overwrite)  # pre-flight
-    result = run_case(case, plan=True)
+    with _busy("planning the test"):
+        result = run_case(case, plan=True)
     plan_result = result.plan
     paths = write_results(result, out, overwrite=overwrite) if out is not None else {}
     summary = plan_result.summary()
