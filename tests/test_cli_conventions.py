@@ -107,7 +107,7 @@ def test_zarr_output_without_zarr_fails_before_the_work(tmp_path, monkeypatch):
     monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "zarr" else real(name, *a))
     monkeypatch.setattr(sweep_module, "_base", lambda case: pytest.fail("the sweep started before the check"))
     out = tmp_path / "s.zarr"
-    r = runner.invoke(app, ["sweep", "examples/paper.toml", "--grid", "alpha0=0.1:0.3:3", "--out", str(out)])
+    r = runner.invoke(app, ["sweep", "examples/paper.toml", "--grid", "alpha0=0.1:0.3:3", "--file", str(out)])
     assert r.exit_code == 2, r.output
     assert r.stderr.strip().count("\n") == 0 and "zarr" in r.stderr and "pip install" in r.stderr
     assert list(tmp_path.iterdir()) == []

@@ -41,6 +41,12 @@ SWEEP_PARAMETERS = {
     "F2": ("force", "N"), "c": ("dimensionless", "1"), "m1": ("mass", "kg"), "m2": ("mass", "kg"),
     "L1": ("length", "m"),
 }
+#: Long names of the sweepable inputs (the coordinates' ``long_name``).
+SWEEP_LONG_NAMES = {
+    "force": "push force P at release", "energy": "stored strain energy E_S", "alpha0": "release angle alpha0",
+    "F1": "friction at the central hinges F1", "F2": "friction at the rail supports F2", "c": "mass factor c",
+    "m1": "mass of a bar m1", "m2": "mass of the head m2", "L1": "length of a bar L1",
+}
 #: Outputs: (long name, unit).
 OUTPUTS = {
     "stop_time": ("time from release to the end of the motion t_F", "s"),
@@ -140,14 +146,17 @@ def _dataset(case: Case, grids: dict[str, np.ndarray], data: dict[str, np.ndarra
     import xarray as xr
 
     names = list(grids)
-    coords = {n: (n, grids[n], {"units": SWEEP_PARAMETERS[n][1]}) for n in names}
+    coords = {n: (n, grids[n], {"units": SWEEP_PARAMETERS[n][1], "long_name": SWEEP_LONG_NAMES[n]}) for n in names}
     shape = tuple(grids[n].size for n in names)
     variables = {}
     for key, (long, unit) in OUTPUTS.items():
         values = data[key] if data is not None else np.zeros(shape, dtype=np.int8 if key in _FLAGS else float)
         variables[key] = (names, np.asarray(values, dtype=np.int8 if key in _FLAGS else float),
                           {"long_name": long, "units": unit})
-    attrs = {"title": f"quickrelease sweep: {case.title}", "case": case.source, "device": case.device.name}
+    from . import __version__
+
+    attrs = {"title": f"quickrelease sweep: {case.title}", "case": case.source, "device": case.device.name,
+             "Conventions": "CF-1.8", "source": f"quickrelease {__version__}"}
     attrs.update({f"fixed_{k}": float(v) for k, v in base.items() if k not in grids and np.isfinite(v)})
     return xr.Dataset(variables, coords=coords, attrs=attrs)
 
@@ -164,8 +173,8 @@ def _check_optional(out: str | Path | None, backend: str) -> None:
         needs += ["dask", "distributed"]
     missing = [name for name in needs if find_spec(name) is None]
     if missing:
-        raise QuickReleaseError(f"{'the dask backend' if backend == 'dask' else f'--out {out}'} needs "
-                                f"{', '.join(missing)}: pip install 'quickrelease[dask]'")
+        what = "the dask backend" if backend == "dask" else f"{out} (a Zarr store)"
+        raise QuickReleaseError(f"{what} needs {', '.join(missing)}: pip install 'quickrelease[dask]'")
 
 
 def sweep(case: Case, grids: dict[str, np.ndarray], *, backend: str = "numpy", out: str | Path | None = None,
