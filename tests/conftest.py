@@ -5,6 +5,18 @@ import pytest
 from quickrelease import preset
 
 
+@pytest.fixture(autouse=True)
+def _matplotlib_settings_unchanged():
+    """Every test: the package's figure functions draw in their own style and leave the user's matplotlib
+    settings (rcParams) exactly as they found them (issue 11)."""
+    import matplotlib
+
+    before = dict(matplotlib.rcParams)
+    yield
+    changed = sorted(k for k, v in matplotlib.rcParams.items() if before.get(k) != v)
+    assert not changed, f"rcParams changed: {changed}"
+
+
 @pytest.fixture(scope="session")
 def paper_device():
     return preset("paper")
@@ -12,7 +24,7 @@ def paper_device():
 
 #: The release identified from Table 7's printed inputs (E_S = 2900 J, t_F = 1.05 s), rounded to 0.01 N:
 #: a realistic friction pair for solver tests (the solvers do not depend on how it was found).
-PAPER_CASE = dict(E_S=2900.0, alpha0=0.2, F1=419.85, F2=804.57)
+PAPER_CASE = dict(stored_energy=2900.0, alpha0=0.2, F1=419.85, F2=804.57)
 
 
 #: The uq case of the paper's test (scattered push force, angles and stop time): used by the uq, output-folder

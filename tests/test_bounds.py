@@ -53,10 +53,10 @@ def test_strain_energy_limit_is_where_the_terms_overflow():
 
 
 @pytest.mark.parametrize("kwargs,culprit", [
-    (dict(E_S=2900.0, F1=1e308, F2=0.0), "F1 = 1e+308 N"),
-    (dict(E_S=2900.0, F1=0.0, F2=1e308), "F2 = 1e+308 N"),
-    (dict(E_S=5e-324, F1=0.0, F2=0.0), "E_S = 4.94066e-324 J"),
-    (dict(E_S=2900.0, F1=0.0, F2=0.0, mass_model=1e308), "c = 1e+308"),
+    (dict(stored_energy=2900.0, F1=1e308, F2=0.0), "F1 = 1e+308 N"),
+    (dict(stored_energy=2900.0, F1=0.0, F2=1e308), "F2 = 1e+308 N"),
+    (dict(stored_energy=5e-324, F1=0.0, F2=0.0), "E_S = 4.94066e-324 J"),
+    (dict(stored_energy=2900.0, F1=0.0, F2=0.0, mass_model=1e308), "c = 1e+308"),
 ])
 def test_release_not_resolvable_names_the_input(kwargs, culprit):
     with np.errstate(all="ignore"), pytest.raises(ParameterError) as info:
@@ -196,7 +196,7 @@ def test_synth_cli_writes_nothing_on_bad_noise(tmp_path):
 
     shutil.copy(PAPER, tmp_path / "case.toml")
     r = CliRunner().invoke(app, ["synth", str(tmp_path / "case.toml"), "--noise", "u=0", "-c", "u",
-                                 "--out", str(tmp_path / "r.csv"), "--case-out", str(tmp_path / "fit.toml")])
+                                 "--file", str(tmp_path / "r.csv"), "--case-out", str(tmp_path / "fit.toml")])
     assert r.exit_code == 2 and r.stderr.count("\n") == 1, r.output
     assert sorted(p.name for p in tmp_path.iterdir()) == ["case.toml"]
 

@@ -79,7 +79,7 @@ def test_identify_lumped_is_infeasible():
     (["simulate", "--energy", "-3 kJ", "--alpha0", "0.2"], "E_S = -3000 J is outside (0, inf)"),
     (["simulate", "--energy", "3 kJ", "--alpha0", "0.2", "--f1", "-1"], "F1 = -1 N is outside [0, inf)"),
     (["simulate", "--energy", "3 kJ", "--alpha0", "0.2", "--mass-model", "heavy"], "mass_model = heavy"),
-    (["simulate", "--energy", "3 kJ", "--alpha0", "0.2", "--method", "euler"], "method = euler"),
+    (["simulate", "--energy", "3 kJ", "--alpha0", "0.2", "--method", "euler"], "'--method': Value error, 'euler' is not one of"),
     (["simulate", "--energy", "3 kJ", "--force", "1 kN", "--alpha0", "0.2"], "exactly one"),
     (["simulate", "--energy", "3 blorps", "--alpha0", "0.2"], "unknown unit"),
     (["identify", "--energy", "3 kJ", "--alpha0", "0.2", "--alpha-final", "0.1", "--stop-time", "1"],

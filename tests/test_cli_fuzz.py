@@ -96,14 +96,14 @@ COMMANDS: dict[str, Command] = {
                          "--json"), {}, swap={"--force": (("--energy",), ())}),
     "uq": Command(("{uq_case}", "--samples", "400", "--chunk", "200", "--json"), {}, skip=("--scheduler",),
                   slow={"--samples": ("big",)}),
-    "sweep": Command(("{case}", "--grid", "force=1000 kN:2000 kN:2", "--out", "sweep.nc", "--json"),
+    "sweep": Command(("{case}", "--grid", "force=1000 kN:2000 kN:2", "--file", "sweep.nc", "--json"),
                      {"--grid": "force={}:2000 kN:3"}, skip=("--scheduler",), lenient=("--workers",)),
-    "synth": Command(("{case}", "--out", "record.csv", "--channels", "u", "--rate", "200 Hz", "--json"),
+    "synth": Command(("{case}", "--file", "record.csv", "--channels", "u", "--rate", "200 Hz", "--json"),
                      {"--noise": "u={}", "--offset": "u={}"}),
-    "synth-building": Command(("{building_case}", "--out", "record.csv", "--channels", "x", "--duration", "5 s",
+    "synth-building": Command(("{building_case}", "--file", "record.csv", "--channels", "x", "--duration", "5 s",
                                "--json"), {"--noise": "x={}", "--offset": "x={}"}, command="synth",
                                skip=("--seed", "--jitter", "--missing")),  # checked as for the device (above)
-    "demo": Command(("--out", "demo",), {}),
+    "demo": Command(("--file", "demo",), {}),
     "building": Command(("{building_case}", "--json"), {}),  # --model is checked before the case is read
 }
 

@@ -57,6 +57,21 @@ def test_netcdf_round_trip(tmp_path):
         assert float(f.stop_time_s) == r.stop_time
 
 
+def test_netcdf_through_xarray_has_a_time_coordinate_and_cf_attributes(tmp_path):
+    import xarray as xr
+
+    from quickrelease import __version__
+
+    r = simulate(2900.0, 0.2, 419.85, 804.57)
+    write_netcdf(r, tmp_path / "r.nc")
+    with xr.open_dataset(tmp_path / "r.nc") as ds:
+        assert ds.alpha.dims == ("t",) and np.array_equal(ds.t.values, r.t)  # alpha.plot() is against time
+        assert ds.t.attrs["units"] == "s" and ds.u_ddot.attrs["units"] == "m/s^2"
+        assert all("long_name" in ds[v].attrs for v in [*ds.data_vars, "t"])
+        assert ds.attrs["Conventions"].startswith("CF-") and ds.attrs["source"] == f"quickrelease {__version__}"
+        assert ds.attrs["stop_time_s"] == r.stop_time
+
+
 def test_atomic_write_leaves_nothing_on_failure(tmp_path):
     target = tmp_path / "out.json"
     write_json({"a": 1}, target)

@@ -34,7 +34,7 @@ def _mp_stop_time(E_S, alpha0, F1, F2, c=(2, 3), m1=576.78, m2=531.69, L1=2.477)
 
 
 def test_energy_method_against_mpmath(solutions):
-    t_ref, a_ref = _mp_stop_time(**PAPER_CASE)
+    t_ref, a_ref = _mp_stop_time(*PAPER_CASE.values())
     r = solutions["energy"]
     assert r.stop_time == pytest.approx(t_ref, rel=1e-13)
     assert r.alpha_final == pytest.approx(a_ref, rel=1e-14)
@@ -215,13 +215,14 @@ def test_lumped_is_slower_than_distributed():
 
 def test_to_pandas_columns(solutions):
     df = solutions["energy"].to_pandas()
-    assert list(df.columns)[:4] == ["t_s", "alpha_rad", "alpha_dot_rad_s", "alpha_ddot_rad_s2"]
+    assert df.index.name == "t_s" and np.array_equal(df.index.to_numpy(), solutions["energy"].t)
+    assert list(df.columns)[:3] == ["alpha_rad", "alpha_dot_rad_s", "alpha_ddot_rad_s2"]
     assert len(df) == 1001
     assert df["E_K_J"].iloc[0] == pytest.approx(2900.0, rel=1e-14)
 
 
 @pytest.mark.parametrize("kwargs,match", [
-    (dict(E_S=-1.0), r"E_S = -1 J is outside \(0, inf\)"),
+    (dict(stored_energy=-1.0), r"E_S = -1 J is outside \(0, inf\)"),
     (dict(alpha0=1.6), r"alpha0 = 1.6 rad is outside \(0, pi/2\)"),
     (dict(F1=-3.0), r"F1 = -3 N is outside \[0, inf\)"),
     (dict(method="euler"), r"method = euler is outside 'energy', 'rk', 'explicit'"),
@@ -372,7 +373,7 @@ def test_readme_convergence_table_of_the_explicit_scheme():
     reference, and the observed order (ratios of successive errors -> 2 when dt halves: first order)."""
     rows, t_ref_printed, a_ref_printed = _readme_convergence_table()
     assert [row[0] for row in rows] == [1e-3 / 2**j for j in range(6)]
-    t_ref, a_ref = _mp_stop_time(**PAPER_CASE)
+    t_ref, a_ref = _mp_stop_time(*PAPER_CASE.values())
     assert t_ref == pytest.approx(t_ref_printed, abs=0.5e-10)
     assert a_ref == pytest.approx(a_ref_printed, abs=0.5e-10)
     prev = None

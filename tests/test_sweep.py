@@ -35,6 +35,8 @@ def test_values_match_single_releases():
     grids = {"force": np.array([1000e3, 2200e3]), "alpha0": np.array([0.2, 0.3])}
     ds = sweep(case, grids)
     assert ds.stop_time.dims == ("force", "alpha0") and ds.stop_time.attrs["units"] == "s"
+    assert ds.force.attrs == {"units": "N", "long_name": "push force P at release"}  # labelled axes in .plot()
+    assert all("long_name" in ds[v].attrs and "units" in ds[v].attrs for v in ds.data_vars)
     for i, P in enumerate(grids["force"]):
         for j, a0 in enumerate(grids["alpha0"]):
             E = strain_energy(P, a0, case.device).total

@@ -10,6 +10,7 @@ import html
 import json
 import tomllib
 import xml.dom.minidom
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pytest
@@ -99,9 +100,10 @@ def test_campaign_names_and_title_in_every_output(tmp_path):
     assert data["title"] == NAME
     assert data["tests"][0]["name"] == NAME
     svg = _svg_ok(out / "figures" / "campaign_friction.svg")
-    # matplotlib draws the text as paths and keeps it in an XML comment per line (with '--' written '- -')
+    # the figures keep text as SVG text (svg.fonttype "none"): each line of the name is a text element
+    texts = {"".join(node.itertext()) for node in ET.fromstring(svg.encode("utf-8")).iter("{http://www.w3.org/2000/svg}text")}
     for line in SHOWN.split("\n"):
-        assert f"<!-- {line.replace('--', '- -')} -->" in svg
+        assert line in texts, (line, texts)
     assert (out / "figures" / "campaign_friction.png").stat().st_size > 1000
     page = (out / "report.html").read_text(encoding="utf-8")
     assert html.escape("Prüfung 試験 $x$ $^$ --", quote=True) in page
@@ -112,7 +114,7 @@ def test_synth_case_out_is_valid_toml_for_any_file_name(tmp_path):
     folder.mkdir()
     record = folder / 'rec $1 "試験" \\ \x1b[31m.csv'
     case_out = folder / "case.toml"
-    cli("synth", EXAMPLES / "paper.toml", "--rate", "200 Hz", "--out", record, "--case-out", case_out)
+    cli("synth", EXAMPLES / "paper.toml", "--rate", "200 Hz", "--file", record, "--case-out", case_out)
     case = tomllib.loads(case_out.read_text(encoding="utf-8"))
     assert case["title"] == f"Fit to {record.name}"
     assert (case_out.parent / case["record"]["file"]).resolve() == record.resolve()

@@ -10,8 +10,6 @@ Table 7). SI units throughout.
 
 from __future__ import annotations
 
-from importlib.metadata import PackageNotFoundError, version
-
 from . import building, decay, dynamics, kinematics, statics
 from .building import FreeVibration, Isolation, TwoDOF, free_vibration
 from .device import DEVICE_KEYS, Device, load_device, preset, preset_names
@@ -40,10 +38,18 @@ from .solvers import METHODS, simulate, stop_time
 from .statics import InternalForces, StrainEnergy, fuse_force, internal_forces, push_force, strain_energy
 from .units import parse_quantity
 
-try:
-    __version__ = version("quickrelease")
-except PackageNotFoundError:  # running from a source tree
-    __version__ = "0.0.0+unknown"
+
+def _package_version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("quickrelease")
+    except PackageNotFoundError:  # running from a source tree
+        return "0.0.0+unknown"
+
+
+__version__ = _package_version()
+del _package_version
 
 __all__ = [
     "DEVICE_KEYS", "Device", "load_device", "preset", "preset_names",

@@ -97,3 +97,26 @@ def check_seed(name: str, seed) -> int:
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or not 0 <= seed < 2**63:
         raise ParameterError(name, seed, "integers in [0, 2^63)")
     return int(seed)
+
+
+def renamed(**old_to_new: str):
+    """Decorator: keyword arguments renamed for one vocabulary across the API (``E_S=`` is now
+    ``stored_energy=``) still work, with a DeprecationWarning naming the new name."""
+    import functools
+    import warnings
+
+    def decorate(func):
+        @functools.wraps(func)
+        def wrapper(*args, **kwargs):
+            for old, new in old_to_new.items():
+                if old in kwargs:
+                    if new in kwargs:
+                        raise TypeError(f"{func.__name__}() got both {old}= (its old name) and {new}=")
+                    warnings.warn(f"{func.__name__}({old}=...) is now {func.__name__}({new}=...); the old name "
+                                  "will be removed", DeprecationWarning, stacklevel=2)
+                    kwargs[new] = kwargs.pop(old)
+            return func(*args, **kwargs)
+
+        return wrapper
+
+    return decorate

@@ -139,6 +139,8 @@ def run_bench(quick: bool = False, seed: int = 0, log=print) -> dict[str, Any]:
     out["identify_speedup_vs_quad_brentq"] = out["identify_cases_per_s"] * per_qb
     log(f"scipy, one case at a time: solve_ivp {1 / per_ivp:,.0f} cases/s, quad + brentq {1 / per_qb:,.1f} cases/s")
     # accuracy against mpmath on the same sample cases
+    log(f"accuracy vs mpmath: 30-digit references of {len(args)} stop times and {len(iargs)} identifications "
+        "(tens of seconds) ...")
     ref = np.array([stop_time_mp(*a)[0] for a in args])
     kern = batch.stop_time(**sample).stop_time
     err_k = np.abs(kern / ref - 1)

@@ -25,6 +25,7 @@ import numpy as np
 from scipy import stats
 
 from .decay import DecayAnalysis, analyse_decay, hysteresis_loop
+from .display import Summarised
 from .errors import ParameterError, QuickReleaseError
 from .isolation_fit import BuildingChannel, IsolationFit, compare_models, decay_check, fit_isolation
 
@@ -37,8 +38,8 @@ MODELS = ("linear", "bilinear", "2dof")
 _CURVE_POINTS = 4000
 
 
-@dataclass(frozen=True, eq=False)
-class BuildingResult:
+@dataclass(frozen=True, eq=False, repr=False)
+class BuildingResult(Summarised):
     """The analysis of a building's free-vibration record: the chosen model's fit and the cross-checks."""
 
     fit: IsolationFit

@@ -68,6 +68,7 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
+from ._style import styled
 from .building import pushed_state
 from .campaign import LinearLaw, fit_line, iter_tests, law_panel, weights_or_none
 from .errors import ParameterError, QuickReleaseError
@@ -447,13 +448,14 @@ def fit_building_campaign(releases, mass: float, model: str = "linear", *, varia
                                   notes=notes, reported=reported, superstructure_mass=superstructure_mass)
 
 
-def building_campaign_figure(result: BuildingCampaignResult):
+@styled
+def building_campaign_figure(result: BuildingCampaignResult, fig=None):
     """Each quantity against each variable: the releases with their 95% intervals, the law and its band."""
     from .plots import _figure, user_label
 
     nq, nv = len(result.quantities), len(result.variables)
     height = 2.9 * nv + 0.9  # [in]: 0.85 in for the titles above, 0.5 in for the labels below
-    fig = _figure(3.2 * nq + 0.6, height, left=0.06, right=0.98, bottom=0.5 / height, top=1 - 0.85 / height,
+    fig = _figure(3.2 * nq + 0.6, height, fig=fig, left=0.06, right=0.98, bottom=0.5 / height, top=1 - 0.85 / height,
                   wspace=0.35, hspace=0.6)
     axes = np.atleast_2d(fig.subplots(nv, nq, squeeze=False))
     for row, v in enumerate(result.variables):

@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from ._style import styled
 from .decay import analyse_decay
 from .isolation_fit import CHANNEL_KINDS
 from .plots import _COLORS, _figure, user_label
@@ -49,13 +50,14 @@ def _unit(kind: str) -> str:
     return CHANNEL_KINDS.get(kind, "")
 
 
-def fit_figure(result):
+@styled
+def fit_figure(result, fig=None):
     """Each channel measured (points) and the fitted model (line), with the residuals below."""
     fit = result.fit
     channels = list(fit.channels)
     n = len(channels)
     height = 1.0 + 2.4 * n
-    fig = _figure(7.0, height, left=0.12, right=0.98, bottom=0.5 / height, top=1.0 - 0.55 / height)
+    fig = _figure(7.0, height, fig=fig, left=0.12, right=0.98, bottom=0.5 / height, top=1.0 - 0.55 / height)
     grid = fig.add_gridspec(3 * n - 1, 1, height_ratios=([3, 1.2, 0.5] * n)[:-1], hspace=0.1)
     share = None
     bottom = None
@@ -132,10 +134,11 @@ def decay_envelope_data(result) -> dict[str, np.ndarray]:
     return out
 
 
-def decay_figure(result, model=False):
+@styled
+def decay_figure(result, model=False, fig=None):
     """Half-cycle amplitudes of the record with the two pure decay laws, the combined law and the model."""
     data = decay_envelope_data(result)
-    fig = _figure(5.6, 3.6, left=0.14, bottom=0.14, top=0.88)
+    fig = _figure(5.6, 3.6, fig=fig, left=0.14, bottom=0.14, top=0.88)
     ax = fig.subplots()
     ax.plot(data["n"], 1e3 * data["amplitude"], "o", ms=4, color=_COLORS["d"], label="record (half swing)")
     styles = {"coulomb": ("Coulomb: linear decay", _COLORS["b"], "--"),
@@ -160,10 +163,11 @@ def decay_figure(result, model=False):
     return fig
 
 
-def amplitude_figure(result, model=False):
+@styled
+def amplitude_figure(result, model=False, fig=None):
     """Equivalent period and equivalent damping ratio against the amplitude, record and fitted model."""
     a = result.decay
-    fig = _figure(7.0, 3.0, left=0.09, right=0.98, bottom=0.16, top=0.86, wspace=0.3)
+    fig = _figure(7.0, 3.0, fig=fig, left=0.09, right=0.98, bottom=0.16, top=0.86, wspace=0.3)
     left, right = fig.subplots(1, 2)
     left.plot(1e3 * a.amplitude, a.equivalent_period, "o", ms=4, color=_COLORS["d"], label="record")
     right.plot(1e3 * a.damping_amplitude, a.equivalent_damping, "o", ms=4, color=_COLORS["d"], label="record")
@@ -184,10 +188,11 @@ def amplitude_figure(result, model=False):
     return fig
 
 
-def hysteresis_figure(result):
+@styled
+def hysteresis_figure(result, fig=None):
     """The isolators' force -m a against the displacement after the release: record and fitted model."""
     loop = result.loop
-    fig = _figure(4.8, 3.8, left=0.16, bottom=0.13, top=0.9)
+    fig = _figure(4.8, 3.8, fig=fig, left=0.16, bottom=0.13, top=0.9)
     ax = fig.subplots()
     ax.plot(1e3 * loop["x"], loop["force"] / 1e3, ".", ms=1.5, color=_COLORS["d"], alpha=0.6, label="record",
             rasterized=loop["x"].size > _RASTER)

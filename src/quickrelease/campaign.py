@@ -43,8 +43,10 @@ from typing import Any
 
 import numpy as np
 
+from ._style import styled
 from .case import Case, CaseFileError, case_from_mapping, load_case
 from .device import read_toml
+from .display import Summarised
 from .errors import QuickReleaseError
 from .fit import FitResult, fit_record, observation_sigma
 
@@ -282,8 +284,8 @@ def fit_joint(tests: list[CampaignTest], friction: str, variables: tuple[str, ..
                     chi2_reduced=red, weighted=se is not None)
 
 
-@dataclass(frozen=True, eq=False)
-class CampaignResult:
+@dataclass(frozen=True, eq=False, repr=False)
+class CampaignResult(Summarised):
     """Friction per test and the laws fitted over the campaign."""
 
     title: str
@@ -455,12 +457,13 @@ def law_panel(ax, law: LinearLaw, x, y, yerr, names, *, x_scale: float = 1.0, y_
     ax.set_ylabel(y_label)
 
 
-def campaign_figure(result: CampaignResult):
+@styled
+def campaign_figure(result: CampaignResult, fig=None):
     """Friction against each variable: the tests (95% error bars), the fitted law and its 95% band."""
     from .plots import _figure, user_label
 
     nv = len(result.variables)
-    fig = _figure(3.4 * nv + 0.6, 5.8, left=0.1, right=0.98, bottom=0.1, top=0.86, wspace=0.3, hspace=0.48)
+    fig = _figure(3.4 * nv + 0.6, 5.8, fig=fig, left=0.1, right=0.98, bottom=0.1, top=0.86, wspace=0.3, hspace=0.48)
     axes = np.atleast_2d(fig.subplots(2, nv, squeeze=False))
     for row, friction in enumerate(("F1", "F2")):
         for col, var in enumerate(result.variables):

@@ -7,12 +7,13 @@ stderr and exit with code 2.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from functools import wraps
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 import typer
 from typer.core import TyperGroup
@@ -66,17 +67,36 @@ class _OneLineErrors(TyperGroup):
 
 app = typer.Typer(
     cls=_OneLineErrors,
-    add_completion=False,
     no_args_is_help=True,
     pretty_exceptions_enable=False,
+    # "markdown", not Typer's default "rich": Rich markup would swallow the case file's table names
+    # ([observations], [record], [[tests]]) in every help text.
+    rich_markup_mode="markdown",
+    context_settings={"help_option_names": ["-h", "--help"]},
     help="Dynamics of the pushing and quick-release device: simulate a release, identify friction.",
 )
+
+
+def _version_callback(value: bool) -> None:
+    if value:
+        from . import __version__
+
+        typer.echo(f"quickrelease {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _main_options(
+    version: Annotated[bool, typer.Option("--version", callback=_version_callback, is_eager=True,
+                                          help="Print the version and exit.")] = False,
+) -> None:
+    """Dynamics of the pushing and quick-release device: simulate a release, identify friction."""
 
 DeviceOpt = Annotated[Path | None, typer.Option("--device", help="Device TOML file (Table 2 keys); default: the paper's device.")]
 ForceOpt = Annotated[str | None, typer.Option("--force", "-P", help="Push force P at release, e.g. '1598 kN' (SI number: N).")]
 EnergyOpt = Annotated[str | None, typer.Option("--energy", help="Stored strain energy E_S, e.g. '2.90 kJ' (SI number: J).")]
 Alpha0Opt = Annotated[str | None, typer.Option("--alpha0", help="Angle of the bars with the loading axis at release, e.g. '0.2' or '11.46 deg'.")]
-MassOpt = Annotated[str | None, typer.Option("--mass-model", help="distributed (c = 2/3, default), lumped (c = 1) or a number c.")]
+MassOpt = Annotated[str | None, typer.Option("--mass-model", metavar="<distributed|lumped|C>", help="distributed (c = 2/3, default), lumped (c = 1) or a number c.")]
 JsonOpt = Annotated[bool, typer.Option("--json", help="Print one JSON object instead of a table.")]
 
 
@@ -120,6 +140,22 @@ def _energy(device, force: str | None, energy: str | None, alpha0: float) -> tup
     return strain_energy(P, alpha0, device).total, P
 
 
+@contextlib.contextmanager
+def _busy(what: str) -> Iterator[None]:
+    """A spinner with ``what`` on stderr while a long computation runs, when stderr is a terminal (never in
+    pipes, files or tests); it is gone before the command prints its results."""
+    if not sys.stderr.isatty():
+        yield
+        return
+    from rich.console import Console
+    from rich.live import Live
+    from rich.spinner import Spinner
+
+    with Live(Spinner("dots", text=_clean(what)), console=Console(stderr=True), transient=True,
+              redirect_stdout=False, redirect_stderr=False, refresh_per_second=8):
+        yield
+
+
 def _print_json(data: dict[str, Any]) -> None:
     typer.echo(json.dumps(data, indent=2, allow_nan=False))
 
@@ -134,13 +170,22 @@ def _table(title: str, rows: list[tuple[str, ...]], headers: tuple[str, ...]) ->
         table.add_column(escape(_clean(h)))
     for row in rows:
         table.add_row(*(escape(_clean(str(cell))) for cell in row))
-    Console(width=140).print(table)
+    Console().print(table)  # the terminal's width (80 columns when not a terminal)
 
 
 def _fmt(value: Any) -> str:
     if isinstance(value, float):
         return f"{value:.6g}"
     return str(value)
+
+
+def _file_option(file: Path, out_old: Path | None, command: str) -> Path:
+    """The output file of ``sweep`` and ``synth``: ``--file`` (``--out`` names a folder in every other command;
+    here it is still accepted, with a note)."""
+    if out_old is None:
+        return file
+    _echo(f"note: {command} writes a file: its option is now --file (-f); --out still works for now", err=True)
+    return out_old
 
 
 CaseArg = Annotated[Path | None, typer.Argument(help="Case file (TOML); flags override its entries.",
@@ -195,10 +240,10 @@ def simulate(
     force: ForceOpt = None,
     energy: EnergyOpt = None,
     alpha0: Alpha0Opt = None,
-    f1: Annotated[str | None, typer.Option("--f1", help="Friction at the central hinges F1, e.g. '420 N' (default 0).")] = None,
-    f2: Annotated[str | None, typer.Option("--f2", help="Friction at the rail supports F2, e.g. '0.8 kN' (default 0).")] = None,
+    f1: Annotated[str | None, typer.Option("--f1", help="Friction at the central hinges F1, e.g. '420 N' (default 0, noted on stderr).")] = None,
+    f2: Annotated[str | None, typer.Option("--f2", help="Friction at the rail supports F2, e.g. '0.8 kN' (default 0, noted on stderr).")] = None,
     mass_model: MassOpt = None,
-    method: Annotated[str | None, typer.Option("--method", help="energy (default), rk or explicit.")] = None,
+    method: Annotated[Literal["energy", "rk", "explicit"] | None, typer.Option("--method", help="Solver: the energy first integral (default), Runge-Kutta, or the paper's explicit scheme (Table 6).")] = None,
     dt: Annotated[str | None, typer.Option("--dt", help="Time step of the explicit method, e.g. '1e-4 s'.")] = None,
     as_json: JsonOpt = False,
 ) -> None:
@@ -222,6 +267,10 @@ def simulate(
     response = run(case.stored_energy, case.alpha0, case.F1 or 0.0, case.F2 or 0.0, device=case.device,
                    mass_model=case.mass_model, method=case.method, dt=case.dt, n_points=case.n_points,
                    rk_method=case.rk_method)
+    if case_file is None:  # no case file: a friction left out is zero, and the user is told so
+        for flag, given, name in (("--f1", f1, "F1"), ("--f2", f2, "F2")):
+            if given is None:
+                _echo(f"note: {flag} not given: {name} = 0 N (frictionless)", err=True)
     summary = {"push_force_N": case.push_force, **response.summary(), "device": case.device.name}
     if as_json:
         _print_json(summary)
@@ -230,7 +279,9 @@ def simulate(
 
     words = {"stopped_by": f"{response.stopped_by}: {STOP_REASONS[response.stopped_by]}",
              "stop_time_s": "inf (never arrives)"} if response.stopped_by == "creeps_to_limit" else {}
-    _table("Release", [(k, words.get(k, _fmt(v))) for k, v in summary.items()], ("quantity", "value"))
+    from .display import label, value_text
+
+    _table("Release", [(label(k), words.get(k, value_text(k, v))) for k, v in summary.items()], ("quantity", "value"))
 
 
 @app.command()
@@ -262,7 +313,9 @@ def identify(
     if as_json:
         _print_json(summary)
         return
-    _table("Identified friction (Eq. 11-13)", [(k, _fmt(v)) for k, v in summary.items()], ("quantity", "value"))
+    from .display import quantity_rows
+
+    _table("Identified friction (Eq. 11-13)", quantity_rows(summary), ("quantity", "value"))
 
 
 OutOpt = Annotated[Path, typer.Option("--out", "-o", help="Output folder (created if needed).")]
@@ -296,10 +349,13 @@ def run_command(
         _print_json({"release": result.summary(), "identification": result.identification_summary(), **extra,
                      "files": {k: str(v) for k, v in paths.items()}})
         return
-    rows = [(k, _fmt(v)) for k, v in result.summary().items()]
+    from .display import label, quantity_rows, value_text
+
+    rows = quantity_rows(result.summary())
     if result.identification is not None:
         i = result.identification
-        rows = [("F1_N (identified)", _fmt(i.F1)), ("F2_N (identified)", _fmt(i.F2))] + rows
+        rows = [(f"{label('F1_N')} (identified)", value_text("F1_N", i.F1)),
+                (f"{label('F2_N')} (identified)", value_text("F2_N", i.F2))] + rows
     _table(result.case.title, rows, ("quantity", "value"))
     if result.building is not None:
         _building_tables(result.building, result.building.summary(), f"{result.case.title}: the building")
@@ -335,6 +391,7 @@ def report(
 def demo(
     out: OutOpt = Path("quickrelease-demo"),
     overwrite: OverwriteOpt = False,
+    as_json: JsonOpt = False,
 ) -> None:
     """The paper's test: E_S from Eq. 2 at P = 1598 kN, alpha0 = 0.2 rad; Table 7 identified; paper vs us.
 
@@ -355,6 +412,11 @@ def demo(
     results_folder(case, out, overwrite=overwrite)  # pre-flight
     dev = preset("paper")
     cmp = reproduce_table7(dev, mass_model=mass_model)
+    if as_json:
+        paths = write_results(run_case(case), out, overwrite=overwrite)
+        _print_json({"device": dev.name, "mass_model": mass_model, **cmp.summary(), "out": str(out),
+                     "files": sorted(str(p) for p in paths.values())})
+        return
     _echo(f"Device: {dev.name} (Table 2); mass model: {mass_model}")
     terms = [(k, f"{v:.2f}") for k, v in cmp.E_S_breakdown.items()]
     terms.append(("total E_S", f"{cmp.E_S_eq2:.2f}"))
@@ -376,7 +438,7 @@ def uq(
     samples: Annotated[int, typer.Option("--samples", "-n", help="Monte Carlo samples.")] = 100_000,
     seed: Annotated[int, typer.Option("--seed", help="Seed (results depend on seed and chunk size only).")] = 0,
     chunk: Annotated[int, typer.Option("--chunk", help="Samples per chunk (bounds memory).")] = 1_000_000,
-    backend: Annotated[str, typer.Option("--backend", help="numpy (default) or dask.")] = "numpy",
+    backend: Annotated[Literal["numpy", "dask"], typer.Option("--backend", help="Where the samples are computed: this process, or a Dask cluster.")] = "numpy",
     scheduler: Annotated[str | None, typer.Option("--scheduler", help="Dask scheduler address; default: a LocalCluster.")] = None,
     workers: Annotated[int, typer.Option("--workers", help="Workers of the LocalCluster.")] = 2,
     out: Annotated[Path | None, typer.Option("--out", "-o", help="Folder for chunks, uq.json and the corner figure.")] = None,
@@ -414,11 +476,12 @@ def uq(
 def sweep_command(
     case_file: Annotated[Path, typer.Argument(help="Case file: the inputs not swept, and the device.")],
     grid: Annotated[list[str], typer.Option("--grid", "-g", help="NAME=start:stop:count (with units), e.g. 'force=500 kN:3000 kN:26'; repeat for more dimensions.")],
-    out: Annotated[Path, typer.Option("--out", "-o", help="Output .nc (NetCDF) or .zarr; heat maps beside it.")] = Path("sweep.nc"),
-    backend: Annotated[str, typer.Option("--backend", help="numpy (default) or dask (needs --out *.zarr).")] = "numpy",
+    file: Annotated[Path, typer.Option("--file", "-f", help="Output file: .nc (NetCDF) or .zarr (Zarr store); the heat maps beside it.")] = Path("sweep.nc"),
+    out_old: Annotated[Path | None, typer.Option("--out", "-o", hidden=True, help="Old name of --file.")] = None,
+    backend: Annotated[Literal["numpy", "dask"], typer.Option("--backend", help="Where the grid is computed: this process, or a Dask cluster (needs --file *.zarr).")] = "numpy",
     scheduler: Annotated[str | None, typer.Option("--scheduler", help="Dask scheduler address; default: a LocalCluster.")] = None,
     workers: Annotated[int, typer.Option("--workers", help="Workers of the LocalCluster.")] = 2,
-    resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted dask sweep in --out (same inputs only).")] = False,
+    resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted dask sweep in --file (same inputs only).")] = False,
     block_rows: Annotated[int | None, typer.Option("--block-rows", help="Rows of the first grid per Dask block (default: about 10^6 points a block).")] = None,
     overwrite: OverwriteOpt = False,
     as_json: JsonOpt = False,
@@ -428,10 +491,13 @@ def sweep_command(
     from .plots import save_figure
     from .sweep import heatmap_figure, parse_grid, sweep
 
+    out = _file_option(file, out_old, "sweep")
     grids = dict(parse_grid(g) for g in grid)
-    ds = sweep(load_case(case_file), grids, backend=backend, out=out, scheduler=scheduler, workers=workers,
-               block_rows=block_rows, resume=resume, overwrite=overwrite, log=lambda line: _echo(f"note: {line}", err=True))
-    figs = save_figure(heatmap_figure(ds), out.parent, out.name.rsplit(".", 1)[0] + "_heatmaps")
+    with _busy("sweeping the grid"):
+        ds = sweep(load_case(case_file), grids, backend=backend, out=out, scheduler=scheduler, workers=workers,
+                   block_rows=block_rows, resume=resume, overwrite=overwrite,
+                   log=lambda line: _echo(f"note: {line}", err=True))
+        figs = save_figure(heatmap_figure(ds), out.parent, out.name.rsplit(".", 1)[0] + "_heatmaps")
     summary = {"file": str(out), "dims": {k: int(v) for k, v in ds.sizes.items()},
                "stop_time_s": [float(ds.stop_time.min()),  # creeping cases (stopped_by 2, t_F = inf): counted apart
                                float(ds.stop_time.where(ds.stopped_by != 2).max())],
@@ -445,8 +511,10 @@ def sweep_command(
     if as_json:
         _print_json(summary)
         return
+    from .display import quantity_rows
+
     _table(f"Sweep over {' x '.join(f'{k} ({v})' for k, v in summary['dims'].items())}",
-           [(k, _fmt(v)) for k, v in summary.items() if k not in ("dims",)], ("quantity", "value (min, max)"))
+           quantity_rows(summary, skip=("dims",)), ("quantity", "value (min, max)"))
 
 
 @app.command()
@@ -463,7 +531,8 @@ def synth(
     jitter: Annotated[float, typer.Option("--jitter", help="Uneven sampling: instants shifted by up to +-jitter/2 intervals, in [0, 1).")] = 0.0,
     missing: Annotated[float, typer.Option("--missing", help="Share of missing samples per channel, in [0, 1).")] = 0.0,
     building: Annotated[bool, typer.Option("--building", help="Synthesize the building's free vibration ([building]) instead of the device's release (implied by a case without [test]).")] = False,
-    out: Annotated[Path, typer.Option("--out", "-o", help="Record file to write (CSV).")] = Path("record.csv"),
+    file: Annotated[Path, typer.Option("--file", "-f", help="Record file to write (CSV).")] = Path("record.csv"),
+    out_old: Annotated[Path | None, typer.Option("--out", "-o", hidden=True, help="Old name of --file.")] = None,
     case_out: Annotated[Path | None, typer.Option("--case-out", help="Also write a case file that fits this record.")] = None,
     as_json: JsonOpt = False,
 ) -> None:
@@ -471,6 +540,7 @@ def synth(
     or (--building) of the building's free vibration after the release, and the precision of its isolation fit."""
     import os
 
+    out = _file_option(file, out_old, "synth")
     from .case import load_case
     from .export import write_text
     from .synth import case_toml, parse_channel_values, predicted_errors, synthesize
@@ -592,14 +662,16 @@ def fit_command(
 
         if out is not None:
             results_folder(case, out, overwrite=overwrite)  # pre-flight
-        result = run_case(case)
-        fit = result.fit
-        paths = write_results(result, out, overwrite=overwrite) if out is not None else {}
+        with _busy("fitting the record"):
+            result = run_case(case)
+            fit = result.fit
+            paths = write_results(result, out, overwrite=overwrite) if out is not None else {}
     else:
         from .runfolder import RunFolder, case_inputs
 
         folder = RunFolder(out, "fit", {"case": case_inputs(case)}, overwrite=overwrite) if out is not None else None
-        fit = fit_record(case)
+        with _busy("fitting the record"):
+            fit = fit_record(case)
         paths = {}
         if folder is not None:
             from .export import write_json
@@ -635,7 +707,7 @@ def fit_command(
 @_guard
 def building_command(
     case_file: Annotated[Path, typer.Argument(help="Case file with [building] and [building.record].")],
-    model: Annotated[str | None, typer.Option("--model", help="linear, bilinear or 2dof (default: the case's [building] model).")] = None,
+    model: Annotated[Literal["linear", "bilinear", "2dof"] | None, typer.Option("--model", help="Isolation model (default: the case's [building] model).")] = None,
     compare: Annotated[bool, typer.Option("--compare", help="Also fit the other models; rank them by AIC/BIC and residual whiteness.")] = False,
     out: Annotated[Path | None, typer.Option("--out", "-o", help="Also write summary.json, the figures and report.html here.")] = None,
     overwrite: OverwriteOpt = False,
@@ -657,7 +729,8 @@ def building_command(
         from .workflow import building_folder
 
         building_folder(data, out, model=model, compare=compare, overwrite=overwrite)  # pre-flight
-    result = analyse_building(data, model=model, compare=compare)
+    with _busy(f"fitting the {model or data.model} isolation model"):
+        result = analyse_building(data, model=model, compare=compare)
     paths = {}
     if out is not None:
         from .workflow import write_building_results
@@ -720,10 +793,11 @@ def campaign(
 
     if out is not None:
         campaign_folder(campaign_file, out, overwrite=overwrite)  # pre-flight
-    result = run_campaign(campaign_file)
-    paths = {}
-    if out is not None:
-        paths = write_campaign_results(result, out, overwrite=overwrite)
+    with _busy("fitting every test of the campaign"):
+        result = run_campaign(campaign_file)
+        paths = {}
+        if out is not None:
+            paths = write_campaign_results(result, out, overwrite=overwrite)
     if as_json:
         _print_json(result.summary())
         return
@@ -806,7 +880,8 @@ def plan(
     case = load_case(case_file)
     if out is not None:
         results_folder(case, out, plan=True, overwrite=overwrite)  # pre-flight
-    result = run_case(case, plan=True)
+    with _busy("planning the test"):
+        result = run_case(case, plan=True)
     plan_result = result.plan
     paths = write_results(result, out, overwrite=overwrite) if out is not None else {}
     summary = plan_result.summary()
@@ -868,7 +943,9 @@ def bench(
     if as_json:
         _print_json(result)
         return
-    _table("quickrelease bench", [(k, _fmt(v)) for k, v in result.items()], ("quantity", "value"))
+    from .display import quantity_rows
+
+    _table("quickrelease bench", quantity_rows(result), ("quantity", "value"))
 
 
 def main() -> None:

@@ -18,6 +18,7 @@ import numpy as np
 
 from ._validate import HALF_PI
 from .errors import ParameterError
+from .units import si
 
 __all__ = [
     "MASS_MODELS",
@@ -341,6 +342,8 @@ def final_angle(E_S, alpha0, F1, F2, L1):
     :func:`reaches_geometric_limit`), the motion ends at the geometric limit and
     pi/2 is returned; so too where it creeps towards it (:func:`creeps_to_limit`: pi/2 is its limit).
     """
+    E_S, alpha0 = si(E_S, "energy", "E_S"), si(alpha0, "angle", "alpha0")
+    F1, F2, L1 = si(F1, "force", "F1"), si(F2, "force", "F2"), si(L1, "length", "L1")
     delta = sweep_angle(E_S, alpha0, F1, F2, L1)
     limit = reaches_geometric_limit(E_S, alpha0, F1, F2, L1) | creeps_to_limit(E_S, alpha0, F1, F2, L1)
     alpha_F = np.where(limit, HALF_PI, np.minimum(np.asarray(alpha0, dtype=float) + delta, HALF_PI))

@@ -17,17 +17,13 @@ from typing import Any
 
 import numpy as np
 
-from .response import Response
+from .response import TIME_HISTORIES, Response
 
 __all__ = ["atomic_path", "write_json", "write_text", "write_csv", "read_csv", "write_netcdf", "read_netcdf",
            "COLUMN_UNITS"]
 
 #: Time-history columns and their units (the CSV header carries the unit in the name).
-COLUMN_UNITS: dict[str, str] = {
-    "t_s": "s", "alpha_rad": "rad", "alpha_dot_rad_s": "rad/s", "alpha_ddot_rad_s2": "rad/s^2",
-    "u_m": "m", "v_m": "m", "u_dot_m_s": "m/s", "v_dot_m_s": "m/s", "u_ddot_m_s2": "m/s^2",
-    "v_ddot_m_s2": "m/s^2", "E_K_J": "J", "W_F_J": "J", "E_S_J": "J",
-}
+COLUMN_UNITS: dict[str, str] = {column: unit for column, (_, unit, _) in TIME_HISTORIES.items()}
 
 
 @contextlib.contextmanager
@@ -93,56 +89,21 @@ def read_csv(path: str | Path) -> dict[str, np.ndarray]:
 def write_netcdf(response: Response, path: str | Path, attrs: dict[str, Any] | None = None) -> Path:
     """Write the time histories as NetCDF (classic format, readable by xarray and every NetCDF tool).
 
-    Variables are named as the CSV columns without the unit suffix, with a ``units`` attribute;
-    the summary goes into global attributes.
+    The dataset of :meth:`Response.to_xarray`: variables named as the CSV columns without the unit suffix,
+    on the time coordinate ``t``, with ``units`` and ``long_name``; the summary and ``attrs`` as global
+    attributes. Text attributes are UTF-8 (a title "Prüfung" reads back letter for letter).
     """
-    from scipy.io import netcdf_file
-
-    data = response.to_dict()
-    n = response.t.size
-    summary = {k: v for k, v in response.summary().items() if v is not None}
-    summary.update(attrs or {})
+    ds = response.to_xarray()
+    for key, value in (attrs or {}).items():
+        ds.attrs[key] = int(value) if isinstance(value, bool) else value
     with atomic_path(path) as tmp:
-        f = netcdf_file(tmp, "w", version=2)
-        try:
-            f.createDimension("time", n)
-            for name, values in data.items():
-                var_name = _var_name(name)
-                var = f.createVariable(var_name, "d", ("time",))
-                var[:] = np.asarray(values, dtype=float)
-                var.units = COLUMN_UNITS[name]
-            f.title = "quickrelease release time history"
-            for key, value in summary.items():
-                if isinstance(value, bool):
-                    value = np.int32(value)
-                elif isinstance(value, int):
-                    value = np.int64(value) if abs(value) >= 2**31 else np.int32(value)
-                elif isinstance(value, float):
-                    value = np.float64(value)  # scipy would store a Python float as float32
-                elif isinstance(value, str):
-                    value = _text_attr(value)
-                setattr(f, key, value)
-        finally:
-            f.close()
+        ds.to_netcdf(tmp, engine="scipy", format="NETCDF3_64BIT")
     return Path(path)
 
 
-def _text_attr(text: str) -> bytes:
-    """A text attribute as NetCDF classic stores text: UTF-8 bytes (NC_CHAR), the encoding the NetCDF
-    conventions and xarray read back as text. scipy's writer encodes ``str`` as ASCII and fails on any
-    other letter (a title "Prüfung", a test name in CJK)."""
-    return text.encode("utf-8")
-
-
-def _var_name(column: str) -> str:
-    unit = COLUMN_UNITS[column]
-    suffix = "_" + unit.replace("/", "_").replace("^", "")
-    return column[: -len(suffix)] if column.endswith(suffix) else column
-
-
 def read_netcdf(path: str | Path) -> dict[str, np.ndarray]:
-    """Read the variables of a NetCDF file written by :func:`write_netcdf`."""
-    from scipy.io import netcdf_file
+    """The variables (and the time coordinate ``t``) of a NetCDF file written by :func:`write_netcdf`."""
+    import xarray as xr
 
-    with netcdf_file(path, "r", mmap=False) as f:
-        return {name: np.array(var[:]) for name, var in f.variables.items()}
+    with xr.open_dataset(path, engine="scipy") as ds:
+        return {str(name): np.array(ds[name].values) for name in [*ds.coords, *ds.data_vars]}

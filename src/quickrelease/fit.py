@@ -33,6 +33,7 @@ from . import dynamics
 from ._lsq import jacobian_covariance
 from .case import Case, FitOptions
 from .device import Device
+from .display import Summarised
 from .errors import InfeasibleObservationError, QuickReleaseError
 from .records import (
     DISPLACEMENT_CHANNELS,
@@ -61,8 +62,8 @@ FIT_CHUNK_ROWS = 1 << 16
 _UNITS = {"F1": "N", "F2": "N", "energy": "J", "mass_factor": "-", "release_time": "s"}
 
 
-@dataclass(frozen=True, eq=False)
-class FitResult:
+@dataclass(frozen=True, eq=False, repr=False)
+class FitResult(Summarised):
     """Estimates, uncertainties and diagnostics of a fit to a measured record (SI units)."""
 
     names: tuple[str, ...]

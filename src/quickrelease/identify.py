@@ -21,16 +21,20 @@ from ._kernels import feasible_slack
 from ._roots import brent
 from ._validate import check_angle, check_positive
 from .device import Device, preset
+from .display import Summarised
 from .errors import InfeasibleObservationError, ParameterError, QuickReleaseError
 from .solvers import FirstIntegral
 from .statics import strain_energy
+from .units import si_scalar
 
 __all__ = ["Identification", "identify_friction", "stop_time_on_line", "case_friction"]
 
 
-@dataclass(frozen=True)
-class Identification:
+@dataclass(frozen=True, repr=False)
+class Identification(Summarised):
     """Friction forces identified from a stop observation (Eq. 11-13), with the inputs."""
+
+    _repr_keys = ("F1_N", "F2_N", "stop_time_s", "alpha_final_rad")
 
     F1: float
     """Friction at the central hinges [N]."""
@@ -135,6 +139,8 @@ def identify_friction(alpha0: float, alpha_final: float, stop_time: float, *,
     mass_model : {"distributed", "lumped"} or float
         Mass factor c.
 
+    Numbers are SI; the quantities also take strings with units (``"2.9 kJ"``) or pint Quantities.
+
     Returns
     -------
     Identification
@@ -148,6 +154,10 @@ def identify_friction(alpha0: float, alpha_final: float, stop_time: float, *,
     """
     device = device or preset("paper")
     c = dynamics.mass_factor(mass_model)
+    alpha0, alpha_final = si_scalar(alpha0, "angle", "alpha0"), si_scalar(alpha_final, "angle", "alpha_final")
+    stop_time = si_scalar(stop_time, "time", "stop_time")
+    stored_energy = None if stored_energy is None else si_scalar(stored_energy, "energy", "stored_energy")
+    push_force = None if push_force is None else si_scalar(push_force, "force", "push_force")
     check_angle("alpha0", alpha0)
     check_angle("alpha_final", alpha_final)
     if alpha_final <= alpha0:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from functools import lru_cache
 from importlib import resources
 from typing import Any
@@ -19,6 +19,7 @@ from typing import Any
 from . import dynamics
 from ._roots import brent
 from .device import Device, preset
+from .display import Summarised
 from .identify import identify_friction, stop_time_on_line
 from .solvers import simulate
 from .statics import strain_energy
@@ -67,8 +68,8 @@ def printed_table7() -> dict[str, PrintedValue]:
     return out
 
 
-@dataclass(frozen=True)
-class PaperComparison:
+@dataclass(frozen=True, repr=False)
+class PaperComparison(Summarised):
     """Our numbers beside the paper's for the Table 7 test, with what explains the gaps.
 
     All values SI. ``rows()`` gives the side-by-side table the CLI and README show.
@@ -143,6 +144,19 @@ class PaperComparison:
         if c0 <= t.value <= c1:
             return f"{lumped}; feasible with c = {self.mass_factor:.4g} ([{c0:.4f}, {c1:.4f}] s)"
         return f"{lumped}; infeasible with c = {self.mass_factor:.4g} too"
+
+    def summary(self) -> dict[str, Any]:
+        """Every computed value (SI; intervals as two-element lists), the printed Table 7 values as
+        ``printed_<name>`` (SI) and the side-by-side ``table7`` rows: what ``quickrelease demo --json`` prints."""
+        out: dict[str, Any] = {f"printed_{k}": v.value for k, v in self.printed.items()}
+        for f in fields(self):
+            if f.name == "printed":
+                continue
+            value = getattr(self, f.name)
+            out[f.name] = list(value) if isinstance(value, tuple) else value
+        out["table7"] = [dict(zip(("quantity", "paper", "quickrelease", "note"), row, strict=True))
+                         for row in self.rows()]
+        return out
 
     def rows(self) -> list[tuple[str, str, str, str]]:
         """(quantity, paper, ours, note) rows for a side-by-side table."""

@@ -19,10 +19,12 @@ from typing import Any
 import numpy as np
 
 from . import batch
+from ._style import styled
 from ._validate import check_size
 from .building import FreeVibration, Isolation, free_vibration, pushed_state
 from .case import BuildingSpec, Case, Distribution
 from .device import Device
+from .display import Summarised
 from .dynamics import angular_acceleration
 from .errors import ParameterError, QuickReleaseError
 from .identify import case_friction
@@ -669,8 +671,8 @@ def _refine_minimum(f, a: float, b: float, tol: float = 1e-10) -> float:
 
 # -- the plan ----------------------------------------------------------------------------------------------------
 
-@dataclass(frozen=True, eq=False)
-class PlanResult:
+@dataclass(frozen=True, eq=False, repr=False)
+class PlanResult(Summarised):
     """Everything :func:`plan_case` found for a case."""
 
     case: Case
@@ -770,7 +772,8 @@ def plan_case(case: Case, *, clearance_samples: int = 200) -> PlanResult:
 
 # -- figures --------------------------------------------------------------------------------------------------
 
-def choices_figure(table: FuseTable):
+@styled
+def choices_figure(table: FuseTable, fig=None):
     """The (diameter, angle) choices: push force at rupture (kN, +- one standard deviation) on a grid, the
     choices inside the target range outlined, the most likely one in bold."""
     from matplotlib.patches import Rectangle
@@ -781,7 +784,7 @@ def choices_figure(table: FuseTable):
     std = table.grid("push_force_std") / 1e3
     within = table.grid("within")
     nd, na = P.shape
-    fig = _figure(1.6 + 1.05 * na, 1.5 + 0.55 * nd, left=0.16, right=0.97, bottom=0.2, top=0.8)
+    fig = _figure(1.6 + 1.05 * na, 1.5 + 0.55 * nd, fig=fig, left=0.16, right=0.97, bottom=0.2, top=0.8)
     ax = fig.subplots()
     centre = 0.5 * sum(table.target) / 1e3
     dev = np.clip(P / centre - 1.0, -0.5, 0.5)
@@ -806,12 +809,13 @@ def choices_figure(table: FuseTable):
     return fig
 
 
-def utilisation_figure(members: MemberChecks):
+@styled
+def utilisation_figure(members: MemberChecks, fig=None):
     """Utilisation of every member check (skipped checks marked), with the limit 1."""
     from .plots import _COLORS, _figure
 
     checks = list(members.checks)
-    fig = _figure(6.4, 0.8 + 0.42 * len(checks), left=0.46, right=0.95, bottom=0.22, top=0.86)
+    fig = _figure(6.4, 0.8 + 0.42 * len(checks), fig=fig, left=0.46, right=0.95, bottom=0.22, top=0.86)
     ax = fig.subplots()
     labels = [f"{c.member}: {c.check}" for c in checks]
     values = [c.utilisation if c.utilisation is not None else 0.0 for c in checks]
@@ -831,12 +835,13 @@ def utilisation_figure(members: MemberChecks):
     return fig
 
 
-def envelope_figure(envelope: Envelope):
+@styled
+def envelope_figure(envelope: Envelope, fig=None):
     """Distributions over the friction estimate of the stroke, the opening, the time to stop and the peak head
     velocity, with the nominal value and the 5-95% range."""
     from .plots import _COLORS, _figure
 
-    fig = _figure(7.0, 4.6, left=0.08, right=0.98, bottom=0.11, top=0.88, wspace=0.25, hspace=0.45)
+    fig = _figure(7.0, 4.6, fig=fig, left=0.08, right=0.98, bottom=0.11, top=0.88, wspace=0.25, hspace=0.45)
     axes = fig.subplots(2, 2)
     for ax, key in zip(axes.flat, ("u_final", "v_final", "stop_time", "peak_u_dot"), strict=True):
         unit, label = ENVELOPE_QUANTITIES[key]
@@ -853,11 +858,12 @@ def envelope_figure(envelope: Envelope):
     return fig
 
 
-def gap_figure(clear: Clearance):
+@styled
+def gap_figure(clear: Clearance, fig=None):
     """The head's retraction, the building's approach and the gap between them after release."""
     from .plots import _COLORS, _figure
 
-    fig = _figure(6.4, 3.4, left=0.11, right=0.97, bottom=0.14, top=0.86)
+    fig = _figure(6.4, 3.4, fig=fig, left=0.11, right=0.97, bottom=0.14, top=0.86)
     ax = fig.subplots()
     ax.plot(clear.t, clear.head, color=_COLORS["a"], label="head retraction u(t)")
     ax.plot(clear.t, clear.approach, color=_COLORS["c"], label="building approach d0 - x(t)")

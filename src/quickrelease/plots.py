@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from . import dynamics
+from ._style import COLORS, STYLE, figure, styled
 from .identify import Identification, stop_time_on_line
 from .response import Response
 from .statics import StrainEnergy
@@ -23,24 +24,7 @@ __all__ = [
     "state_diagram_data", "identification_curve_data", "user_text", "user_label",
 ]
 
-_STYLE = {
-    "font.size": 9, "axes.titlesize": 9, "axes.labelsize": 9, "legend.fontsize": 8,
-    "xtick.labelsize": 8, "ytick.labelsize": 8, "axes.grid": True, "grid.alpha": 0.3,
-    "lines.linewidth": 1.4, "svg.hashsalt": "quickrelease", "figure.dpi": 100,
-}
-_COLORS = {"a": "#1f4e79", "b": "#c0504d", "c": "#4f8a3c", "d": "#7f7f7f"}
-
-
-def _figure(width: float, height: float, **margins: float):
-    """A Figure with fixed margins (fractions of the figure): much cheaper to save than a layout engine."""
-    import matplotlib
-
-    matplotlib.rcParams.update(_STYLE)
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(width, height))
-    fig.subplots_adjust(**{"left": 0.12, "right": 0.97, "bottom": 0.14, "top": 0.9, **margins})
-    return fig
+_STYLE, _COLORS, _figure = STYLE, COLORS, figure  # the names the figure modules import
 
 
 #: Control characters but newline and tab: no glyph draws them, and XML (the SVG) forbids them.
@@ -64,9 +48,10 @@ def _mark_stop(ax, response: Response) -> None:
     ax.axvline(response.stop_time, color=_COLORS["d"], lw=0.8, ls="--")
 
 
-def fig13(response: Response):
+@styled
+def fig13(response: Response, fig=None):
     """Fig. 13: (a) position angle, (b) angular velocity, (c) angular acceleration, (d) energy balance vs time."""
-    fig = _figure(7.0, 5.0, left=0.09, right=0.98, bottom=0.09, top=0.88, wspace=0.28, hspace=0.28)
+    fig = _figure(7.0, 5.0, fig=fig, left=0.09, right=0.98, bottom=0.09, top=0.88, wspace=0.28, hspace=0.28)
     axes = fig.subplots(2, 2, sharex=True)
     r = response
     (a, b), (c, d) = axes
@@ -96,9 +81,10 @@ def fig13(response: Response):
     return fig
 
 
-def fig14(response: Response):
+@styled
+def fig14(response: Response, fig=None):
     """Fig. 14: (a) retraction u and opening v, (b) their velocities, vs time."""
-    fig = _figure(7.0, 2.8, left=0.08, right=0.98, bottom=0.16, top=0.9, wspace=0.28)
+    fig = _figure(7.0, 2.8, fig=fig, left=0.08, right=0.98, bottom=0.16, top=0.9, wspace=0.28)
     a, b = fig.subplots(1, 2, sharex=True)
     r = response
     a.plot(r.t, r.u, color=_COLORS["a"], label="longitudinal $u$")
@@ -139,7 +125,8 @@ def state_diagram_data(response: Response) -> dict[str, np.ndarray]:
             "distance": np.abs(F) / grad}
 
 
-def fig15(responses: Response | list[Response], n_markers: int = 40):
+@styled
+def fig15(responses: Response | list[Response], n_markers: int = 40, fig=None):
     """Fig. 15: state diagram, numerical solutions (markers) over the analytic curve of Eq. 10 (line).
 
     Each response's legend entry gives its largest distance from the curve.
@@ -147,7 +134,7 @@ def fig15(responses: Response | list[Response], n_markers: int = 40):
     responses = [responses] if isinstance(responses, Response) else list(responses)
     r = responses[0]
     d = r.device
-    fig = _figure(4.6, 3.4, left=0.14, bottom=0.14)
+    fig = _figure(4.6, 3.4, fig=fig, left=0.14, bottom=0.14)
     ax = fig.subplots()
     fine = np.linspace(r.alpha0, r.alpha_final, 400)
     W = dynamics.dissipated_energy(fine, r.alpha0, r.F1, r.F2, d.L1)
@@ -184,10 +171,11 @@ def identification_curve_data(ident: Identification, n: int = 41) -> dict[str, n
     return {"F2_ratio": ratio, "F1": F1, "F2": ident.F2_max * ratio, "stop_time": t}
 
 
-def identification_figure(ident: Identification):
+@styled
+def identification_figure(ident: Identification, fig=None):
     """Stop time along the line of Eq. 13, with the measured t_F and the identified point."""
     data = identification_curve_data(ident)
-    fig = _figure(4.6, 3.4, left=0.14, bottom=0.15)
+    fig = _figure(4.6, 3.4, fig=fig, left=0.14, bottom=0.15)
     ax = fig.subplots()
     ax.plot(data["F2_ratio"], data["stop_time"], color=_COLORS["a"], label="model $t_F$ on Eq. 13")
     ax.axhline(ident.stop_time, color=_COLORS["d"], ls="--", lw=0.9, label=f"measured $t_F$ = {ident.stop_time:g} s")
@@ -200,13 +188,14 @@ def identification_figure(ident: Identification):
     return fig
 
 
-def strain_energy_figure(strain: StrainEnergy):
+@styled
+def strain_energy_figure(strain: StrainEnergy, fig=None):
     """Bar chart of the six terms of Eq. 2, grouped by member and coloured by effect."""
     terms = strain.terms()
     labels = {"axial_E1": "E1 axial", "axial_E2": "E2 axial", "axial_E3": "E3 axial", "axial_E4": "E4 (fuse) axial",
               "bending_E2": "E2 bending", "shear_E2": "E2 shear"}
     colors = {"axial": _COLORS["a"], "bending": _COLORS["b"], "shear": _COLORS["c"]}
-    fig = _figure(5.6, 3.2, left=0.2, right=0.98, bottom=0.14, top=0.84)
+    fig = _figure(5.6, 3.2, fig=fig, left=0.2, right=0.98, bottom=0.14, top=0.84)
     ax = fig.subplots()
     names = list(terms)
     values = [terms[n] for n in names]
@@ -222,7 +211,8 @@ def strain_energy_figure(strain: StrainEnergy):
     return fig
 
 
-def fit_figure(result):
+@styled
+def fit_figure(result, fig=None):
     """Measured and fitted channels of a fit to a record, each with its residuals (the +-2 sigma band shaded).
 
     ``result`` is a :class:`quickrelease.fit.FitResult` with a record.
@@ -232,7 +222,7 @@ def fit_figure(result):
     names = list(result.record.channels)
     n = len(names)
     height = 1.0 + 2.6 * n
-    fig = _figure(7.0, height, left=0.11, right=0.98, bottom=0.5 / height, top=1.0 - 0.55 / height)
+    fig = _figure(7.0, height, fig=fig, left=0.11, right=0.98, bottom=0.5 / height, top=1.0 - 0.55 / height)
     grid = fig.add_gridspec(3 * n - 1, 1, height_ratios=([3, 1.2, 0.5] * n)[:-1], hspace=0.1)
     t_fine, curves = result.model_curves()
     share = None
@@ -268,12 +258,14 @@ def fit_figure(result):
 def save_figure(fig: Any, folder: str | Path, stem: str, formats: tuple[str, ...] = ("png", "svg"),
                 dpi: int = 150) -> dict[str, Path]:
     """Write ``fig`` as ``folder/stem.png`` and ``.svg`` (atomically); returns the paths by format."""
+    import matplotlib
+
     from .export import atomic_path
 
     out = {}
     for fmt in formats:
         path = Path(folder) / f"{stem}.{fmt}"
-        with atomic_path(path) as tmp:
+        with atomic_path(path) as tmp, matplotlib.rc_context(_STYLE):  # svg settings are read at save time
             fig.savefig(tmp, format=fmt, dpi=dpi, metadata={"Date": None} if fmt == "svg" else None)
         out[fmt] = path
     return out

@@ -51,10 +51,15 @@ def _table(rows: list[tuple[str, str, str]], headers: tuple[str, str, str] = ("q
     return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
 
 
-def _svg_inline(svg: str) -> str:
-    """Strip the XML prolog and DOCTYPE so the SVG can sit inside HTML."""
+def _svg_inline(svg: str, prefix: str) -> str:
+    """The SVG ready to sit inside HTML: XML prolog and DOCTYPE stripped, and every id (with the references
+    to it: ``url(#id)``, ``href="#id"``) given the figure's ``prefix``, so that figures that draw the same
+    clip path or marker do not repeat an id in the page (HTML ids are unique)."""
     svg = re.sub(r"<\?xml[^>]*\?>", "", svg)
     svg = re.sub(r"<!DOCTYPE[^>]*>", "", svg, flags=re.S)
+    svg = re.sub(r'\bid="([^"]+)"', lambda m: f'id="{prefix}-{m.group(1)}"', svg)
+    svg = re.sub(r"url\(#([^)]+)\)", lambda m: f"url(#{prefix}-{m.group(1)})", svg)
+    svg = re.sub(r'href="#([^"]+)"', lambda m: f'href="#{prefix}-{m.group(1)}"', svg)
     return svg.strip()
 
 
@@ -404,7 +409,7 @@ def _plan_section(plan, svgs: dict[str, str]) -> str:
 def _figure(svgs: dict[str, str], stem: str, caption: str | None = None) -> str:
     if stem not in svgs:
         return ""
-    return (f"<figure id=\"{stem}\">{_svg_inline(svgs[stem])}"
+    return (f"<figure id=\"{stem}\">{_svg_inline(svgs[stem], stem)}"
             f"<figcaption>{_e(caption or FIGURES[stem])}</figcaption></figure>")
 
 

@@ -10,8 +10,27 @@ import numpy as np
 
 from . import dynamics, kinematics
 from .device import Device
+from .display import Summarised
 
-__all__ = ["Response", "STOP_REASONS"]
+__all__ = ["Response", "STOP_REASONS", "TIME_HISTORIES"]
+
+#: The time histories of a release: column (CSV, with its unit), variable name (NetCDF, xarray), unit
+#: (UDUNITS) and long name. The order is the files' column order.
+TIME_HISTORIES: dict[str, tuple[str, str, str]] = {
+    "t_s": ("t", "s", "time since the fuse broke"),
+    "alpha_rad": ("alpha", "rad", "angle of the bars with the loading axis"),
+    "alpha_dot_rad_s": ("alpha_dot", "rad/s", "angular velocity of the bars"),
+    "alpha_ddot_rad_s2": ("alpha_ddot", "rad/s^2", "angular acceleration of the bars"),
+    "u_m": ("u", "m", "retraction of the head along the loading axis"),
+    "v_m": ("v", "m", "opening of the rhombus across the loading axis"),
+    "u_dot_m_s": ("u_dot", "m/s", "velocity of the head"),
+    "v_dot_m_s": ("v_dot", "m/s", "opening velocity"),
+    "u_ddot_m_s2": ("u_ddot", "m/s^2", "acceleration of the head"),
+    "v_ddot_m_s2": ("v_ddot", "m/s^2", "opening acceleration"),
+    "E_K_J": ("E_K", "J", "kinetic energy of the device"),
+    "W_F_J": ("W_F", "J", "energy dissipated by friction"),
+    "E_S_J": ("E_S", "J", "strain energy stored at release"),
+}
 
 #: Why the motion ended: friction dissipated E_S (Eq. 8), or the rhombus became flat.
 STOP_REASONS = {
@@ -24,7 +43,7 @@ STOP_REASONS = {
 
 
 @dataclass(frozen=True, eq=False)
-class Response:
+class Response(Summarised):
     """Time history and summary of one release.
 
     Arrays share the time axis ``t`` (shape ``(n,)``). Angles in rad, lengths in m,
@@ -176,10 +195,32 @@ class Response:
         }
 
     def to_pandas(self):
-        """The time histories as a pandas DataFrame (columns with units in their names)."""
+        """The time histories as a pandas DataFrame indexed by the time ``t_s`` (columns with units in their
+        names, as in the CSV; ``.reset_index()`` gives the time as a column)."""
         import pandas as pd
 
-        return pd.DataFrame(self.to_dict())
+        return pd.DataFrame(self.to_dict()).set_index("t_s")
+
+    def to_xarray(self):
+        """The time histories as an ``xarray.Dataset`` on the time coordinate ``t`` [s], each variable with its
+        ``units`` and ``long_name`` (CF conventions), the summary as global attributes: what
+        ``quickrelease run`` writes as ``timeseries.nc``. ``ds.alpha.plot()`` plots against time."""
+        import xarray as xr
+
+        from . import __version__
+
+        data = self.to_dict()
+        name, unit, long_name = TIME_HISTORIES["t_s"]
+        coords = {name: (name, data.pop("t_s"), {"units": unit, "long_name": long_name, "axis": "T"})}
+        variables = {TIME_HISTORIES[col][0]: (name, np.asarray(values, dtype=float),
+                                              {"units": TIME_HISTORIES[col][1], "long_name": TIME_HISTORIES[col][2]})
+                     for col, values in data.items()}
+        attrs: dict[str, Any] = {"title": "quickrelease release time history", "Conventions": "CF-1.8",
+                                 "source": f"quickrelease {__version__}"}
+        for key, value in self.summary().items():
+            if value is not None:
+                attrs[key] = int(value) if isinstance(value, bool) else value
+        return xr.Dataset(variables, coords=coords, attrs=attrs)
 
     def __repr__(self) -> str:
         return (

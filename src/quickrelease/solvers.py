@@ -35,10 +35,11 @@ from ._kernels import Releases
 from ._roots import brent
 from ._statetable import StateTable
 from ._timemap import TimeMap
-from ._validate import HALF_PI, check_angle, check_nonnegative, check_positive, check_size
+from ._validate import HALF_PI, check_angle, check_nonnegative, check_positive, check_size, renamed
 from .device import Device, preset
 from .errors import ParameterError
 from .response import Response
+from .units import si_scalar
 
 __all__ = ["METHODS", "simulate", "stop_time", "FirstIntegral"]
 
@@ -215,14 +216,17 @@ class FirstIntegral:
         return (alpha, alpha_dot, alpha_ddot) if acceleration else (alpha, alpha_dot)
 
 
-def stop_time(E_S: float, alpha0: float, F1: float, F2: float, *,
+@renamed(E_S="stored_energy")
+def stop_time(stored_energy: float, alpha0: float, F1: float, F2: float, *,
               device: Device | None = None, mass_model: str | float = "distributed") -> float:
     """Time from release to the end of the motion, t_F, by the energy solution (Eq. 10) [s].
 
+    Quantity arguments are SI numbers, strings with units or pint Quantities.
+
     Parameters
     ----------
-    E_S : float
-        Stored strain energy [J].
+    stored_energy : float
+        Stored strain energy E_S [J].
     alpha0 : float
         Angle at release [rad], in (0, pi/2).
     F1, F2 : float
@@ -234,7 +238,7 @@ def stop_time(E_S: float, alpha0: float, F1: float, F2: float, *,
     """
     device = device or preset("paper")
     c = dynamics.mass_factor(mass_model)
-    _check_release(E_S, alpha0, F1, F2)
+    E_S, alpha0, F1, F2 = _release_args(stored_energy, alpha0, F1, F2)
     return FirstIntegral(E_S, alpha0, F1, F2, device.m1, device.m2, device.L1, c).stop_time()
 
 
@@ -255,6 +259,14 @@ def _unresolved(fi: FirstIntegral, derived: str) -> None:
     others = ", ".join(f"{k} = {v:.6g} {u}".rstrip() for k, (v, u) in inputs.items() if k != worst)
     raise ParameterError(worst, inputs[worst][0], f"the range the release model resolves in floating point "
                          f"(with {others}, alpha0 = {fi.alpha0:.6g} rad it gives {derived})", inputs[worst][1])
+
+
+def _release_args(E_S, alpha0, F1, F2) -> tuple[float, float, float, float]:
+    """The release's arguments as SI floats (numbers, strings with units or pint Quantities), checked."""
+    E_S, alpha0 = si_scalar(E_S, "energy", "E_S"), si_scalar(alpha0, "angle", "alpha0")
+    F1, F2 = si_scalar(F1, "force", "F1"), si_scalar(F2, "force", "F2")
+    _check_release(E_S, alpha0, F1, F2)
+    return E_S, alpha0, F1, F2
 
 
 def _check_release(E_S, alpha0, F1, F2) -> None:
@@ -464,7 +476,8 @@ def _solve_explicit(fi: FirstIntegral, dt: float | None = None, max_steps: int =
 _SOLVERS = {"energy": _solve_energy, "rk": _solve_rk, "explicit": _solve_explicit}
 
 
-def simulate(E_S: float, alpha0: float, F1: float = 0.0, F2: float = 0.0, *,
+@renamed(E_S="stored_energy")
+def simulate(stored_energy: float, alpha0: float, F1: float = 0.0, F2: float = 0.0, *,
              device: Device | None = None, mass_model: str | float = "distributed",
              method: str = "energy", dt: float | None = None, n_points: int = 1001,
              t_end: float | None = None, rtol: float = RK_RTOL, atol: float | None = None,
@@ -473,8 +486,8 @@ def simulate(E_S: float, alpha0: float, F1: float = 0.0, F2: float = 0.0, *,
 
     Parameters
     ----------
-    E_S : float
-        Strain energy stored before release [J] (e.g. ``strain_energy(P, alpha0, device).total``).
+    stored_energy : float
+        Strain energy E_S stored before release [J] (e.g. ``strain_energy(P, alpha0, device).total``).
     alpha0 : float
         Angle of the bars with the loading axis at release [rad], in (0, pi/2).
     F1, F2 : float
@@ -496,11 +509,16 @@ def simulate(E_S: float, alpha0: float, F1: float = 0.0, F2: float = 0.0, *,
     rk_method : {"DOP853", "RK45"}
         Runge-Kutta scheme of ``rk``.
 
+    Numbers are SI; every quantity argument also takes a string with units (``"2.9 kJ"``) or a pint
+    Quantity (``2.9 * ureg.kJ``), converted at the boundary.
+
     Returns
     -------
     Response
     """
-    _check_release(E_S, alpha0, F1, F2)
+    E_S, alpha0, F1, F2 = _release_args(stored_energy, alpha0, F1, F2)
+    dt = None if dt is None else si_scalar(dt, "time", "dt")
+    t_end = None if t_end is None else si_scalar(t_end, "time", "t_end")
     if method not in _SOLVERS:
         raise ParameterError("method", method, "'" + "', '".join(METHODS) + "'")
     if not isinstance(n_points, int | np.integer) or n_points < 2:

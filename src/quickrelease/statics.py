@@ -22,9 +22,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validate import check_angle, check_positive
-from .device import Device
+from ._validate import check_angle, check_positive, renamed
+from .device import Device, preset
 from .errors import ParameterError
+from .units import si, si_scalar
 
 __all__ = [
     "push_force",
@@ -62,7 +63,8 @@ def push_force(fuse_strength, alpha0):
     return fuse_strength / np.tan(alpha0)
 
 
-def fuse_force(push, alpha0):
+@renamed(push="push_force")
+def fuse_force(push_force, alpha0):
     """Axial force in the fuse, ``N4 = P tan(alpha0)`` (Table 3) [N].
 
     This is also the fuse strength S needed for a target push force P (Eq. 1
@@ -70,11 +72,12 @@ def fuse_force(push, alpha0):
 
     Parameters
     ----------
-    push : float or array
+    push_force : float or array
         Push force P [N].
     alpha0 : float or array
         Angle of the bars with the loading axis [rad], in (0, pi/2).
     """
+    push, alpha0 = si(push_force, "force", "P"), si(alpha0, "angle", "alpha0")
     check_positive("P", push, "N")
     check_angle("alpha0", alpha0)
     return push * np.tan(alpha0)
@@ -106,18 +109,21 @@ class InternalForces:
     """Axial force in the fuse E4, ``P tan(alpha0)`` [N]."""
 
 
-def internal_forces(push: float, alpha0: float, device: Device) -> InternalForces:
+@renamed(push="push_force")
+def internal_forces(push_force: float, alpha0: float, device: Device | None = None) -> InternalForces:
     """Internal forces in the device members before release (Table 3).
 
     Parameters
     ----------
-    push : float
+    push_force : float
         Push force P [N].
     alpha0 : float
         Angle of the bars with the loading axis [rad], in (0, pi/2).
-    device : Device
-        Supplies L2 for the bending moment.
+    device : Device, optional
+        Supplies L2 for the bending moment; the paper's device (Table 2) by default.
     """
+    push, alpha0 = si_scalar(push_force, "force", "P"), si_scalar(alpha0, "angle", "alpha0")
+    device = device or preset("paper")
     check_positive("P", push, "N")
     check_angle("alpha0", alpha0)
     P = float(push)
@@ -196,7 +202,8 @@ class StrainEnergy:
         }
 
 
-def strain_energy(push: float, alpha0: float, device: Device) -> StrainEnergy:
+@renamed(push="push_force")
+def strain_energy(push_force: float, alpha0: float, device: Device | None = None) -> StrainEnergy:
     """Elastic strain energy stored before release, E_S (Eq. 2), with its breakdown.
 
     ``E_S = 4 N1^2 L1/(2 E A1) + 2 N2^2 L2/(2 E A2) + 2 N3^2 L3/(2 E A3)
@@ -205,18 +212,22 @@ def strain_energy(push: float, alpha0: float, device: Device) -> StrainEnergy:
 
     Parameters
     ----------
-    push : float
+    push_force : float
         Push force P [N].
     alpha0 : float
         Angle of the bars with the loading axis [rad].
-    device : Device
-        Member data (Table 2).
+    device : Device, optional
+        Member data; the paper's device (Table 2) by default.
 
     Returns
     -------
     StrainEnergy
         The six terms; ``.total`` is E_S [J].
+
+    ``push`` and ``alpha0`` also take strings with units or pint Quantities.
     """
+    push, alpha0 = si_scalar(push_force, "force", "P"), si_scalar(alpha0, "angle", "alpha0")
+    device = device or preset("paper")
     f = internal_forces(push, alpha0, device)
     d = device
     limit = strain_energy_limit(alpha0, d)

@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from . import batch
+from ._style import styled
 from ._validate import check_size, check_workers
 from .case import Case
 from .errors import ParameterError, QuickReleaseError
@@ -39,6 +40,12 @@ SWEEP_PARAMETERS = {
     "force": ("force", "N"), "energy": ("energy", "J"), "alpha0": ("angle", "rad"), "F1": ("force", "N"),
     "F2": ("force", "N"), "c": ("dimensionless", "1"), "m1": ("mass", "kg"), "m2": ("mass", "kg"),
     "L1": ("length", "m"),
+}
+#: Long names of the sweepable inputs (the coordinates' ``long_name``).
+SWEEP_LONG_NAMES = {
+    "force": "push force P at release", "energy": "stored strain energy E_S", "alpha0": "release angle alpha0",
+    "F1": "friction at the central hinges F1", "F2": "friction at the rail supports F2", "c": "mass factor c",
+    "m1": "mass of a bar m1", "m2": "mass of the head m2", "L1": "length of a bar L1",
 }
 #: Outputs: (long name, unit).
 OUTPUTS = {
@@ -139,16 +146,35 @@ def _dataset(case: Case, grids: dict[str, np.ndarray], data: dict[str, np.ndarra
     import xarray as xr
 
     names = list(grids)
-    coords = {n: (n, grids[n], {"units": SWEEP_PARAMETERS[n][1]}) for n in names}
+    coords = {n: (n, grids[n], {"units": SWEEP_PARAMETERS[n][1], "long_name": SWEEP_LONG_NAMES[n]}) for n in names}
     shape = tuple(grids[n].size for n in names)
     variables = {}
     for key, (long, unit) in OUTPUTS.items():
         values = data[key] if data is not None else np.zeros(shape, dtype=np.int8 if key in _FLAGS else float)
         variables[key] = (names, np.asarray(values, dtype=np.int8 if key in _FLAGS else float),
                           {"long_name": long, "units": unit})
-    attrs = {"title": f"quickrelease sweep: {case.title}", "case": case.source, "device": case.device.name}
+    from . import __version__
+
+    attrs = {"title": f"quickrelease sweep: {case.title}", "case": case.source, "device": case.device.name,
+             "Conventions": "CF-1.8", "source": f"quickrelease {__version__}"}
     attrs.update({f"fixed_{k}": float(v) for k, v in base.items() if k not in grids and np.isfinite(v)})
     return xr.Dataset(variables, coords=coords, attrs=attrs)
+
+
+def _check_optional(out: str | Path | None, backend: str) -> None:
+    """The optional packages the output and the backend need, checked before any work (one line, no traceback
+    after minutes of computing)."""
+    from importlib.util import find_spec
+
+    needs = []
+    if out is not None and Path(out).suffix == ".zarr":
+        needs.append("zarr")
+    if backend == "dask":
+        needs += ["dask", "distributed"]
+    missing = [name for name in needs if find_spec(name) is None]
+    if missing:
+        what = "the dask backend" if backend == "dask" else f"{out} (a Zarr store)"
+        raise QuickReleaseError(f"{what} needs {', '.join(missing)}: pip install 'quickrelease[dask]'")
 
 
 def sweep(case: Case, grids: dict[str, np.ndarray], *, backend: str = "numpy", out: str | Path | None = None,
@@ -186,6 +212,7 @@ def sweep(case: Case, grids: dict[str, np.ndarray], *, backend: str = "numpy", o
         raise ParameterError("out", str(out), "a path ending in .nc (NetCDF) or .zarr (Zarr)")
     if resume and backend != "dask":
         raise ParameterError("resume", True, "the dask backend (a numpy sweep is written whole or not at all)")
+    _check_optional(out, backend)
     check_workers("workers", workers)
     points = math.prod(g.size for g in grids.values())
     if backend == "numpy":  # the whole grid is in memory (the dask backend streams blocks to disk)
@@ -302,14 +329,15 @@ _TITLES = {"stop_time": "stop time $t_F$", "alpha_final": r"final angle $\alpha_
            "v_final": "hinge opening $v_F$", "peak_u_dot": "peak head velocity", "peak_v_dot": "peak hinge velocity"}
 
 
-def heatmap_figure(ds) -> Any:
+@styled
+def heatmap_figure(ds, fig=None) -> Any:
     """Heat maps of t_F, alpha_F, u_F, v_F and the peak velocities over the first two grid dimensions
     (other dimensions at their first value); line plots for a one-dimensional sweep."""
     from .plots import _figure
 
     names = list(ds.dims)
     keys = ["stop_time", "alpha_final", "u_final", "v_final", "peak_u_dot", "peak_v_dot"]
-    fig = _figure(9.0, 5.6, left=0.08, right=0.97, bottom=0.1, top=0.9, wspace=0.45, hspace=0.45)
+    fig = _figure(9.0, 5.6, fig=fig, left=0.08, right=0.97, bottom=0.1, top=0.9, wspace=0.45, hspace=0.45)
     axes = fig.subplots(2, 3)
     sel = {n: 0 for n in names[2:]}
     for ax, key in zip(axes.flat, keys, strict=True):

@@ -2,21 +2,24 @@
 
 Inside quickrelease every number is SI (N, m, kg, s, rad, J, Pa). This module is
 the one place where strings such as ``"1598 kN"`` or ``"11.46 deg"`` become floats;
-it is used by the device loader and the command line, never by the physics.
-pint is imported on first use only.
+it is used by the device loader, the command line and the Python API's entry points (which also take
+pint Quantities: :func:`si`, :func:`si_scalar`), never by the physics. pint is imported on first use only.
 """
 
 from __future__ import annotations
 
 import math
+import numbers
 import re
 import sys
 from functools import lru_cache
 from typing import Any
 
-from .errors import UnitError
+import numpy as np
 
-__all__ = ["DIMENSIONS", "parse_quantity"]
+from .errors import ParameterError, UnitError
+
+__all__ = ["DIMENSIONS", "parse_quantity", "si", "si_scalar", "is_quantity"]
 
 #: Physical kinds understood by :func:`parse_quantity`: (SI unit, pint dimensionality).
 DIMENSIONS: dict[str, tuple[str, str]] = {
@@ -178,6 +181,53 @@ def parse_quantity(value: object, kind: str, name: str) -> float:
     except OverflowError:
         converted = math.inf
     return _finite(converted, text, name)
+
+
+#: pint's spelling of the SI unit of each kind (pint reads "**", not "^").
+_PINT_SI = {kind: (unit.replace("^", "**") if unit else "dimensionless") for kind, (unit, _) in DIMENSIONS.items()}
+_PINT_SI["angle"] = "radian"
+
+
+def is_quantity(value: object) -> bool:
+    """Whether ``value`` is a pint Quantity (of any registry), without importing pint."""
+    return type(value).__module__.split(".")[0] == "pint" and hasattr(value, "magnitude") and hasattr(value, "to")
+
+
+def quantity_to_si(value: Any, kind: str, name: str) -> Any:
+    """A pint Quantity (scalar or array, of the user's own registry) as its magnitude in the SI unit of
+    ``kind``; a UnitError naming ``name`` when its dimension is not that of ``kind``."""
+    import pint
+
+    try:
+        magnitude = value.to(_PINT_SI[kind]).magnitude
+    except pint.errors.DimensionalityError:
+        noun = kind.replace("_", " ")
+        article = "an" if noun[0] in "aeiou" else "a"
+        raise UnitError(f"{name} = {value:~} has dimension {value.dimensionality or 'dimensionless'}; expected "
+                        f"{article} {noun} (e.g. in {DIMENSIONS[kind][0] or 'a dimensionless number'})") from None
+    return float(magnitude) if np.ndim(magnitude) == 0 else np.asarray(magnitude, dtype=float)
+
+
+def si(value: Any, kind: str, name: str) -> Any:
+    """An argument of the Python API in SI units: a pint Quantity converted (scalar or array), a string with
+    units parsed by :func:`parse_quantity`; numbers and arrays (taken as SI) pass unchanged."""
+    if is_quantity(value):
+        return quantity_to_si(value, kind, name)
+    if isinstance(value, str):
+        return parse_quantity(value, kind, name)
+    return value
+
+
+def si_scalar(value: Any, kind: str, name: str) -> float:
+    """A scalar argument of the Python API as a float in SI units: a number, a string with units or a pint
+    Quantity. An array, a list, None or anything else is a :class:`ParameterError` naming ``name``."""
+    value = si(value, kind, name)
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        shape = np.shape(value) if isinstance(value, np.ndarray | list | tuple) else None
+        got = f"an array of shape {shape}" if shape else repr(value) if len(repr(value)) < 40 else type(value).__name__
+        raise ParameterError(name, got, f"single numbers in {DIMENSIONS[kind][0] or '1'} (a float, a string with "
+                                        "units or a pint Quantity; for arrays, quickrelease.batch)")
+    return float(value)
 
 
 def _finite(value: float, text: str, name: str) -> float:

@@ -23,8 +23,10 @@ from typing import Any
 import numpy as np
 
 from . import batch
+from ._style import styled
 from ._validate import check_seed, check_size, check_workers
 from .case import Case
+from .display import Summarised
 from .errors import ParameterError, QuickReleaseError
 from .statics import strain_energy_coefficient
 
@@ -147,8 +149,8 @@ def _percentiles(hist: np.ndarray, edges: np.ndarray, qs=PERCENTILES) -> list[fl
     return out
 
 
-@dataclass(frozen=True)
-class UQResult:
+@dataclass(frozen=True, repr=False)
+class UQResult(Summarised):
     """Monte Carlo distribution of the identified friction, with local sensitivities."""
 
     samples: int
@@ -525,11 +527,12 @@ def _progress(enabled: bool, total: int, done: int):
     return _Bar(total, done) if enabled else _NoBar()
 
 
-def corner_figure(result: UQResult):
+@styled
+def corner_figure(result: UQResult, fig=None):
     """Histograms of F1 and F2 and their joint distribution (a corner plot) with the 95% intervals."""
     from .plots import _figure
 
-    fig = _figure(6.0, 5.8, left=0.12, right=0.97, bottom=0.1, top=0.88, wspace=0.08, hspace=0.12)
+    fig = _figure(6.0, 5.8, fig=fig, left=0.12, right=0.97, bottom=0.1, top=0.88, wspace=0.08, hspace=0.12)
     axes = fig.subplots(2, 2)
     h = result.histograms
     coarse = N_BINS // 512

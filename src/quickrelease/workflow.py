@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from .case import Case
+from .display import Summarised
 from .fit import FitResult, fit_record
 from .identify import Identification, case_friction, identify_friction
 from .planning import PlanResult, plan_case, plan_figures
@@ -44,8 +45,8 @@ FIGURES = {
 }
 
 
-@dataclass(frozen=True)
-class CaseResult:
+@dataclass(frozen=True, repr=False)
+class CaseResult(Summarised):
     """Everything a case produced."""
 
     case: Case
@@ -206,8 +207,13 @@ def render_figures(result: CaseResult) -> dict[str, Any]:
 
 
 def _svg_text(fig: Any) -> str:
+    import matplotlib
+
+    from ._style import STYLE
+
     buf = io.StringIO()
-    fig.savefig(buf, format="svg", metadata={"Date": None})
+    with matplotlib.rc_context(STYLE):  # the svg settings (text as text, stable ids) are read at save time
+        fig.savefig(buf, format="svg", metadata={"Date": None})
     return buf.getvalue()
 
 
@@ -281,8 +287,12 @@ def _write_results_into(result: CaseResult, out: Path, *, figures: bool, report:
         pngs = {stem: out / "figures" / f"{stem}.png" for stem in figs} if figures else {}
 
         def write_pngs() -> None:
+            import matplotlib
+
+            from ._style import STYLE
+
             for stem, path in pngs.items():
-                with atomic_path(path) as tmp:
+                with atomic_path(path) as tmp, matplotlib.rc_context(STYLE):
                     figs[stem].savefig(tmp, format="png", dpi=150)
 
         child = _start_in_child(write_pngs) if pngs else None

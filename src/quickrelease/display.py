@@ -1,0 +1,165 @@
+"""Quantities for people: the names and rounded values the command line's tables print.
+
+Results travel as dictionaries keyed the way JSON needs them (``push_force_N``, ``stop_time_s``: the SI
+unit is the key's suffix). A table for a person shows ``push force P`` and ``1598 kN`` instead. This module
+maps one to the other and nothing else; every key not known here is still shown, with its underscores
+as spaces and its unit taken from the suffix.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping
+from typing import Any
+
+#: (key suffix, unit as printed, whether SI prefixes k/M/G apply), longest suffix first.
+UNIT_SUFFIXES: tuple[tuple[str, str, bool], ...] = (
+    ("_rad_s2", "rad/s²", False),
+    ("_rad_s", "rad/s", False),
+    ("_m_s2", "m/s²", False),
+    ("_m_s", "m/s", False),
+    ("_N_m", "N/m", True),
+    ("_N_s_m", "N·s/m", True),
+    ("_rad", "rad", False),
+    ("_deg", "°", False),
+    ("_kg", "kg", False),
+    ("_Hz", "Hz", False),
+    ("_Pa", "Pa", True),
+    ("_N", "N", True),
+    ("_J", "J", True),
+    ("_s", "s", False),
+    ("_m", "m", False),
+)
+
+#: Human names of the keys the summaries use (without the unit suffix).
+NAMES: dict[str, str] = {
+    "push_force": "push force P",
+    "stored_energy": "stored energy E_S",
+    "alpha0": "release angle alpha0",
+    "alpha_dot0": "initial rate alpha_dot0",
+    "alpha_final": "final angle alpha_F",
+    "stop_time": "stop time t_F",
+    "stopped_by": "stopped by",
+    "mass_factor": "mass factor c",
+    "F1": "hinge friction F1",
+    "F2": "rail friction F2",
+    "F1_max": "largest hinge friction F1*",
+    "F2_max": "largest rail friction F2*",
+    "u_final": "head travel u_F",
+    "v_final": "opening v_F",
+    "peak_alpha_dot": "peak rate alpha_dot",
+    "peak_u_dot": "peak head velocity u_dot",
+    "peak_v_dot": "peak opening velocity v_dot",
+    "peak_u_ddot": "peak head acceleration u_ddot",
+    "peak_v_ddot": "peak opening acceleration v_ddot",
+    "feasible_stop_time": "feasible stop times",
+    "samples": "samples",
+    "method": "method",
+    "device": "device",
+}
+
+_PREFIXES = ((1e9, "G"), (1e6, "M"), (1e3, "k"))
+
+
+def split_key(key: str) -> tuple[str, str, bool]:
+    """(name, unit, prefixable) of a summary key: ``"push_force_N"`` -> ``("push_force", "N", True)``;
+    a key without a unit suffix has unit ``""``."""
+    for suffix, unit, prefixable in UNIT_SUFFIXES:
+        if key.endswith(suffix) and len(key) > len(suffix):
+            return key[: -len(suffix)], unit, prefixable
+    return key, "", False
+
+
+def label(key: str) -> str:
+    """The name a person reads for a summary key: ``"push_force_N"`` -> ``"push force P"``."""
+    name, _, _ = split_key(key)
+    return NAMES.get(name, name.replace("_", " "))
+
+
+def number(value: float, digits: int = 5) -> str:
+    """``value`` rounded to ``digits`` significant digits, without a trailing exponent where it fits."""
+    if not math.isfinite(value):
+        return str(value)
+    if value == 0.0:
+        return "0"
+    text = f"{value:.{digits}g}"
+    return text.replace("e+0", "e").replace("e-0", "e-").replace("e+", "e")
+
+
+def _scale(values: list[float], prefixable: bool) -> tuple[float, str]:
+    """The SI prefix for a group of values: the largest step below the largest magnitude (k for 1598e3)."""
+    if not prefixable:
+        return 1.0, ""
+    big = max((abs(v) for v in values if math.isfinite(v)), default=0.0)
+    for factor, prefix in _PREFIXES:
+        if big >= 10 * factor:
+            return factor, prefix
+    return 1.0, ""
+
+
+def value_text(key: str, value: Any, digits: int = 5) -> str:
+    """``value`` for a person, with the unit of ``key``: ``("push_force_N", 1.598e6)`` -> ``"1598 kN"``;
+    intervals as ``"[0.9906, 1.1243] s"``; ``None`` as ``"-"``; booleans as yes/no."""
+    _, unit, prefixable = split_key(key)
+    if value is None:
+        return "-"
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        factor, prefix = _scale([float(value)], prefixable)
+        text = str(value) if isinstance(value, int) and not unit else number(float(value) / factor, digits)
+        return f"{text} {prefix}{unit}".rstrip()
+    if isinstance(value, (list, tuple)) and value and all(isinstance(v, (int, float)) for v in value):
+        factor, prefix = _scale([float(v) for v in value], prefixable)
+        inner = ", ".join(number(float(v) / factor, digits) for v in value)
+        return f"[{inner}] {prefix}{unit}".rstrip()
+    return str(value)
+
+
+def quantity_rows(summary: Mapping[str, Any], skip: Iterable[str] = ()) -> list[tuple[str, str]]:
+    """(name, value with unit) rows of a summary dictionary for a two-column table."""
+    left_out = set(skip)
+    return [(label(k), value_text(k, v)) for k, v in summary.items() if k not in left_out]
+
+
+def _shown(value: Any) -> bool:
+    """Whether a summary value fits a one-line repr: a scalar, a string, or a short list of numbers."""
+    if value is None or isinstance(value, (bool, int, float, str)):
+        return True
+    return isinstance(value, (list, tuple)) and len(value) <= 4 and all(isinstance(v, (int, float)) for v in value)
+
+
+def short_repr(name: str, summary: Mapping[str, Any], keys: Iterable[str] = ()) -> str:
+    """``Name(F1=419.85 N, F2=804.57 N, ...)``: the chosen (else the first five) scalar entries of a summary,
+    rounded, with units; never the whole device or the arrays."""
+    chosen = [k for k in keys if k in summary] or [k for k, v in summary.items() if _shown(v)][:5]
+    inner = ", ".join(f"{split_key(k)[0]}={value_text(k, summary[k])}" for k in chosen)
+    return f"{name}({inner})"
+
+
+def summary_html(name: str, summary: Mapping[str, Any]) -> str:
+    """An HTML table of a summary for notebooks (``_repr_html_``): human names and values with units;
+    nested entries (per-channel tables, lists of tests) summarised by their size."""
+    import html
+
+    rows = []
+    for key, value in summary.items():
+        text = value_text(key, value) if _shown(value) else f"({len(value)} entries)" \
+            if isinstance(value, (dict, list, tuple)) else str(value)
+        rows.append(f"<tr><th style=\"text-align:left\">{html.escape(label(key))}</th>"
+                    f"<td style=\"text-align:left\">{html.escape(text)}</td></tr>")
+    return f"<table><caption style=\"text-align:left\"><b>{html.escape(name)}</b></caption>{''.join(rows)}</table>"
+
+
+class Summarised:
+    """Mixin of the result types: a short ``repr`` and a notebook table (``_repr_html_``), both from the
+    type's ``summary()``. Dataclasses using it are declared with ``repr=False`` so this repr is kept."""
+
+    #: Summary keys the repr shows (default: the first five scalar entries).
+    _repr_keys: tuple[str, ...] = ()
+
+    def __repr__(self) -> str:
+        return short_repr(type(self).__name__, self.summary(), self._repr_keys)  # type: ignore[attr-defined]
+
+    def _repr_html_(self) -> str:
+        return summary_html(type(self).__name__, self.summary())  # type: ignore[attr-defined]
