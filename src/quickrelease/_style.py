@@ -13,7 +13,7 @@ from typing import Any, TypeVar
 
 STYLE: dict[str, Any] = {
     "font.size": 9, "axes.titlesize": 9, "axes.labelsize": 9, "legend.fontsize": 8,
-    "xtick.labelsize": 8, "ytick.labelsize": 8, "axes.grid": True, "grid.alpha": 0.3,
+    "xtick.labelsize": 8, "ytick.labelsize": 8, "figure.titlesize": 10, "axes.grid": True, "grid.alpha": 0.3,
     "lines.linewidth": 1.4, "svg.hashsalt": "quickrelease", "figure.dpi": 100,
     "svg.fonttype": "none",  # text stays text: searchable, smaller, no glyph definitions (ids) repeated
 }

@@ -16,7 +16,7 @@ from ._style import STYLE as _STYLE
 from ._style import styled, unit_text
 from .decay import analyse_decay
 from .isolation_fit import CHANNEL_KINDS
-from .plots import _COLORS, _figure, user_label
+from .plots import _COLORS, _figure, _joint_legend, user_label
 
 __all__ = ["BUILDING_FIGURES", "building_figures", "fit_figure", "decay_figure", "amplitude_figure",
            "hysteresis_figure", "decay_envelope_data", "model_decay"]
@@ -81,8 +81,7 @@ def fit_figure(result, fig=None):
             ax.axvline(fit.release_time, color=_COLORS["d"], lw=0.8, ls=":", label="release" if ax is top else None)
             if ax is not bottom or k < n - 1:
                 ax.tick_params(labelbottom=False)
-        top.legend(loc="upper right")
-        bottom.legend(loc="upper right", ncols=2)
+        _joint_legend(top, bottom, loc="upper right")
         user_label(top, "set_title", f"{ch.name}: rms residual {fit.residual_rms[ch.name]:.3g} {unit}, noise "
                                      f"{sigma:.3g} {unit} ({fit.noise_source[ch.name]})",
                fontsize=_STYLE["legend.fontsize"])
@@ -155,6 +154,9 @@ def decay_figure(result, model=False, fig=None):
         ax.plot(np.arange(model.amplitude.size), 1e3 * model.amplitude, "x", ms=4, color=_COLORS["a"],
                 label=f"fitted {result.fit.model} model")
     ax.set_xlabel("half-cycle n after the release [-]")
+    from matplotlib.ticker import MaxNLocator
+
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))  # a count of half-cycles
     ax.set_ylabel("amplitude (half swing) [mm]")
     ax.set_ylim(bottom=0.0)
     law = result.decay.law

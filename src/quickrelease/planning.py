@@ -831,7 +831,7 @@ def utilisation_figure(members: MemberChecks, fig=None):
     ax.invert_yaxis()
     ax.set_xlim(0, max(1.2, max(values) * 1.25))
     ax.set_xlabel("utilisation, demand / capacity [-]")
-    ax.legend(loc="lower right")
+    ax.legend(loc="upper right")
     f = members.forces
     ax.set_title(f"Member checks at P = {f.P / 1e3:.0f} kN, $\\alpha_0$ = {f.alpha0:.4g} rad\n"
                  "(the fuse E4 is meant to reach 1: it breaks)")

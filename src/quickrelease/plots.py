@@ -76,7 +76,7 @@ def fig13(response: Response, fig=None):
         ax.set_xlabel("time $t$ [s]")
     for ax in axes.flat:
         _mark_stop(ax, r)
-        ax.legend(loc="center right" if ax is d else "best")
+        ax.legend(loc="best")
     fig.suptitle(f"Release response ({r.method}, c = {r.mass_factor:.4g}): "
                  f"$t_F$ = {r.stop_time:.4f} s, $\\alpha_F$ = {r.alpha_final:.4f} rad")
     return fig
@@ -255,14 +255,21 @@ def fit_figure(result, fig=None):
                        label="stop $t_F$" if ax is top else None)
             if ax is not bottom or k < n - 1:
                 ax.tick_params(labelbottom=False)
-        top.legend(loc="best")
-        bottom.legend(loc="upper right", ncols=2)
+        _joint_legend(top, bottom, loc="best")
         top.set_title(f"{name}: rms residual {result.residual_rms[name]:.3g} {unit}, noise {sigma:.3g} {unit} "
                       f"({result.noise_source[name]})", fontsize=_STYLE["legend.fontsize"])
     bottom.set_xlabel("record time [s]")
     fig.suptitle(f"Fit to the record: $F_1$ = {result.F1:.1f} ± {result.std_errors['F1']:.2g} N, "
                  f"$F_2$ = {result.F2:.1f} ± {result.std_errors['F2']:.2g} N")
     return fig
+
+
+def _joint_legend(top, bottom, **kwargs) -> None:
+    """One legend in ``top`` for the lines of ``top`` and of the small residual axes ``bottom`` below it
+    (a legend of its own would cover the residuals)."""
+    handles, labels = top.get_legend_handles_labels()
+    more, more_labels = bottom.get_legend_handles_labels()
+    top.legend(handles + more, labels + more_labels, **kwargs)
 
 
 def save_figure(fig: Any, folder: str | Path, stem: str, formats: tuple[str, ...] = ("png", "svg"),

@@ -147,7 +147,10 @@ def _dataset(case: Case, grids: dict[str, np.ndarray], data: dict[str, np.ndarra
         values = data[key] if data is not None else np.zeros(shape, dtype=np.int8 if key in _FLAGS else float)
         variables[key] = (names, np.asarray(values, dtype=np.int8 if key in _FLAGS else float),
                           {"long_name": long, "units": unit})
-    attrs = {"title": f"quickrelease sweep: {case.title}", "case": case.source, "device": case.device.name}
+    from .runfolder import provenance, provenance_attrs
+
+    attrs = {"title": f"quickrelease sweep: {case.title}", "case": case.source, "device": case.device.name,
+             **provenance_attrs(provenance(case))}
     attrs.update({f"fixed_{k}": float(v) for k, v in base.items() if k not in grids and np.isfinite(v)})
     return xr.Dataset(variables, coords=coords, attrs=attrs)
 

@@ -377,8 +377,9 @@ def run_uq(case: Case, samples: int, *, seed: int = 0, chunk: int = DEFAULT_CHUN
         parts = _run_chunks(case, seed, sizes, edges, done, store, backend, scheduler, workers, progress)
         result = _result(case, samples, seed, chunk, _combine(parts), edges)
         from .export import write_json
+        from .runfolder import provenance
 
-        write_json(result.summary(), work / "uq.json")
+        write_json(result.summary(), work / "uq.json", provenance(case))
         if figures:
             from .plots import save_figure
 
