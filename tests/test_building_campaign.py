@@ -191,6 +191,9 @@ def test_summary_is_json_and_the_figure_draws(constant):
     assert len(fig.axes) == len(constant.quantities) * len(constant.variables)
     assert [t.get_text() for t in fig.axes[0].texts] == ["R1", "R2", "R3", "R4", "R5"]
     assert [ax.get_title().split(":")[0] for ax in fig.axes[:4]] == ["T", "zeta", "F_s", "zeta_eq"]
+    from quality import figure_faults
+
+    assert figure_faults(fig) == []
 
 
 def test_bad_campaigns_are_refused_before_any_fit():

@@ -139,3 +139,16 @@ def test_fig15_curve_over_the_markers_and_its_distance_defined(written):
         residual = abs(resp.kinetic_energy + resp.dissipated_energy - resp.stored_energy)[moving].max()
         printed = float(line.get_label().rsplit(": ", 1)[1])
         assert printed == pytest.approx(residual / resp.stored_energy, rel=0.06, abs=1e-15)
+
+
+def test_planning_figures_are_labelled():
+    """The member checks with a check skipped (no yield strength of E3 in the device file) and the fuse
+    choices: cheap to make, so checked here; the gap figure in test_clearance.py."""
+    from quickrelease.device import load_device
+    from quickrelease.planning import member_checks, utilisation_figure
+
+    checks = member_checks(1598e3, 0.2, load_device(EXAMPLES / "device_checked.toml"), rupture_strength=610e6)
+    assert any(c.utilisation is None for c in checks.checks)
+    fig = utilisation_figure(checks)
+    assert figure_faults(fig) == []
+    assert any("skipped" in t.get_text() for t in fig.axes[0].texts)
