@@ -471,6 +471,10 @@ def test_campaign_recovers_the_load_law(tmp_path):
     assert len(data["tests"]) == 6 and all(t["method"] == "fit to record" for t in data["tests"])
     report = (tmp_path / "report.html").read_text()
     assert '<figure id="campaign_friction"><svg' in report and "T6" in report
+    import hashlib
+
+    prov = json.loads((tmp_path / "campaign.json").read_text(encoding="utf-8"))["provenance"]
+    assert prov["input"]["sha256"] == hashlib.sha256((EXAMPLES / "campaign.toml").read_bytes()).hexdigest()
 
 
 def test_campaign_law_arithmetic():

@@ -70,7 +70,10 @@ def test_report_reads_as_a_test_report(written, monkeypatch):
     assert html_faults(text) == []
     want = _expected(case_file)
     assert want["sha256"] in text and version("quickrelease") in text
-    assert "A. Prüfer &lt;lab&gt;" in text and "Test &amp; Co" in text and ">QR-7<" in text  # the sign-off
+    signoff = text[text.index('<h2 id="sign-off">'):]  # who ran it, from [report], escaped
+    for row in ("operator</th><td>A. Prüfer &lt;lab&gt;</td>", "organisation</th><td>Test &amp; Co</td>",
+                "test identifier</th><td>QR-7</td>"):
+        assert row in signoff, row
     assert '<details id="input-text">' in text  # the case file echoed, escaped, collapsible
     assert 'title = &quot;Paper test: Table 7 (Oliveto et al.)&quot;' in text
     assert re.search(r"<th scope=\"row\">report date</th><td>\d{4}-\d{2}-\d{2}</td>", text)
