@@ -33,7 +33,7 @@ h1 { font-size: 1.6rem; margin-bottom: 0.2rem; } h2 { font-size: 1.2rem; border-
 table { border-collapse: collapse; margin: 0.6rem 0; font-size: 0.92rem; }
 th, td { border: 1px solid #c8ccd0; padding: 0.25rem 0.6rem; text-align: left; }
 th { background: #e8edf2; } td.num { text-align: right; font-variant-numeric: tabular-nums; }
-figure { margin: 1rem 0; } figure svg { width: 100%; max-width: 760px; height: auto; }
+figure { margin: 1rem 0; } figure svg { max-width: 100%; height: auto; }  /* own size: one font scale */
 figcaption { font-size: 0.9rem; color: #444; }
 .flag { color: #a00; font-weight: bold; }
 nav.toc { background: #f4f6f8; padding: 0.4rem 1rem; margin: 1rem 0; } nav.toc ol { margin: 0.3rem 0; }
