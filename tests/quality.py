@@ -114,6 +114,8 @@ def figure_faults(fig) -> list[str]:
             legend_texts |= {t.get_text() for t in legend.get_texts()}
     for k, ax in enumerate(fig.axes):
         where = f"axes {k} ({ax.get_title()[:40]!r})"
+        if not ax.axison:  # a panel of text
+            continue
         for name, axis, label in (("x", ax.xaxis, ax.get_xlabel()), ("y", ax.yaxis, ax.get_ylabel())):
             if _shows_ticks(axis) and not UNIT.search(label):
                 faults.append(f"{where}: {name} label {label!r} has no [unit]")

@@ -155,3 +155,10 @@ def test_planning_figures_are_labelled():
     fig = utilisation_figure(checks)
     assert figure_faults(fig) == []
     assert any("skipped" in t.get_text() for t in fig.axes[0].texts)
+
+
+def test_uq_corner_figure_is_labelled():
+    from quickrelease.uq import corner_figure, run_uq
+
+    result = run_uq(load_case(EXAMPLES / "uq_paper.toml"), 2000, seed=1, chunk=2000)
+    assert figure_faults(corner_figure(result)) == []

@@ -548,8 +548,9 @@ def corner_figure(result: UQResult, fig=None):
             ax.axvline(result.percentiles[name][key], color="#c0504d", lw=0.9, ls="--" if key != "p50" else "-")
         ax.set_yticks([])
         ax.set_xlim(edges[lo], edges[hi + 1])
-    axes[0, 0].set_title("$F_1$: median and 95% interval", fontsize=STYLE["legend.fontsize"])
-    axes[1, 1].set_title("$F_2$: median and 95% interval", fontsize=STYLE["legend.fontsize"])
+    axes[0, 0].set_title("$F_1$: median (line), 95% interval (dashed)", fontsize=STYLE["legend.fontsize"])
+    axes[1, 1].set_title("$F_2$: median (line), 95% interval (dashed)", fontsize=STYLE["legend.fontsize"])
+    axes[0, 0].tick_params(labelbottom=False)  # the same F1 axis as the joint panel below, labelled there
     axes[1, 1].set_xlabel("$F_2$ [N]")
     axes[0, 1].axis("off")
     axes[0, 1].text(0.0, 0.5, "\n".join([
