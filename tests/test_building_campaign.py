@@ -236,7 +236,9 @@ def test_campaign_command_on_the_shipped_example(tmp_path):
     r = runner.invoke(app, ["campaign", str(EXAMPLES / "building_campaign.toml"), "--json", "--out", str(tmp_path)])
     assert r.exit_code == 0, r.output
     data = json.loads(r.stdout)
-    assert data == json.loads((tmp_path / "campaign.json").read_text(encoding="utf-8"))
+    written = json.loads((tmp_path / "campaign.json").read_text(encoding="utf-8"))
+    assert written.pop("provenance")["input"]["name"] == "building_campaign.toml"  # what made the file
+    assert data == written
     laws = {(law["quantity"], law["variable"]): law for law in data["laws"]}
     fs = laws[("friction", "displacement")]
     assert fs["significant_5pct"] and abs(fs["b"] - 150e3) < 3 * fs["b_se"] and abs(fs["a"] - 40e3) < 3 * fs["a_se"]
