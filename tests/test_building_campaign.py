@@ -242,6 +242,9 @@ def test_summary_is_json_and_the_figure_draws(constant):
     assert len(fig.axes) == len(constant.quantities) * len(constant.variables)
     assert [t.get_text() for t in fig.axes[0].texts] == ["R1", "R2", "R3", "R4", "R5"]
     assert [ax.get_title().split(":")[0] for ax in fig.axes[:4]] == ["T", "zeta", "F_s", "zeta_eq"]
+    from quality import figure_faults
+
+    assert figure_faults(fig) == []
 
 
 def test_bad_campaigns_are_refused_before_any_fit():
@@ -284,7 +287,9 @@ def test_campaign_command_on_the_shipped_example(tmp_path):
     r = runner.invoke(app, ["campaign", str(EXAMPLES / "building_campaign.toml"), "--json", "--out", str(tmp_path)])
     assert r.exit_code == 0, r.output
     data = json.loads(r.stdout)
-    assert data == json.loads((tmp_path / "campaign.json").read_text(encoding="utf-8"))
+    written = json.loads((tmp_path / "campaign.json").read_text(encoding="utf-8"))
+    assert written.pop("provenance")["input"]["name"] == "building_campaign.toml"  # what made the file
+    assert data == written
     laws = {(law["quantity"], law["variable"]): law for law in data["laws"]}
     fs = laws[("friction", "displacement")]
     assert fs["significant_5pct"] and abs(fs["b"] - 150e3) < 3 * fs["b_se"] and abs(fs["a"] - 40e3) < 3 * fs["a_se"]

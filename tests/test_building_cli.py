@@ -5,8 +5,10 @@ with events, no code shared with the package), written to CSV in the case-file g
 layer's displacement in mm, its acceleration in g0 in a file of its own with its own clock and rate.
 """
 
+import hashlib
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -125,7 +127,10 @@ def test_building_command_json_folder_and_refusals(tmp_path):
     stems = ("building_fit", "building_decay", "building_amplitude", "building_hysteresis")
     assert files == sorted(["manifest.json", "report.html", "summary.json"]
                            + [f"figures/{s}.{e}" for s in stems for e in ("png", "svg")])
-    assert json.loads((out / "summary.json").read_text()) == data
+    written = json.loads((out / "summary.json").read_text())
+    prov = written.pop("provenance")  # what made the file: the version and the case file as read
+    assert written == data and prov["input"]["name"] == Path(case).name
+    assert prov["input"]["sha256"] == hashlib.sha256(Path(case).read_bytes()).hexdigest()
     html = (out / "report.html").read_text()
     assert 'id="building-model">linear<' in html and "Decay cross-check" in html
     assert all(f'id="{s}"' in html for s in stems)

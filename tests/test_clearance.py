@@ -115,7 +115,9 @@ def test_gap_that_keeps_growing_reports_no_minimum():
     s = c.summary()
     assert s["min_gap_m"] is None and s["note"] == GAP_GROWS
     assert c.describe_minimum().startswith("no minimum gap")
-    gap_figure(c)  # draws without a minimum to mark
+    from quality import figure_faults
+
+    assert figure_faults(gap_figure(c)) == []  # draws without a minimum to mark
     # the same building pushed further catches up: the gap falls, and the minimum is reported
     c2 = clearance(rel, BuildingSpec(period=1.8, displacement=0.3), 0.3)
     assert c2.min_gap is not None and c2.note == ""

@@ -101,6 +101,14 @@ def test_demo_prints_the_comparison(tmp_path):
     assert f"{tmp_path / 'demo' / 'report.html'}" in r.stdout
     assert "0.4056 kN" in r.stdout and "0.4198 kN" in r.stdout
     assert "2.9154 kJ" in r.stdout
+    from quality import html_faults  # the report holds Table 7 too, and is valid HTML
+
+    report = (tmp_path / "demo" / "report.html").read_text(encoding="utf-8")
+    table7 = report[report.index('<h2 id="table7">'):report.index("</table>", report.index('<h2 id="table7">'))]
+    assert "0.4056 kN" in table7 and "0.4198 kN" in table7 and "2.9154 kJ" in table7 and "2.90 kJ" in table7
+    assert html_faults(report) == []
+    table = json.loads((tmp_path / "demo" / "table7.json").read_text(encoding="utf-8"))
+    assert table["provenance"]["input"]["name"] == "paper case (built in)"
 
 
 def test_installed_script_runs():

@@ -238,6 +238,11 @@ def test_predicted_errors_are_the_fit_errors_at_the_truth(paper):
     fit = fit_record(paper, syn.record())
     assert pred["F1_se_N"] == pytest.approx(fit.std_errors["F1"], rel=0.1)
     assert pred["correlation_F1_F2"] == pytest.approx(fit.correlation[0, 1], abs=0.01)
+    from quality import figure_faults  # the figure of such a fit: residual axes with units, lines in legends
+
+    from quickrelease.plots import fit_figure
+
+    assert figure_faults(fit_figure(fit)) == []
 
 
 def test_energy_and_mass_factor_can_be_estimated(paper):
@@ -466,6 +471,10 @@ def test_campaign_recovers_the_load_law(tmp_path):
     assert len(data["tests"]) == 6 and all(t["method"] == "fit to record" for t in data["tests"])
     report = (tmp_path / "report.html").read_text()
     assert '<figure id="campaign_friction"><svg' in report and "T6" in report
+    import hashlib
+
+    prov = json.loads((tmp_path / "campaign.json").read_text(encoding="utf-8"))["provenance"]
+    assert prov["input"]["sha256"] == hashlib.sha256((EXAMPLES / "campaign.toml").read_bytes()).hexdigest()
 
 
 def test_campaign_law_arithmetic():

@@ -148,6 +148,9 @@ def test_report_contents(paper_run):
     for stem in PAPER_FIGURES:
         assert f'<figure id="{stem}"><svg' in text, stem
     assert text.count("<svg") == len(PAPER_FIGURES)
+    from quality import html_faults
+
+    assert html_faults(text) == []
     lowered = text.lower()
     for fetch in ("<script", "<link", "<img", "@import", "url(http", 'src="http', "href=\"http"):
         assert fetch not in lowered, fetch

@@ -268,7 +268,7 @@ def test_plan_example_json_and_outputs(tmp_path):
         png = tmp_path / "figures" / f"{stem}.png"
         assert png.stat().st_size > 15_000, stem
     report = (tmp_path / "report.html").read_text()
-    assert "<h2>Test planning</h2>" in report and '<figure id="plan_gap"><svg' in report
+    assert ">Test planning</h2>" in report and '<figure id="plan_gap"><svg' in report
     assert json.loads((tmp_path / "plan.json").read_text())["stroke_m"] == pytest.approx(data["stroke_m"])
 
 

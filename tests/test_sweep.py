@@ -74,6 +74,12 @@ def test_netcdf_output_and_heatmaps(tmp_path):
     assert 0 < float(ds.stopped_by.mean()) < 1  # the grid crosses the geometric limit
     fig = heatmap_figure(ds)
     assert len(fig.axes) == 12  # six panels and their colour bars
+    import hashlib
+
+    from quality import figure_faults
+
+    assert figure_faults(fig) == []
+    assert back.attrs["input_sha256"] == hashlib.sha256((EXAMPLES / "larger_push.toml").read_bytes()).hexdigest()
 
 
 def _mtimes(store, block_rows, blocks):

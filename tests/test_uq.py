@@ -156,7 +156,11 @@ def test_uq_cli_writes_the_corner_figure(case_path, tmp_path):
     assert r.exit_code == 0, r.output
     assert "dF1/dstop_time" in r.stdout and "97.5%" in r.stdout
     assert (tmp_path / "o" / "uq_corner.png").stat().st_size > 20_000
-    assert Path(tmp_path / "o" / "uq.json").exists()
+    import hashlib
+
+    prov = json.loads((tmp_path / "o" / "uq.json").read_text(encoding="utf-8"))["provenance"]  # what made it
+    assert prov["input"]["sha256"] == hashlib.sha256(Path(case_path).read_bytes()).hexdigest()
+    assert prov["input"]["text"] == Path(case_path).read_text(encoding="utf-8")
 
 
 def _mp_stop_time(a0, aF, F1, F2, k, m2, L1):

@@ -13,11 +13,32 @@ from typing import Any, TypeVar
 
 STYLE: dict[str, Any] = {
     "font.size": 9, "axes.titlesize": 9, "axes.labelsize": 9, "legend.fontsize": 8,
-    "xtick.labelsize": 8, "ytick.labelsize": 8, "axes.grid": True, "grid.alpha": 0.3,
+    "xtick.labelsize": 8, "ytick.labelsize": 8, "figure.titlesize": 10, "axes.grid": True, "grid.alpha": 0.3,
     "lines.linewidth": 1.4, "svg.hashsalt": "quickrelease", "figure.dpi": 100,
     "svg.fonttype": "none",  # text stays text: searchable, smaller, no glyph definitions (ids) repeated
 }
 COLORS = {"a": "#1f4e79", "b": "#c0504d", "c": "#4f8a3c", "d": "#7f7f7f"}
+#: The font sizes a figure may use: every text of every figure is one of these (no figure sets its own).
+FONT_SIZES = frozenset(v for k, v in STYLE.items() if k.endswith("size"))
+
+_POWERS = {"^2": "²", "^3": "³", "^4": "⁴", "^-1": "⁻¹", "^-2": "⁻²"}
+
+
+def unit_text(unit: str) -> str:
+    """A unit as figures and reports write it: powers as superscripts (``m/s^2`` -> ``m/s²``), ``-`` for a
+    dimensionless quantity kept; one way everywhere."""
+    for plain, sup in _POWERS.items():
+        unit = unit.replace(plain, sup)
+    return unit
+
+
+def per(y_unit: str, x_unit: str) -> str:
+    """The unit of a slope dy/dx: ``N/kN``, ``%/cm``; a dimensionless numerator gives ``1/cm``, a
+    dimensionless denominator the numerator's unit."""
+    y_unit, x_unit = unit_text(y_unit), unit_text(x_unit)
+    if x_unit in ("-", ""):
+        return y_unit
+    return f"{'1' if y_unit in ('-', '') else y_unit}/{x_unit}"
 
 F = TypeVar("F", bound=Callable[..., Any])
 

@@ -451,6 +451,7 @@ def fit_building_campaign(releases, mass: float, model: str = "linear", *, varia
 @styled
 def building_campaign_figure(result: BuildingCampaignResult, fig=None):
     """Each quantity against each variable: the releases with their 95% intervals, the law and its band."""
+    from ._style import per
     from .plots import _figure, user_label
 
     nq, nv = len(result.quantities), len(result.variables)
@@ -467,14 +468,14 @@ def building_campaign_figure(result: BuildingCampaignResult, fig=None):
             lo = np.array([r.ci95[q][0] for r in result.releases])
             hi = np.array([r.ci95[q][1] for r in result.releases])
             ax = axes[row, col]
-            slope_unit = f"{y_unit}/{x_unit}" if x_unit != "-" else y_unit
+            slope_unit = per(y_unit, x_unit)
             law_panel(ax, result.laws[(q, v)], x, y, np.vstack([y - lo, hi - y]).clip(min=0.0),
                       [r.name for r in result.releases], x_scale=x_scale, y_scale=y_scale,
                       x_label=f"{x_label} [{x_unit}]", y_label=f"{y_label} [{y_unit}]", slope_unit=slope_unit,
                       name=symbol)
             ax.ticklabel_format(axis="y", useOffset=False)
             if row == 0 and col == 0:
-                ax.legend(fontsize=6, loc="best")
+                ax.legend(loc="best")
     user_label(fig, "suptitle", f"{result.title}: the isolation system against the release amplitude "
                                 f"({result.model} model)")
     return fig

@@ -12,10 +12,11 @@ from typing import Any
 
 import numpy as np
 
-from ._style import styled
+from ._style import STYLE as _STYLE
+from ._style import styled, unit_text
 from .decay import analyse_decay
 from .isolation_fit import CHANNEL_KINDS
-from .plots import _COLORS, _figure, user_label
+from .plots import _COLORS, _figure, _joint_legend, user_label
 
 __all__ = ["BUILDING_FIGURES", "building_figures", "fit_figure", "decay_figure", "amplitude_figure",
            "hysteresis_figure", "decay_envelope_data", "model_decay"]
@@ -47,7 +48,7 @@ def building_figures(result) -> dict[str, Any]:
 
 
 def _unit(kind: str) -> str:
-    return CHANNEL_KINDS.get(kind, "")
+    return unit_text(CHANNEL_KINDS.get(kind, ""))
 
 
 @styled
@@ -71,21 +72,22 @@ def fit_figure(result, fig=None):
         t_fine = np.linspace(float(ch.t[0]), float(ch.t[-1]), 4000)
         top.plot(t_fine, fit.model_values(ch, t_fine), color=_COLORS["a"], lw=1.0, label=f"{fit.model} model")
         user_label(top, "set_ylabel", f"{ch.name} [{unit}]")
-        top.legend(loc="upper right", fontsize=7)
         sigma = fit.noise[ch.name]
         resid = ch.values - fit.model_values(ch)
-        bottom.axhspan(-2 * sigma, 2 * sigma, color=_COLORS["c"], alpha=0.15, lw=0)
-        bottom.plot(ch.t, resid, ".", ms=1.2, color=_COLORS["b"], rasterized=raster)
-        bottom.set_ylabel("resid.")
+        bottom.axhspan(-2 * sigma, 2 * sigma, color=_COLORS["c"], alpha=0.15, lw=0, label="±2σ (noise)")
+        bottom.plot(ch.t, resid, ".", ms=1.2, color=_COLORS["b"], rasterized=raster, label="residual")
+        bottom.set_ylabel(f"residual [{unit}]")
         for ax in (top, bottom):
-            ax.axvline(fit.release_time, color=_COLORS["d"], lw=0.8, ls=":")
+            ax.axvline(fit.release_time, color=_COLORS["d"], lw=0.8, ls=":", label="release" if ax is top else None)
             if ax is not bottom or k < n - 1:
                 ax.tick_params(labelbottom=False)
+        _joint_legend(top, bottom, loc="upper right")
         user_label(top, "set_title", f"{ch.name}: rms residual {fit.residual_rms[ch.name]:.3g} {unit}, noise "
-                                     f"{sigma:.3g} {unit} ({fit.noise_source[ch.name]})", fontsize=8)
-    bottom.set_xlabel("record time [s] (dotted: release)")
+                                     f"{sigma:.3g} {unit} ({fit.noise_source[ch.name]})",
+               fontsize=_STYLE["legend.fontsize"])
+    bottom.set_xlabel("record time [s]")
     fig.suptitle(f"Building: {fit.model} isolation model fitted to the record "
-                 f"({'converged' if fit.converged else 'NOT converged'})", fontsize=9)
+                 f"({'converged' if fit.converged else 'NOT converged'})")
     return fig
 
 
@@ -151,7 +153,10 @@ def decay_figure(result, model=False, fig=None):
     if model is not None and model.amplitude.size:
         ax.plot(np.arange(model.amplitude.size), 1e3 * model.amplitude, "x", ms=4, color=_COLORS["a"],
                 label=f"fitted {result.fit.model} model")
-    ax.set_xlabel("half-cycle n after the release")
+    ax.set_xlabel("half-cycle n after the release [-]")
+    from matplotlib.ticker import MaxNLocator
+
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))  # a count of half-cycles
     ax.set_ylabel("amplitude (half swing) [mm]")
     ax.set_ylim(bottom=0.0)
     law = result.decay.law
@@ -159,7 +164,7 @@ def decay_figure(result, model=False, fig=None):
     if law is not None:
         title += f": r = {law.ratio:.4g} per half-cycle, friction displacement {1e3 * law.friction_displacement:.3g} mm"
     ax.set_title(title)
-    ax.legend(loc="upper right", fontsize=7)
+    ax.legend(loc="upper right")
     return fig
 
 
@@ -184,7 +189,7 @@ def amplitude_figure(result, model=False, fig=None):
     left.set_title("Period against amplitude")
     right.set_title("Damping against amplitude")
     for ax in (left, right):
-        ax.legend(loc="best", fontsize=7)
+        ax.legend(loc="best")
     return fig
 
 
@@ -201,5 +206,5 @@ def hysteresis_figure(result, fig=None):
     ax.set_xlabel("displacement of the isolation layer [mm]")
     ax.set_ylabel("isolators' force -m a [kN]")
     ax.set_title("Hysteresis loop")
-    ax.legend(loc="best", fontsize=7)
+    ax.legend(loc="best")
     return fig

@@ -434,6 +434,7 @@ def law_panel(ax, law: LinearLaw, x, y, yerr, names, *, x_scale: float = 1.0, y_
     or (low, high) rows of distances), the fitted law and its 95% band, the slope and its p-value in the
     title (under ``name``, default the law's quantity). ``x_scale`` and ``y_scale`` convert SI to the
     plotted units."""
+    from ._style import STYLE
     from .plots import _COLORS, user_label
 
     x = np.asarray(x, dtype=float)
@@ -445,14 +446,14 @@ def law_panel(ax, law: LinearLaw, x, y, yerr, names, *, x_scale: float = 1.0, y_
                     label="95% band")
     ax.plot(grid * x_scale, mean * y_scale, color=_COLORS["a"], label="fitted law")
     ax.errorbar(x * x_scale, y * y_scale, yerr=np.asarray(yerr, dtype=float) * y_scale, fmt="o", ms=4,
-                color=_COLORS["b"], capsize=2, label="tests")
+                color=_COLORS["b"], capsize=2, label="tests (95% interval)")
     for xi, yi, test in zip(x, y, names, strict=True):
         user_label(ax, "annotate", test, (xi * x_scale, yi * y_scale), textcoords="offset points", xytext=(4, 3),
-                   fontsize=6)
+                   fontsize=STYLE["legend.fontsize"])
     verdict = "significant" if law.significant else "not significant"
     factor = y_scale / x_scale
     ax.set_title(f"{name or law.quantity}: slope {law.slope * factor:.3g} ± {law.slope_se * factor:.2g} {slope_unit}\n"
-                 f"(p = {law.p_value:.2g}, {verdict} at 5%)", fontsize=8)
+                 f"(p = {law.p_value:.2g}, {verdict} at 5%)", fontsize=STYLE["legend.fontsize"])
     ax.set_xlabel(x_label)
     ax.set_ylabel(y_label)
 
@@ -460,6 +461,7 @@ def law_panel(ax, law: LinearLaw, x, y, yerr, names, *, x_scale: float = 1.0, y_
 @styled
 def campaign_figure(result: CampaignResult, fig=None):
     """Friction against each variable: the tests (95% error bars), the fitted law and its 95% band."""
+    from ._style import per
     from .plots import _figure, user_label
 
     nv = len(result.variables)
@@ -473,8 +475,8 @@ def campaign_figure(result: CampaignResult, fig=None):
             law_panel(ax, result.laws[(friction, var)], [t.value(var) for t in result.tests],
                       [getattr(t, friction) for t in result.tests], 1.96 * se, [t.name for t in result.tests],
                       x_scale=scale, x_label=f"{label} [{unit}]", y_label=f"${friction[0]}_{friction[1]}$ [N]",
-                      slope_unit=f"N/{unit}")
+                      slope_unit=per("N", unit))
             if row == 0 and col == 0:
-                ax.legend(fontsize=6, loc="best")
+                ax.legend(loc="best")
     user_label(fig, "suptitle", f"{result.title}: friction against load and angle")
     return fig

@@ -246,6 +246,11 @@ CASE_SCHEMA: dict[str, dict[str, tuple[str, str]]] = {
         "superstructure_period": ("time", "a positive fixed-base period of the superstructure, e.g. '0.5 s'"),
         "superstructure_damping_ratio": ("dimensionless", "a damping ratio in [0, 1), e.g. 0.02"),
     },
+    "report": {
+        "operator": ("str", "who ran the test or the analysis, e.g. 'A. Engineer'"),
+        "organisation": ("str", "their organisation, e.g. 'Test lab Ltd'"),
+        "test_id": ("str", "the test's identifier, e.g. 'QR-2024-07'"),
+    },
     "plan": {
         "samples": ("int", "an integer >= 2 (friction samples of the release envelope)"),
         "seed": ("seed", "an integer in [0, 2^63)"),
@@ -317,6 +322,12 @@ class Case:
     title: str = "quickrelease case"
     notes: str = ""
     source: str = "<case>"
+    source_text: str | None = field(default=None, repr=False)
+    """The case file's text as read (echoed, with its SHA-256, in every output: :func:`quickrelease.runfolder.
+    provenance`); None for a case not read from a file."""
+    report: dict[str, str] = field(default_factory=dict)
+    """The ``[report]`` table: who ran the test (``operator``, ``organisation``, ``test_id``), for the report's
+    sign-off block."""
     has_test: bool = True
     """False for a case of the building alone (no ``[test]``: alpha0 and E_S are NaN; see :func:`load_case`)."""
 
@@ -489,7 +500,12 @@ def load_case(path: str | Path, *, require_test: bool = True) -> Case:
     path = Path(path)
     source = str(path)
     data = read_toml(path, "case file", CaseFileError)
-    return case_from_mapping(data, source=source, base=path.parent, require_test=require_test)
+    case = case_from_mapping(data, source=source, base=path.parent, require_test=require_test)
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except (OSError, UnicodeDecodeError):  # read a moment ago: only a file replaced in between
+        text = None
+    return replace(case, source_text=text)
 
 
 def case_from_mapping(data: dict[str, Any], source: str = "<case>", base: Path | None = None, *,
@@ -522,7 +538,8 @@ def case_from_mapping(data: dict[str, Any], source: str = "<case>", base: Path |
     building = _building(values, data.get("building"), source, base)
     if "test" not in data and not require_test and building is not None:  # a case of the building alone
         return Case(device=device, alpha0=math.nan, stored_energy=math.nan, building=building, has_test=False,
-                    title=values.get("title", Path(source).stem), notes=values.get("notes", ""), source=source)
+                    title=values.get("title", Path(source).stem), notes=values.get("notes", ""), source=source,
+                    report=_report(values))
     if "test" not in data:
         raise CaseFileError(f"{source}: missing table [test] (force or energy, alpha0)")
     if "test.alpha0" not in values:
@@ -582,8 +599,13 @@ def case_from_mapping(data: dict[str, Any], source: str = "<case>", base: Path |
         energy_given=has_energy, uncertainty=uncertainty, record=record, fit=fit, fuse=fuse, building=building,
         plan=plan, friction_case=friction_case, friction_correlation=values.get("friction.correlation", 0.0),
         title=values.get("title", Path(source).stem), notes=values.get("notes", ""), source=source,
-        **sim,
+        report=_report(values), **sim,
     )
+
+
+def _report(values: dict[str, Any]) -> dict[str, str]:
+    """The ``[report]`` entries (operator, organisation, test_id) given."""
+    return {k.split(".", 1)[1]: v for k, v in values.items() if k.startswith("report.")}
 
 
 def _device(table: dict[str, Any], source: str, base: Path) -> Device:

@@ -399,6 +399,7 @@ def demo(
     paper case into --out. The mass model is the distributed one (c = 2/3): the paper's t_F = 1.05 s is
     infeasible with the lumped one (c = 1), whose feasible interval the comparison reports in a row.
     """
+    from dataclasses import replace
     from importlib import resources
 
     from .case import load_case
@@ -413,7 +414,7 @@ def demo(
     dev = preset("paper")
     cmp = reproduce_table7(dev, mass_model=mass_model)
     if as_json:
-        paths = write_results(run_case(case), out, overwrite=overwrite)
+        paths = write_results(replace(run_case(case), paper=cmp), out, overwrite=overwrite)
         _print_json({"device": dev.name, "mass_model": mass_model, **cmp.summary(), "out": str(out),
                      "files": sorted(str(p) for p in paths.values())})
         return
@@ -427,7 +428,7 @@ def demo(
         f"u_F = {cmp.u_final:.4f} m, v_F = {cmp.v_final:.4f} m, "
         f"peak u_dot = {cmp.peak_u_dot:.3f} m/s, peak v_dot = {cmp.peak_v_dot:.3f} m/s"
     )
-    paths = write_results(run_case(case), out, overwrite=overwrite)
+    paths = write_results(replace(run_case(case), paper=cmp), out, overwrite=overwrite)
     _echo(f"Figures and report of the paper case: {out / 'report.html'} ({len(paths)} files in {out}/)")
 
 
@@ -489,12 +490,14 @@ def sweep_command(
     """Release envelope (t_F, alpha_F, u_F, v_F, peak velocities) over a grid of inputs."""
     from .case import load_case
     from .plots import save_figure
+    from .runfolder import provenance
     from .sweep import heatmap_figure, parse_grid, sweep
 
     out = _file_option(file, out_old, "sweep")
     grids = dict(parse_grid(g) for g in grid)
+    case = load_case(case_file)
     with _busy("sweeping the grid"):
-        ds = sweep(load_case(case_file), grids, backend=backend, out=out, scheduler=scheduler, workers=workers,
+        ds = sweep(case, grids, backend=backend, out=out, scheduler=scheduler, workers=workers,
                    block_rows=block_rows, resume=resume, overwrite=overwrite,
                    log=lambda line: _echo(f"note: {line}", err=True))
         figs = save_figure(heatmap_figure(ds), out.parent, out.name.rsplit(".", 1)[0] + "_heatmaps")
@@ -507,14 +510,14 @@ def sweep_command(
                "peak_v_dot_m_s": [float(ds.peak_v_dot.min()), float(ds.peak_v_dot.max())],
                "geometric_limit_share": float((ds.stopped_by == 1).mean()),
                "flagged": int((ds.status != 0).sum()),  # outputs NaN, the reason in the status variable
-               "figures": [str(p) for p in figs.values()]}
+               "figures": [str(p) for p in figs.values()], "provenance": provenance(case)}
     if as_json:
         _print_json(summary)
         return
     from .display import quantity_rows
 
     _table(f"Sweep over {' x '.join(f'{k} ({v})' for k, v in summary['dims'].items())}",
-           quantity_rows(summary, skip=("dims",)), ("quantity", "value (min, max)"))
+           quantity_rows(summary, skip=("dims", "provenance")), ("quantity", "value (min, max)"))
 
 
 @app.command()
@@ -675,9 +678,10 @@ def fit_command(
         paths = {}
         if folder is not None:
             from .export import write_json
+            from .runfolder import provenance
 
             with folder.staged() as work:
-                paths = {"fit": folder.final(write_json(fit.summary(), work / "fit.json"))}
+                paths = {"fit": folder.final(write_json(fit.summary(), work / "fit.json", provenance(case)))}
     summary = fit.summary()
     if as_json:
         _print_json(summary)
@@ -736,7 +740,7 @@ def building_command(
         from .workflow import write_building_results
 
         paths = write_building_results(result, data, out, model=model, compare=compare, title=case.title,
-                                       overwrite=overwrite)
+                                       overwrite=overwrite, origin=case)
     summary = result.summary()
     if as_json:
         _print_json(summary)

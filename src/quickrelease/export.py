@@ -61,8 +61,11 @@ def write_text(text: str, path: str | Path) -> Path:
     return Path(path)
 
 
-def write_json(data: dict[str, Any], path: str | Path) -> Path:
-    """Write a JSON object atomically (no NaN: JSON has none)."""
+def write_json(data: dict[str, Any], path: str | Path, provenance: dict[str, Any] | None = None) -> Path:
+    """Write a JSON object atomically (no NaN: JSON has none); with ``provenance``
+    (:func:`quickrelease.runfolder.provenance`) stated under the key ``provenance``."""
+    if provenance is not None:
+        data = {**data, "provenance": provenance}
     return write_text(json.dumps(data, indent=2, allow_nan=False) + "\n", path)
 
 
@@ -86,14 +89,16 @@ def read_csv(path: str | Path) -> dict[str, np.ndarray]:
     return {n: matrix[:, i] for i, n in enumerate(names)}
 
 
-def write_netcdf(response: Response, path: str | Path, attrs: dict[str, Any] | None = None) -> Path:
+def write_netcdf(response: Response, path: str | Path, attrs: dict[str, Any] | None = None,
+                 provenance: dict[str, Any] | None = None) -> Path:
     """Write the time histories as NetCDF (classic format, readable by xarray and every NetCDF tool).
 
     The dataset of :meth:`Response.to_xarray`: variables named as the CSV columns without the unit suffix,
     on the time coordinate ``t``, with ``units`` and ``long_name``; the summary and ``attrs`` as global
-    attributes. Text attributes are UTF-8 (a title "Prüfung" reads back letter for letter).
+    attributes, with the ``provenance`` (version, input file and its SHA-256). Text attributes are UTF-8 (a
+    title "Prüfung" reads back letter for letter).
     """
-    ds = response.to_xarray()
+    ds = response.to_xarray(provenance=provenance)
     for key, value in (attrs or {}).items():
         ds.attrs[key] = int(value) if isinstance(value, bool) else value
     with atomic_path(path) as tmp:

@@ -19,7 +19,8 @@ from typing import Any
 import numpy as np
 
 from . import batch
-from ._style import styled
+from ._style import STYLE as _STYLE
+from ._style import styled, unit_text
 from ._validate import check_size
 from .building import FreeVibration, Isolation, free_vibration, pushed_state
 from .case import BuildingSpec, Case, Distribution
@@ -794,7 +795,7 @@ def choices_figure(table: FuseTable, fig=None):
         for j in range(na):
             c = table.choices[i * na + j]
             text = f"{P[i, j]:.0f}" + (f"\n±{std[i, j]:.0f}" if std[i, j] > 0 else "")
-            ax.text(j, i, text, ha="center", va="center", fontsize=7,
+            ax.text(j, i, text, ha="center", va="center", fontsize=_STYLE["legend.fontsize"],
                     fontweight="bold" if c is best else "normal")
             if within[i, j]:
                 ax.add_patch(Rectangle((j - 0.5, i - 0.5), 1, 1, fill=False, lw=2.0, ec="black"))
@@ -823,12 +824,14 @@ def utilisation_figure(members: MemberChecks, fig=None):
               for c in checks]
     bars = ax.barh(labels, values, color=colors)
     for bar, c in zip(bars, checks, strict=True):
-        text = "skipped" if c.utilisation is None else f" {c.utilisation:.3f}"
-        ax.text(max(bar.get_width(), 0.0), bar.get_y() + bar.get_height() / 2, text, va="center", fontsize=7)
-    ax.axvline(1.0, color=_COLORS["b"], lw=1.0, ls="--")
+        text = " skipped (no capacity given)" if c.utilisation is None else f" {c.utilisation:.3f}"
+        ax.text(max(bar.get_width(), 0.0), bar.get_y() + bar.get_height() / 2, text, va="center",
+                fontsize=_STYLE["legend.fontsize"])
+    ax.axvline(1.0, color=_COLORS["b"], lw=1.0, ls="--", label="capacity (utilisation 1)")
     ax.invert_yaxis()
     ax.set_xlim(0, max(1.2, max(values) * 1.25))
-    ax.set_xlabel("utilisation (demand / capacity)")
+    ax.set_xlabel("utilisation, demand / capacity [-]")
+    ax.legend(loc="upper right")
     f = members.forces
     ax.set_title(f"Member checks at P = {f.P / 1e3:.0f} kN, $\\alpha_0$ = {f.alpha0:.4g} rad\n"
                  "(the fuse E4 is meant to reach 1: it breaks)")
@@ -853,7 +856,7 @@ def envelope_figure(envelope: Envelope, fig=None):
                 ax.axvline(r[q], color=_COLORS["d"], ls="--", lw=0.9)
         ax.axvline(envelope.nominal[key], color=_COLORS["b"], lw=1.4)
         ax.set_yticks([])
-        ax.set_xlabel(f"{label} [{unit}]", fontsize=8)
+        ax.set_xlabel(f"{label} [{unit_text(unit)}]")
     fig.suptitle(f"Release envelope over {envelope.samples:,} friction samples (red: nominal, dashed: 5-95%)")
     return fig
 
@@ -865,21 +868,22 @@ def gap_figure(clear: Clearance, fig=None):
 
     fig = _figure(6.4, 3.4, fig=fig, left=0.11, right=0.97, bottom=0.14, top=0.86)
     ax = fig.subplots()
-    ax.plot(clear.t, clear.head, color=_COLORS["a"], label="head retraction u(t)")
-    ax.plot(clear.t, clear.approach, color=_COLORS["c"], label="building approach d0 - x(t)")
-    ax.plot(clear.t, clear.gap, color=_COLORS["b"], lw=1.8, label="gap")
+    mm = 1e3  # plotted in mm
+    ax.plot(clear.t, mm * clear.head, color=_COLORS["a"], label="head retraction u(t)")
+    ax.plot(clear.t, mm * clear.approach, color=_COLORS["c"], label="building approach d0 - x(t)")
+    ax.plot(clear.t, mm * clear.gap, color=_COLORS["b"], lw=1.8, label="gap")
     ax.axhline(0.0, color="black", lw=0.8)
     if clear.contact:
-        ax.fill_between(clear.t, clear.gap, 0.0, where=clear.gap < 0, color=_COLORS["b"], alpha=0.3, label="contact")
-    if clear.min_gap is not None:
-        ax.plot([clear.min_gap_time], [clear.min_gap], "o", color=_COLORS["b"])
-        ax.annotate(f"min gap {1e3 * clear.min_gap:.0f} mm at {clear.min_gap_time:.3g} s", (clear.min_gap_time,
-                    clear.min_gap), textcoords="offset points", xytext=(6, -12), fontsize=8)
+        ax.fill_between(clear.t, mm * clear.gap, 0.0, where=clear.gap < 0, color=_COLORS["b"], alpha=0.3,
+                        label="contact")
+    if clear.min_gap is not None:  # named in the legend, not in an annotation that may cover the curves
+        ax.plot([clear.min_gap_time], [mm * clear.min_gap], "o", color=_COLORS["b"],
+                label=f"min gap {mm * clear.min_gap:.0f} mm at {clear.min_gap_time:.3g} s")
     ax.set_xlabel("time after release [s]")
-    ax.set_ylabel("[m]")
+    ax.set_ylabel("distance [mm]")
     verdict = "CONTACT" if clear.contact else "clear"
     ax.set_title(f"Clearance between the front head and the building ({verdict}); d0 = {1e3 * clear.d0:.0f} mm")
-    ax.legend(fontsize=7, loc="best")
+    ax.legend(loc="best")
     return fig
 
 

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from . import dynamics
-from ._style import COLORS, STYLE, figure, styled
+from ._style import COLORS, STYLE, figure, styled, unit_text
 from .identify import Identification, stop_time_on_line
 from .response import Response
 from .statics import StrainEnergy
@@ -45,7 +45,8 @@ def user_label(ax_or_fig, method: str, text: Any, *args: Any, **kwargs: Any):
 
 
 def _mark_stop(ax, response: Response) -> None:
-    ax.axvline(response.stop_time, color=_COLORS["d"], lw=0.8, ls="--")
+    ax.axvline(response.stop_time, color=_COLORS["d"], lw=0.8, ls="--",
+               label=f"stop $t_F$ = {response.stop_time:.4f} s")
 
 
 @styled
@@ -71,11 +72,11 @@ def fig13(response: Response, fig=None):
     d.axhline(r.stored_energy / 1e3, color=_COLORS["d"], lw=0.8, ls=":", label="$E_S$")
     d.set_ylabel("energy [kJ]")
     d.set_title("(d) energy balance")
-    d.legend(loc="center right")
     for ax in (c, d):
         ax.set_xlabel("time $t$ [s]")
     for ax in axes.flat:
         _mark_stop(ax, r)
+        ax.legend(loc="best")
     fig.suptitle(f"Release response ({r.method}, c = {r.mass_factor:.4g}): "
                  f"$t_F$ = {r.stop_time:.4f} s, $\\alpha_F$ = {r.alpha_final:.4f} rad")
     return fig
@@ -97,18 +98,19 @@ def fig14(response: Response, fig=None):
     b.set_title("(b) linear velocity")
     for ax in (a, b):
         ax.set_xlabel("time $t$ [s]")
-        ax.legend()
         _mark_stop(ax, r)
+        ax.legend()
     return fig
 
 
 def state_diagram_data(response: Response) -> dict[str, np.ndarray]:
     """Numbers behind Fig. 15: the numerical (alpha, alpha_dot), Eq. 10 at the same alpha, and the distance.
 
-    ``distance`` is the distance of each numerical point from the analytic curve, to first order:
-    ``|F| / |grad F|`` with ``F(alpha, alpha_dot) = M(alpha) alpha_dot^2 + W_F(alpha) - E_S`` (Eq. 9), whose
-    zero level is the curve. Unlike the vertical gap it stays meaningful near the stop, where the
-    curve is vertical (units: rad and rad/s taken together).
+    ``energy_residual`` [J] is ``|F|`` with ``F(alpha, alpha_dot) = M(alpha) alpha_dot^2 + W_F(alpha) - E_S``
+    (Eq. 9, ``E_K + W_F - E_S``), whose zero level is the curve: the distance printed on Fig. 15, relative to
+    E_S (``energy_residual / E_S``, dimensionless). Unlike the vertical gap it stays meaningful near the stop,
+    where the curve is vertical. ``distance`` is the same residual turned into a distance in the state plane,
+    to first order ``|F| / |grad F|`` (rad and rad/s taken together: a check, not a quantity with one unit).
     """
     r = response
     d = r.device
@@ -122,14 +124,16 @@ def state_diagram_data(response: Response) -> dict[str, np.ndarray]:
     dW = 2.0 * r.F1 * d.L1 * np.cos(alpha) + 4.0 * r.F2 * d.L1 * np.sin(alpha)
     grad = np.hypot(dM * alpha_dot**2 + dW, 2.0 * M * alpha_dot)
     return {"alpha": alpha, "alpha_dot": alpha_dot, "alpha_dot_analytic": analytic,
-            "distance": np.abs(F) / grad}
+            "energy_residual": np.abs(F), "distance": np.abs(F) / grad}
 
 
 @styled
 def fig15(responses: Response | list[Response], n_markers: int = 40, fig=None):
-    """Fig. 15: state diagram, numerical solutions (markers) over the analytic curve of Eq. 10 (line).
+    """Fig. 15: state diagram, numerical solutions (markers) with the analytic curve of Eq. 10 (a line drawn
+    on top of them, so that it stays visible where the markers lie on it).
 
-    Each response's legend entry gives its largest distance from the curve.
+    Each response's legend entry gives its largest distance from the curve, as the energy residual relative
+    to the stored energy, ``max |E_K + W_F - E_S| / E_S`` (dimensionless; see :func:`state_diagram_data`).
     """
     responses = [responses] if isinstance(responses, Response) else list(responses)
     r = responses[0]
@@ -139,7 +143,7 @@ def fig15(responses: Response | list[Response], n_markers: int = 40, fig=None):
     fine = np.linspace(r.alpha0, r.alpha_final, 400)
     W = dynamics.dissipated_energy(fine, r.alpha0, r.F1, r.F2, d.L1)
     M = dynamics.generalized_mass(fine, d.m1, d.m2, d.L1, r.mass_factor)
-    ax.plot(fine, np.sqrt(np.maximum(r.stored_energy - W, 0.0) / M), color=_COLORS["d"], lw=2.2,
+    ax.plot(fine, np.sqrt(np.maximum(r.stored_energy - W, 0.0) / M), color="black", lw=0.9, zorder=3,
             label="analytic, Eq. 10")
     markers = [("o", _COLORS["b"]), ("x", _COLORS["a"]), ("s", _COLORS["c"])]
     for k, resp in enumerate(responses):
@@ -150,12 +154,14 @@ def fig15(responses: Response | list[Response], n_markers: int = 40, fig=None):
                 "energy": "energy solution"}[resp.method]
         marker, color = markers[k % len(markers)]
         idx = np.arange(k * step // max(len(responses), 1), data["alpha"].size, step)
-        ax.plot(data["alpha"][idx], data["alpha_dot"][idx], marker, ms=3.5, mfc="none", color=color,
-                label=f"{name}: max distance {np.max(data['distance']):.1e}")
+        residual = np.max(data["energy_residual"]) / resp.stored_energy
+        ax.plot(data["alpha"][idx], data["alpha_dot"][idx], marker, ms=4.5, mfc="none", color=color, zorder=2,
+                label=f"{name}: {residual:.1e}")
     ax.set_xlabel(r"position angle $\alpha$ [rad]")
     ax.set_ylabel(r"angular velocity $\dot\alpha$ [rad/s]")
     ax.set_title("Response state diagram")
-    ax.legend(loc="lower left")
+    ax.legend(loc="lower left", title=r"distance from Eq. 10: max $|E_K + W_F - E_S|\,/\,E_S$ [-]",
+              title_fontsize=_STYLE["legend.fontsize"])
     return fig
 
 
@@ -202,7 +208,8 @@ def strain_energy_figure(strain: StrainEnergy, fig=None):
     bars = ax.barh([labels[n] for n in names], values, color=[colors[n.split("_")[0]] for n in names])
     for bar, value in zip(bars, values, strict=True):
         label = f" {value:.0f} J ({100 * value / strain.total:.1f}%)"
-        ax.text(bar.get_width(), bar.get_y() + bar.get_height() / 2, label, va="center", fontsize=8)
+        ax.text(bar.get_width(), bar.get_y() + bar.get_height() / 2, label, va="center",
+                fontsize=_STYLE["legend.fontsize"])
     ax.invert_yaxis()
     ax.set_xlabel("strain energy [J]")
     ax.set_xlim(0, max(values) * 1.35)
@@ -213,7 +220,8 @@ def strain_energy_figure(strain: StrainEnergy, fig=None):
 
 @styled
 def fit_figure(result, fig=None):
-    """Measured and fitted channels of a fit to a record, each with its residuals (the +-2 sigma band shaded).
+    """Measured and fitted channels of a fit to a record, each with its residuals (the band shaded is +-2 sigma,
+    sigma the channel's noise level: about 95% of the residuals of a good fit lie inside it).
 
     ``result`` is a :class:`quickrelease.fit.FitResult` with a record.
     """
@@ -229,30 +237,39 @@ def fit_figure(result, fig=None):
     t_rel = result.release_time
     for k, name in enumerate(names):
         ch = result.record.channels[name]
-        unit = CHANNELS[name][1]
+        unit = unit_text(CHANNELS[name][1])
         top = fig.add_subplot(grid[3 * k], sharex=share)
         share = share or top
         bottom = fig.add_subplot(grid[3 * k + 1], sharex=share)
         top.plot(ch.t, ch.values, ".", ms=1.6, color=_COLORS["d"], alpha=0.6, label="measured")
         top.plot(t_fine, curves[name], color=_COLORS["a"], lw=1.2, label="fitted model")
         top.set_ylabel(f"{name} [{unit}]")
-        top.legend(loc="best", fontsize=7)
         sigma = result.noise[name]
         resid = ch.values - result.fitted[name]
-        bottom.axhspan(-2 * sigma, 2 * sigma, color=_COLORS["c"], alpha=0.15, lw=0)
-        bottom.plot(ch.t, resid, ".", ms=1.4, color=_COLORS["b"])
-        bottom.set_ylabel("resid.")
+        bottom.axhspan(-2 * sigma, 2 * sigma, color=_COLORS["c"], alpha=0.15, lw=0, label="±2σ (noise)")
+        bottom.plot(ch.t, resid, ".", ms=1.4, color=_COLORS["b"], label="residual")
+        bottom.set_ylabel(f"residual [{unit}]")
         for ax in (top, bottom):
-            ax.axvline(t_rel, color=_COLORS["d"], lw=0.8, ls=":")
-            ax.axvline(t_rel + result.stop_time, color=_COLORS["d"], lw=0.8, ls="--")
+            ax.axvline(t_rel, color=_COLORS["d"], lw=0.8, ls=":", label="release" if ax is top else None)
+            ax.axvline(t_rel + result.stop_time, color=_COLORS["d"], lw=0.8, ls="--",
+                       label="stop $t_F$" if ax is top else None)
             if ax is not bottom or k < n - 1:
                 ax.tick_params(labelbottom=False)
+        _joint_legend(top, bottom, loc="best")
         top.set_title(f"{name}: rms residual {result.residual_rms[name]:.3g} {unit}, noise {sigma:.3g} {unit} "
-                      f"({result.noise_source[name]})", fontsize=8)
-    bottom.set_xlabel("record time [s] (dotted: release, dashed: stop)")
+                      f"({result.noise_source[name]})", fontsize=_STYLE["legend.fontsize"])
+    bottom.set_xlabel("record time [s]")
     fig.suptitle(f"Fit to the record: $F_1$ = {result.F1:.1f} ± {result.std_errors['F1']:.2g} N, "
                  f"$F_2$ = {result.F2:.1f} ± {result.std_errors['F2']:.2g} N")
     return fig
+
+
+def _joint_legend(top, bottom, **kwargs) -> None:
+    """One legend in ``top`` for the lines of ``top`` and of the small residual axes ``bottom`` below it
+    (a legend of its own would cover the residuals)."""
+    handles, labels = top.get_legend_handles_labels()
+    more, more_labels = bottom.get_legend_handles_labels()
+    top.legend(handles + more, labels + more_labels, **kwargs)
 
 
 def save_figure(fig: Any, folder: str | Path, stem: str, formats: tuple[str, ...] = ("png", "svg"),

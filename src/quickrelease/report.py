@@ -1,13 +1,19 @@
 """A self-contained HTML report of a case: inputs, strain energy, identification, release, figures.
 
 One file, no network fetches: figures are embedded as inline SVG and the style is inline.
-Every piece of user-provided text (title, notes, names) is escaped.
+Every piece of user-provided text (title, notes, names) is escaped. It reads as a test report: the date,
+the package version and the input file (name, SHA-256, its text in a collapsible block) at the top, a table
+of contents, and a sign-off block naming who ran the test (the case file's ``[report]`` table) at the end.
+The date is today's, or ``SOURCE_DATE_EPOCH``'s where that is set (reproducible builds); it is the only
+thing in the output folder that depends on when it was written.
 """
 
 from __future__ import annotations
 
+import datetime
 import html
 import math
+import os
 import re
 from typing import Any
 
@@ -27,9 +33,12 @@ h1 { font-size: 1.6rem; margin-bottom: 0.2rem; } h2 { font-size: 1.2rem; border-
 table { border-collapse: collapse; margin: 0.6rem 0; font-size: 0.92rem; }
 th, td { border: 1px solid #c8ccd0; padding: 0.25rem 0.6rem; text-align: left; }
 th { background: #e8edf2; } td.num { text-align: right; font-variant-numeric: tabular-nums; }
-figure { margin: 1rem 0; } figure svg { width: 100%; max-width: 760px; height: auto; }
+figure { margin: 1rem 0; } figure svg { max-width: 100%; height: auto; }  /* own size: one font scale */
 figcaption { font-size: 0.9rem; color: #444; }
 .flag { color: #a00; font-weight: bold; }
+nav.toc { background: #f4f6f8; padding: 0.4rem 1rem; margin: 1rem 0; } nav.toc ol { margin: 0.3rem 0; }
+pre.input { white-space: pre-wrap; font-size: 0.85rem; background: #f4f6f8; padding: 0.6rem; overflow-x: auto; }
+table.signoff td { min-width: 14rem; height: 1.6rem; }
 """
 
 
@@ -67,17 +76,71 @@ _DEVICE_UNITS = {"mass": "kg", "length": "m", "area": "m²", "second_moment": "m
                  "dimensionless": "–"}
 
 
+def report_date() -> str:
+    """The report's date (ISO 8601, UTC): ``SOURCE_DATE_EPOCH`` where set, else today."""
+    epoch = os.environ.get("SOURCE_DATE_EPOCH")
+    if epoch is not None and epoch.strip().isdigit():
+        when = datetime.datetime.fromtimestamp(int(epoch), datetime.UTC)
+    else:
+        when = datetime.datetime.now(datetime.UTC)
+    return when.date().isoformat()
+
+
+def _front(title: str, prov: dict[str, Any], what: str, extra: list[tuple[str, str]] = ()) -> list[str]:
+    """The report's head: title, date, version, the input file (name, SHA-256, text) and a place for the
+    table of contents."""
+    entry = prov.get("input")
+    rows = [("report date", _e(report_date())), ("quickrelease version", _e(prov["quickrelease"]))]
+    if entry:
+        rows += [(what, _e(entry["name"])), ("SHA-256 of the " + what, f"<code>{_e(entry['sha256'])}</code>")]
+    else:
+        rows.append((what, "none (built in Python)"))
+    rows += list(extra)
+    body = "".join(f"<tr><th scope=\"row\">{_e(k)}</th><td>{v}</td></tr>" for k, v in rows)
+    parts = [f"<h1>{_e(title)}</h1>", f"<table class=\"front\"><tbody>{body}</tbody></table>"]
+    if entry:
+        parts.append(f"<details id=\"input-text\"><summary>The {_e(what)} as read</summary>"
+                     f"<pre class=\"input\">{_e(entry['text'])}</pre></details>")
+    parts.append(_TOC)
+    return parts
+
+
+_TOC = "<!--quickrelease-toc-->"
+
+
+def _signoff(info: dict[str, str] | None, prov: dict[str, Any]) -> str:
+    """The sign-off block: who ran the test (the case file's ``[report]`` table), and lines to sign."""
+    info = info or {}
+    rows = [("test identifier", info.get("test_id")), ("operator", info.get("operator")),
+            ("organisation", info.get("organisation")),
+            ("analysed with", f"quickrelease {prov['quickrelease']} on {report_date()}"),
+            ("checked by", None), ("signature and date", None)]
+    body = "".join(f"<tr><th scope=\"row\">{_e(k)}</th><td>{'' if v is None else _e(v)}</td></tr>" for k, v in rows)
+    note = "" if info else ("<p class=\"meta\">Give a <code>[report]</code> table (operator, organisation, test_id) "
+                            "in the case file to fill this block.</p>")
+    return f"<h2 id=\"sign-off\">Sign-off</h2><table class=\"signoff\"><tbody>{body}</tbody></table>{note}"
+
+
+def _paper_section(cmp) -> str:
+    """Table 7 of the paper beside ours (:class:`~quickrelease.paper.PaperComparison`)."""
+    rows = "".join(f"<tr><td>{_e(q)}</td><td class=\"num\">{_e(p)}</td><td class=\"num\">{_e(o)}</td>"
+                   f"<td>{_e(n)}</td></tr>" for q, p, o, n in cmp.rows())
+    return ("<h2 id=\"table7\">The paper and quickrelease (Table 7)</h2>"
+            "<table><thead><tr><th>quantity</th><th>paper</th><th>quickrelease</th><th>note</th></tr></thead>"
+            f"<tbody>{rows}</tbody></table>"
+            "<p>The paper's values as printed (rounded); ours computed for the same device and test, with what "
+            "explains each difference.</p>")
+
+
 def render_report(result: CaseResult, svgs: dict[str, str]) -> str:
     """The HTML text of the report for a case result, with the given SVG figures embedded."""
-    from . import __version__
+    from .runfolder import provenance
 
     case = result.case
     r = result.response
     s = r.summary()
-    parts: list[str] = []
-    parts.append(f"<h1>{_e(case.title)}</h1>")
-    parts.append(f"<p class=\"meta\">Case file: {_e(case.source)} &middot; quickrelease {_e(__version__)} &middot; "
-                 f"device: {_e(case.device.name)}</p>")
+    prov = provenance(case)
+    parts: list[str] = _front(case.title, prov, "case file", [("device", _e(case.device.name))])
     if case.notes:
         parts.append(f"<div class=\"notes\">{_e(case.notes)}</div>")
 
@@ -86,8 +149,8 @@ def render_report(result: CaseResult, svgs: dict[str, str]) -> str:
     rows = [
         ("push force P", _num(case.push_force / 1e3 if case.push_force else None), "kN"),
         ("stored energy E_S" + (" (given)" if case.energy_given else " (Eq. 2)"), _num(case.stored_energy), "J"),
-        ("initial angle α0", f"{_num(case.alpha0)} ({_num(math.degrees(case.alpha0), '.4g')}°)", "rad"),
-        ("mass model", f"{_e(case.mass_model)} (c = {_num(case.mass_factor, '.4g')})", ""),
+        ("initial angle α0", f"{_num(case.alpha0)} ({_num(math.degrees(case.alpha0))}°)", "rad"),
+        ("mass model", f"{_e(case.mass_model)} (c = {_num(case.mass_factor)})", ""),
         ("solver", _e(case.method), ""),
     ]
     if case.has_friction:
@@ -125,8 +188,8 @@ def render_report(result: CaseResult, svgs: dict[str, str]) -> str:
         i = result.identification
         parts.append("<h2>Identified friction (Eq. 11-13)</h2>")
         parts.append(_table([
-            ("F1 (central hinges)", f"<strong id=\"F1\">{_num(i.F1, '.6g')}</strong>", "N"),
-            ("F2 (rail supports)", f"<strong id=\"F2\">{_num(i.F2, '.6g')}</strong>", "N"),
+            ("F1 (central hinges)", f"<strong id=\"F1\">{_num(i.F1)}</strong>", "N"),
+            ("F2 (rail supports)", f"<strong id=\"F2\">{_num(i.F2)}</strong>", "N"),
             ("F1* (Eq. 11)", _num(i.F1_max), "N"),
             ("F2* (Eq. 12)", _num(i.F2_max), "N"),
             ("F2 / F2*", _num(i.F2_ratio), "–"),
@@ -134,6 +197,8 @@ def render_report(result: CaseResult, svgs: dict[str, str]) -> str:
             ("feasible t_F on Eq. 13", f"[{_num(i.feasible_stop_times[0])}, {_num(i.feasible_stop_times[1])}]", "s"),
         ]))
         parts.append(_figure(svgs, "identification"))
+    if getattr(result, "paper", None) is not None:
+        parts.append(_paper_section(result.paper))
 
     if result.fit is not None:
         parts.append(_fit_section(result.fit, svgs))
@@ -161,7 +226,7 @@ def render_report(result: CaseResult, svgs: dict[str, str]) -> str:
         parts.append(building_section(building, svgs))
     if result.plan is not None:
         parts.append(_plan_section(result.plan, svgs))
-    parts.append(f"<p class=\"meta\">Generated by quickrelease {_e(__version__)}.</p>")
+    parts.append(_signoff(case.report, prov))
     return _page(case.title, parts)
 
 
@@ -175,9 +240,9 @@ def _fit_section(fit, svgs: dict[str, str]) -> str:
     parts = ["<h2>Fit to the measured record</h2>"]
     if fit.record is not None:
         parts.append(f"<p>Record: {_e(fit.record.file.name)}, {fit.record.t.size} rows, "
-                     f"{_num(fit.record.t[0], '.4g')} to {_num(fit.record.t[-1], '.4g')} s. Weighted least squares "
+                     f"{_num(fit.record.t[0])} to {_num(fit.record.t[-1])} s. Weighted least squares "
                      f"(each channel by its noise level); {'converged' if fit.converged else 'NOT converged'} after "
-                     f"{fit.nfev} evaluations; reduced chi-square {_num(fit.chi2_reduced, '.4g')} "
+                     f"{fit.nfev} evaluations; reduced chi-square {_num(fit.chi2_reduced)} "
                      f"({fit.dof} degrees of freedom). Start values: {_e(fit.start_source)}.</p>")
     rows = []
     for name in fit.names:
@@ -234,11 +299,11 @@ def building_section(result, svgs: dict[str, str]) -> str:
     names = ", ".join(f"{c.name} ({c.kind})" for c in fit.channels)
     converged = "converged" if fit.converged else "<span class=\"flag\">NOT converged</span>"
     parts.append(f"<p>Record: {_e(result.source or 'channels given directly')}; channels "
-                 f"{_e(names)}; mass {_num(fit.mass / 1e3, '.6g')} t. "
+                 f"{_e(names)}; mass {_num(fit.mass / 1e3)} t. "
                  f"Model: <strong id=\"building-model\">{_e(fit.model)}</strong>; weighted least squares "
                  f"{converged} after {fit.nfev} "
-                 f"evaluations; reduced chi-square {_num(fit.chi2_reduced, '.4g')} ({fit.dof} degrees of freedom); "
-                 f"AIC {_num(fit.aic, '.6g')}, BIC {_num(fit.bic, '.6g')}.</p>")
+                 f"evaluations; reduced chi-square {_num(fit.chi2_reduced)} ({fit.dof} degrees of freedom); "
+                 f"AIC {_num(fit.aic)}, BIC {_num(fit.bic)}.</p>")
     rows = []
     for key, (label, unit, scale) in _ENGINEERING.items():
         if key not in s or s[key] is None:
@@ -280,9 +345,9 @@ def building_section(result, svgs: dict[str, str]) -> str:
 
         rows = "".join(
             f"<tr><td>{_e(r['model'])}</td><td class=\"num\">{r['parameters']}</td><td class=\"num\">"
-            f"{_num(r['chi2'], '.6g')}</td><td class=\"num\">{_num(r['aic'], '.6g')}</td><td class=\"num\">"
-            f"{_num(r['delta_aic'], '.4g')}</td><td class=\"num\">{_num(r['bic'], '.6g')}</td><td class=\"num\">"
-            f"{_num(r['delta_bic'], '.4g')}</td><td>{_e(white(r))}</td></tr>" for r in result.comparison)
+            f"{_num(r['chi2'])}</td><td class=\"num\">{_num(r['aic'])}</td><td class=\"num\">"
+            f"{_num(r['delta_aic'])}</td><td class=\"num\">{_num(r['bic'])}</td><td class=\"num\">"
+            f"{_num(r['delta_bic'])}</td><td>{_e(white(r))}</td></tr>" for r in result.comparison)
         parts.append("<table><thead><tr><th>model</th><th>parameters</th><th>χ²</th><th>AIC</th><th>ΔAIC</th><th>BIC</th>"
                      f"<th>ΔBIC</th><th>whiteness p</th></tr></thead><tbody>{rows}</tbody></table>")
         parts.append("<p>Lowest BIC first; a difference above about 10 is strong support for the lower one. Small "
@@ -291,13 +356,13 @@ def building_section(result, svgs: dict[str, str]) -> str:
     if result.decay is not None:
         d = result.decay
         law = d.law
-        text = (f"{max(d.peaks.size - 1, 0)} half-cycles; damped period {_num(d.period, '.5g')} s (natural "
-                f"{_num(d.natural_period, '.5g')} s).")
+        text = (f"{max(d.peaks.size - 1, 0)} half-cycles; damped period {_num(d.period)} s (natural "
+                f"{_num(d.natural_period)} s).")
         if law is not None:
             text += (" Combined decrement law (Feeny and Liang 1996): amplitude ratio "
-                     f"r = {_num(law.ratio, '.5g')} per half-cycle (ζ = {_num(law.damping_ratio, '.4g')}), "
+                     f"r = {_num(law.ratio)} per half-cycle (ζ = {_num(law.damping_ratio)}), "
                      "friction displacement δ = F_s / k = "
-                     f"{_num(1e3 * law.friction_displacement, '.4g')} mm; rms residual of the peaks: combined "
+                     f"{_num(1e3 * law.friction_displacement)} mm; rms residual of the peaks: combined "
                      f"{_num(1e3 * law.rms, '.3g')} mm, viscous only {_num(1e3 * law.rms_viscous_only, '.3g')} mm, "
                      f"Coulomb only {_num(1e3 * law.rms_friction_only, '.3g')} mm.")
         parts.append(f"<p>{text}</p>")
@@ -320,14 +385,16 @@ def building_section(result, svgs: dict[str, str]) -> str:
     return "\n".join(parts)
 
 
-def render_building_report(result, svgs: dict[str, str], title: str = "Building free-vibration test") -> str:
-    """The HTML report of ``quickrelease building``: the building section alone."""
-    from . import __version__
+def render_building_report(result, svgs: dict[str, str], title: str = "Building free-vibration test", *,
+                           provenance: dict[str, Any] | None = None, origin: Any = None) -> str:
+    """The HTML report of ``quickrelease building``: the building section alone. ``origin`` is the case
+    (its file and its ``[report]`` table); without it the record is the input named."""
+    from .runfolder import provenance as _provenance
 
-    parts = [f"<h1>{_e(title)}</h1>",
-             f"<p class=\"meta\">Record: {_e(result.source)} &middot; quickrelease {_e(__version__)}</p>",
-             building_section(result, svgs),
-             f"<p class=\"meta\">Generated by quickrelease {_e(__version__)}.</p>"]
+    prov = provenance or _provenance(origin if origin is not None else result.source)
+    parts = [*_front(title, prov, "case file" if origin is not None else "record",
+                     [("record", _e(result.source))]),
+             building_section(result, svgs), _signoff(getattr(origin, "report", None), prov)]
     return _page(title, parts)
 
 
@@ -336,21 +403,21 @@ def _plan_section(plan, svgs: dict[str, str]) -> str:
     from .planning import ENVELOPE_QUANTITIES
 
     parts = ["<h2>Test planning</h2>",
-             f"<p>Planned push: P = {_num(plan.push_force / 1e3, '.6g')} kN at α0 = {_num(plan.alpha0, '.4g')} rad, "
-             f"E_S = {_num(plan.stored_energy, '.6g')} J.</p>"]
+             f"<p>Planned push: P = {_num(plan.push_force / 1e3)} kN at α0 = {_num(plan.alpha0)} rad, "
+             f"E_S = {_num(plan.stored_energy)} J.</p>"]
     if plan.fuse is not None:
         ft = plan.fuse
         best = ft.best
         parts.append("<h3>Fuse and angle (Eq. 1: P = S / tan α0, S = f_u π d² / 4)</h3>")
-        parts.append(f"<p>Target {_num(ft.target[0] / 1e3, '.6g')} to {_num(ft.target[1] / 1e3, '.6g')} kN; rupture "
-                     f"strength {_num(ft.rupture_strength / 1e6, '.4g')} ± "
+        parts.append(f"<p>Target {_num(ft.target[0] / 1e3)} to {_num(ft.target[1] / 1e3)} kN; rupture "
+                     f"strength {_num(ft.rupture_strength / 1e6)} ± "
                      f"{_num(ft.rupture_strength_std / 1e6, '.3g')} MPa. Most likely inside the target: "
-                     f"d = {_num(1e3 * best.diameter, '.4g')} mm at α0 = "
-                     f"{_num(best.alpha0, '.4g')} rad, P = {_num(best.push_force / 1e3, '.5g')} ± "
+                     f"d = {_num(1e3 * best.diameter)} mm at α0 = "
+                     f"{_num(best.alpha0)} rad, P = {_num(best.push_force / 1e3)} ± "
                      f"{_num(best.push_force_std / 1e3, '.3g')} kN "
                      f"({_num(100 * best.probability_within, '.3g')}% inside).</p>")
         rows = [(f"d = {1e3 * c.diameter:.4g} mm, α0 = {c.alpha0:.4g} rad",
-                 f"{_num(c.push_force / 1e3, '.5g')} ± {_num(c.push_force_std / 1e3, '.3g')}",
+                 f"{_num(c.push_force / 1e3)} ± {_num(c.push_force_std / 1e3, '.3g')}",
                  f"{c.stored_energy:.5g} J; {100 * c.probability_within:.3g}%") for c in ft.choices if c.within]
         parts.append(_table(rows, ("choice inside the target", "push force [kN]", "E_S; chance inside the target")))
         for text in ft.warnings:
@@ -359,8 +426,8 @@ def _plan_section(plan, svgs: dict[str, str]) -> str:
     m = plan.members
     parts.append("<h3>Member checks</h3>")
     rows = "".join(f"<tr><td>{_e(c.member)}</td><td>{_e(c.check)}</td><td class=\"num\">"
-                   f"{_num(c.demand / (1e6 if c.unit == 'Pa' else 1e3), '.4g')}</td><td class=\"num\">"
-                   f"{_num(None if c.capacity is None else c.capacity / (1e6 if c.unit == 'Pa' else 1e3), '.4g')}</td>"
+                   f"{_num(c.demand / (1e6 if c.unit == 'Pa' else 1e3))}</td><td class=\"num\">"
+                   f"{_num(None if c.capacity is None else c.capacity / (1e6 if c.unit == 'Pa' else 1e3))}</td>"
                    f"<td>{'MPa' if c.unit == 'Pa' else 'kN'}</td><td class=\"num\">{_num(c.utilisation, '.3f')}</td>"
                    f"<td>{_e(c.note)}</td></tr>" for c in m.checks)
     parts.append("<table><thead><tr><th>member</th><th>check</th><th>demand</th><th>capacity</th><th>unit</th>"
@@ -371,13 +438,13 @@ def _plan_section(plan, svgs: dict[str, str]) -> str:
     parts.append(_figure(svgs, "plan_utilisation"))
     env = plan.envelope
     parts.append("<h3>Release envelope</h3>")
-    parts.append(f"<p>Friction: {_e(env.friction)}; nominal F1 = {_num(env.F1, '.5g')} N, "
-                 f"F2 = {_num(env.F2, '.5g')} N; {env.samples:,} sample(s); "
+    parts.append(f"<p>Friction: {_e(env.friction)}; nominal F1 = {_num(env.F1)} N, "
+                 f"F2 = {_num(env.F2)} N; {env.samples:,} sample(s); "
                  f"{_num(100 * env.geometric_limit_share, '.3g')}% reach the flat rhombus.</p>")
-    rows = "".join(f"<tr><td>{_e(label)}</td><td class=\"num\">{_num(env.nominal[k], '.4g')}</td>"
-                   f"<td class=\"num\">{_num(env.ranges[k]['p5'], '.4g')}</td>"
-                   f"<td class=\"num\">{_num(env.ranges[k]['p95'], '.4g')}</td>"
-                   f"<td class=\"num\">{_num(env.ranges[k]['max'], '.4g')}</td><td>{_e(unit)}</td></tr>"
+    rows = "".join(f"<tr><td>{_e(label)}</td><td class=\"num\">{_num(env.nominal[k])}</td>"
+                   f"<td class=\"num\">{_num(env.ranges[k]['p5'])}</td>"
+                   f"<td class=\"num\">{_num(env.ranges[k]['p95'])}</td>"
+                   f"<td class=\"num\">{_num(env.ranges[k]['max'])}</td><td>{_e(unit)}</td></tr>"
                    for k, (unit, label) in ENVELOPE_QUANTITIES.items())
     parts.append("<table><thead><tr><th>quantity</th><th>nominal</th><th>5%</th><th>95%</th><th>max</th>"
                  f"<th>unit</th></tr></thead><tbody>{rows}</tbody></table>")
@@ -387,18 +454,18 @@ def _plan_section(plan, svgs: dict[str, str]) -> str:
         b = plan.case.building
         parts.append("<h3>Clearance with the building</h3>")
         verdict = ("<span class=\"flag\">CONTACT: the building reaches the front head "
-                   f"(first at {_num(c.first_contact_time, '.3g')} s); {_num(1e3 * c.margin_needed, '.4g')} mm more "
+                   f"(first at {_num(c.first_contact_time, '.3g')} s); {_num(1e3 * c.margin_needed)} mm more "
                    "room is needed</span>" if c.contact else "no contact: the head stays clear of the building")
-        parts.append(f"<p>Building ({_e(b.model)}): T = {_num(b.initial_period, '.4g')} s, "
+        parts.append(f"<p>Building ({_e(b.model)}): T = {_num(b.initial_period)} s, "
                      f"ζ = {_num(b.damping_ratio, '.3g')}, isolator "
-                     f"friction {_num(b.friction_force / 1e3, '.4g')} kN; pushed displacement d0 = "
-                     f"{_num(1e3 * c.d0, '.4g')} mm; {_e(c.describe_minimum())}; "
-                     f"largest approach {_num(1e3 * c.max_approach, '.4g')} mm. "
+                     f"friction {_num(b.friction_force / 1e3)} kN; pushed displacement d0 = "
+                     f"{_num(1e3 * c.d0)} mm; {_e(c.describe_minimum())}; "
+                     f"largest approach {_num(1e3 * c.max_approach)} mm. "
                      f"{verdict}.</p>")
         if plan.clearance_spread is not None:
             sp = plan.clearance_spread
             parts.append(f"<p>Over {sp['clearance_samples']} friction samples: 5% of the minimum gaps below "
-                         f"{_num(sp['min_gap_p5_m'] and 1e3 * sp['min_gap_p5_m'], '.4g')} mm; contact in "
+                         f"{_num(sp['min_gap_p5_m'] and 1e3 * sp['min_gap_p5_m'])} mm; contact in "
                          f"{_num(100 * sp['contact_share'], '.3g')}% of them.</p>")
         parts.append(_figure(svgs, "plan_gap"))
     for text in plan.notes:
@@ -413,8 +480,38 @@ def _figure(svgs: dict[str, str], stem: str, caption: str | None = None) -> str:
             f"<figcaption>{_e(caption or FIGURES[stem])}</figcaption></figure>")
 
 
+def _slug(text: str) -> str:
+    return re.sub(r"[^a-z0-9]+", "-", html.unescape(re.sub(r"<[^>]+>", "", text)).lower()).strip("-") or "section"
+
+
+def _contents(body: str) -> str:
+    """Give every ``<h2>`` an id (when it has none) and put a table of contents linking to them where
+    :data:`_TOC` stands."""
+    entries: list[tuple[str, str]] = []
+    used = set(re.findall(r'\bid="([^"]+)"', body))
+
+    def number(m: re.Match[str]) -> str:
+        attrs, inner = m.group(1) or "", m.group(2)
+        found = re.search(r'\bid="([^"]+)"', attrs)
+        if found:
+            ident = found.group(1)
+        else:
+            ident, k = f"sec-{_slug(inner)}", 2
+            while ident in used:
+                ident, k = f"sec-{_slug(inner)}-{k}", k + 1
+            used.add(ident)
+            attrs = f' id="{ident}"{attrs}'
+        entries.append((ident, re.sub(r"<[^>]+>", "", inner)))
+        return f"<h2{attrs}>{inner}</h2>"
+
+    body = re.sub(r"<h2((?:\s[^>]*)?)>(.*?)</h2>", number, body, flags=re.S)
+    items = "".join(f'<li><a href="#{ident}">{text}</a></li>' for ident, text in entries)
+    toc = f'<nav class="toc" id="contents"><strong>Contents</strong><ol>{items}</ol></nav>' if entries else ""
+    return body.replace(_TOC, toc, 1)
+
+
 def _page(title: str, parts: list[str]) -> str:
-    body = "\n".join(p for p in parts if p)
+    body = _contents("\n".join(p for p in parts if p))
     return (f"<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
             f"<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
             f"<title>{_e(title)} – quickrelease report</title><style>{_CSS}</style></head>\n"
@@ -423,16 +520,17 @@ def _page(title: str, parts: list[str]) -> str:
 
 def render_campaign_report(result, svgs: dict[str, str]) -> str:
     """The HTML report of a campaign: the tests, the friction laws with their significance, the figure."""
-    from . import __version__
     from .campaign import VARIABLES
+    from .runfolder import provenance
 
-    parts = [f"<h1>{_e(result.title)}</h1>",
-             f"<p class=\"meta\">Campaign file: {_e(result.source)} &middot; quickrelease {_e(__version__)}</p>"]
+    prov = provenance(result)
+    signoff = _signoff(None, prov)
+    parts = _front(result.title, prov, "campaign file")
     if result.notes:
         parts.append(f"<div class=\"notes\">{_e(result.notes)}</div>")
     if getattr(result, "kind", "device") == "building":
         parts += _building_campaign_section(result, svgs)
-        parts.append(f"<p class=\"meta\">Generated by quickrelease {_e(__version__)}.</p>")
+        parts.append(signoff)
         return _page(f"{result.title}", parts)
     parts.append("<h2>Friction per test</h2>")
     rows = []
@@ -440,7 +538,7 @@ def render_campaign_report(result, svgs: dict[str, str]) -> str:
         def pm(value, se):
             return _num(value, ".2f") + ("" if se is None else f" ± {_num(se, '.2g')}")
         rows.append(f"<tr><td>{_e(t.name)}</td><td class=\"num\">{_num((t.case.push_force or math.nan) / 1e3, '.0f')}"
-                    f"</td><td class=\"num\">{_num(t.case.alpha0, '.4g')}</td><td class=\"num\">"
+                    f"</td><td class=\"num\">{_num(t.case.alpha0)}</td><td class=\"num\">"
                     f"{_num(t.case.stored_energy, '.0f')}</td><td class=\"num\">{pm(t.F1, t.F1_se)}</td>"
                     f"<td class=\"num\">{pm(t.F2, t.F2_se)}</td><td>{_e(t.method)}</td></tr>")
     parts.append("<table><thead><tr><th>test</th><th>P [kN]</th><th>α0 [rad]</th><th>E_S [J]</th>"
@@ -451,8 +549,8 @@ def render_campaign_report(result, svgs: dict[str, str]) -> str:
     for law in result.laws.values():
         _, label, _, scale, unit = VARIABLES[law.variable]
         verdict = "<strong>yes</strong>" if law.significant else "no"
-        rows.append(f"<tr><td>{law.friction}</td><td>{_e(label)}</td><td class=\"num\">{_num(law.intercept, '.4g')} ± "
-                    f"{_num(law.intercept_se, '.2g')}</td><td class=\"num\">{_num(law.slope / scale, '.4g')} ± "
+        rows.append(f"<tr><td>{law.friction}</td><td>{_e(label)}</td><td class=\"num\">{_num(law.intercept)} ± "
+                    f"{_num(law.intercept_se, '.2g')}</td><td class=\"num\">{_num(law.slope / scale)} ± "
                     f"{_num(law.slope_se / scale, '.2g')} N/{_e(unit)}</td>"
                     f"<td class=\"num\">{_num(law.p_value, '.2g')}</td>"
                     f"<td>{verdict}</td><td class=\"num\">{_num(law.chi2_reduced, '.3g')}</td></tr>")
@@ -464,13 +562,13 @@ def render_campaign_report(result, svgs: dict[str, str]) -> str:
     for friction, joint in result.joint.items():
         terms = joint.summary()["terms"]
         units = {n: VARIABLES[n][3:] if n in VARIABLES else (1.0, "") for n in terms}
-        text = ", ".join(f"{_e(n)}: {_num(v['value'] / units[n][0], '.4g')} ± {_num(v['se'] / units[n][0], '.2g')} "
+        text = ", ".join(f"{_e(n)}: {_num(v['value'] / units[n][0])} ± {_num(v['se'] / units[n][0], '.2g')} "
                          f"N{'/' + units[n][1] if units[n][1] else ''} (p = {_num(v['p_value'], '.2g')})"
                          for n, v in terms.items())
         parts.append(f"<p>Joint law for {friction}: {text}.</p>")
     parts.append(_figure(svgs, "campaign_friction", "Friction against each variable: tests with 95% error bars, "
                                                     "the fitted law and its 95% confidence band"))
-    parts.append(f"<p class=\"meta\">Generated by quickrelease {_e(__version__)}.</p>")
+    parts.append(signoff)
     return _page(f"{result.title}", parts)
 
 
@@ -480,7 +578,7 @@ def _building_campaign_section(result, svgs: dict[str, str]) -> list[str]:
     from .building_campaign import BUILDING_VARIABLES, QUANTITIES
 
     parts = [f"<h2>The isolation system per release ({_e(result.model)} model, mass "
-             f"{_num(result.mass / 1e3, '.4g')} t)</h2>"]
+             f"{_num(result.mass / 1e3)} t)</h2>"]
     head = "".join(f"<th>{_e(QUANTITIES[q][4])} [{_e(QUANTITIES[q][3])}] (95% interval)</th>"
                    for q in result.columns)
     rows = []
@@ -494,7 +592,7 @@ def _building_campaign_section(result, svgs: dict[str, str]) -> list[str]:
         force = "" if r.force is None else _num(r.force / 1e3, ".4g")
         warn = "; ".join(([f"refitted from {r.restarted_from}'s estimates"] if r.restarted_from else [])
                          + list(r.fit.warnings))
-        rows.append(f"<tr><td>{_e(r.name)}</td><td class=\"num\">{_num(abs(r.d0) * 1e2, '.4g')}</td>"
+        rows.append(f"<tr><td>{_e(r.name)}</td><td class=\"num\">{_num(abs(r.d0) * 1e2)}</td>"
                     f"<td class=\"num\">{force}</td>{''.join(cells)}<td>{_e(warn)}</td></tr>")
     parts.append(f"<table><thead><tr><th>release</th><th>|d0| [cm]</th><th>P [kN]</th>{head}<th>warnings</th>"
                  f"</tr></thead><tbody>{''.join(rows)}</tbody></table>")
@@ -507,7 +605,7 @@ def _building_campaign_section(result, svgs: dict[str, str]) -> list[str]:
         verdict = "<strong>yes</strong>" if law.significant else "no"
         rows.append(f"<tr><td>{_e(symbol)}</td><td>{_e(x_label)}</td><td class=\"num\">"
                     f"{_num(law.intercept * y_scale, '#.5g')} ± {_num(law.intercept_se * y_scale, '.2g')} {_e(y_unit)}"
-                    f"</td><td class=\"num\">{_num(law.slope * y_scale / x_scale, '.4g')} ± "
+                    f"</td><td class=\"num\">{_num(law.slope * y_scale / x_scale)} ± "
                     f"{_num(law.slope_se * y_scale / x_scale, '.2g')} {_e(y_unit + per)}</td>"
                     f"<td class=\"num\">{_num(law.p_value, '.2g')}</td><td>{verdict}</td>"
                     f"<td class=\"num\">{_num(law.chi2_reduced, '.3g')}</td></tr>")

@@ -201,10 +201,11 @@ class Response(Summarised):
 
         return pd.DataFrame(self.to_dict()).set_index("t_s")
 
-    def to_xarray(self):
+    def to_xarray(self, provenance: dict[str, Any] | None = None):
         """The time histories as an ``xarray.Dataset`` on the time coordinate ``t`` [s], each variable with its
         ``units`` and ``long_name`` (CF conventions), the summary as global attributes: what
-        ``quickrelease run`` writes as ``timeseries.nc``. ``ds.alpha.plot()`` plots against time."""
+        ``quickrelease run`` writes as ``timeseries.nc``. ``ds.alpha.plot()`` plots against time. ``provenance``
+        (:func:`quickrelease.runfolder.provenance`) adds the version, the input file and its SHA-256."""
         import xarray as xr
 
         from . import __version__
@@ -220,6 +221,10 @@ class Response(Summarised):
         for key, value in self.summary().items():
             if value is not None:
                 attrs[key] = int(value) if isinstance(value, bool) else value
+        if provenance is not None:
+            from .runfolder import provenance_attrs
+
+            attrs.update(provenance_attrs(provenance))
         return xr.Dataset(variables, coords=coords, attrs=attrs)
 
     def __repr__(self) -> str:

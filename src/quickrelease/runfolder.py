@@ -41,7 +41,7 @@ import numpy as np
 from .errors import QuickReleaseError
 
 __all__ = ["OutputError", "RunFolder", "canonical", "fingerprint", "case_inputs", "differences", "check_target",
-           "MANIFEST", "output_error", "commit_files"]
+           "MANIFEST", "output_error", "commit_files", "provenance", "provenance_attrs"]
 
 MANIFEST = "manifest.json"
 _FORMAT = "quickrelease-run/1"
@@ -103,7 +103,7 @@ def case_inputs(case: Any) -> dict[str, Any]:
 
     def strip(d: Any) -> Any:
         if isinstance(d, dict):
-            return {k: strip(v) for k, v in d.items() if k not in ("source",)}
+            return {k: strip(v) for k, v in d.items() if k not in ("source", "source_text")}
         if isinstance(d, list):
             return [strip(v) for v in d]
         return d
@@ -125,6 +125,45 @@ def _digest_record(record: Any, data: dict[str, Any] | None) -> None:
         file = getattr(ch, "file", None)
         if file is not None:
             data["channels"][name]["file"] = {"name": Path(file).name, "sha256": _file_digest(file)}
+
+
+# -- provenance -------------------------------------------------------------------------------------------------
+
+def provenance(origin: Any) -> dict[str, Any]:
+    """What made an output: the package version and the input file (its name, SHA-256 and text), the same in
+    every file a command writes (JSON under the key ``provenance``, NetCDF global attributes through
+    :func:`provenance_attrs`, the report's header).
+
+    ``origin`` is a :class:`~quickrelease.case.Case` (its file's text as read by ``load_case``), a result with a
+    ``source`` (a campaign), or a path. Nothing here depends on the time or the folder the file lies in, so a
+    resumed run writes the same bytes as an uninterrupted one. ``input`` is None for inputs not read from a file
+    (a case built in Python).
+    """
+    source = getattr(origin, "source", origin)
+    text = getattr(origin, "source_text", None)
+    raw = None
+    if text is not None:
+        raw = text.encode("utf-8")
+    elif isinstance(source, str | Path) and str(source) and not str(source).startswith("<"):
+        try:
+            raw = Path(source).read_bytes()
+        except OSError:
+            raw = None
+    entry = None
+    if raw is not None:
+        entry = {"name": Path(str(source)).name, "sha256": hashlib.sha256(raw).hexdigest(),
+                 "text": raw.decode("utf-8", errors="replace")}
+    return {"quickrelease": _version(), "input": entry}
+
+
+def provenance_attrs(prov: dict[str, Any]) -> dict[str, str]:
+    """The provenance as NetCDF global attributes (text only): ``quickrelease_version``, ``input_file``,
+    ``input_sha256`` (the text itself stays in the JSON files and the report)."""
+    attrs = {"quickrelease_version": str(prov["quickrelease"])}
+    if prov.get("input"):
+        attrs["input_file"] = str(prov["input"]["name"])
+        attrs["input_sha256"] = str(prov["input"]["sha256"])
+    return attrs
 
 
 def _flatten(data: Any, prefix: str = "") -> dict[str, Any]:

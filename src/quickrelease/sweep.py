@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from . import batch
-from ._style import styled
+from ._style import STYLE, styled
 from ._validate import check_size, check_workers
 from .case import Case
 from .errors import ParameterError, QuickReleaseError
@@ -153,10 +153,10 @@ def _dataset(case: Case, grids: dict[str, np.ndarray], data: dict[str, np.ndarra
         values = data[key] if data is not None else np.zeros(shape, dtype=np.int8 if key in _FLAGS else float)
         variables[key] = (names, np.asarray(values, dtype=np.int8 if key in _FLAGS else float),
                           {"long_name": long, "units": unit})
-    from . import __version__
+    from .runfolder import provenance, provenance_attrs
 
     attrs = {"title": f"quickrelease sweep: {case.title}", "case": case.source, "device": case.device.name,
-             "Conventions": "CF-1.8", "source": f"quickrelease {__version__}"}
+             "Conventions": "CF-1.8", **provenance_attrs(provenance(case))}
     attrs.update({f"fixed_{k}": float(v) for k, v in base.items() if k not in grids and np.isfinite(v)})
     return xr.Dataset(variables, coords=coords, attrs=attrs)
 
@@ -362,7 +362,7 @@ def heatmap_figure(ds, fig=None) -> Any:
                 ax.contour(x, y, limit, levels=[0.5], colors="w", linewidths=0.8).set_rasterized(True)
             ax.set_xlabel(f"{names[1]} [{SWEEP_PARAMETERS[names[1]][1]}]")
             ax.set_ylabel(f"{names[0]} [{SWEEP_PARAMETERS[names[0]][1]}]")
-        ax.set_title(_TITLES[key], fontsize=8)
+        ax.set_title(_TITLES[key], fontsize=STYLE["legend.fontsize"])
     extra = f" ({', '.join(f'{n} = {float(ds[n][0]):.4g}' for n in names[2:])})" if names[2:] else ""
     fig.suptitle(f"Release envelope over the sweep{extra}; white line: the geometric limit")
     return fig

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from . import batch
-from ._style import styled
+from ._style import STYLE, styled
 from ._validate import check_seed, check_size, check_workers
 from .case import Case
 from .display import Summarised
@@ -377,8 +377,9 @@ def run_uq(case: Case, samples: int, *, seed: int = 0, chunk: int = DEFAULT_CHUN
         parts = _run_chunks(case, seed, sizes, edges, done, store, backend, scheduler, workers, progress)
         result = _result(case, samples, seed, chunk, _combine(parts), edges)
         from .export import write_json
+        from .runfolder import provenance
 
-        write_json(result.summary(), work / "uq.json")
+        write_json(result.summary(), work / "uq.json", provenance(case))
         if figures:
             from .plots import save_figure
 
@@ -547,8 +548,9 @@ def corner_figure(result: UQResult, fig=None):
             ax.axvline(result.percentiles[name][key], color="#c0504d", lw=0.9, ls="--" if key != "p50" else "-")
         ax.set_yticks([])
         ax.set_xlim(edges[lo], edges[hi + 1])
-    axes[0, 0].set_title("$F_1$: median and 95% interval", fontsize=8)
-    axes[1, 1].set_title("$F_2$: median and 95% interval", fontsize=8)
+    axes[0, 0].set_title("$F_1$: median (line), 95% interval (dashed)", fontsize=STYLE["legend.fontsize"])
+    axes[1, 1].set_title("$F_2$: median (line), 95% interval (dashed)", fontsize=STYLE["legend.fontsize"])
+    axes[0, 0].tick_params(labelbottom=False)  # the same F1 axis as the joint panel below, labelled there
     axes[1, 1].set_xlabel("$F_2$ [N]")
     axes[0, 1].axis("off")
     axes[0, 1].text(0.0, 0.5, "\n".join([
@@ -558,7 +560,7 @@ def corner_figure(result: UQResult, fig=None):
         f"F2: {result.percentiles['F2']['p50']:.1f} N [{result.percentiles['F2']['p2.5']:.1f}, "
         f"{result.percentiles['F2']['p97.5']:.1f}]",
         f"correlation {result.correlation:.3f}",
-        f"infeasible {100 * result.infeasible_share:.2f}%"]), fontsize=8, va="center")
+        f"infeasible {100 * result.infeasible_share:.2f}%"]), fontsize=STYLE["legend.fontsize"], va="center")
     ax = axes[1, 0]
     h2 = h["2d"]
     e1 = h["edges_F1"][:: N_BINS // N_BINS_2D]

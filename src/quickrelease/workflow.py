@@ -65,6 +65,9 @@ class CaseResult(Summarised):
     building: Any = None
     """The building's analysis (:class:`~quickrelease.building_analysis.BuildingResult`), when the case has a
     ``[building.record]``."""
+    paper: Any = None
+    """The Table 7 comparison (:class:`~quickrelease.paper.PaperComparison`), for the paper's case (``demo``):
+    the report shows it, ``table7.json`` holds it."""
 
     def summary(self) -> dict[str, Any]:
         """The release summary: the keys of ``quickrelease simulate --json``."""
@@ -263,22 +266,26 @@ def write_results(result: CaseResult, out: str | Path, *, figures: bool = True, 
 def _write_results_into(result: CaseResult, out: Path, *, figures: bool, report: bool,
                         data: bool) -> dict[str, Path]:
     from .export import write_csv, write_json, write_netcdf, write_text
+    from .runfolder import provenance
 
     paths: dict[str, Path] = {}
+    prov = provenance(result.case)
     if data:
-        paths["summary"] = write_json(result.summary(), out / "summary.json")
+        paths["summary"] = write_json(result.summary(), out / "summary.json", prov)
         ident = result.identification_summary()
         if ident is not None:
-            paths["identification"] = write_json(ident, out / "identification.json")
+            paths["identification"] = write_json(ident, out / "identification.json", prov)
         if result.fit is not None:
-            paths["fit"] = write_json(result.fit.summary(), out / "fit.json")
+            paths["fit"] = write_json(result.fit.summary(), out / "fit.json", prov)
         if result.plan is not None:
-            paths["plan"] = write_json(result.plan.summary(), out / "plan.json")
+            paths["plan"] = write_json(result.plan.summary(), out / "plan.json", prov)
         if result.building is not None:
-            paths["building"] = write_json(result.building.summary(), out / "building.json")
+            paths["building"] = write_json(result.building.summary(), out / "building.json", prov)
+        if result.paper is not None:
+            paths["table7"] = write_json(result.paper.summary(), out / "table7.json", prov)
         paths["timeseries_csv"] = write_csv(result.response, out / "timeseries.csv")
         paths["timeseries_nc"] = write_netcdf(result.response, out / "timeseries.nc",
-                                              attrs={"case": result.case.title})
+                                              attrs={"case": result.case.title}, provenance=prov)
     svgs: dict[str, str] = {}
     if figures or report:
         from .export import atomic_path
@@ -326,24 +333,29 @@ def building_folder(result_or_data, out: str | Path, *, model: str | None = None
 
 
 def write_building_results(result, data, out: str | Path, *, model: str | None = None, compare: bool = False,
-                           title: str = "Building free-vibration test", overwrite: bool = False) -> dict[str, Path]:
+                           title: str = "Building free-vibration test", overwrite: bool = False,
+                           origin: Any = None) -> dict[str, Path]:
     """Write ``quickrelease building``'s results into ``out``: ``summary.json`` (the ``--json`` keys), the
     building figures (``figures/<stem>.png``/``.svg``), ``report.html`` and ``manifest.json``, staged and
-    moved into place as :func:`write_results` does; returns the paths by name."""
+    moved into place as :func:`write_results` does; returns the paths by name. ``origin`` (the case) is what
+    the files' provenance names (:func:`~quickrelease.runfolder.provenance`; by default the record)."""
     from .building_plots import building_figures
     from .export import write_json, write_text
     from .plots import save_figure
     from .report import render_building_report
+    from .runfolder import provenance
 
+    prov = provenance(origin if origin is not None else result.source)
     folder = building_folder(data, out, model=model, compare=compare, overwrite=overwrite)
     with folder.staged() as work:
-        paths = {"summary": write_json(result.summary(), work / "summary.json")}
+        paths = {"summary": write_json(result.summary(), work / "summary.json", prov)}
         svgs = {}
         for stem, fig in building_figures(result).items():
             for fmt, path in save_figure(fig, work / "figures", stem).items():
                 paths[f"{stem}.{fmt}"] = path
             svgs[stem] = paths[f"{stem}.svg"].read_text(encoding="utf-8")
-        paths["report"] = write_text(render_building_report(result, svgs, title), work / "report.html")
+        paths["report"] = write_text(render_building_report(result, svgs, title, provenance=prov, origin=origin),
+                                     work / "report.html")
     return {name: folder.final(path) for name, path in paths.items()}
 
 
@@ -379,6 +391,7 @@ def write_campaign_results(result, out: str | Path, *, overwrite: bool = False) 
     from .export import write_json, write_text
     from .plots import save_figure
     from .report import render_campaign_report
+    from .runfolder import provenance
 
     if getattr(result, "kind", "device") == "building":
         from .building_campaign import building_campaign_figure as figure
@@ -388,7 +401,7 @@ def write_campaign_results(result, out: str | Path, *, overwrite: bool = False) 
         stem = "campaign_friction"
     folder = campaign_folder(result.source, out, overwrite=overwrite)
     with folder.staged() as work:
-        paths = {"campaign": write_json(result.summary(), work / "campaign.json")}
+        paths = {"campaign": write_json(result.summary(), work / "campaign.json", provenance(result))}
         fig = figure(result)
         for fmt, path in save_figure(fig, work / "figures", stem).items():
             paths[f"{stem}.{fmt}"] = path

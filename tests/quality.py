@@ -1,0 +1,135 @@
+"""Checks of what a reader sees, on objects, not pixels: an HTML page's validity and a figure's labels.
+
+``html_faults(text)``: well-formed (every non-void element closed, in order), no duplicate ``id``, every local
+link (``href="#x"``, ``xlink:href="#x"``, ``url(#x)``) resolves to an ``id`` of the page.
+``figure_faults(fig)``: every axis that shows tick labels has a label with a unit in brackets, units written
+one way (``m/s²``, never ``m/s^2`` or ``m s-2``), every labelled artist in a legend, every text at one of the
+package style's font sizes.
+"""
+
+from __future__ import annotations
+
+import re
+from collections import Counter
+from html.parser import HTMLParser
+
+from quickrelease._style import FONT_SIZES
+
+VOID = {"area", "base", "br", "col", "embed", "hr", "img", "input", "link", "meta", "source", "track", "wbr"}
+
+
+class _Checker(HTMLParser):
+    def __init__(self) -> None:
+        super().__init__(convert_charrefs=True)
+        self.stack: list[tuple[str, tuple[int, int]]] = []
+        self.ids: list[str] = []
+        self.refs: list[str] = []
+        self.faults: list[str] = []
+        self.doctype = False
+
+    def handle_decl(self, decl: str) -> None:
+        self.doctype = self.doctype or decl.lower() == "doctype html"
+
+    def _attrs(self, attrs) -> None:
+        for name, value in attrs:
+            if value is None:
+                continue
+            if name == "id":
+                self.ids.append(value)
+            if name in ("href", "xlink:href") and value.startswith("#"):
+                self.refs.append(value[1:])
+            self.refs += re.findall(r"url\(#([^)]+)\)", value)
+
+    def handle_starttag(self, tag, attrs) -> None:
+        self._attrs(attrs)
+        if tag not in VOID:
+            self.stack.append((tag, self.getpos()))
+
+    def handle_startendtag(self, tag, attrs) -> None:  # <path ... /> in inline SVG
+        self._attrs(attrs)
+
+    def handle_endtag(self, tag) -> None:
+        if tag in VOID:
+            return
+        if not self.stack:
+            self.faults.append(f"</{tag}> at {self.getpos()} closes nothing")
+            return
+        open_tag, pos = self.stack.pop()
+        if open_tag != tag:
+            self.faults.append(f"</{tag}> at {self.getpos()} closes <{open_tag}> opened at {pos}")
+
+    def handle_data(self, data) -> None:
+        if self.stack and self.stack[-1][0] == "style":
+            self.refs += re.findall(r"url\(#([^)]+)\)", data)
+
+
+def html_faults(text: str) -> list[str]:
+    """What is wrong with an HTML page (an empty list when nothing is)."""
+    checker = _Checker()
+    checker.feed(text)
+    checker.close()
+    faults = list(checker.faults)
+    if not checker.doctype:
+        faults.append("no <!DOCTYPE html>")
+    faults += [f"<{tag}> opened at {pos} is never closed" for tag, pos in checker.stack]
+    dups = [i for i, n in Counter(checker.ids).items() if n > 1]
+    if dups:
+        faults.append(f"{len(dups)} duplicate ids, e.g. {dups[:3]}")
+    known = set(checker.ids)
+    missing = sorted({r for r in checker.refs if r not in known})
+    if missing:
+        faults.append(f"{len(missing)} local links to no id, e.g. {missing[:3]}")
+    return faults
+
+
+UNIT = re.compile(r"\[[^\[\]]+\]")
+PLAIN_POWERS = re.compile(r"\^\d|\^-|\bs-\d|\bm s\b")
+
+
+def _number(text: str) -> bool:
+    try:
+        float(text.replace("\u2212", "-").replace("$", "").replace("\\mathdefault{", "").replace("}", ""))
+    except ValueError:
+        return False
+    return True
+
+
+def _shows_ticks(axis) -> bool:
+    """The axis shows numbers (categories, e.g. the names of the terms of a bar chart, need no unit)."""
+    return any(t.get_visible() and _number(t.get_text().strip()) for t in axis.get_ticklabels())
+
+
+def figure_faults(fig) -> list[str]:
+    """What a reader of ``fig`` would miss (an empty list when nothing): see the module's docstring."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    if not isinstance(fig.canvas, FigureCanvasAgg):
+        FigureCanvasAgg(fig)
+    fig.canvas.draw()  # tick labels exist only once drawn
+    faults = []
+    legend_texts = set()
+    legends = [ax.get_legend() for ax in fig.axes] + list(fig.legends)
+    for legend in legends:
+        if legend is not None:
+            legend_texts |= {t.get_text() for t in legend.get_texts()}
+    for k, ax in enumerate(fig.axes):
+        where = f"axes {k} ({ax.get_title()[:40]!r})"
+        if not ax.axison:  # a panel of text
+            continue
+        for name, axis, label in (("x", ax.xaxis, ax.get_xlabel()), ("y", ax.yaxis, ax.get_ylabel())):
+            if _shows_ticks(axis) and not UNIT.search(label):
+                faults.append(f"{where}: {name} label {label!r} has no [unit]")
+        artists = [*ax.lines, *ax.collections, *ax.patches, *ax.containers, *ax.images]
+        for artist in artists:
+            label = str(artist.get_label())
+            if label and not label.startswith("_") and label not in legend_texts:
+                faults.append(f"{where}: {label!r} is in no legend")
+    for text in fig.findobj(lambda a: hasattr(a, "get_text") and hasattr(a, "get_fontsize")):
+        content = text.get_text()
+        if not content.strip() or not text.get_visible():
+            continue
+        if PLAIN_POWERS.search(re.sub(r"\$[^$]*\$", "", content)):  # mathtext ($^2$) is drawn raised
+            faults.append(f"unit not written as superscript: {content!r}")
+        if text.get_fontsize() not in FONT_SIZES:
+            faults.append(f"font size {text.get_fontsize()} (not one of {sorted(FONT_SIZES)}): {content[:40]!r}")
+    return faults
