@@ -16,8 +16,9 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE / "_ext"))
 os.environ.setdefault("MPLBACKEND", "Agg")
 
-import quickrelease  # noqa: E402
 from gallery_scraper import figures_in_globals  # noqa: E402
+
+import quickrelease  # noqa: E402
 
 project = "quickrelease"
 author = "quickrelease developers"
