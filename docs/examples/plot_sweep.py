@@ -19,6 +19,7 @@ from quickrelease.sweep import heatmap_figure, sweep
 EXAMPLES = next(d / "examples" for d in (Path.cwd(), *Path.cwd().parents) if (d / "examples" / "paper.toml").is_file())
 case = load_case(EXAMPLES / "larger_push.toml")
 ds = sweep(case, {"force": np.linspace(500e3, 3000e3, 26), "alpha0": np.linspace(0.1, 0.5, 41)})
-print(ds["stop_time"].attrs.get("units"), float(ds["stop_time"].min()), float(ds["stop_time"].max()))
+print(f"t_F from {float(ds.stop_time.min()):.3f} to {float(ds.stop_time.max()):.3f} {ds.stop_time.attrs['units']}; "
+      f"{float((ds.stopped_by == 1).mean()):.1%} of the grid reaches the geometric limit (stopped_by = 1)")
 
 fig = heatmap_figure(ds)
