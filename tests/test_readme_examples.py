@@ -11,7 +11,7 @@ BLOCKS = re.findall(r"^```python\n(.*?)^```", (ROOT / "README.md").read_text(enc
 
 
 def test_the_readme_has_python_examples():
-    assert len(BLOCKS) >= 2
+    assert len(BLOCKS) >= 1  # the rest live in the documentation (tests/test_docs.py runs them)
 
 
 @pytest.mark.parametrize("index", range(len(BLOCKS)))

@@ -356,7 +356,7 @@ def test_table_6_whole_run_and_stop_inside_the_last_step_by_hand():
 
 
 def _readme_convergence_table():
-    text = (Path(__file__).parent.parent / "README.md").read_text(encoding="utf-8")
+    text = (Path(__file__).parent.parent / "docs" / "paper.md").read_text(encoding="utf-8")  # moved from the README
     head = text.index("| dt [s] | t_F [s] | error in t_F [s]")
     rows = []
     for line in text[head:].splitlines()[2:]:
