@@ -205,9 +205,20 @@ def turning_points(t, x, noise: float = 0.0, rest: float = 0.0) -> tuple[np.ndar
             idx.append(best)
             direction = -direction
             best = k
+    # the record ends on a rest (the sliders stuck) when the samples within the threshold of the running
+    # extreme reach the end, at least four of them, with no trend across them beyond half the threshold
+    # (a swing still under way rises by about the threshold there). Not "the extreme lies four samples
+    # before the end": on a noisy rest the extreme is the noise's largest sample, which falls among the
+    # last four in ~4/n_rest of records, and that record lost its last half-cycle (and its decay law).
+    k = best
+    while k > (idx[-1] if idx else 0) + 1 and direction * (x[best] - x[k - 1]) <= threshold:
+        k -= 1
     stuck = n - 1 - best >= 4
+    if not stuck and n - k >= 8:
+        rise = np.polyfit(t[k:] - t[k], x[k:], 1)[0] * (t[-1] - t[k])
+        stuck = abs(rise) < 0.5 * threshold
     if stuck:
-        idx.append(best)
+        idx.append(best if n - 1 - best >= 4 else k)
     half = 3
     if len(idx) >= 2:
         half = int(max(5, min(np.median(np.diff(idx)) // 12, 400)))
