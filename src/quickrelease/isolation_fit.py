@@ -277,7 +277,7 @@ def _start(model: str, mass: float, channels: list[BuildingChannel], t_r: float,
         except QuickReleaseError:
             pass
     if model == "bilinear":
-        start.update(_bilinear_start(mass, xch, t_r, noise, start))
+        start.update(_bilinear_start(mass, xch, t_r, noise, start, channels))
     if model == "2dof":
         start.update(_two_dof_start(mass, superstructure_mass, channels, t_r, start))
     return start
@@ -321,12 +321,16 @@ def _two_dof_start(mass: float, ms: float, channels: list[BuildingChannel], t_r:
 
 
 def _bilinear_start(mass: float, xch: BuildingChannel | None, t_r: float, noise: dict[str, float],
-                    linear: dict[str, float]) -> dict[str, float]:
-    """Start values of the bilinear model from the decay: the last half-cycles are elastic (period of
+                    linear: dict[str, float], channels: list[BuildingChannel] = ()) -> dict[str, float]:
+    """Start values of the bilinear model from the record, without design values.
+
+    With an acceleration channel of the layer: the hysteresis loop (:func:`quickrelease.decay.bilinear_loop`:
+    k2, Q and c from the loading branches, k1 and the sliders' share of Q from the elastic unloading after
+    each reversal). Else from the decay (the secant period): the last half-cycles are elastic (period of
     k1), and the first ones, on the soft branch, have the equivalent stiffness ``k_eff = k2 + f_p / A``
     (A the half-cycle's amplitude, f_p = F_y (1 - k2 / k1) the plastic element's force), so two of them
     give k2 and f_p."""
-    from .decay import analyse_decay
+    from .decay import analyse_decay, bilinear_loop
 
     k_lin = mass * (2.0 * math.pi / linear["period"]) ** 2
     guess = {"period": linear["period"] / 2.0, "stiffness_ratio": 0.2, "yield_force": 0.5 * k_lin * 0.02,
@@ -337,6 +341,18 @@ def _bilinear_start(mass: float, xch: BuildingChannel | None, t_r: float, noise:
         analysis = analyse_decay(xch.t, xch.values, release_time=t_r, noise=noise[xch.name])
     except QuickReleaseError:
         return guess
+    ach = next((c for c in channels if c.kind == "a"), None) or next((c for c in channels if c.kind == "a_roof"),
+                                                                      None)
+    if ach is not None:
+        moving = (ach.t > t_r) & (ach.t >= xch.t[0]) & (ach.t <= xch.t[-1])
+        pre = ach.values[ach.t < t_r]
+        zero = float(np.median(pre)) if pre.size >= 3 else 0.0
+        loop = bilinear_loop(ach.t[moving], np.interp(ach.t[moving], xch.t, xch.values), ach.values[moving] - zero,
+                             mass, analysis.peak_times, analysis.peaks, t_r)
+        if loop is not None and 0.0 < loop.k2 < loop.k1 and loop.yield_force > 0.0:
+            return {"period": 2.0 * math.pi * math.sqrt(mass / loop.k1), "stiffness_ratio": loop.k2 / loop.k1,
+                    "yield_force": loop.yield_force, "friction": max(loop.friction, 0.0),
+                    "damping_ratio": float(np.clip(loop.damping / (2.0 * math.sqrt(loop.k1 * mass)), 0.002, 0.5))}
     teq, amp = analysis.equivalent_period, analysis.amplitude
     if teq.size < 4:
         return guess

@@ -1,0 +1,51 @@
+"""Start values of the isolation fit from the record itself (decay.bilinear_loop, isolation_fit's starts and
+multi-start), on records made by the independent event-located solve_ivp of tests/building_reference.py."""
+
+import math
+
+import numpy as np
+import pytest
+from building_reference import reference
+
+from quickrelease.decay import analyse_decay, bilinear_loop
+
+M = 4.0e5
+
+
+@pytest.mark.parametrize("k1, k2, Fy, zeta, Fs, d0, rate", [
+    (4.0e7, 4.0e6, 8.0e4, 0.03, 8.0e3, 0.20, 200.0),  # the round-trip building of test_isolation_fit
+    (2.4e7, 2.8e6, 4.0e4, 0.03, 1.5e4, 0.22, 1000.0),  # sliders a third of Q, a faster record
+    (3.0e7, 3.0e6, 6.0e4, 0.00, 1.0e4, 0.15, 200.0),  # no dampers: the loop is exact
+    (3.0e7, 3.0e6, 6.0e4, 0.03, 0.0, 0.15, 200.0),  # no sliders
+])
+def test_loop_estimate_on_noise_free_records(k1, k2, Fy, zeta, Fs, d0, rate):
+    """k1, k2, Q = F_y (1 - k2 / k1) + F_s and F_s read off the loop of a noise-free record, within the error
+    of its one approximation: the velocity by the trapezoid rule over the acceleration. The acceleration
+    jumps by 2 F_s / m at each reversal (and by the sliders' force at the release), where the rule errs by at
+    most half the jump times the step; between the jumps and kinks (2 pieces a half-cycle) it errs by
+    dt^2 / 12 times the change of the jerk a' (Euler-Maclaurin), |a'| <= (k1 |v| + c |a|) / m. So after n
+    reversals v is off by at most dv = (n + 1) (2 F_s / m) dt / 2 + 2 n dt^2 / 6 max|a'|, and the force
+    c v of the branches (L) by dF = c dv. That moves Q by dF, the intercepts 2 f_p by 2 dF (so F_s = Q -
+    f_p by 2 dF), k2 by dF / A (A the smallest amplitude used, at least a quarter of d0 here), and k1 - k2
+    (the gap falls by 2 f_p over the elastic travel 2 f_p / (k1 - k2)) by (k1 - k2) 2 dF / (2 f_p). The
+    travel u counts from the located turning points, within 1e-7 of the amplitude (decay._refine_extremum):
+    that moves each intercept 2 f_p by (k1 - k2) 1e-7 d0 too. Without dampers (c = 0) that is all."""
+    fp = Fy * (1.0 - k2 / k1)
+    c = 2.0 * zeta * math.sqrt(k1 * M)
+    t = np.arange(0.0, 8.0, 1.0 / rate) + 0.3 / rate  # the release between two samples
+    (x, v, a), _ = reference(M, k1, k2, fp, c, Fs, d0, t, with_rates=True)
+    analysis = analyse_decay(np.r_[0.0, t], np.r_[d0, x], release_time=0.0)
+    est = bilinear_loop(t, x, a, M, analysis.peak_times, analysis.peaks, 0.0)
+    assert est is not None
+    n = analysis.peaks.size - 1
+    dt = 1.0 / rate
+    jerk = (k1 * np.max(np.abs(v)) + c * np.max(np.abs(a))) / M
+    dF = c * ((n + 1) * (2.0 * Fs / M) * dt / 2.0 + 2.0 * n * dt**2 / 6.0 * jerk) + 1e-9 * (fp + Fs)
+    dP = (k1 - k2) * 1e-7 * d0
+    Q = fp + Fs
+    assert est.characteristic_strength == pytest.approx(Q, abs=dF)
+    assert est.friction == pytest.approx(Fs, abs=2.0 * dF + dP)
+    assert est.k2 == pytest.approx(k2, abs=dF / (0.25 * d0) + 1e-9 * k2)
+    assert est.k1 == pytest.approx(k1, abs=(k1 - k2) * 2.0 * dF / (2.0 * fp) + 1e-9 * k1)
+    assert est.yield_force == pytest.approx(Fy, rel=0.01)
+    assert est.damping == pytest.approx(c, abs=dF / 0.05 + 1e-6 * (c + 1.0))  # v of the branches above 0.05 m/s
