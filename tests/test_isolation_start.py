@@ -8,6 +8,7 @@ import pytest
 from building_reference import reference
 
 from quickrelease.decay import analyse_decay, bilinear_loop
+from quickrelease.isolation_fit import fit_isolation
 
 M = 4.0e5
 
@@ -49,3 +50,22 @@ def test_loop_estimate_on_noise_free_records(k1, k2, Fy, zeta, Fs, d0, rate):
     assert est.k1 == pytest.approx(k1, abs=(k1 - k2) * 2.0 * dF / (2.0 * fp) + 1e-9 * k1)
     assert est.yield_force == pytest.approx(Fy, rel=0.01)
     assert est.damping == pytest.approx(c, abs=dF / 0.05 + 1e-6 * (c + 1.0))  # v of the branches above 0.05 m/s
+
+
+def _hard_linear_record(seed):
+    """The hard linear record of test_isolation_coverage: sliders of 1% of the weight, four half-cycles."""
+    from test_isolation_coverage import K, _channels, _rows
+    Fs, zeta, d0 = 0.01 * M * 9.80665, 0.05, 0.12
+    return _channels(_rows(K, K, math.inf, 2 * zeta * math.sqrt(K * M), Fs, d0, 6.0), seed), \
+        {"period": 2.0, "damping_ratio": zeta, "friction": Fs, "d0": d0}
+
+
+def test_multi_start_keeps_the_best_not_the_first():
+    """A designer's start that leaves the sliders out (friction 0, the dissipation all viscous, zeta 0.12)
+    leads the hard record into a wrong count of half-cycles; the decay's own start, tried beside it, finds the
+    noise level, and the fit keeps that one, not the first."""
+    channels, truth = _hard_linear_record(5)
+    fit = fit_isolation(channels, M, "linear", start={"friction": 0.0, "damping_ratio": 0.12}, profile=False)
+    assert fit.chi2_reduced < 1.3, fit.chi2_reduced
+    z = {name: (fit.estimates[name] - value) / fit.std_errors[name] for name, value in truth.items()}
+    assert all(abs(v) < 4.0 for v in z.values()), z

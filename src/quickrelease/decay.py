@@ -422,6 +422,8 @@ class LoopEstimate:
     """Viscous coefficient c [N s/m]."""
     reversals: int
     """Reversals whose elastic unloading entered the estimate of k1."""
+    friction_se: float = math.nan
+    """Standard error of F_s from the scatter of the reversals' intercepts 2 f_p (nan with one reversal) [N]."""
 
     @property
     def yield_force(self) -> float:
@@ -497,23 +499,29 @@ def bilinear_loop(t, x, acceleration, mass: float, peak_times, peaks, release_ti
             if not g0 > 0.0:
                 continue
             run = mine[: int(np.argmax(gap[mine] < 0.25 * g0)) or mine.size]
-            if run.size >= 3:
-                runs.append(run)
+            if run.size >= 6:
+                runs.append((n, run))
         if not runs:
             return est
-        idx = np.concatenate(runs)
+        idx = np.concatenate([run for _, run in runs])
         B = np.zeros((idx.size, len(runs) + 1))
         i0 = 0
-        for j, run in enumerate(runs):
+        for j, (n, run) in enumerate(runs):
             B[i0:i0 + run.size, j] = 1.0
+            # the travel from the reversal's position as the cubic through the run's own samples gives it
+            # at the turning-point time (linear in the samples: the located turning point of a noisy record
+            # lies outward of the truth by about 0.7 noise levels, which (k1 - k2) turns into f_p)
+            tau = t[run] - peak_times[n]
+            origin = float(np.linalg.lstsq(np.vander(tau, 6), x[run], rcond=None)[0][-1])
+            B[i0:i0 + run.size, -1] = -s[run] * (x[run] - origin)
             i0 += run.size
-        B[:, -1] = -u[idx]
         coef = np.linalg.lstsq(B, gap[idx], rcond=None)[0]
         dk, fp = float(coef[-1]), 0.5 * float(np.mean(coef[:-1]))
         if not (dk > 0.0 and fp > 0.0):  # F_s = Q - f_p may come out a rounding below 0 without sliders
             return est
         elastic_travel = 2.0 * fp / dk
+        fp_se = 0.5 * float(np.std(coef[:-1], ddof=1)) / math.sqrt(len(runs)) if len(runs) > 1 else math.nan
         est = LoopEstimate(k1=k2 + dk, k2=k2, characteristic_strength=Q, friction=Q - fp, damping=max(c, 0.0),
-                           reversals=len(runs))
+                           reversals=len(runs), friction_se=fp_se)
         yielded = swing >= 2.0 * elastic_travel  # second pass: every half-cycle past the elastic travel
     return est

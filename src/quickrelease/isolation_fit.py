@@ -352,7 +352,9 @@ def _bilinear_start(mass: float, xch: BuildingChannel | None, t_r: float, noise:
         if loop is not None and 0.0 < loop.k2 < loop.k1 and loop.yield_force > 0.0:
             return {"period": 2.0 * math.pi * math.sqrt(mass / loop.k1), "stiffness_ratio": loop.k2 / loop.k1,
                     "yield_force": loop.yield_force, "friction": max(loop.friction, 0.0),
-                    "damping_ratio": float(np.clip(loop.damping / (2.0 * math.sqrt(loop.k1 * mass)), 0.002, 0.5))}
+                    "damping_ratio": float(np.clip(loop.damping / (2.0 * math.sqrt(loop.k1 * mass)), 0.002, 0.5)),
+                    "friction_se": loop.friction_se if math.isfinite(loop.friction_se)
+                    else 0.05 * loop.characteristic_strength}
     teq, amp = analysis.equivalent_period, analysis.amplitude
     if teq.size < 4:
         return guess
@@ -471,6 +473,7 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
                              "m")
     p0 = _start(model, mass, channels, t_r0, d0, noise, superstructure_mass)
     rest = p0.pop("rest", None)
+    friction_se = p0.pop("friction_se", None)  # of the bilinear loop's F_s: the spread of its multi-start
     p0.update(d0=d0, release_time=t_r0)
     for ch in channels:
         if ch.offset:
@@ -601,6 +604,15 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
                     starts.append({**values, "friction": share * 0.5 * k * drop,
                                    "damping_ratio": float(np.clip(zeta, 0.002, 0.5))})
         elif model == "bilinear" and "yield_force" in names:
+            if friction_se is not None and not start:
+                # the loop reads Q = f_p + F_s well and its split less well: F_s two standard errors either
+                # way at fixed Q (f_p = F_y (1 - k2 / k1))
+                ratio = 1.0 - values["stiffness_ratio"]
+                for shift in (2.0 * friction_se, -2.0 * friction_se):
+                    fs = float(np.clip(values["friction"] + shift, 0.0, values["friction"] + values["yield_force"]
+                                       * ratio))
+                    starts.append({**values, "friction": fs,
+                                   "yield_force": values["yield_force"] + (values["friction"] - fs) / ratio})
             total = values["friction"] + values["yield_force"]
             for share in (0.05, 0.2, 0.4):
                 starts.append({**values, "friction": share * total, "yield_force": (1.0 - share) * total})
@@ -611,6 +623,9 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
             res = r_try
         if model == "linear" and absolute and 2.0 * res.cost <= 1.3 * max(data.size - len(names), 1):
             break  # misfit at the noise level: the other basins of the linear model lie far above it
+        dof_ = max(data.size - len(names), 1)
+        if model == "bilinear" and absolute and 2.0 * res.cost <= dof_ + 3.0 * math.sqrt(2.0 * dof_):
+            break  # within 3 sigma of chi-square's mean (a wrong count of half-cycles lay 8 sigma above it)
     if not absolute:
         # a noise level taken from the residuals: weight each such channel by its own residual scatter
         # and refit (twice; the weights settle at once). One global chi-square scale cannot correct
@@ -690,9 +705,10 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
     if absolute and math.isfinite(chi2_red) and chi2_red > 1.3:
         warnings.append(f"the misfit is {math.sqrt(chi2_red):.2g} times the noise: the record does not support the "
                         f"{model} model, or the fit sits in a local minimum (give start values)")
-    if model == "bilinear" and not start:
-        warnings.append("bilinear fit started from the decay analysis; its misfit has local minima: give the "
-                        "bearings' design values as start values and compare")
+    if model == "bilinear" and not start and friction_se is None:
+        warnings.append("bilinear fit started from the decay's secant periods (no hysteresis loop: no acceleration "
+                        "channel, or too few yielded half-cycles); its misfit has local minima: give the bearings' "
+                        "design values as start values and compare")
     return IsolationFit(model=model, mass=mass, names=tuple(names), estimates=estimates, std_errors=std_errors,
                         ci95=ci, interval_method=method, correlation=corr, condition_number=cond, noise=noise,
                         noise_source=source, residual_rms=rms, samples=samples, chi2=chi2, dof=dof,
