@@ -403,11 +403,16 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
     start, fixed : dict, optional
         Start values, and parameters held fixed (by name: period, damping_ratio, friction,
         stiffness_ratio, yield_force, superstructure_period, superstructure_damping_ratio, d0, release_time,
-        offset_<channel>). The bilinear model's misfit has
-        local minima (the count of half-cycles before the sliders stick changes in jumps, and friction and
-        yield force act alike on the soft branch): give the bearings' design values as start values (a
-        start within about 30% of the truth converged in our tests; the start from the decay analysis alone
-        may not, and the result then warns).
+        offset_<channel>). Without them the fit starts from the record itself: the linear model from the
+        decay analysis (period from the turning-point times, F_s and zeta from the linear and geometric
+        parts of the combined decrement law, d0 and the release from the record), the bilinear model from
+        the hysteresis loop of the acceleration channel (:func:`quickrelease.decay.bilinear_loop`: k2, Q,
+        c from the loading branches, k1 and F_s from the elastic unloading after each reversal), and each
+        from a few more starts that split the dissipation otherwise, keeping the lowest chi-square. The
+        bilinear model's misfit has local minima (the count of half-cycles before the sliders stick changes
+        in jumps, and friction and yield force act alike on the soft branch): without an acceleration
+        channel its start comes from the secant periods of the decay only, which may not find the right
+        one, and the result then warns (give the bearings' design values as start values).
     profile : bool, optional
         Profile-likelihood intervals: True for every physical parameter, False never, None (default) for
         those at a bound or with a relative standard error above ``PROFILE_RELATIVE_SE``.
@@ -613,9 +618,10 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
                                        * ratio))
                     starts.append({**values, "friction": fs,
                                    "yield_force": values["yield_force"] + (values["friction"] - fs) / ratio})
-            total = values["friction"] + values["yield_force"]
-            for share in (0.05, 0.2, 0.4):
-                starts.append({**values, "friction": share * total, "yield_force": (1.0 - share) * total})
+            else:  # a start without the loop: splits of the dissipation between the sliders and the rubber
+                total = values["friction"] + values["yield_force"]
+                for share in (0.05, 0.2, 0.4):
+                    starts.append({**values, "friction": share * total, "yield_force": (1.0 - share) * total})
     res = None
     for trial in starts:
         r_try = solve(names, values, [trial[n] for n in names])
@@ -623,9 +629,6 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
             res = r_try
         if model == "linear" and absolute and 2.0 * res.cost <= 1.3 * max(data.size - len(names), 1):
             break  # misfit at the noise level: the other basins of the linear model lie far above it
-        dof_ = max(data.size - len(names), 1)
-        if model == "bilinear" and absolute and 2.0 * res.cost <= dof_ + 3.0 * math.sqrt(2.0 * dof_):
-            break  # within 3 sigma of chi-square's mean (a wrong count of half-cycles lay 8 sigma above it)
     if not absolute:
         # a noise level taken from the residuals: weight each such channel by its own residual scatter
         # and refit (twice; the weights settle at once). One global chi-square scale cannot correct
