@@ -610,18 +610,15 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
                                    "damping_ratio": float(np.clip(zeta, 0.002, 0.5))})
         elif model == "bilinear" and "yield_force" in names:
             if friction_se is not None and not start:
-                # the loop reads Q = f_p + F_s well and its split less well: F_s two standard errors either
-                # way at fixed Q (f_p = F_y (1 - k2 / k1))
-                ratio = 1.0 - values["stiffness_ratio"]
-                for shift in (2.0 * friction_se, -2.0 * friction_se):
-                    fs = float(np.clip(values["friction"] + shift, 0.0, values["friction"] + values["yield_force"]
-                                       * ratio))
-                    starts.append({**values, "friction": fs,
-                                   "yield_force": values["yield_force"] + (values["friction"] - fs) / ratio})
-            else:  # a start without the loop: splits of the dissipation between the sliders and the rubber
-                total = values["friction"] + values["yield_force"]
-                for share in (0.05, 0.2, 0.4):
-                    starts.append({**values, "friction": share * total, "yield_force": (1.0 - share) * total})
+                # the loop's F_s = Q - f_p is its least certain value: f_p comes from the jumps of the gap at
+                # the reversals, Q from the loading branches, which hold the displacement sensor's zero e as
+                # k2 e where they run in one direction only. F_s two standard errors either way, F_y kept
+                for shift in (-2.0 * friction_se, 2.0 * friction_se):
+                    starts.append({**values, "friction": max(values["friction"] + shift, 0.0)})
+            # and splits of the dissipation between the sliders and the rubber
+            total = values["friction"] + values["yield_force"]
+            for share in (0.05, 0.2, 0.4):
+                starts.append({**values, "friction": share * total, "yield_force": (1.0 - share) * total})
     res = None
     for trial in starts:
         r_try = solve(names, values, [trial[n] for n in names])
