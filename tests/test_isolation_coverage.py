@@ -202,3 +202,17 @@ def test_standard_errors_survive_a_reversal_on_a_sample():
     truth = {"period": T, "damping_ratio": zeta, "friction": Fs, "d0": d0, "release_time": RELEASE}
     z = {name: (fit.estimates[name] - value) / fit.std_errors[name] for name, value in truth.items()}
     assert all(abs(v) < 4.0 for v in z.values()), z
+
+
+def test_hard_record_lands_in_the_right_basin():
+    """Sliders of 1% of the weight, four half-cycles (the record of the test above), noise seed 16: the rest's
+    largest noise sample fell among the last four samples, the decay analysis missed the stick (no decay
+    law, so a start without friction), and every start led to a wrong count of half-cycles (reduced
+    chi-square 21; 3 of 100 seeds did, 0 now). The fit reaches the noise level and the truth."""
+    Fs, zeta, d0 = 0.01 * M * 9.80665, 0.05, 0.12
+    fit = fit_isolation(_channels(_rows(K, K, math.inf, 2 * zeta * math.sqrt(K * M), Fs, d0, 6.0), 16), M, "linear",
+                        profile=False)
+    assert fit.chi2_reduced < 1.3, fit.chi2_reduced
+    truth = {"period": T, "damping_ratio": zeta, "friction": Fs, "d0": d0, "release_time": RELEASE}
+    z = {name: (fit.estimates[name] - value) / fit.std_errors[name] for name, value in truth.items()}
+    assert all(abs(v) < 4.0 for v in z.values()), z

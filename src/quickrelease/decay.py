@@ -40,7 +40,8 @@ from scipy.optimize import minimize_scalar
 
 from .errors import ParameterError
 
-__all__ = ["DecayAnalysis", "DecayLaw", "analyse_decay", "combined_decay_law", "turning_points",
+__all__ = ["DecayAnalysis", "DecayLaw", "LoopEstimate", "analyse_decay", "bilinear_loop", "combined_decay_law",
+           "turning_points",
            "zero_crossings", "half_cycle_crossings", "hysteresis_loop"]
 
 
@@ -205,9 +206,20 @@ def turning_points(t, x, noise: float = 0.0, rest: float = 0.0) -> tuple[np.ndar
             idx.append(best)
             direction = -direction
             best = k
+    # the record ends on a rest (the sliders stuck) when the samples within the threshold of the running
+    # extreme reach the end, at least four of them, with no trend across them beyond half the threshold
+    # (a swing still under way rises by about the threshold there). Not "the extreme lies four samples
+    # before the end": on a noisy rest the extreme is the noise's largest sample, which falls among the
+    # last four in ~4/n_rest of records, and that record lost its last half-cycle (and its decay law).
+    k = best
+    while k > (idx[-1] if idx else 0) + 1 and direction * (x[best] - x[k - 1]) <= threshold:
+        k -= 1
     stuck = n - 1 - best >= 4
+    if not stuck and n - k >= 8:
+        rise = np.polyfit(t[k:] - t[k], x[k:], 1)[0] * (t[-1] - t[k])
+        stuck = abs(rise) < 0.5 * threshold
     if stuck:
-        idx.append(best)
+        idx.append(best if n - 1 - best >= 4 else k)
     half = 3
     if len(idx) >= 2:
         half = int(max(5, min(np.median(np.diff(idx)) // 12, 400)))
@@ -391,3 +403,125 @@ def hysteresis_loop(x, acceleration, mass: float) -> tuple[np.ndarray, np.ndarra
     if not (math.isfinite(m) and m > 0):
         raise ParameterError("mass", m, "(0, inf)", "kg")
     return x, -m * acc
+
+
+@dataclass(frozen=True)
+class LoopEstimate:
+    """The bilinear isolators read off the hysteresis loop (:func:`bilinear_loop`), SI units."""
+
+    k1: float
+    """Initial (unloading) stiffness [N/m]: the slope right after each reversal."""
+    k2: float
+    """Post-yield stiffness [N/m]: the slope of the loading branches at large amplitude."""
+    characteristic_strength: float
+    """Q = F_y (1 - k2 / k1) + F_s [N]: the loading branches' intercept at x = 0."""
+    friction: float
+    """F_s = Q - f_p [N]: the part of Q that flips at the reversal itself (the sliders; may come out slightly
+    negative where there are none)."""
+    damping: float
+    """Viscous coefficient c [N s/m]."""
+    reversals: int
+    """Reversals whose elastic unloading entered the estimate of k1."""
+    friction_se: float = math.nan
+    """Standard error of F_s from the scatter of the reversals' intercepts 2 f_p (nan with one reversal) [N]."""
+
+    @property
+    def yield_force(self) -> float:
+        """F_y = (Q - F_s) / (1 - k2 / k1) [N]."""
+        return (self.characteristic_strength - self.friction) / (1.0 - self.k2 / self.k1)
+
+
+def bilinear_loop(t, x, acceleration, mass: float, peak_times, peaks, release_time: float) -> LoopEstimate | None:
+    """Bilinear isolators (with dampers and sliders) from the hysteresis loop, without fitting a model.
+
+    t [s], x [m] and the acceleration [m/s^2] on one time axis, the sensor's zero removed from the
+    acceleration, the samples after the release instant t_r [s]; peak_times and peaks: the turning points
+    (:func:`turning_points`).
+    The restoring force is ``F = -m x_ddot`` (:func:`hysteresis_loop`) and the velocity v the integral of the
+    acceleration from rest at the release. In a half-cycle moving in direction s = +-1, once yielded,
+
+        F = k2 x + s Q + c v,   Q = F_y (1 - k2 / k1) + F_s,                                     (L)
+
+    so k2, Q and c (and a constant -k2 e for the displacement sensor's zero e, where branches of both
+    directions enter) follow by linear least squares from the samples of the outer half of each large
+    half-cycle's travel. At a reversal the sliders' force flips at once (F jumps by 2 F_s) and the rubber
+    unloads elastically, with stiffness k1, until it meets (L) of the new direction; the gap to (L),
+    ``g = s (k2 x + s Q + c v - F)``, is ``2 f_p - (k1 - k2) u`` there (u the travel since the reversal,
+    f_p = F_y (1 - k2 / k1)). A common slope and an intercept per reversal by least squares over the
+    samples with g above a quarter of its value at the reversal give k1 - k2 and 2 f_p, so F_s = Q - f_p.
+    The outer samples of (L) are then those past the elastic travel 2 f_p / (k1 - k2), and both steps are
+    repeated once. None where the record has fewer than two yielded half-cycles or no elastic samples.
+    """
+    t = np.asarray(t, dtype=float)
+    x = np.asarray(x, dtype=float)
+    acc = np.asarray(acceleration, dtype=float)
+    peak_times = np.asarray(peak_times, dtype=float)
+    peaks = np.asarray(peaks, dtype=float)
+    if peaks.size < 3 or t.size < 20:
+        return None
+    force = -float(mass) * acc
+    keep = t > float(release_time)
+    t, x, acc, force = t[keep], x[keep], acc[keep], force[keep]
+    if t.size < 20:
+        return None
+    v = acc[0] * (t[0] - float(release_time)) + np.concatenate([[0.0], np.cumsum(0.5 * (acc[1:] + acc[:-1])
+                                                                                  * np.diff(t))])
+    swing = np.abs(np.diff(peaks))
+    half = np.searchsorted(peak_times, t, side="right") - 1  # the half-cycle of each sample
+    inside = (half >= 0) & (half < swing.size)
+    half = np.where(inside, half, 0)
+    s = np.where(inside, np.sign(peaks[np.minimum(half + 1, peaks.size - 1)] - peaks[half]), 0.0)
+    u = s * (x - peaks[half])  # travel since the half-cycle's turning point
+    yielded = swing >= 0.5 * swing[0]  # first pass: the half-cycles of at least half the first swing
+    elastic_travel = 0.0
+    est = None
+    for _ in range(2):
+        lo = 0.5 * swing[half] if est is None else np.minimum(1.2 * elastic_travel, 0.8 * swing[half])
+        outer = inside & yielded[half] & (u > lo) & (u < swing[half])
+        if np.count_nonzero(outer) < 6:
+            return est
+        # a constant h = -k2 e for the displacement sensor's zero e, where both directions are there
+        both = np.unique(s[outer]).size == 2
+        A = np.column_stack([x[outer], s[outer], v[outer]] + ([np.ones(np.count_nonzero(outer))] if both else []))
+        coef = np.linalg.lstsq(A, force[outer], rcond=None)[0]
+        k2, Q, c, h = float(coef[0]), float(coef[1]), float(coef[2]), float(coef[3]) if both else 0.0
+        if not (k2 > 0.0 and Q > 0.0):
+            return est
+        gap = s * (k2 * x + s * Q + c * v + h - force)
+        runs = []
+        for n in range(swing.size):  # the release, and each reversal after a yielded half-cycle
+            if n > 0 and not yielded[n - 1]:
+                continue
+            mine = np.nonzero(inside & (half == n))[0]
+            if mine.size < 6:
+                continue
+            g0 = float(np.median(gap[mine[:3]]))
+            if not g0 > 0.0:
+                continue
+            run = mine[: int(np.argmax(gap[mine] < 0.25 * g0)) or mine.size]
+            if run.size >= 6:
+                runs.append((n, run))
+        if not runs:
+            return est
+        idx = np.concatenate([run for _, run in runs])
+        B = np.zeros((idx.size, len(runs) + 1))
+        i0 = 0
+        for j, (n, run) in enumerate(runs):
+            B[i0:i0 + run.size, j] = 1.0
+            # the travel from the reversal's position as the cubic through the run's own samples gives it
+            # at the turning-point time (linear in the samples: the located turning point of a noisy record
+            # lies outward of the truth by about 0.7 noise levels, which (k1 - k2) turns into f_p)
+            tau = t[run] - peak_times[n]
+            origin = float(np.linalg.lstsq(np.vander(tau, 6), x[run], rcond=None)[0][-1])
+            B[i0:i0 + run.size, -1] = -s[run] * (x[run] - origin)
+            i0 += run.size
+        coef = np.linalg.lstsq(B, gap[idx], rcond=None)[0]
+        dk, fp = float(coef[-1]), 0.5 * float(np.mean(coef[:-1]))
+        if not (dk > 0.0 and fp > 0.0):  # F_s = Q - f_p may come out a rounding below 0 without sliders
+            return est
+        elastic_travel = 2.0 * fp / dk
+        fp_se = 0.5 * float(np.std(coef[:-1], ddof=1)) / math.sqrt(len(runs)) if len(runs) > 1 else math.nan
+        est = LoopEstimate(k1=k2 + dk, k2=k2, characteristic_strength=Q, friction=Q - fp, damping=max(c, 0.0),
+                           reversals=len(runs), friction_se=fp_se)
+        yielded = swing >= 2.0 * elastic_travel  # second pass: every half-cycle past the elastic travel
+    return est

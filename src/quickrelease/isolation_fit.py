@@ -280,7 +280,7 @@ def _start(model: str, mass: float, channels: list[BuildingChannel], t_r: float,
         except QuickReleaseError:
             pass
     if model == "bilinear":
-        start.update(_bilinear_start(mass, xch, t_r, noise, start))
+        start.update(_bilinear_start(mass, xch, t_r, noise, start, channels))
     if model == "2dof":
         start.update(_two_dof_start(mass, superstructure_mass, channels, t_r, start))
     return start
@@ -324,12 +324,16 @@ def _two_dof_start(mass: float, ms: float, channels: list[BuildingChannel], t_r:
 
 
 def _bilinear_start(mass: float, xch: BuildingChannel | None, t_r: float, noise: dict[str, float],
-                    linear: dict[str, float]) -> dict[str, float]:
-    """Start values of the bilinear model from the decay: the last half-cycles are elastic (period of
+                    linear: dict[str, float], channels: list[BuildingChannel] = ()) -> dict[str, float]:
+    """Start values of the bilinear model from the record, without design values.
+
+    With an acceleration channel of the layer: the hysteresis loop (:func:`quickrelease.decay.bilinear_loop`:
+    k2, Q and c from the loading branches, k1 and the sliders' share of Q from the elastic unloading after
+    each reversal). Else from the decay (the secant period): the last half-cycles are elastic (period of
     k1), and the first ones, on the soft branch, have the equivalent stiffness ``k_eff = k2 + f_p / A``
     (A the half-cycle's amplitude, f_p = F_y (1 - k2 / k1) the plastic element's force), so two of them
     give k2 and f_p."""
-    from .decay import analyse_decay
+    from .decay import analyse_decay, bilinear_loop
 
     k_lin = mass * (2.0 * math.pi / linear["period"]) ** 2
     guess = {"period": linear["period"] / 2.0, "stiffness_ratio": 0.2, "yield_force": 0.5 * k_lin * 0.02,
@@ -340,6 +344,20 @@ def _bilinear_start(mass: float, xch: BuildingChannel | None, t_r: float, noise:
         analysis = analyse_decay(xch.t, xch.values, release_time=t_r, noise=noise[xch.name])
     except QuickReleaseError:
         return guess
+    ach = next((c for c in channels if c.kind == "a"), None) or next((c for c in channels if c.kind == "a_roof"),
+                                                                      None)
+    if ach is not None:
+        moving = (ach.t > t_r) & (ach.t >= xch.t[0]) & (ach.t <= xch.t[-1])
+        pre = ach.values[ach.t < t_r]
+        zero = float(np.median(pre)) if pre.size >= 3 else 0.0
+        loop = bilinear_loop(ach.t[moving], np.interp(ach.t[moving], xch.t, xch.values), ach.values[moving] - zero,
+                             mass, analysis.peak_times, analysis.peaks, t_r)
+        if loop is not None and 0.0 < loop.k2 < loop.k1 and loop.yield_force > 0.0:
+            return {"period": 2.0 * math.pi * math.sqrt(mass / loop.k1), "stiffness_ratio": loop.k2 / loop.k1,
+                    "yield_force": loop.yield_force, "friction": max(loop.friction, 0.0),
+                    "damping_ratio": float(np.clip(loop.damping / (2.0 * math.sqrt(loop.k1 * mass)), 0.002, 0.5)),
+                    "friction_se": loop.friction_se if math.isfinite(loop.friction_se)
+                    else 0.05 * loop.characteristic_strength}
     teq, amp = analysis.equivalent_period, analysis.amplitude
     if teq.size < 4:
         return guess
@@ -506,11 +524,16 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
     start, fixed : dict, optional
         Start values, and parameters held fixed (by name: period, damping_ratio, friction,
         stiffness_ratio, yield_force, superstructure_period, superstructure_damping_ratio, d0, release_time,
-        offset_<channel>). The bilinear model's misfit has
-        local minima (the count of half-cycles before the sliders stick changes in jumps, and friction and
-        yield force act alike on the soft branch): give the bearings' design values as start values (a
-        start within about 30% of the truth converged in our tests; the start from the decay analysis alone
-        may not, and the result then warns).
+        offset_<channel>). Without them the fit starts from the record itself: the linear model from the
+        decay analysis (period from the turning-point times, F_s and zeta from the linear and geometric
+        parts of the combined decrement law, d0 and the release from the record), the bilinear model from
+        the hysteresis loop of the acceleration channel (:func:`quickrelease.decay.bilinear_loop`: k2, Q,
+        c from the loading branches, k1 and F_s from the elastic unloading after each reversal), and each
+        from a few more starts that split the dissipation otherwise, keeping the lowest chi-square. The
+        bilinear model's misfit has local minima (the count of half-cycles before the sliders stick changes
+        in jumps, and friction and yield force act alike on the soft branch): without an acceleration
+        channel its start comes from the secant periods of the decay only, which may not find the right
+        one, and the result then warns (give the bearings' design values as start values).
     profile : bool, optional
         Profile-likelihood intervals: True for every physical parameter, False never, None (default) for
         those at a bound or with a relative standard error above ``PROFILE_RELATIVE_SE``.
@@ -576,6 +599,7 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
                              "m")
     p0 = _start(model, mass, channels, t_r0, d0, noise, superstructure_mass)
     rest = p0.pop("rest", None)
+    friction_se = p0.pop("friction_se", None)  # of the bilinear loop's F_s: the spread of its multi-start
     p0.update(d0=d0, release_time=t_r0)
     for ch in channels:
         if ch.offset:
@@ -640,6 +664,13 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
                     starts.append({**values, "friction": share * 0.5 * k * drop,
                                    "damping_ratio": float(np.clip(zeta, 0.002, 0.5))})
         elif model == "bilinear" and "yield_force" in names:
+            if friction_se is not None and not start:
+                # the loop's F_s = Q - f_p is its least certain value: f_p comes from the jumps of the gap at
+                # the reversals, Q from the loading branches, which hold the displacement sensor's zero e as
+                # k2 e where they run in one direction only. F_s two standard errors either way, F_y kept
+                for shift in (-2.0 * friction_se, 2.0 * friction_se):
+                    starts.append({**values, "friction": max(values["friction"] + shift, 0.0)})
+            # and splits of the dissipation between the sliders and the rubber
             total = values["friction"] + values["yield_force"]
             for share in (0.05, 0.2, 0.4):
                 starts.append({**values, "friction": share * total, "yield_force": (1.0 - share) * total})
@@ -735,9 +766,10 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
     if absolute and math.isfinite(chi2_red) and chi2_red > 1.3:
         warnings.append(f"the misfit is {math.sqrt(chi2_red):.2g} times the noise: the record does not support the "
                         f"{model} model, or the fit sits in a local minimum (give start values)")
-    if model == "bilinear" and not start:
-        warnings.append("bilinear fit started from the decay analysis; its misfit has local minima: give the "
-                        "bearings' design values as start values and compare")
+    if model == "bilinear" and not start and friction_se is None:
+        warnings.append("bilinear fit started from the decay's secant periods (no hysteresis loop: no acceleration "
+                        "channel, or too few yielded half-cycles); its misfit has local minima: give the bearings' "
+                        "design values as start values and compare")
     return IsolationFit(model=model, mass=mass, names=tuple(names), estimates=estimates, std_errors=std_errors,
                         ci95=ci, interval_method=method, correlation=corr, condition_number=cond, noise=noise,
                         noise_source=source, residual_rms=rms, samples=samples, chi2=chi2, dof=dof,
