@@ -430,7 +430,7 @@ def _two_dof_record(path, d0, seed, t_release=0.3):
                fmt="%.10g")
 
 
-def test_2dof_campaign_of_a_flexible_building(tmp_path, capsys):
+def test_2dof_campaign_of_a_flexible_building(tmp_path, capsys, monkeypatch):
     """A campaign with [building] model = "2dof": each release is fitted with the 2-DOF model and the
     superstructure mass of [building]; the laws of T, zeta and F_s hold the truth (no amplitude effect, made
     so), the equivalent damping falls with the amplitude, and every release reports the superstructure's
@@ -479,6 +479,7 @@ a_roof = { column = "a_roof", unit = "m/s^2", noise = "0.02 m/s^2" }
         assert abs(laws[(q, "displacement")]["b"]) < 4 * laws[(q, "displacement")]["b_se"], laws[(q, "displacement")]
     assert laws[("equivalent_damping_ratio", "displacement")]["b"] < 0  # (a 1/d0 curve: 3 releases are too few for
     # its line's slope to be significant once the Birge factor takes in the curvature)
+    monkeypatch.setenv("COLUMNS", "250")  # the tables follow the terminal's width: a wide one, unwrapped headers
     _building_campaign_tables(result)  # the command's per-release table
     table = capsys.readouterr().out
     assert "T_s [s]" in table and "zeta_s [%]" in table and "0.5000" in table
