@@ -171,3 +171,10 @@ def test_long_commands_show_a_spinner_on_a_terminal_only(tmp_path):
     assert r.returncode == 0
     assert json.loads(r.stdout)["dims"] == {"alpha0": 3}  # stdout is the JSON alone
     assert b"sweeping the grid" in seen
+
+
+def test_short_flags_are_lower_case():
+    group = typer.main.get_command(app)
+    shorts = {opt for _, cmd in group.commands.items() for p in cmd.params for opt in p.opts
+              if opt.startswith("-") and not opt.startswith("--")}
+    assert shorts and all(opt == opt.lower() for opt in shorts), sorted(shorts)

@@ -93,7 +93,7 @@ def _main_options(
     """Dynamics of the pushing and quick-release device: simulate a release, identify friction."""
 
 DeviceOpt = Annotated[Path | None, typer.Option("--device", help="Device TOML file (Table 2 keys); default: the paper's device.")]
-ForceOpt = Annotated[str | None, typer.Option("--force", "-P", help="Push force P at release, e.g. '1598 kN' (SI number: N).")]
+ForceOpt = Annotated[str | None, typer.Option("--force", "-p", help="Push force P at release, e.g. '1598 kN' (SI number: N).")]
 EnergyOpt = Annotated[str | None, typer.Option("--energy", help="Stored strain energy E_S, e.g. '2.90 kJ' (SI number: J).")]
 Alpha0Opt = Annotated[str | None, typer.Option("--alpha0", help="Angle of the bars with the loading axis at release, e.g. '0.2' or '11.46 deg'.")]
 MassOpt = Annotated[str | None, typer.Option("--mass-model", metavar="<distributed|lumped|C>", help="distributed (c = 2/3, default), lumped (c = 1) or a number c.")]
