@@ -136,6 +136,7 @@ def test_dask_blocks_resume_and_match_numpy(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["s.zarr"]
 
 
+@pytest.mark.skipif(not HAS_DASK, reason="dask/zarr not installed")
 def test_numpy_zarr_store_is_staged_and_fingerprinted(tmp_path):
     import xarray as xr
 
