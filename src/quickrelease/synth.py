@@ -128,6 +128,36 @@ def _write_csv(cols: dict[str, np.ndarray], path: str | Path) -> Path:
     return Path(path)
 
 
+def _sample_times(duration: float, rate: float, jitter: float, seed: int, n_channels: int):
+    """The record's sampling instants (every 1/rate from 0 to ``duration``, shifted by up to +-jitter/2
+    intervals) and the noise generator that drew the shifts, after the seed and size checks."""
+    check_seed("seed", seed)
+    samples = math.floor(duration * rate) + 1 if math.isfinite(duration * rate) else math.inf
+    check_size("duration x rate", f"{duration:g} s x {rate:g} Hz", samples,
+               f"samples of {n_channels} channel(s)", BYTES_PER_SAMPLE * (n_channels + 1))
+    rng = np.random.default_rng(seed)
+    n = int(samples)
+    t = np.arange(n) / rate
+    if jitter:
+        t = t + (rng.uniform(-0.5, 0.5, n) * jitter / rate)
+        t[0] = max(t[0], 0.0)
+    return t, rng
+
+
+def _measured(channels, clean: dict[str, np.ndarray], offsets: dict[str, float], noise: dict[str, float],
+              missing: float, rng) -> dict[str, np.ndarray]:
+    """Each channel as an instrument records it: the clean signal plus its offset and white noise, with a
+    share ``missing`` of its samples lost (NaN); drawn from ``rng`` channel by channel."""
+    data = {}
+    for name in channels:
+        n = clean[name].size
+        values = clean[name] + offsets[name] + rng.normal(0.0, 1.0, n) * noise[name]
+        if missing:
+            values[rng.uniform(0.0, 1.0, n) < missing] = np.nan
+        data[name] = values
+    return data
+
+
 def synthesize(case: Case, channels: list[str] | tuple[str, ...], *, rate: float, noise: dict[str, float] | None = None,
                release_time: float = 0.5, duration: float | None = None, offsets: dict[str, float] | None = None,
                seed: int = 0, jitter: float = 0.0, missing: float = 0.0) -> SyntheticRecord:
@@ -187,23 +217,9 @@ def synthesize(case: Case, channels: list[str] | tuple[str, ...], *, rate: float
     if not rate * min(t_stop, release_time) >= MIN_SAMPLES:  # noise from before the release, the motion after
         raise ParameterError("rate", rate, f"[{MIN_SAMPLES} / min(t_F, release_time), inf) = "
                              f"[{MIN_SAMPLES / min(t_stop, release_time):.4g}, inf) (t_F = {t_stop:.4g} s)", "Hz")
-    check_seed("seed", seed)
-    samples = math.floor(duration * rate) + 1 if math.isfinite(duration * rate) else math.inf
-    check_size("duration x rate", f"{duration:g} s x {rate:g} Hz", samples,
-               f"samples of {len(channels)} channel(s)", BYTES_PER_SAMPLE * (len(channels) + 1))
-    rng = np.random.default_rng(seed)
-    n = int(samples)
-    t = np.arange(n) / rate
-    if jitter:
-        t = t + (rng.uniform(-0.5, 0.5, n) * jitter / rate)
-        t[0] = max(t[0], 0.0)
+    t, rng = _sample_times(duration, rate, jitter, seed, len(channels))
     clean = release_channels(list(channels), t, release_time, fi, 1.0 / rate)
-    data = {}
-    for name in channels:
-        values = clean[name] + offsets[name] + rng.normal(0.0, 1.0, n) * noise[name]
-        if missing:
-            values[rng.uniform(0.0, 1.0, n) < missing] = np.nan
-        data[name] = values
+    data = _measured(channels, clean, offsets, noise, missing, rng)
     truth = {"F1": float(F1), "F2": float(F2), "energy": float(case.stored_energy), "mass_factor": case.mass_factor,
              "alpha0": case.alpha0, "release_time": float(release_time), "stop_time": float(t_stop),
              "alpha_final": float(fi.alpha_final)}
@@ -470,26 +486,12 @@ def synthesize_building(case: Case, channels: list[str] | tuple[str, ...], *, ra
     if not rate * min(shortest, release_time) >= MIN_SAMPLES:  # noise before the release, the motion after
         raise ParameterError("rate", rate, f"[{MIN_SAMPLES} / min(T{', T_2' if two else ''}, release_time), inf) = "
                              f"[{MIN_SAMPLES / min(shortest, release_time):.4g}, inf) ({which})", "Hz")
-    check_seed("seed", seed)
-    samples = math.floor(duration * rate) + 1 if math.isfinite(duration * rate) else math.inf
-    check_size("duration x rate", f"{duration:g} s x {rate:g} Hz", samples,
-               f"samples of {len(channels)} channel(s)", BYTES_PER_SAMPLE * (len(channels) + 1))
-    rng = np.random.default_rng(seed)
-    n = int(samples)
-    t = np.arange(n) / rate
-    if jitter:
-        t = t + (rng.uniform(-0.5, 0.5, n) * jitter / rate)
-        t[0] = max(t[0], 0.0)
+    t, rng = _sample_times(duration, rate, jitter, seed, len(channels))
     if duration - release_time > motion.horizon:
         motion = free_vibration(iso, d0, t_end=duration - release_time)
     model = motion.channels(t - release_time)  # a rigid superstructure's roof moves with the layer
     clean = {name: model[name].copy() for name in channels}
-    data = {}
-    for name in channels:
-        values = clean[name] + offsets[name] + rng.normal(0.0, 1.0, n) * noise[name]
-        if missing:
-            values[rng.uniform(0.0, 1.0, n) < missing] = np.nan
-        data[name] = values
+    data = _measured(channels, clean, offsets, noise, missing, rng)
     stop = float(motion.stop_time) if motion.stop_time <= duration - release_time else None
     truth = {**iso.summary(), "d0_m": float(d0), "release_time_s": float(release_time), "stop_time_s": stop}
     notes = [] if spec.mass is not None else ["no [building] mass: a unit mass (the motion depends on F_s / m only)"]
