@@ -98,6 +98,15 @@ EnergyOpt = Annotated[str | None, typer.Option("--energy", help="Stored strain e
 Alpha0Opt = Annotated[str | None, typer.Option("--alpha0", help="Angle of the bars with the loading axis at release, e.g. '0.2' or '11.46 deg'.")]
 MassOpt = Annotated[str | None, typer.Option("--mass-model", metavar="<distributed|lumped|C>", help="distributed (c = 2/3, default), lumped (c = 1) or a number c.")]
 JsonOpt = Annotated[bool, typer.Option("--json", help="Print one JSON object instead of a table.")]
+ThreadsOpt = Annotated[int | None, typer.Option("--threads", "-t", help="Threads of the compiled kernels, 1 to the cores numba may use (default: all; results do not depend on it).")]
+
+
+def _check_threads(threads: int | None, backend: str = "numpy") -> None:
+    """--threads: an integer in [1, NUMBA_NUM_THREADS], and not with the Dask backend (checked before any work)."""
+    from ._threads import check_threads, refuse_with_dask
+
+    check_threads(threads, "--threads")
+    refuse_with_dask(threads, backend, "--threads")
 
 
 def _fail(message: str) -> None:
@@ -444,6 +453,7 @@ def uq(
     workers: Annotated[int, typer.Option("--workers", help="Workers of the LocalCluster.")] = 2,
     out: Annotated[Path | None, typer.Option("--out", "-o", help="Folder for chunks, uq.json and the corner figure.")] = None,
     resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted run in --out (same inputs only).")] = False,
+    threads: Annotated[int | None, typer.Option("--threads", "-t", help="Threads of the compiled kernels, 1 to the cores numba may use (default: all; results do not depend on it); numpy backend only (a Dask task runs on one thread).")] = None,
     overwrite: OverwriteOpt = False,
     as_json: JsonOpt = False,
 ) -> None:
@@ -451,10 +461,11 @@ def uq(
     from .case import load_case
     from .uq import run_uq
 
+    _check_threads(threads, backend)
     case = load_case(case_file)
     result = run_uq(case, samples, seed=seed, chunk=chunk, backend=backend, scheduler=scheduler, workers=workers,
                     out=out, resume=resume, overwrite=overwrite, progress=not as_json and sys.stderr.isatty(),
-                    log=lambda line: _echo(f"note: {line}", err=True))
+                    log=lambda line: _echo(f"note: {line}", err=True), threads=threads)
     if as_json:
         _print_json(result.summary())
         return
@@ -484,6 +495,7 @@ def sweep_command(
     workers: Annotated[int, typer.Option("--workers", help="Workers of the LocalCluster.")] = 2,
     resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted dask sweep in --file (same inputs only).")] = False,
     block_rows: Annotated[int | None, typer.Option("--block-rows", help="Rows of the first grid per Dask block (default: about 10^6 points a block).")] = None,
+    threads: Annotated[int | None, typer.Option("--threads", "-t", help="Threads of the compiled kernels, 1 to the cores numba may use (default: all; results do not depend on it); numpy backend only (a Dask task runs on one thread).")] = None,
     overwrite: OverwriteOpt = False,
     as_json: JsonOpt = False,
 ) -> None:
@@ -493,13 +505,14 @@ def sweep_command(
     from .runfolder import provenance
     from .sweep import heatmap_figure, parse_grid, sweep
 
+    _check_threads(threads, backend)
     out = _file_option(file, out_old, "sweep")
     grids = dict(parse_grid(g) for g in grid)
     case = load_case(case_file)
     with _busy("sweeping the grid"):
         ds = sweep(case, grids, backend=backend, out=out, scheduler=scheduler, workers=workers,
                    block_rows=block_rows, resume=resume, overwrite=overwrite,
-                   log=lambda line: _echo(f"note: {line}", err=True))
+                   log=lambda line: _echo(f"note: {line}", err=True), threads=threads)
         figs = save_figure(heatmap_figure(ds), out.parent, out.name.rsplit(".", 1)[0] + "_heatmaps")
     summary = {"file": str(out), "dims": {k: int(v) for k, v in ds.sizes.items()},
                "stop_time_s": [float(ds.stop_time.min()),  # creeping cases (stopped_by 2, t_F = inf): counted apart
@@ -874,6 +887,7 @@ def _building_campaign_tables(result) -> None:
 def plan(
     case_file: Annotated[Path, typer.Argument(help="Case file: the planned push ([test] force, alpha0), the friction estimate, and optionally [fuse], [building], [plan].")],
     out: Annotated[Path | None, typer.Option("--out", "-o", help="Also write plan.json, the figures and report.html here.")] = None,
+    threads: ThreadsOpt = None,
     overwrite: OverwriteOpt = False,
     as_json: JsonOpt = False,
 ) -> None:
@@ -881,11 +895,12 @@ def plan(
     from .case import load_case
     from .workflow import results_folder, run_case, write_results
 
+    _check_threads(threads)
     case = load_case(case_file)
     if out is not None:
         results_folder(case, out, plan=True, overwrite=overwrite)  # pre-flight
     with _busy("planning the test"):
-        result = run_case(case, plan=True)
+        result = run_case(case, plan=True, threads=threads)
     plan_result = result.plan
     paths = write_results(result, out, overwrite=overwrite) if out is not None else {}
     summary = plan_result.summary()

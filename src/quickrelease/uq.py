@@ -24,6 +24,7 @@ import numpy as np
 
 from . import batch
 from ._style import STYLE, styled
+from ._threads import check_threads, refuse_with_dask, using_threads
 from ._validate import check_seed, check_size, check_workers
 from .case import Case
 from .display import Summarised
@@ -307,7 +308,7 @@ def _as_case(name: str, value: float, case: Case) -> dict[str, Any]:
 def run_uq(case: Case, samples: int, *, seed: int = 0, chunk: int = DEFAULT_CHUNK, backend: str = "numpy",
            scheduler: str | None = None, workers: int = 2, out: str | Path | None = None, resume: bool = False,
            overwrite: bool = False, figures: bool = True, progress: bool = False,
-           log: Any = None) -> UQResult:
+           log: Any = None, threads: int | None = None) -> UQResult:
     """Monte Carlo over the case's input scatter: the distribution of the identified F1 and F2.
 
     Parameters
@@ -338,6 +339,10 @@ def run_uq(case: Case, samples: int, *, seed: int = 0, chunk: int = DEFAULT_CHUN
         Show a progress bar (rich).
     log : callable, optional
         Receives one line per note (a damaged chunk recomputed).
+    threads : int, optional
+        Threads of the compiled kernels, 1 to ``numba.config.NUMBA_NUM_THREADS`` (numpy backend only; default:
+        numba's current count, all cores unless changed; :func:`quickrelease.using_threads`). The result is the
+        same for any count. Refused with the Dask backend, whose tasks run on one thread each.
     """
     _check(case)
     if not isinstance(samples, int | np.integer) or samples < 1:
@@ -348,6 +353,8 @@ def run_uq(case: Case, samples: int, *, seed: int = 0, chunk: int = DEFAULT_CHUN
         raise ParameterError("backend", backend, "'numpy' or 'dask'")
     check_seed("seed", seed)
     check_workers("workers", workers)
+    check_threads(threads)
+    refuse_with_dask(threads, backend)
     check_size("chunk", chunk, chunk, "samples in a chunk")
     check_size("samples", samples, -(-samples // chunk), f"chunks of {chunk}", bytes_each=_CHUNK_BYTES)
     if resume and out is None:
@@ -361,8 +368,9 @@ def run_uq(case: Case, samples: int, *, seed: int = 0, chunk: int = DEFAULT_CHUN
                                        "chunk": int(chunk)}, overwrite=overwrite, resume=resume, resumable=True)
     edges = _edges(case, seed)
     if folder is None:
-        return _result(case, samples, seed, chunk, _combine(_run_chunks(case, seed, sizes, edges, {}, None, backend,
-                                                                        scheduler, workers, progress)), edges)
+        with using_threads(threads):
+            parts = _run_chunks(case, seed, sizes, edges, {}, None, backend, scheduler, workers, progress)
+        return _result(case, samples, seed, chunk, _combine(parts), edges)
     from .runfolder import output_error
 
     notes = list(folder.notes)
@@ -374,7 +382,8 @@ def run_uq(case: Case, samples: int, *, seed: int = 0, chunk: int = DEFAULT_CHUN
         for line in notes:
             if log is not None:
                 log(line)
-        parts = _run_chunks(case, seed, sizes, edges, done, store, backend, scheduler, workers, progress)
+        with using_threads(threads):
+            parts = _run_chunks(case, seed, sizes, edges, done, store, backend, scheduler, workers, progress)
         result = _result(case, samples, seed, chunk, _combine(parts), edges)
         from .export import write_json
         from .runfolder import provenance
