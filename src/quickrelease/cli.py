@@ -953,18 +953,64 @@ def plan(
 @_guard
 def bench(
     quick: Annotated[bool, typer.Option("--quick", help="Smaller samples; skip the 1e8-sample Dask run.")] = False,
+    threads: Annotated[int | None, typer.Option("--threads", "-t", help="Threads of the all-cores measurement, 1 to the cores numba may use (default: all).")] = None,
     as_json: JsonOpt = False,
 ) -> None:
-    """Benchmarks: kernel throughput on one core vs scipy (same run), accuracy vs mpmath, uq 1e8 on Dask."""
+    """Benchmarks on the bench and the wide sample: kernel throughput on one core and on all, vs scipy (same run), accuracy vs mpmath, the targets of issue 12."""
     from .bench import run_bench
 
-    result = run_bench(quick=quick, log=(lambda line: None) if as_json else (lambda line: _echo(line, err=True)))
+    _check_threads(threads)
+    result = run_bench(quick=quick, threads=threads, log=lambda line: _echo(line, err=True))
     if as_json:
         _print_json(result)
         return
-    from .display import quantity_rows
+    _bench_tables(result)
 
-    _table("quickrelease bench", quantity_rows(result), ("quantity", "value"))
+
+def _bench_tables(result: dict[str, Any]) -> None:
+    def e(x):
+        return "-" if x is None else f"{x:.1e}"
+
+    n = result["threads"]
+    for sample in ("bench", "wide"):
+        g = result[sample]
+        st, idn = g["stop_time"], g["identify"]
+        rows = [
+            ("one core, wall [cases/s]", f"{st['cases_per_s']:,.0f}", f"{idn['cases_per_s']:,.0f}"),
+            ("one core, CPU time [cases/s]", f"{st['cpu_cases_per_s']:,.0f}", f"{idn['cpu_cases_per_s']:,.0f}"),
+            (f"{n} thread(s), wall [cases/s]", f"{st['all_cores_cases_per_s']:,.0f}",
+             f"{idn['all_cores_cases_per_s']:,.0f}"),
+            (f"{n} thread(s) / one core; same bytes", f"{st['all_cores_ratio']:.2f}x; {st['all_cores_identical']}",
+             f"{idn['all_cores_ratio']:.2f}x; {idn['all_cores_identical']}"),
+            ("scipy one case at a time [cases/s]", f"solve_ivp {st['solve_ivp_cases_per_s']:,.0f}",
+             f"quad + brentq {idn['quad_brentq_cases_per_s']:,.1f}"),
+            ("speed-up vs scipy", f"{st['speedup_vs_solve_ivp']:,.0f}x", f"{idn['speedup_vs_quad_brentq']:,.0f}x"),
+            ("kernel error vs mpmath: median, worst", f"{e(st['median_rel_error'])}, {e(st['max_rel_error'])}",
+             f"{e(idn['median_rel_error'])}, {e(idn['max_rel_error'])}"),
+            ("1-ulp input sensitivity at the worst", e(st["worst_case_sensitivity_1ulp"]),
+             e(idn["worst_case_sensitivity_1ulp"])),
+            ("scipy error vs mpmath: median, worst",
+             f"{e(st['solve_ivp_median_rel_error'])}, {e(st['solve_ivp_max_rel_error'])}",
+             f"{e(idn['quad_brentq_median_rel_error'])}, {e(idn['quad_brentq_max_rel_error'])}"),
+            ("cases: kernels; accuracy vs mpmath", f"{st['cases']:,}; {st['accuracy_cases']}",
+             f"{idn['cases']:,}; {idn['accuracy_cases']}"),
+        ]
+        _table(f"{sample} sample ({g['sample']})", rows, ("", "stop time t_F", "identification F1, F2"))
+        if sample == "wide":
+            rows = [(a["stratum"], f"{a['cases']}, {b['cases']}", e(a["median_rel_error"]), e(a["max_rel_error"]),
+                     e(a["sensitivity_1ulp"]), e(b["median_rel_error"]), e(b["max_rel_error"]), e(b["sensitivity_1ulp"]))
+                    for a, b in zip(st["strata"], idn["strata"], strict=True)]
+            _table(f"wide sample by stratum: error vs mpmath (worst t_F in '{st['worst_stratum']}', worst F1, F2 in "
+                   f"'{idn['worst_stratum']}')", rows,
+                   ("stratum", "cases", "t_F median", "t_F worst", "1-ulp sens.", "F1,F2 median", "F1,F2 worst",
+                    "1-ulp sens."))
+    for t in result["targets"]:
+        _echo(f"{t['status']:>12}: {t['text']}")
+    if "uq_dask" in result:
+        u = result["uq_dask"]
+        _echo(u["skipped"] if "skipped" in u else
+              f"uq, 1e8 samples on {u['workers']} Dask workers: {u['wall_s']:.1f} s, peak memory "
+              f"{u['peak_memory_GiB']:.2f} GiB")
 
 
 def main() -> None:

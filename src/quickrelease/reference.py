@@ -14,7 +14,7 @@ For tests and the benchmark's accuracy columns.
 
 from __future__ import annotations
 
-__all__ = ["stop_time_mp", "identify_mp", "identify_lambda_mp"]
+__all__ = ["stop_time_mp", "stop_time_mpf", "identify_mp", "identify_lambda_mp"]
 
 
 def _setup(dps: int):
@@ -52,13 +52,8 @@ def _time_integral(mp, a0, end, A, B, spare, k, m2, L1):
     return mp.quad(f, [mp.mpf(p) for p in _PANELS])
 
 
-def stop_time_mp(E_S, alpha0, F1, F2, k, m2, L1, dps: int = 30) -> tuple[float, float]:
-    """(t_F [s], alpha_F [rad]) of a release (Eq. 8 and 10) to about ``dps`` digits before rounding; alpha_F = pi/2
-    when the flat rhombus is reached first (Eq. 9). About 0.05 s a case.
-
-    alpha_F solves W_F(alpha_F) = E_S (Eq. 8) by mpmath's bracketing root finder; t_F is :func:`_time_integral`.
-    E_S [J], alpha0 [rad], F1, F2 [N], k = c m1/m2 [-], m2 [kg], L1 [m]; the floats are taken exactly.
-    """
+def stop_time_mpf(E_S, alpha0, F1, F2, k, m2, L1, dps: int = 30):
+    """(t_F [s], alpha_F [rad]) as mpmath numbers: see :func:`stop_time_mp`."""
     mp = _setup(dps)
     E_S, alpha0, F1, F2, k, m2, L1 = (mp.mpf(float(v)) for v in (E_S, alpha0, F1, F2, k, m2, L1))
     A, B = 2 * F1 * L1, 4 * F2 * L1
@@ -72,7 +67,18 @@ def stop_time_mp(E_S, alpha0, F1, F2, k, m2, L1, dps: int = 30) -> tuple[float, 
         end = half_pi
     else:
         end, spare = mp.findroot(lambda a: W(a) - E_S, (alpha0, half_pi), solver="anderson"), mp.mpf(0)
-    return float(_time_integral(mp, alpha0, end, A, B, spare, k, m2, L1)), float(end)
+    return _time_integral(mp, alpha0, end, A, B, spare, k, m2, L1), end
+
+
+def stop_time_mp(E_S, alpha0, F1, F2, k, m2, L1, dps: int = 30) -> tuple[float, float]:
+    """(t_F [s], alpha_F [rad]) of a release (Eq. 8 and 10) to about ``dps`` digits before rounding; alpha_F = pi/2
+    when the flat rhombus is reached first (Eq. 9). About 0.05 s a case.
+
+    alpha_F solves W_F(alpha_F) = E_S (Eq. 8) by mpmath's bracketing root finder; t_F is :func:`_time_integral`.
+    E_S [J], alpha0 [rad], F1, F2 [N], k = c m1/m2 [-], m2 [kg], L1 [m]; the floats are taken exactly.
+    """
+    t, end = stop_time_mpf(E_S, alpha0, F1, F2, k, m2, L1, dps=dps)
+    return float(t), float(end)
 
 
 def _secant(g, lam0, lam1, tol, steps: int = 30):
