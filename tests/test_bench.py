@@ -138,3 +138,24 @@ def test_cli_bench_json_and_table(result, monkeypatch):
 def test_cli_bench_refuses_bad_threads():
     r = CliRunner().invoke(app, ["bench", "--quick", "--threads", "0"])
     assert r.exit_code == 2 and r.stderr.strip().startswith("error: --threads = 0 is outside integers in [1,")
+
+
+def test_one_core_means_one_cpu_and_one_thread():
+    import os
+
+    import numba
+
+    before = numba.get_num_threads()
+    with bench._one_core():
+        assert numba.get_num_threads() == 1
+        if hasattr(os, "sched_getaffinity"):
+            assert len(os.sched_getaffinity(0)) == 1
+    assert numba.get_num_threads() == before
+
+
+def test_same_bytes_means_bytes():
+    from quickrelease.batch import BatchStop
+
+    a = BatchStop(np.array([0.0, 1.0]), np.array([1.0, 1.5]), np.array([0, 1], dtype=np.int8))
+    b = BatchStop(np.array([-0.0, 1.0]), np.array([1.0, 1.5]), np.array([0, 1], dtype=np.int8))  # equal, not same
+    assert bench._same_bytes(a, a) and not bench._same_bytes(a, b)
