@@ -134,3 +134,24 @@ def test_cli_threads_runs(tmp_path):
     assert r.exit_code == 0, r.output
     r2 = runner.invoke(app, ["uq", str(EXAMPLES / "uq_paper.toml"), "-n", "2000", "--json"])
     assert r2.stdout == r.stdout
+
+
+def test_the_kernels_run_on_the_threads_asked_for(uq_case, monkeypatch):
+    """Wiring: inside uq, sweep and the release envelope the batch kernels see the count given by threads=."""
+    seen = []
+
+    def spy(kernel):
+        def wrapped(*args, **kwargs):
+            seen.append(numba.get_num_threads())
+            return kernel(*args, **kwargs)
+        return wrapped
+
+    monkeypatch.setattr(batch, "release", spy(batch.release))
+    monkeypatch.setattr(batch, "identify", spy(batch.identify))
+    run_uq(uq_case, 1000, threads=1)
+    sweep(load_case(EXAMPLES / "larger_push.toml"), {"alpha0": np.array([0.2, 0.3])}, threads=1)
+    release_envelope(load_case(EXAMPLES / "plan.toml"), samples=10, threads=1)
+    assert len(seen) >= 3 and set(seen) == {1}
+    seen.clear()
+    run_uq(uq_case, 1000)  # default: numba's count (all cores unless changed)
+    assert set(seen) == {numba.get_num_threads()} == {TOP}

@@ -359,6 +359,13 @@ def run_uq(case: Case, samples: int, *, seed: int = 0, chunk: int = DEFAULT_CHUN
     check_size("samples", samples, -(-samples // chunk), f"chunks of {chunk}", bytes_each=_CHUNK_BYTES)
     if resume and out is None:
         raise ParameterError("resume", True, "runs with an output folder (out)")
+    with using_threads(threads):
+        return _run(case, samples, seed, chunk, backend, scheduler, workers, out, resume, overwrite, figures,
+                    progress, log)
+
+
+def _run(case, samples, seed, chunk, backend, scheduler, workers, out, resume, overwrite, figures, progress,
+         log) -> UQResult:
     sizes = [min(chunk, samples - i) for i in range(0, samples, chunk)]
     folder = None
     if out is not None:  # pre-flight: before any work
@@ -368,9 +375,8 @@ def run_uq(case: Case, samples: int, *, seed: int = 0, chunk: int = DEFAULT_CHUN
                                        "chunk": int(chunk)}, overwrite=overwrite, resume=resume, resumable=True)
     edges = _edges(case, seed)
     if folder is None:
-        with using_threads(threads):
-            parts = _run_chunks(case, seed, sizes, edges, {}, None, backend, scheduler, workers, progress)
-        return _result(case, samples, seed, chunk, _combine(parts), edges)
+        return _result(case, samples, seed, chunk, _combine(_run_chunks(case, seed, sizes, edges, {}, None, backend,
+                                                                        scheduler, workers, progress)), edges)
     from .runfolder import output_error
 
     notes = list(folder.notes)
@@ -382,8 +388,7 @@ def run_uq(case: Case, samples: int, *, seed: int = 0, chunk: int = DEFAULT_CHUN
         for line in notes:
             if log is not None:
                 log(line)
-        with using_threads(threads):
-            parts = _run_chunks(case, seed, sizes, edges, done, store, backend, scheduler, workers, progress)
+        parts = _run_chunks(case, seed, sizes, edges, done, store, backend, scheduler, workers, progress)
         result = _result(case, samples, seed, chunk, _combine(parts), edges)
         from .export import write_json
         from .runfolder import provenance
