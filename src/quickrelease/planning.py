@@ -408,7 +408,8 @@ def release_envelope(case: Case, E_S: float | None = None, alpha0: float | None 
     alpha0 = case.alpha0 if alpha0 is None else alpha0
     n = case.plan.samples if samples is None else samples
     check_size("samples", n, n, "friction samples")
-    fs = friction_samples(case, n, case.plan.seed if seed is None else seed)
+    with using_threads(threads):  # the friction samples may come from identifying scattered observations
+        fs = friction_samples(case, n, case.plan.seed if seed is None else seed)
     F1, F2 = fs.nominal
     d = case.device
     c = case.mass_factor
