@@ -159,3 +159,28 @@ def test_same_bytes_means_bytes():
     a = BatchStop(np.array([0.0, 1.0]), np.array([1.0, 1.5]), np.array([0, 1], dtype=np.int8))
     b = BatchStop(np.array([-0.0, 1.0]), np.array([1.0, 1.5]), np.array([0, 1], dtype=np.int8))  # equal, not same
     assert bench._same_bytes(a, a) and not bench._same_bytes(a, b)
+
+
+def test_a_kernel_that_depends_on_the_thread_count_is_caught(monkeypatch):
+    """The all-cores measurement compares its results with one core's byte for byte: a kernel whose last bit
+    depends on the thread count is reported (here a planted one)."""
+    import numba
+
+    from quickrelease import batch
+    from quickrelease.sampling import random_releases
+
+    if numba.config.NUMBA_NUM_THREADS < 2:
+        pytest.skip("numba may use one thread only here")
+    real = batch.stop_time
+
+    def planted(*args, **kwargs):
+        r = real(*args, **kwargs)
+        if numba.get_num_threads() > 1:
+            r.stop_time[0] = np.nextafter(r.stop_time[0], np.inf)
+        return r
+
+    monkeypatch.setattr(batch, "stop_time", planted)
+    out = bench._throughput(random_releases(500, seed=1), 2, repeat=1)
+    assert out["stop_time"]["all_cores_identical"] is False and out["identify"]["all_cores_identical"] is True
+    assert out["stop_time"]["all_cores_ratio"] == pytest.approx(out["stop_time"]["all_cores_cases_per_s"]
+                                                                / out["stop_time"]["cases_per_s"])
