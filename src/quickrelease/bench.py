@@ -313,7 +313,10 @@ def _identify_accuracy(sample: str, sizes: Sizes, seed: int, log) -> dict[str, A
                 qb = (math.nan, math.nan)
             q_time[i] = time.perf_counter() - t0
         start = float(ident.F1[i]) if ident.status[i] == 0 else None
-        lam, F1s, F2s = identify_lambda_mp(*args[i], start=start)
+        try:
+            lam, F1s, F2s = identify_lambda_mp(*args[i], start=start)
+        except (ValueError, ZeroDivisionError):  # no root on the line in exact arithmetic either: nothing to compare
+            continue
         if ident.status[i] == 0:
             err_k[i] = max(float(abs(ident.F1[i] / F1s - lam)), float(abs(ident.F2[i] / F2s - (1 - lam))))
         if math.isfinite(qb[0]):
