@@ -43,7 +43,7 @@ import numpy as np
 from scipy import stats
 from scipy.optimize import brentq, least_squares
 
-from ._lsq import jacobian_covariance
+from ._lsq import identified_covariance, jacobian_covariance
 from .building import RECORD_CHANNELS, Isolation, TwoDOF, free_vibration
 from .errors import ParameterError, QuickReleaseError
 
@@ -106,7 +106,8 @@ class IsolationFit:
     std_errors: dict[str, float]
     ci95: dict[str, tuple[float, float]]
     interval_method: dict[str, str]
-    """``"jacobian"`` or ``"profile"`` per parameter."""
+    """``"jacobian"``, ``"profile"`` or ``"not identified"`` per parameter (the last: standard error inf and
+    interval (nan, nan), the record does not see the parameter)."""
     correlation: np.ndarray
     condition_number: float
     noise: dict[str, float]
@@ -713,15 +714,17 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
     chi2_red = chi2 / dof if dof > 0 else math.nan
     J = res.jac
     try:  # columns scaled first: parameters in SI units span many orders of magnitude
-        cov = jacobian_covariance(J)
+        cov, blind = identified_covariance(J)
     except np.linalg.LinAlgError:
-        cov = np.full((p, p), np.nan)
+        cov, blind = np.full((p, p), np.nan), np.zeros(p, dtype=bool)
+    unseen = {n for n, b in zip(names, blind, strict=True) if b}
     scale = 1.0 if absolute else chi2_red
     cov = cov * scale
     se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(se, se)
     corr = np.where(np.isfinite(corr), corr, 0.0)
+    corr[blind, blind] = 1.0
     try:
         cond = float(np.linalg.cond(corr))
     except np.linalg.LinAlgError:
@@ -736,8 +739,12 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
         ci[n] = (max(est[n] - tq * std_errors[n], lo_b), min(est[n] + tq * std_errors[n], hi_b))
         method[n] = "jacobian"
     warnings = []
+    for n in names:  # the record does not see it: no interval (the pseudo-inverse would say SE ~0)
+        if n in unseen:
+            ci[n], method[n] = (math.nan, math.nan), "not identified"
+            warnings.append(f"{n} not identified by this record (standard error inf, no interval)")
     for n in physical:
-        if n not in names:
+        if n not in names or n in unseen:
             continue
         at_bound = est[n] - lower[n] <= 2.0 * std_errors[n] or upper[n] - est[n] <= 2.0 * std_errors[n]
         rel = std_errors[n] / abs(est[n]) if est[n] != 0 else math.inf
@@ -746,10 +753,13 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
             target = chi2 + tq**2 * scale
             ci[n] = _profile_interval(n, names, est, lower[n], upper[n], std_errors[n], target, solve)
             method[n] = "profile"
+            if ci[n] == (lower[n], upper[n]):
+                warnings.append(f"{n} not identified by this record (its profile interval is its whole range "
+                                f"[{lower[n]:.4g}, {upper[n]:.4g}])")
         if rel > PROFILE_RELATIVE_SE and not at_bound:
             warnings.append(f"{n} is poorly determined (standard error {rel:.0%} of the estimate)")
-    if "superstructure_period" in names and est["superstructure_period"] - lower["superstructure_period"] <= \
-            2.0 * std_errors.get("superstructure_period", 0.0):
+    if "superstructure_period" in names and "superstructure_period" not in unseen and \
+            est["superstructure_period"] - lower["superstructure_period"] <= 2.0 * std_errors["superstructure_period"]:
         warnings.append(f"superstructure_period at its lower bound ({SUPERSTRUCTURE_PERIOD_MIN:g} s): the record "
                         "does not resolve a superstructure this stiff (it moves with the isolation layer), and "
                         "the rigid model is this fit's limit: fit model='linear' and compare_models")
