@@ -531,7 +531,8 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
         parts of the combined decrement law, d0 and the release from the record), the bilinear model from
         the hysteresis loop of the acceleration channel (:func:`quickrelease.decay.bilinear_loop`: k2, Q,
         c from the loading branches, k1 and F_s from the elastic unloading after each reversal), and each
-        from a few more starts that split the dissipation otherwise, keeping the lowest chi-square. The
+        from a few more starts that split the dissipation otherwise, keeping the lowest chi-square, then
+        polished (restarts into a neighbouring piece of the misfit where it lies lower, ``_polish``). The
         bilinear model's misfit has local minima (the count of half-cycles before the sliders stick changes
         in jumps, and friction and yield force act alike on the soft branch): without an acceleration
         channel its start comes from the secant periods of the decay only, which may not find the right
