@@ -228,7 +228,7 @@ def test_coverage_bilinear():
     95% intervals hold the truth for every parameter in the binomial band, pooled at least 92%. Measured
     over seeds 0-119: pooled 94.8% (the physical parameters 95.3%); period 116, k2/k1 116, F_y 114, zeta
     114, F_s 112, d0 113, release 116, LVDT zero 114 and accelerometer zero 109 of 120 (the band for 120:
-    106-119; z-score RMS 0.82-1.09); 4.7 s of CPU a seed on a loaded machine. The CI's one seed holds every
+    105-120; z-score RMS 0.82-1.09); 4.7 s of CPU a seed on a loaded machine. The CI's one seed holds every
     parameter."""
     n = 200 if SLOW else 1
     k1, k2, Fy, zeta, Fs, d0 = BILINEAR
