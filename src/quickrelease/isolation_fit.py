@@ -501,6 +501,141 @@ class _Misfit:
         return J
 
 
+def _noise_levels(channels, t_r0: float) -> tuple[dict[str, float], dict[str, str], bool]:
+    """The noise level [SI] of each channel and where it came from: given; else the scatter of the quiet
+    segment before the release ``t_r0`` (:func:`_quiet_noise`); else the channel's spread, a first guess
+    for the weights that the fit replaces by the residuals' scatter. Also whether every level is known
+    (``absolute``: the covariance is not rescaled by the reduced chi-square)."""
+    noise, source = {}, {}
+    for ch in channels:
+        if ch.noise is not None:
+            noise[ch.name], source[ch.name] = ch.noise, "given"
+        else:
+            q = _quiet_noise(ch, t_r0)
+            if q is not None:
+                noise[ch.name], source[ch.name] = q, "pre-release segment"
+    absolute = len(noise) == len(channels)
+    for ch in channels:  # unknown: the spread of the channel, rescaled by the reduced chi-square below
+        if ch.name not in noise:
+            noise[ch.name], source[ch.name] = float(np.std(ch.values)) or 1.0, "residuals"
+    return noise, source, absolute
+
+
+def _initial_values(model: str, mass: float, channels, t_r0: float, fixed: dict[str, float],
+                    noise: dict[str, float], superstructure_mass: float | None):
+    """The start of the fit from the record: the pushed displacement d0 (the displacement channel's median
+    before the release, or the fixed one), each channel's offset (its median before the release; 0 for a
+    displacement), the model's parameters from the decay analysis or the hysteresis loop (:func:`_start`),
+    and for the linear model the displacement sensor's zero from the decay law's rest reading. Returns the
+    start values, the displacement channel (or None), d0 [m] and the bilinear loop's standard error of
+    F_s (or None)."""
+    # the pushed displacement and the offsets before the release
+    xch = next((c for c in channels if c.kind == "x"), None) or next(
+        (c for c in channels if c.kind == "x_roof"), None)  # the roof rests at d0 too before the release
+    offsets0 = {}
+    for ch in channels:
+        pre = ch.values[ch.t < t_r0]
+        offsets0[ch.name] = float(np.median(pre)) if (pre.size >= 3 and ch.kind not in ("x", "x_roof")) else 0.0
+    d0 = 0.0
+    if xch is not None:
+        pre = xch.values[xch.t < t_r0]
+        d0 = float(np.median(pre)) if pre.size >= 3 else float(xch.values[0])
+    if "d0" in fixed:
+        d0 = float(fixed["d0"])
+    if d0 == 0.0:
+        raise ParameterError("d0", d0, "a non-zero pushed displacement (give a displacement channel or fixed d0)",
+                             "m")
+    p0 = _start(model, mass, channels, t_r0, d0, noise, superstructure_mass)
+    rest = p0.pop("rest", None)
+    friction_se = p0.pop("friction_se", None)  # of the bilinear loop's F_s: the spread of its multi-start
+    p0.update(d0=d0, release_time=t_r0)
+    for ch in channels:
+        if ch.offset:
+            p0[f"offset_{ch.name}"] = offsets0[ch.name]
+    if (model == "linear" and rest is not None and xch is not None and xch.offset and "d0" not in fixed
+            and abs(rest) < 0.5 * abs(d0)):
+        # the displacement sensor's zero: the decay law's rest reading, not 0 (the pushed level is d0 plus
+        # that zero, and a start with the zero off by a few noise levels can settle in a wrong count of
+        # half-cycles before the sliders stick); the law is exact for the linear model only
+        p0[f"offset_{xch.name}"], p0["d0"] = rest, d0 - rest
+    return p0, xch, d0, friction_se
+
+
+def _start_points(model: str, mass: float, names: list[str], values: dict[str, float], fixed: dict[str, float],
+                  start: dict[str, float] | None, from_decay: dict[str, float], friction_se: float | None,
+                  xch, d0: float, misfit: _Misfit) -> list[dict[str, float]]:
+    """The multi-start's start points, the first the start ``values`` (given or from the record)."""
+    # The sliders' stick ends the motion at one reversal or another, so the misfit jumps where the count
+    # of half-cycles changes and a local search can settle in the wrong count's basin; the friction is
+    # also traded against the damping (linear) and against the yield force (bilinear: both act alike on
+    # the soft branch). Several splits of the dissipation are tried as starts and the best fit kept.
+    starts = [dict(values)]
+    if model == "linear" and start:  # design values off by 15-25% can lead into the wrong basin: the decay's
+        starts.append({**from_decay, **fixed})  # start (cheap for the linear model) is tried beside them
+    if "friction" in names:
+        if model in ("linear", "2dof") and "damping_ratio" in names:
+            k = mass * (2.0 * math.pi / values["period"]) ** 2
+            starts.append({**values, "friction": max(values["friction"], 0.02 * k * abs(d0)),
+                           "damping_ratio": 0.5 * values["damping_ratio"]})
+            # and the first half-cycle's decrement d0 - |x1| taken by the sliders alone (2 F_s / k per
+            # half-cycle), by the damper alone (|x1| = d0 exp(-pi zeta)) and half by each: a start in the
+            # right basin where the decay analysis found no law
+            # Eleven shares (0, 0.1, ..., 1) are scored by their misfit at the start (one model evaluation
+            # each) and the three lowest are tried: the basin of the right count of half-cycles can be
+            # narrow in the share (the shipped example's record, 3 half-cycles: only shares near 0.63 lead
+            # there, and the three shares 0, 0.5 and 1 tried before all missed it)
+            x1 = _first_peak(xch, values["release_time"], values["period"], d0) if xch is not None else None
+            if x1 is not None and 0.0 < x1 < abs(d0):
+                drop = abs(d0) - x1
+                splits = []
+                for share in np.linspace(0.0, 1.0, 11):
+                    zeta = -math.log1p(-(1.0 - share) * drop / abs(d0)) / math.pi
+                    trial = {**values, "friction": share * 0.5 * k * drop,
+                             "damping_ratio": float(np.clip(zeta, 0.002, 0.5))}
+                    r0 = misfit.residuals(np.array([trial[n] for n in names]), names, values)
+                    splits.append((float(np.sum(r0 * r0)) if np.all(np.isfinite(r0)) else math.inf, trial))
+                splits.sort(key=lambda pair: pair[0])
+                starts.extend(trial for _, trial in splits[:3])
+        elif model == "bilinear" and "yield_force" in names:
+            if friction_se is not None and not start:
+                # the loop's F_s = Q - f_p is its least certain value: f_p comes from the jumps of the gap at
+                # the reversals, Q from the loading branches, which hold the displacement sensor's zero e as
+                # k2 e where they run in one direction only. F_s two standard errors either way, F_y kept
+                for shift in (-2.0 * friction_se, 2.0 * friction_se):
+                    starts.append({**values, "friction": max(values["friction"] + shift, 0.0)})
+            # and splits of the dissipation between the sliders and the rubber
+            total = values["friction"] + values["yield_force"]
+            for share in (0.05, 0.2, 0.4):
+                starts.append({**values, "friction": share * total, "yield_force": (1.0 - share) * total})
+    return starts
+
+
+def _profile_step(names: list[str], physical: list[str], unseen: set[str], est: dict[str, float],
+                  std_errors: dict[str, float], lower: dict[str, float], upper: dict[str, float],
+                  profile: bool | None, chi2: float, tq: float, scale: float, solve,
+                  ci: dict[str, tuple[float, float]], method: dict[str, str]) -> list[str]:
+    """Profile-likelihood intervals (into ``ci`` and ``method``) for the physical parameters that want one
+    (``profile`` True; or None and at a bound or with a relative standard error above
+    ``PROFILE_RELATIVE_SE``), the chi-square target ``chi2 + t^2 scale``. Returns the warnings."""
+    warnings = []
+    for n in physical:
+        if n not in names or n in unseen:
+            continue
+        at_bound = est[n] - lower[n] <= 2.0 * std_errors[n] or upper[n] - est[n] <= 2.0 * std_errors[n]
+        rel = std_errors[n] / abs(est[n]) if est[n] != 0 else math.inf
+        want = profile if profile is not None else (at_bound or rel > PROFILE_RELATIVE_SE)
+        if want and len(names) > 1:
+            target = chi2 + tq**2 * scale
+            ci[n] = _profile_interval(n, names, est, lower[n], upper[n], std_errors[n], target, solve)
+            method[n] = "profile"
+            if ci[n] == (lower[n], upper[n]):
+                warnings.append(f"{n} not identified by this record (its profile interval is its whole range "
+                                f"[{lower[n]:.4g}, {upper[n]:.4g}])")
+        if rel > PROFILE_RELATIVE_SE and not at_bound:
+            warnings.append(f"{n} is poorly determined (standard error {rel:.0%} of the estimate)")
+    return warnings
+
+
 def fit_isolation(channels, mass: float, model: str = "linear", *, release_time: float | None = None,
                   fit_release_time: bool = True, start: dict[str, float] | None = None,
                   fixed: dict[str, float] | None = None, profile: bool | None = None,
@@ -571,48 +706,8 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
     t_r0 = float(release_time) if release_time is not None else _detect_release(channels)
     if not fit_release_time:
         fixed["release_time"] = t_r0
-    # noise levels: given, or from the quiet segment before the release
-    noise, source = {}, {}
-    for ch in channels:
-        if ch.noise is not None:
-            noise[ch.name], source[ch.name] = ch.noise, "given"
-        else:
-            q = _quiet_noise(ch, t_r0)
-            if q is not None:
-                noise[ch.name], source[ch.name] = q, "pre-release segment"
-    absolute = len(noise) == len(channels)
-    for ch in channels:  # unknown: the spread of the channel, rescaled by the reduced chi-square below
-        if ch.name not in noise:
-            noise[ch.name], source[ch.name] = float(np.std(ch.values)) or 1.0, "residuals"
-    # the pushed displacement and the offsets before the release
-    xch = next((c for c in channels if c.kind == "x"), None) or next(
-        (c for c in channels if c.kind == "x_roof"), None)  # the roof rests at d0 too before the release
-    offsets0 = {}
-    for ch in channels:
-        pre = ch.values[ch.t < t_r0]
-        offsets0[ch.name] = float(np.median(pre)) if (pre.size >= 3 and ch.kind not in ("x", "x_roof")) else 0.0
-    d0 = 0.0
-    if xch is not None:
-        pre = xch.values[xch.t < t_r0]
-        d0 = float(np.median(pre)) if pre.size >= 3 else float(xch.values[0])
-    if "d0" in fixed:
-        d0 = float(fixed["d0"])
-    if d0 == 0.0:
-        raise ParameterError("d0", d0, "a non-zero pushed displacement (give a displacement channel or fixed d0)",
-                             "m")
-    p0 = _start(model, mass, channels, t_r0, d0, noise, superstructure_mass)
-    rest = p0.pop("rest", None)
-    friction_se = p0.pop("friction_se", None)  # of the bilinear loop's F_s: the spread of its multi-start
-    p0.update(d0=d0, release_time=t_r0)
-    for ch in channels:
-        if ch.offset:
-            p0[f"offset_{ch.name}"] = offsets0[ch.name]
-    if (model == "linear" and rest is not None and xch is not None and xch.offset and "d0" not in fixed
-            and abs(rest) < 0.5 * abs(d0)):
-        # the displacement sensor's zero: the decay law's rest reading, not 0 (the pushed level is d0 plus
-        # that zero, and a start with the zero off by a few noise levels can settle in a wrong count of
-        # half-cycles before the sliders stick); the law is exact for the linear model only
-        p0[f"offset_{xch.name}"], p0["d0"] = rest, d0 - rest
+    noise, source, absolute = _noise_levels(channels, t_r0)
+    p0, xch, d0, friction_se = _initial_values(model, mass, channels, t_r0, fixed, noise, superstructure_mass)
     from_decay = dict(p0)  # the start of the model-free decay analysis, before the caller's start values
     p0.update(start or {})
     physical = _physical_names(model)
@@ -644,48 +739,7 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
         return least_squares(residuals, x0, bounds=(lo, hi), args=(free, base), x_scale="jac", jac=jacobian,
                              diff_step=1e-4, xtol=tol, ftol=tol, gtol=tol, max_nfev=400 * max(len(free), 1))
 
-    # The sliders' stick ends the motion at one reversal or another, so the misfit jumps where the count
-    # of half-cycles changes and a local search can settle in the wrong count's basin; the friction is
-    # also traded against the damping (linear) and against the yield force (bilinear: both act alike on
-    # the soft branch). Several splits of the dissipation are tried as starts and the best fit kept.
-    starts = [dict(values)]
-    if model == "linear" and start:  # design values off by 15-25% can lead into the wrong basin: the decay's
-        starts.append({**from_decay, **fixed})  # start (cheap for the linear model) is tried beside them
-    if "friction" in names:
-        if model in ("linear", "2dof") and "damping_ratio" in names:
-            k = mass * (2.0 * math.pi / values["period"]) ** 2
-            starts.append({**values, "friction": max(values["friction"], 0.02 * k * abs(d0)),
-                           "damping_ratio": 0.5 * values["damping_ratio"]})
-            # and the first half-cycle's decrement d0 - |x1| taken by the sliders alone (2 F_s / k per
-            # half-cycle), by the damper alone (|x1| = d0 exp(-pi zeta)) and half by each: a start in the
-            # right basin where the decay analysis found no law
-            # Eleven shares (0, 0.1, ..., 1) are scored by their misfit at the start (one model evaluation
-            # each) and the three lowest are tried: the basin of the right count of half-cycles can be
-            # narrow in the share (the shipped example's record, 3 half-cycles: only shares near 0.63 lead
-            # there, and the three shares 0, 0.5 and 1 tried before all missed it)
-            x1 = _first_peak(xch, values["release_time"], values["period"], d0) if xch is not None else None
-            if x1 is not None and 0.0 < x1 < abs(d0):
-                drop = abs(d0) - x1
-                splits = []
-                for share in np.linspace(0.0, 1.0, 11):
-                    zeta = -math.log1p(-(1.0 - share) * drop / abs(d0)) / math.pi
-                    trial = {**values, "friction": share * 0.5 * k * drop,
-                             "damping_ratio": float(np.clip(zeta, 0.002, 0.5))}
-                    r0 = misfit.residuals(np.array([trial[n] for n in names]), names, values)
-                    splits.append((float(np.sum(r0 * r0)) if np.all(np.isfinite(r0)) else math.inf, trial))
-                splits.sort(key=lambda pair: pair[0])
-                starts.extend(trial for _, trial in splits[:3])
-        elif model == "bilinear" and "yield_force" in names:
-            if friction_se is not None and not start:
-                # the loop's F_s = Q - f_p is its least certain value: f_p comes from the jumps of the gap at
-                # the reversals, Q from the loading branches, which hold the displacement sensor's zero e as
-                # k2 e where they run in one direction only. F_s two standard errors either way, F_y kept
-                for shift in (-2.0 * friction_se, 2.0 * friction_se):
-                    starts.append({**values, "friction": max(values["friction"] + shift, 0.0)})
-            # and splits of the dissipation between the sliders and the rubber
-            total = values["friction"] + values["yield_force"]
-            for share in (0.05, 0.2, 0.4):
-                starts.append({**values, "friction": share * total, "yield_force": (1.0 - share) * total})
+    starts = _start_points(model, mass, names, values, fixed, start, from_decay, friction_se, xch, d0, misfit)
     res = None
     for trial in starts:
         r_try = solve(names, values, [trial[n] for n in names])
@@ -748,21 +802,8 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
         if n in unseen:
             ci[n], method[n] = (math.nan, math.nan), "not identified"
             warnings.append(f"{n} not identified by this record (standard error inf, no interval)")
-    for n in physical:
-        if n not in names or n in unseen:
-            continue
-        at_bound = est[n] - lower[n] <= 2.0 * std_errors[n] or upper[n] - est[n] <= 2.0 * std_errors[n]
-        rel = std_errors[n] / abs(est[n]) if est[n] != 0 else math.inf
-        want = profile if profile is not None else (at_bound or rel > PROFILE_RELATIVE_SE)
-        if want and len(names) > 1:
-            target = chi2 + tq**2 * scale
-            ci[n] = _profile_interval(n, names, est, lower[n], upper[n], std_errors[n], target, solve)
-            method[n] = "profile"
-            if ci[n] == (lower[n], upper[n]):
-                warnings.append(f"{n} not identified by this record (its profile interval is its whole range "
-                                f"[{lower[n]:.4g}, {upper[n]:.4g}])")
-        if rel > PROFILE_RELATIVE_SE and not at_bound:
-            warnings.append(f"{n} is poorly determined (standard error {rel:.0%} of the estimate)")
+    warnings += _profile_step(names, physical, unseen, est, std_errors, lower, upper, profile, chi2, tq, scale,
+                              solve, ci, method)
     if "superstructure_period" in names and "superstructure_period" not in unseen and \
             est["superstructure_period"] - lower["superstructure_period"] <= 2.0 * std_errors["superstructure_period"]:
         warnings.append(f"superstructure_period at its lower bound ({SUPERSTRUCTURE_PERIOD_MIN:g} s): the record "
