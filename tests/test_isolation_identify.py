@@ -103,3 +103,20 @@ def test_device_fit_writes_a_parameter_it_cannot_see_as_null(monkeypatch):
     assert any(w.startswith(f"{last} not identified by this record") for w in data["warnings"])
     table = runner.invoke(app, ["fit", str(EXAMPLES / "fit.toml")])
     assert table.exit_code == 0 and "not identified" in table.output, table.output
+
+
+def test_campaign_release_with_a_parameter_not_identified():
+    """A campaign's release (building_campaign._estimates) on the never-yielding fit: F_y keeps SE inf and no
+    interval, the quantities that do not depend on it (the secant period and equivalent damping at d0: the
+    spring is elastic there) keep finite standard errors by the delta method (the covariance with an infinite
+    variance gave NaN for all of them), and the release's JSON is valid."""
+    from quickrelease.building_campaign import BuildingRelease, _estimates
+
+    fit = _never_yielding().fit
+    quantities = ("secant_period", "equivalent_damping_ratio", "yield_force", "damping_ratio")
+    release = _estimates(BuildingRelease("r1", tuple(fit.channels)), fit, quantities)
+    assert math.isinf(release.std_errors["yield_force"]) and release.interval_method["yield_force"] == "not identified"
+    for q in ("secant_period", "equivalent_damping_ratio", "damping_ratio"):
+        assert math.isfinite(release.std_errors[q]) and release.std_errors[q] > 0.0, (q, release.std_errors)
+    summary = json.loads(json.dumps(release.summary(), allow_nan=False))
+    assert summary["std_errors"]["yield_force"] is None and summary["ci95"]["yield_force"] == [None, None]

@@ -254,7 +254,9 @@ def _estimates(release: BuildingRelease, fit: IsolationFit, quantities: tuple[st
         for i, n in enumerate(fit.names):  # central differences on the free parameters
             if n.startswith("offset_") or n == "release_time":
                 continue
-            h = 1e-6 * max(abs(params[n]), se_known[i], 1e-12)
+            # relative to the value (a standard error far above it, as of a parameter the record hardly sees,
+            # would step out of the model's domain); to the standard error for a value of 0
+            h = 1e-6 * max(abs(params[n]) if params[n] != 0.0 else se_known[i], 1e-12)
             hi, lo = dict(params), dict(params)
             hi[n] += h
             lo[n] -= h
