@@ -102,26 +102,38 @@ def physical_estimates(fit: IsolationFit) -> dict[str, Any]:
     ``linear``/``2dof``: ``period_s``; ``bilinear``: ``k1_N_m = m (2 pi / T1)^2`` (its interval the image
     of T1's, k1 decreasing in T1), ``k2_N_m = (k2/k1) k1`` (interval by the delta method on ln k2 with the
     correlation of k2/k1 and T1), ``Fy_N``; all: ``damping_ratio``, ``friction_N``. A parameter held fixed
-    has its value and no interval (None).
+    has its value and no interval (None), and so has one the record does not identify (its key listed in
+    ``not_identified``).
     """
     est, ci, model = fit.estimates, fit.ci95, fit.model
     iso = fit.isolation()
     out: dict[str, Any] = {}
 
+    blind = {n for n, how in fit.interval_method.items() if how == "not identified"}
+    out["not_identified"] = []
+
     def put(key: str, name: str, value: float | None = None) -> None:
         out[key] = float(est[name]) if name in est else value
-        out[f"{key}_ci95"] = [float(v) for v in ci[name]] if name in ci else None
+        out[f"{key}_ci95"] = [float(v) for v in ci[name]] if name in ci and name not in blind else None
+        if name in blind:
+            out["not_identified"].append(key)
 
     if model == "bilinear":
         m = fit.mass
         out["k1_N_m"] = float(iso.stiffness)
         out["k1_N_m_ci95"] = None
-        if "period" in ci:
+        if "period" in blind:
+            out["not_identified"].append("k1_N_m")
+        elif "period" in ci:
             lo, hi = ci["period"]
             out["k1_N_m_ci95"] = [m * (2 * math.pi / hi) ** 2 if hi > 0 else 0.0,
                                   m * (2 * math.pi / lo) ** 2 if lo > 0 else math.inf]
         out["k2_N_m"] = float(iso.k2)
-        out["k2_N_m_ci95"] = _k2_interval(fit)
+        k2_ci = None if blind & {"period", "stiffness_ratio"} else _k2_interval(fit)
+        if blind & {"period", "stiffness_ratio"} or (k2_ci is not None and not math.isfinite(k2_ci[1])):
+            k2_ci = None  # the record does not bound k2
+            out["not_identified"].append("k2_N_m")
+        out["k2_N_m_ci95"] = k2_ci
         put("Fy_N", "yield_force", float(iso.yield_force))
     else:
         put("period_s", "period", float(iso.period))
@@ -145,6 +157,8 @@ def _k2_interval(fit: IsolationFit) -> list[float] | None:
         var += (2.0 * se_T / T) ** 2 - 2.0 * (2.0 / T) * (1.0 / r) * rho * se_r * se_T
     k2 = fit.isolation().k2
     half = float(stats.t.ppf(0.975, max(fit.dof, 1))) * math.sqrt(max(var, 0.0))
+    if half > 700.0:  # beyond the float range: the record does not bound k2 (JSON: [0, null])
+        return [0.0, math.inf]
     return [k2 * math.exp(-half), k2 * math.exp(half)]
 
 

@@ -237,7 +237,9 @@ def _estimates(release: BuildingRelease, fit: IsolationFit, quantities: tuple[st
         params["d0"] = float(release.d0)
     tq = float(stats.t.ppf(0.975, max(fit.dof, 1)))
     se_all = np.array([fit.std_errors[n] for n in fit.names])
-    cov = fit.correlation * np.outer(se_all, se_all)
+    blind = ~np.isfinite(se_all)  # not identified by the record: a quantity that depends on one has SE inf
+    se_known = np.where(blind, 0.0, se_all)
+    cov = fit.correlation * np.outer(se_known, se_known)
     values, ses, ci, method = {}, {}, {}, {}
     for q in quantities:
         if q in _FITTED and q in fit.estimates:
@@ -252,7 +254,9 @@ def _estimates(release: BuildingRelease, fit: IsolationFit, quantities: tuple[st
         for i, n in enumerate(fit.names):  # central differences on the free parameters
             if n.startswith("offset_") or n == "release_time":
                 continue
-            h = 1e-6 * max(abs(params[n]), se_all[i], 1e-12)
+            # relative to the value (a standard error far above it, as of a parameter the record hardly sees,
+            # would step out of the model's domain); to the standard error for a value of 0
+            h = 1e-6 * max(abs(params[n]) if params[n] != 0.0 else se_known[i], 1e-12)
             hi, lo = dict(params), dict(params)
             hi[n] += h
             lo[n] -= h
@@ -261,7 +265,7 @@ def _estimates(release: BuildingRelease, fit: IsolationFit, quantities: tuple[st
                            - derived_quantity(q, fit.model, fit.mass, lo)) / (2.0 * h)
             except ParameterError:  # at a bound (friction 0): one-sided
                 grad[i] = (derived_quantity(q, fit.model, fit.mass, hi) - values[q]) / h
-        ses[q] = math.sqrt(max(float(grad @ cov @ grad), 0.0))
+        ses[q] = math.inf if np.any(grad[blind] != 0.0) else math.sqrt(max(float(grad @ cov @ grad), 0.0))
         ci[q] = (values[q] - tq * ses[q], values[q] + tq * ses[q])
         method[q] = "delta"
     return ReleaseEstimates(name=release.name, d0=params["d0"], d0_given=release.d0, force=release.force,

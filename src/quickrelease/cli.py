@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import math
 import sys
 from collections.abc import Callable, Iterator
 from functools import wraps
@@ -702,7 +703,9 @@ def fit_command(
     rows = []
     for name in fit.names:
         lo, hi = fit.ci95[name]
-        rows.append((name, f"{fit.estimates[name]:.6g}", f"{fit.std_errors[name]:.3g}", f"[{lo:.6g}, {hi:.6g}]"))
+        rows.append((name, f"{fit.estimates[name]:.6g}", f"{fit.std_errors[name]:.3g}", f"[{lo:.6g}, {hi:.6g}]")
+                    if math.isfinite(fit.std_errors[name]) else (name, f"{fit.estimates[name]:.6g}", "inf",
+                                                                 "not identified"))
     chi2 = "n/a (no degrees of freedom)" if fit.chi2_reduced is None else f"{fit.chi2_reduced:.4g}"
     title = f"Fit of {case.title}: {'converged' if fit.converged else 'NOT converged'}, " \
             f"reduced chi-square {chi2}, start values from {fit.start_source}"
@@ -771,7 +774,8 @@ def _building_tables(result, summary: dict[str, Any], title: str) -> None:
     for key, unit in units.items():
         if key in summary and summary[key] is not None:
             ci = summary.get(f"{key}_ci95")
-            interval = "-" if not ci else f"[{_fmt(ci[0])}, {_fmt(ci[1])}]"
+            interval = "not identified" if key in summary.get("not_identified", ()) else \
+                "-" if not ci else f"[{_fmt(ci[0])}, {_fmt(ci[1])}]"
             rows.append((key, f"{summary[key]:.6g}", interval, unit))
     state = "converged" if fit.converged else "NOT converged"
     _table(f"{title}: {fit.model} isolation model, {state}, reduced chi-square {fit.chi2_reduced:.4g}, "
@@ -859,7 +863,8 @@ def _building_campaign_tables(result) -> None:
         cells = [r.name, f"{abs(r.d0) * 1e2:.4g}", "" if r.force is None else f"{r.force / 1e3:.4g}"]
         for q in qs:
             scale = QUANTITIES[q][2]
-            cells.append(f"{r.values[q] * scale:#.5g} ± {r.std_errors[q] * scale:.2g}")
+            cells.append(f"{r.values[q] * scale:#.5g} ± {r.std_errors[q] * scale:.2g}" if math.isfinite(r.std_errors[q])
+                         else f"{r.values[q] * scale:#.5g} (not identified)")
         rows.append(tuple(cells))
     _table(f"{result.title}: the {result.model} isolation system per release (± standard error)", rows,
            ("release", "|d0| [cm]", "P [kN]", *(f"{QUANTITIES[q][4]} [{QUANTITIES[q][3]}]" for q in qs)))

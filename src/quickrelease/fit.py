@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from . import dynamics
-from ._lsq import jacobian_covariance
+from ._lsq import identified_covariance
 from .case import Case, FitOptions
 from .device import Device
 from .display import Summarised
@@ -160,7 +160,11 @@ class FitResult(Summarised):
         return {n.removeprefix("offset_"): v for n, v in self.estimates.items() if n.startswith("offset_")}
 
     def summary(self) -> dict[str, Any]:
-        """JSON-ready summary: the keys of ``quickrelease fit --json``."""
+        """JSON-ready summary: the keys of ``quickrelease fit --json`` (a standard error or interval the record
+        does not identify, inf or nan, as None)."""
+        return _json_safe(self._summary())
+
+    def _summary(self) -> dict[str, Any]:
         def pair(name):
             lo, hi = self.ci95[name]
             return [lo, hi]
@@ -189,6 +193,17 @@ class FitResult(Summarised):
             out["observations"] = {k: {"observed": o, "sigma": s, "fitted": f}
                                    for k, (o, s, f) in self.observations.items()}
         return out
+
+
+def _json_safe(value: Any) -> Any:
+    """NaN and infinities as None (JSON has none), recursively."""
+    if isinstance(value, dict):
+        return {k: _json_safe(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_json_safe(v) for v in value]
+    if isinstance(value, float | np.floating):
+        return float(value) if math.isfinite(value) else None
+    return value
 
 
 def observation_sigma(case: Case) -> dict[str, float]:
@@ -711,7 +726,7 @@ def fit_record(case: Case, record: Record | None = None, *, options: FitOptions 
     dof = m - p
     chi2 = float(r @ r)
     chi2_red = chi2 / dof if dof > 0 else None
-    cov = jacobian_covariance(J)  # columns scaled first: F1, F2 [N], E_S [J], c, t_r [s], offsets
+    cov, blind = identified_covariance(J)  # columns scaled first: F1, F2 [N], E_S [J], c, t_r [s], offsets
     if not options.absolute_sigma and chi2_red is not None:
         cov = cov * chi2_red
     se = np.sqrt(np.maximum(np.diag(cov), 0.0))
@@ -729,7 +744,7 @@ def fit_record(case: Case, record: Record | None = None, *, options: FitOptions 
         lo, hi = est[n] - q * ses[n], est[n] + q * ses[n]
         if n in ("F1", "F2", "energy", "mass_factor"):
             lo = max(lo, 0.0)
-        ci[n] = (lo, hi)
+        ci[n] = (lo, hi) if math.isfinite(ses[n]) else (math.nan, math.nan)
     model, fi = problem.model(x)
     t_stop = fi.stop_time()
     values = problem.values(x)
@@ -740,7 +755,9 @@ def fit_record(case: Case, record: Record | None = None, *, options: FitOptions 
     rms = {n: float(np.sqrt(np.mean((model[n] - ch.values) ** 2))) for n, ch in problem.channels.items()}
     fitted_obs = {"alpha_final": fi.alpha_final, "stop_time": t_stop}
     obs = {n: (o, s, float(fitted_obs[n])) for n, (o, s) in problem.obs.items()}
-    warns = _warnings(names, est, ses, corr, cond, x, lower, upper, problem)
+    warns = [f"{n} not identified by this record (standard error inf, no interval)"
+             for n, b in zip(names, blind, strict=True) if b]
+    warns += _warnings(names, est, ses, corr, cond, x, lower, upper, problem)
     fixed = {k: v for k, v in problem.fixed.items() if k not in est}
     return FitResult(
         names=names, estimates=est, std_errors=ses, ci95=ci, correlation=corr, condition_number=cond,

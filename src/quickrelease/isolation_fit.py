@@ -43,7 +43,7 @@ import numpy as np
 from scipy import stats
 from scipy.optimize import brentq, least_squares
 
-from ._lsq import jacobian_covariance
+from ._lsq import identified_covariance, jacobian_covariance
 from .building import RECORD_CHANNELS, Isolation, TwoDOF, free_vibration
 from .errors import ParameterError, QuickReleaseError
 
@@ -106,7 +106,8 @@ class IsolationFit:
     std_errors: dict[str, float]
     ci95: dict[str, tuple[float, float]]
     interval_method: dict[str, str]
-    """``"jacobian"`` or ``"profile"`` per parameter."""
+    """``"jacobian"``, ``"profile"`` or ``"not identified"`` per parameter (the last: standard error inf and
+    interval (nan, nan), the record does not see the parameter)."""
     correlation: np.ndarray
     condition_number: float
     noise: dict[str, float]
@@ -434,6 +435,7 @@ class _Misfit:
         self.channels, self.mass, self.model, self.superstructure_mass = channels, mass, model, superstructure_mass
         self.lower, self.upper = lower, upper
         self.t_last = max(float(c.t[-1]) for c in channels)
+        self.dt = min(float(np.median(np.diff(c.t))) for c in channels)  # the finest sampling interval [s]
         self.sig = np.concatenate([np.full(c.t.size, noise[c.name]) for c in channels])
         self.data = np.concatenate([c.values for c in channels])
         # the model is evaluated once at the union of the channels' times (channels often share an axis)
@@ -499,76 +501,11 @@ class _Misfit:
         return J
 
 
-def fit_isolation(channels, mass: float, model: str = "linear", *, release_time: float | None = None,
-                  fit_release_time: bool = True, start: dict[str, float] | None = None,
-                  fixed: dict[str, float] | None = None, profile: bool | None = None,
-                  superstructure_mass: float | None = None) -> IsolationFit:
-    """Fit the isolation system (:mod:`quickrelease.building`) to records of the isolation layer.
-
-    Parameters
-    ----------
-    channels : sequence of BuildingChannel
-        Displacement (x [m]), velocity (v [m/s]) and/or acceleration (a [m/s^2]) of the isolation layer,
-        and of the roof (x_roof [m], v_roof [m/s], a_roof [m/s^2]: the 2-DOF model's roof mass; the rigid
-        models' roof moves with the layer), each on its own time axis, the pre-release segment included
-        where there is one.
-    mass : float
-        Mass carried by the isolation layer [kg] (the whole building).
-    model : {"linear", "bilinear", "2dof"}
-        ``2dof``: the flexible superstructure of :class:`quickrelease.building.TwoDOF`, parameters period
-        T [s] (of the whole mass on the isolators), damping_ratio, friction [N], superstructure_period T_s
-        [s] (fixed-base) and superstructure_damping_ratio; needs ``superstructure_mass``.
-    release_time : float, optional
-        Start value (or, with ``fit_release_time=False``, the value) of the release instant [s, record
-        time]; detected where the record leaves its initial rest when not given.
-    start, fixed : dict, optional
-        Start values, and parameters held fixed (by name: period, damping_ratio, friction,
-        stiffness_ratio, yield_force, superstructure_period, superstructure_damping_ratio, d0, release_time,
-        offset_<channel>). Without them the fit starts from the record itself: the linear model from the
-        decay analysis (period from the turning-point times, F_s and zeta from the linear and geometric
-        parts of the combined decrement law, d0 and the release from the record), the bilinear model from
-        the hysteresis loop of the acceleration channel (:func:`quickrelease.decay.bilinear_loop`: k2, Q,
-        c from the loading branches, k1 and F_s from the elastic unloading after each reversal), and each
-        from a few more starts that split the dissipation otherwise, keeping the lowest chi-square. The
-        bilinear model's misfit has local minima (the count of half-cycles before the sliders stick changes
-        in jumps, and friction and yield force act alike on the soft branch): without an acceleration
-        channel its start comes from the secant periods of the decay only, which may not find the right
-        one, and the result then warns (give the bearings' design values as start values).
-    profile : bool, optional
-        Profile-likelihood intervals: True for every physical parameter, False never, None (default) for
-        those at a bound or with a relative standard error above ``PROFILE_RELATIVE_SE``.
-    superstructure_mass : float, optional
-        The roof mass m_s [kg] of the 2-DOF model, in (0, mass) (given, not fitted: the record fixes the
-        parameters per unit mass only).
-
-    Returns
-    -------
-    IsolationFit
-    """
-    channels = list(channels)
-    if not channels:
-        raise ParameterError("channels", "none", "at least one channel of the isolation layer")
-    if model not in FIT_MODELS:
-        raise ParameterError("model", model, "'linear', 'bilinear' or '2dof'")
-    mass = float(mass)
-    if not (math.isfinite(mass) and mass > 0):
-        raise ParameterError("mass", mass, "(0, inf)", "kg")
-    if model == "2dof":
-        ms = math.nan if superstructure_mass is None else float(superstructure_mass)
-        if not (math.isfinite(ms) and 0.0 < ms < mass):
-            raise ParameterError("superstructure_mass", superstructure_mass,
-                                 f"(0, mass) = (0, {mass:.6g}) kg (the 2dof model needs it)", "kg")
-        superstructure_mass = ms
-    else:
-        superstructure_mass = None
-    names_seen = [c.name for c in channels]
-    if len(set(names_seen)) != len(names_seen):
-        raise ParameterError("channels", ", ".join(names_seen), "distinct channel names")
-    fixed = dict(fixed or {})
-    t_r0 = float(release_time) if release_time is not None else _detect_release(channels)
-    if not fit_release_time:
-        fixed["release_time"] = t_r0
-    # noise levels: given, or from the quiet segment before the release
+def _noise_levels(channels, t_r0: float) -> tuple[dict[str, float], dict[str, str], bool]:
+    """The noise level [SI] of each channel and where it came from: given; else the scatter of the quiet
+    segment before the release ``t_r0`` (:func:`_quiet_noise`); else the channel's spread, a first guess
+    for the weights that the fit replaces by the residuals' scatter. Also whether every level is known
+    (``absolute``: the covariance is not rescaled by the reduced chi-square)."""
     noise, source = {}, {}
     for ch in channels:
         if ch.noise is not None:
@@ -581,6 +518,17 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
     for ch in channels:  # unknown: the spread of the channel, rescaled by the reduced chi-square below
         if ch.name not in noise:
             noise[ch.name], source[ch.name] = float(np.std(ch.values)) or 1.0, "residuals"
+    return noise, source, absolute
+
+
+def _initial_values(model: str, mass: float, channels, t_r0: float, fixed: dict[str, float],
+                    noise: dict[str, float], superstructure_mass: float | None):
+    """The start of the fit from the record: the pushed displacement d0 (the displacement channel's median
+    before the release, or the fixed one), each channel's offset (its median before the release; 0 for a
+    displacement), the model's parameters from the decay analysis or the hysteresis loop (:func:`_start`),
+    and for the linear model the displacement sensor's zero from the decay law's rest reading. Returns the
+    start values, the displacement channel (or None), d0 [m] and the bilinear loop's standard error of
+    F_s (or None)."""
     # the pushed displacement and the offsets before the release
     xch = next((c for c in channels if c.kind == "x"), None) or next(
         (c for c in channels if c.kind == "x_roof"), None)  # the roof rests at d0 too before the release
@@ -610,37 +558,13 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
         # that zero, and a start with the zero off by a few noise levels can settle in a wrong count of
         # half-cycles before the sliders stick); the law is exact for the linear model only
         p0[f"offset_{xch.name}"], p0["d0"] = rest, d0 - rest
-    from_decay = dict(p0)  # the start of the model-free decay analysis, before the caller's start values
-    p0.update(start or {})
-    physical = _physical_names(model)
-    all_names = _parameter_names(model, channels)
-    unknown = sorted(set(fixed) - set(all_names))
-    if unknown:
-        raise ParameterError("fixed", unknown[0], ", ".join(all_names))
-    names = [n for n in all_names if n not in fixed]
-    values = {**p0, **fixed}
-    lower, upper = _bounds(channels, t_r0, values["period"])
-    misfit = _Misfit(channels, noise, mass, model, superstructure_mass, lower, upper)
-    sig, data = misfit.sig, misfit.data
+    return p0, xch, d0, friction_se
 
-    def unpack(theta, free=names, base=values) -> dict[str, float]:
-        return _unpack(theta, free, base)
 
-    def residuals(theta, free=names, base=values) -> np.ndarray:
-        return misfit.residuals(theta, free, base)
-
-    def jacobian(theta, free=names, base=values):
-        return misfit.jacobian(theta, free, base)
-
-    def solve(free, base, x0, tol=1e-12):
-        lo = np.array([lower.get(n, -math.inf) for n in free])
-        hi = np.array([upper.get(n, math.inf) for n in free])
-        x0 = np.clip(np.asarray(x0, dtype=float), lo, hi)
-        # central differences over a relative step of 1e-4: the misfit jumps where a piece boundary (a
-        # stick, a yield) passes a sample, so a step near the rounding level would see those jumps
-        return least_squares(residuals, x0, bounds=(lo, hi), args=(free, base), x_scale="jac", jac=jacobian,
-                             diff_step=1e-4, xtol=tol, ftol=tol, gtol=tol, max_nfev=400 * max(len(free), 1))
-
+def _start_points(model: str, mass: float, names: list[str], values: dict[str, float], fixed: dict[str, float],
+                  start: dict[str, float] | None, from_decay: dict[str, float], friction_se: float | None,
+                  xch, d0: float, misfit: _Misfit) -> list[dict[str, float]]:
+    """The multi-start's start points, the first the start ``values`` (given or from the record)."""
     # The sliders' stick ends the motion at one reversal or another, so the misfit jumps where the count
     # of half-cycles changes and a local search can settle in the wrong count's basin; the friction is
     # also traded against the damping (linear) and against the yield force (bilinear: both act alike on
@@ -683,6 +607,139 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
             total = values["friction"] + values["yield_force"]
             for share in (0.05, 0.2, 0.4):
                 starts.append({**values, "friction": share * total, "yield_force": (1.0 - share) * total})
+    return starts
+
+
+def _profile_step(names: list[str], physical: list[str], unseen: set[str], est: dict[str, float],
+                  std_errors: dict[str, float], lower: dict[str, float], upper: dict[str, float],
+                  profile: bool | None, chi2: float, tq: float, scale: float, solve,
+                  ci: dict[str, tuple[float, float]], method: dict[str, str]) -> list[str]:
+    """Profile-likelihood intervals (into ``ci`` and ``method``) for the physical parameters that want one
+    (``profile`` True; or None and at a bound or with a relative standard error above
+    ``PROFILE_RELATIVE_SE``), the chi-square target ``chi2 + t^2 scale``. Returns the warnings."""
+    warnings = []
+    for n in physical:
+        if n not in names or n in unseen:
+            continue
+        at_bound = est[n] - lower[n] <= 2.0 * std_errors[n] or upper[n] - est[n] <= 2.0 * std_errors[n]
+        rel = std_errors[n] / abs(est[n]) if est[n] != 0 else math.inf
+        want = profile if profile is not None else (at_bound or rel > PROFILE_RELATIVE_SE)
+        if want and len(names) > 1:
+            target = chi2 + tq**2 * scale
+            ci[n] = _profile_interval(n, names, est, lower[n], upper[n], std_errors[n], target, solve)
+            method[n] = "profile"
+            if ci[n] == (lower[n], upper[n]):
+                warnings.append(f"{n} not identified by this record (its profile interval is its whole range "
+                                f"[{lower[n]:.4g}, {upper[n]:.4g}])")
+        if rel > PROFILE_RELATIVE_SE and not at_bound:
+            warnings.append(f"{n} is poorly determined (standard error {rel:.0%} of the estimate)")
+    return warnings
+
+
+def fit_isolation(channels, mass: float, model: str = "linear", *, release_time: float | None = None,
+                  fit_release_time: bool = True, start: dict[str, float] | None = None,
+                  fixed: dict[str, float] | None = None, profile: bool | None = None,
+                  superstructure_mass: float | None = None) -> IsolationFit:
+    """Fit the isolation system (:mod:`quickrelease.building`) to records of the isolation layer.
+
+    Parameters
+    ----------
+    channels : sequence of BuildingChannel
+        Displacement (x [m]), velocity (v [m/s]) and/or acceleration (a [m/s^2]) of the isolation layer,
+        and of the roof (x_roof [m], v_roof [m/s], a_roof [m/s^2]: the 2-DOF model's roof mass; the rigid
+        models' roof moves with the layer), each on its own time axis, the pre-release segment included
+        where there is one.
+    mass : float
+        Mass carried by the isolation layer [kg] (the whole building).
+    model : {"linear", "bilinear", "2dof"}
+        ``2dof``: the flexible superstructure of :class:`quickrelease.building.TwoDOF`, parameters period
+        T [s] (of the whole mass on the isolators), damping_ratio, friction [N], superstructure_period T_s
+        [s] (fixed-base) and superstructure_damping_ratio; needs ``superstructure_mass``.
+    release_time : float, optional
+        Start value (or, with ``fit_release_time=False``, the value) of the release instant [s, record
+        time]; detected where the record leaves its initial rest when not given.
+    start, fixed : dict, optional
+        Start values, and parameters held fixed (by name: period, damping_ratio, friction,
+        stiffness_ratio, yield_force, superstructure_period, superstructure_damping_ratio, d0, release_time,
+        offset_<channel>). Without them the fit starts from the record itself: the linear model from the
+        decay analysis (period from the turning-point times, F_s and zeta from the linear and geometric
+        parts of the combined decrement law, d0 and the release from the record), the bilinear model from
+        the hysteresis loop of the acceleration channel (:func:`quickrelease.decay.bilinear_loop`: k2, Q,
+        c from the loading branches, k1 and F_s from the elastic unloading after each reversal), and each
+        from a few more starts that split the dissipation otherwise, keeping the lowest chi-square, then
+        polished (restarts into a neighbouring piece of the misfit where it lies lower, ``_polish``). The
+        bilinear model's misfit has local minima (the count of half-cycles before the sliders stick changes
+        in jumps, and friction and yield force act alike on the soft branch): without an acceleration
+        channel its start comes from the secant periods of the decay only, which may not find the right
+        one, and the result then warns (give the bearings' design values as start values).
+    profile : bool, optional
+        Profile-likelihood intervals: True for every physical parameter, False never, None (default) for
+        those at a bound or with a relative standard error above ``PROFILE_RELATIVE_SE``.
+    superstructure_mass : float, optional
+        The roof mass m_s [kg] of the 2-DOF model, in (0, mass) (given, not fitted: the record fixes the
+        parameters per unit mass only).
+
+    Returns
+    -------
+    IsolationFit
+    """
+    channels = list(channels)
+    if not channels:
+        raise ParameterError("channels", "none", "at least one channel of the isolation layer")
+    if model not in FIT_MODELS:
+        raise ParameterError("model", model, "'linear', 'bilinear' or '2dof'")
+    mass = float(mass)
+    if not (math.isfinite(mass) and mass > 0):
+        raise ParameterError("mass", mass, "(0, inf)", "kg")
+    if model == "2dof":
+        ms = math.nan if superstructure_mass is None else float(superstructure_mass)
+        if not (math.isfinite(ms) and 0.0 < ms < mass):
+            raise ParameterError("superstructure_mass", superstructure_mass,
+                                 f"(0, mass) = (0, {mass:.6g}) kg (the 2dof model needs it)", "kg")
+        superstructure_mass = ms
+    else:
+        superstructure_mass = None
+    names_seen = [c.name for c in channels]
+    if len(set(names_seen)) != len(names_seen):
+        raise ParameterError("channels", ", ".join(names_seen), "distinct channel names")
+    fixed = dict(fixed or {})
+    t_r0 = float(release_time) if release_time is not None else _detect_release(channels)
+    if not fit_release_time:
+        fixed["release_time"] = t_r0
+    noise, source, absolute = _noise_levels(channels, t_r0)
+    p0, xch, d0, friction_se = _initial_values(model, mass, channels, t_r0, fixed, noise, superstructure_mass)
+    from_decay = dict(p0)  # the start of the model-free decay analysis, before the caller's start values
+    p0.update(start or {})
+    physical = _physical_names(model)
+    all_names = _parameter_names(model, channels)
+    unknown = sorted(set(fixed) - set(all_names))
+    if unknown:
+        raise ParameterError("fixed", unknown[0], ", ".join(all_names))
+    names = [n for n in all_names if n not in fixed]
+    values = {**p0, **fixed}
+    lower, upper = _bounds(channels, t_r0, values["period"])
+    misfit = _Misfit(channels, noise, mass, model, superstructure_mass, lower, upper)
+    sig, data = misfit.sig, misfit.data
+
+    def unpack(theta, free=names, base=values) -> dict[str, float]:
+        return _unpack(theta, free, base)
+
+    def residuals(theta, free=names, base=values) -> np.ndarray:
+        return misfit.residuals(theta, free, base)
+
+    def jacobian(theta, free=names, base=values):
+        return misfit.jacobian(theta, free, base)
+
+    def solve(free, base, x0, tol=1e-12):
+        lo = np.array([lower.get(n, -math.inf) for n in free])
+        hi = np.array([upper.get(n, math.inf) for n in free])
+        x0 = np.clip(np.asarray(x0, dtype=float), lo, hi)
+        # central differences over a relative step of 1e-4: the misfit jumps where a piece boundary (a
+        # stick, a yield) passes a sample, so a step near the rounding level would see those jumps
+        return least_squares(residuals, x0, bounds=(lo, hi), args=(free, base), x_scale="jac", jac=jacobian,
+                             diff_step=1e-4, xtol=tol, ftol=tol, gtol=tol, max_nfev=400 * max(len(free), 1))
+
+    starts = _start_points(model, mass, names, values, fixed, start, from_decay, friction_se, xch, d0, misfit)
     res = None
     for trial in starts:
         r_try = solve(names, values, [trial[n] for n in names])
@@ -691,6 +748,9 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
         if model in ("linear", "2dof") and absolute and 2.0 * res.cost <= 1.3 * max(data.size - len(names), 1):
             break  # misfit at the noise level: the other basins lie far above it (2dof: every start of the
             # rigid and flexible test records reached the same minimum, at 5x the cost)
+    res = _requiet(res, channels, noise, source, sig, names, values, solve, t_r0)
+    if model in ("linear", "bilinear"):
+        res = _polish(res, names, values, solve, misfit.residuals, lower, upper, misfit.dt)
     if not absolute:
         # a noise level taken from the residuals: weight each such channel by its own residual scatter
         # and refit (twice; the weights settle at once). One global chi-square scale cannot correct
@@ -713,15 +773,17 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
     chi2_red = chi2 / dof if dof > 0 else math.nan
     J = res.jac
     try:  # columns scaled first: parameters in SI units span many orders of magnitude
-        cov = jacobian_covariance(J)
+        cov, blind = identified_covariance(J)
     except np.linalg.LinAlgError:
-        cov = np.full((p, p), np.nan)
+        cov, blind = np.full((p, p), np.nan), np.zeros(p, dtype=bool)
+    unseen = {n for n, b in zip(names, blind, strict=True) if b}
     scale = 1.0 if absolute else chi2_red
     cov = cov * scale
     se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(se, se)
     corr = np.where(np.isfinite(corr), corr, 0.0)
+    corr[blind, blind] = 1.0
     try:
         cond = float(np.linalg.cond(corr))
     except np.linalg.LinAlgError:
@@ -736,20 +798,14 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
         ci[n] = (max(est[n] - tq * std_errors[n], lo_b), min(est[n] + tq * std_errors[n], hi_b))
         method[n] = "jacobian"
     warnings = []
-    for n in physical:
-        if n not in names:
-            continue
-        at_bound = est[n] - lower[n] <= 2.0 * std_errors[n] or upper[n] - est[n] <= 2.0 * std_errors[n]
-        rel = std_errors[n] / abs(est[n]) if est[n] != 0 else math.inf
-        want = profile if profile is not None else (at_bound or rel > PROFILE_RELATIVE_SE)
-        if want and len(names) > 1:
-            target = chi2 + tq**2 * scale
-            ci[n] = _profile_interval(n, names, est, lower[n], upper[n], std_errors[n], target, solve)
-            method[n] = "profile"
-        if rel > PROFILE_RELATIVE_SE and not at_bound:
-            warnings.append(f"{n} is poorly determined (standard error {rel:.0%} of the estimate)")
-    if "superstructure_period" in names and est["superstructure_period"] - lower["superstructure_period"] <= \
-            2.0 * std_errors.get("superstructure_period", 0.0):
+    for n in names:  # the record does not see it: no interval (the pseudo-inverse would say SE ~0)
+        if n in unseen:
+            ci[n], method[n] = (math.nan, math.nan), "not identified"
+            warnings.append(f"{n} not identified by this record (standard error inf, no interval)")
+    warnings += _profile_step(names, physical, unseen, est, std_errors, lower, upper, profile, chi2, tq, scale,
+                              solve, ci, method)
+    if "superstructure_period" in names and "superstructure_period" not in unseen and \
+            est["superstructure_period"] - lower["superstructure_period"] <= 2.0 * std_errors["superstructure_period"]:
         warnings.append(f"superstructure_period at its lower bound ({SUPERSTRUCTURE_PERIOD_MIN:g} s): the record "
                         "does not resolve a superstructure this stiff (it moves with the isolation layer), and "
                         "the rigid model is this fit's limit: fit model='linear' and compare_models")
@@ -786,6 +842,96 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
                         converged=bool(res.success), nfev=int(res.nfev), warnings=tuple(warnings),
                         channels=tuple(channels), superstructure_mass=superstructure_mass,
                         fixed={n: float(values[n]) for n in fixed})
+
+
+#: The chi-square drop a polish restart must reach to replace the fit (:func:`_polish`).
+POLISH_GAIN = 1.0
+#: Rounds of polish restarts at most, the leading axes of the correlations they probe and the steps along
+#: them (in standard deviations), and the shifts of the release time (in sampling intervals).
+POLISH_ROUNDS, POLISH_AXES, POLISH_STEPS, POLISH_SHIFTS = 3, 3, (1.0, 2.0), (1,)
+
+
+def _polish(res, names, values, solve, residuals, lower, upper, dt: float):
+    """Restarts from the best fit of the multi-start into a neighbouring minimum, kept where it fits better.
+
+    Near the optimum the misfit has steps: where a stick or a reversal crosses a sample, the piecewise model
+    jumps at that sample, so the chi-square is piecewise smooth with a local minimum in many pieces, and a
+    local search stops at the first (often against a cliff: one side of it a different count of half-cycles
+    before the sliders stick, thousands higher). The chi-square is probed at trial points: the release time
+    shifted by ``POLISH_SHIFTS`` sampling intervals ``dt`` either way, and the fit moved along the
+    ``POLISH_AXES`` leading axes of the correlation matrix (the combinations the record fixes least) by
+    ``POLISH_STEPS`` standard deviations either way, ``x +- s sqrt(lambda_k) (v_k * se)`` (lambda_k, v_k its
+    eigenpairs, se the standard errors): one model evaluation each. A probe whose chi-square lies below the
+    local quadratic ``chi2 + |J (y - x)|^2`` by at least ``POLISH_GAIN`` sees a lower piece; the fit
+    restarts (full tolerance) from the lowest such probe and keeps the refit if its chi-square falls by at
+    least ``POLISH_GAIN`` (less is within the noise of where the sampled steps fall); the round repeats from
+    it, at most ``POLISH_ROUNDS`` times."""
+    lo = np.array([lower.get(n, -math.inf) for n in names])
+    hi = np.array([upper.get(n, math.inf) for n in names])
+    for _ in range(POLISH_ROUNDS):
+        x = np.asarray(res.x, dtype=float)
+        J = np.asarray(res.jac, dtype=float)
+        chi2 = 2.0 * res.cost
+        try:
+            cov, blind = identified_covariance(J)
+        except np.linalg.LinAlgError:
+            return res
+        trials = []
+        if "release_time" in names:
+            i = names.index("release_time")
+            for k in POLISH_SHIFTS:
+                for sign in (-1.0, 1.0):
+                    y = x.copy()
+                    y[i] += sign * k * dt
+                    trials.append(y)
+        se = np.where(blind, 0.0, np.sqrt(np.clip(np.diag(cov), 0.0, None)))
+        ok = se > 0.0
+        if np.count_nonzero(ok) >= 2:
+            w, v = np.linalg.eigh(cov[np.ix_(ok, ok)] / np.outer(se[ok], se[ok]))
+            for k in range(1, min(POLISH_AXES, w.size) + 1):
+                axis = np.zeros_like(x)
+                axis[ok] = math.sqrt(max(float(w[-k]), 0.0)) * v[:, -k] * se[ok]
+                for step in POLISH_STEPS:
+                    trials.extend((x + step * axis, x - step * axis))
+        best, best_chi2 = None, math.inf
+        for y in trials:
+            y = np.clip(y, lo, hi)
+            r = residuals(y, names, values)
+            probe = float(r @ r)
+            if probe <= chi2 + float(np.sum((J @ (y - x)) ** 2)) - POLISH_GAIN and probe < best_chi2:
+                best, best_chi2 = y, probe
+        if best is None:
+            return res
+        done = solve(names, values, best)
+        if 2.0 * (res.cost - done.cost) < POLISH_GAIN:
+            return res
+        res = done
+    return res
+
+
+def _requiet(res, channels, noise, source, sig, names, values, solve, t_detected: float):
+    """The noise levels from the quiet segment before the FITTED release, and the fit redone with them.
+
+    The detected release lags the true one (a displacement leaves its rest quadratically: beyond 8 noise
+    levels some 50 ms later), so the segment before the detected instant holds the first tens of ms of the
+    motion and its scatter overstates the noise (displacement-only records: 14-20%). Once the fit has put
+    the release at t_r, the levels are taken again from the samples before t_r (``_quiet_noise``); where one
+    moves by more than 0.1% the weights change (in place, in ``sig``) and the fit restarts from its optimum.
+    """
+    if "release_time" not in names:
+        return res
+    t_fit = float(res.x[names.index("release_time")])
+    if not t_fit < t_detected:
+        return res
+    changed, i = False, 0
+    for ch in channels:
+        if source[ch.name] == "pre-release segment":
+            q = _quiet_noise(ch, t_fit)
+            if q is not None and abs(q - noise[ch.name]) > 1e-3 * noise[ch.name]:
+                noise[ch.name], changed = q, True
+                sig[i:i + ch.t.size] = q
+        i += ch.t.size
+    return solve(names, values, res.x) if changed else res
 
 
 def _profile_interval(name, names, est, lo_b, hi_b, se, target, solve) -> tuple[float, float]:

@@ -248,10 +248,11 @@ def _fit_section(fit, svgs: dict[str, str]) -> str:
     for name in fit.names:
         unit = _PARAM_UNITS.get(name) or CHANNELS[name.removeprefix("offset_")][1]
         lo, hi = fit.ci95[name]
+        interval = f"[{_num(lo)}, {_num(hi)}]" if math.isfinite(fit.std_errors[name]) else "not identified"
         ident = {"F1": ' id="fit-F1"', "F2": ' id="fit-F2"'}.get(name, "")
         rows.append(f"<tr><td>{_e(name)}</td><td class=\"num\"{ident}>{_num(fit.estimates[name])}</td>"
                     f"<td class=\"num\">{_num(fit.std_errors[name], '.3g')}</td>"
-                    f"<td class=\"num\">[{_num(lo)}, {_num(hi)}]</td><td>{_e(unit)}</td></tr>")
+                    f"<td class=\"num\">{interval}</td><td>{_e(unit)}</td></tr>")
     parts.append("<table><thead><tr><th>parameter</th><th>estimate</th><th>standard error</th><th>95% interval</th>"
                  f"<th>unit</th></tr></thead><tbody>{''.join(rows)}</tbody></table>")
     i1, i2 = fit.names.index("F1"), fit.names.index("F2")
@@ -311,6 +312,8 @@ def building_section(result, svgs: dict[str, str]) -> str:
         ci = s.get(f"{key}_ci95")
         interval = "&ndash;" if not ci else f"[{_num(None if ci[0] is None else ci[0] * scale)}, " \
                                              f"{_num(None if ci[1] is None else ci[1] * scale)}]"
+        if key in s.get("not_identified", ()):
+            interval = "not identified"
         rows.append(f"<tr><td>{_e(label)}</td><td class=\"num\" id=\"building-{key}\">{_num(s[key] * scale)}</td>"
                     f"<td class=\"num\">{interval}</td><td>{_e(unit)}</td></tr>")
     parts.append("<table><thead><tr><th>isolation system</th><th>estimate</th><th>95% interval</th><th>unit</th>"
@@ -323,9 +326,11 @@ def building_section(result, svgs: dict[str, str]) -> str:
             kind = next((c.kind for c in fit.channels if c.name == ch), "")
             label, unit, scale = f"offset of {ch}", CHANNEL_KINDS.get(kind, ""), 1.0
         lo, hi = fit.ci95[name]
+        interval = "not identified" if fit.interval_method[name] == "not identified" else \
+            f"[{_num(lo * scale)}, {_num(hi * scale)}]"
         rows.append(f"<tr><td>{_e(name)}</td><td>{_e(label)}</td><td class=\"num\">{_num(fit.estimates[name] * scale)}"
                     f"</td><td class=\"num\">{_num(fit.std_errors[name] * scale, '.3g')}</td><td class=\"num\">"
-                    f"[{_num(lo * scale)}, {_num(hi * scale)}]</td><td>{_e(fit.interval_method[name])}</td>"
+                    f"{interval}</td><td>{_e(fit.interval_method[name])}</td>"
                     f"<td>{_e(unit)}</td></tr>")
     parts.append("<details><summary>Every fitted parameter</summary><table><thead><tr><th>parameter</th><th></th>"
                  "<th>estimate</th><th>standard error</th><th>95% interval</th><th>interval</th><th>unit</th></tr>"
