@@ -266,12 +266,12 @@ def simulate(
         case = case.replace(F1=F1_case, F2=F2_case)
     response = run(case.stored_energy, case.alpha0, case.F1 or 0.0, case.F2 or 0.0, device=case.device,
                    mass_model=case.mass_model, method=case.method, dt=case.dt, n_points=case.n_points,
-                   rk_method=case.rk_method)
+                   rk_method=case.rk_method, push_force=case.push_force)
     if case_file is None:  # no case file: a friction left out is zero, and the user is told so
         for flag, given, name in (("--f1", f1, "F1"), ("--f2", f2, "F2")):
             if given is None:
                 _echo(f"note: {flag} not given: {name} = 0 N (frictionless)", err=True)
-    summary = {"push_force_N": case.push_force, **response.summary(), "device": case.device.name}
+    summary = response.summary()
     if as_json:
         _print_json(summary)
         return

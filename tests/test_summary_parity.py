@@ -1,0 +1,58 @@
+"""``Response.summary()`` is what ``quickrelease simulate --json`` prints: the same keys, the same values
+(issue 11), the push force P and the device's name included."""
+
+import json
+import math
+import subprocess
+import sys
+
+import pytest
+
+import quickrelease as qr
+
+FLAGS = ["--alpha0", "0.2", "--f1", "419.85 N", "--f2", "804.57 N"]
+
+
+def _cli_json(*args: str) -> dict:
+    done = subprocess.run([sys.executable, "-m", "quickrelease", "simulate", *args, "--json"],
+                          capture_output=True, text=True, check=True)
+    return json.loads(done.stdout)
+
+
+@pytest.mark.parametrize(("flags", "api"), [
+    (["--force", "1598 kN"], {"push_force": "1598 kN"}),
+    (["--energy", "2.90 kJ"], {"stored_energy": 2900.0}),
+    (["--force", "1598 kN", "--method", "rk", "--mass-model", "lumped"],
+     {"push_force": 1.598e6, "method": "rk", "mass_model": "lumped"}),
+])
+def test_api_summary_is_the_cli_json(flags, api):
+    printed = _cli_json(*flags, *FLAGS)
+    summary = qr.simulate(alpha0=0.2, F1=419.85, F2=804.57, **api).summary()
+    assert list(summary) == list(printed)  # same keys, same order
+    for key, value in printed.items():
+        assert summary[key] == pytest.approx(value, rel=1e-12) if isinstance(value, float) else \
+            summary[key] == value, key
+    assert printed["device"] == "paper"
+    assert printed["push_force_N"] == (1.598e6 if "--force" in flags else None)
+
+
+def test_push_force_alone_stores_the_energy_of_eq2():
+    r = qr.simulate(alpha0=0.2, F1=419.85, F2=804.57, push_force=1.598e6)
+    assert r.push_force == 1.598e6 and r.summary()["push_force_N"] == 1.598e6
+    # the paper's E_S of the 1598 kN push at 0.2 rad: 2.90 kJ (Section 5, rounded to 3 digits; ours 2915 J)
+    assert r.stored_energy == pytest.approx(2.90e3, rel=6e-3)
+    assert r.stored_energy == qr.strain_energy(1.598e6, 0.2).total
+    given = qr.simulate(2900.0, 0.2, 419.85, 804.57, push_force=1.598e6)  # both: E_S simulated, P recorded
+    assert given.stored_energy == 2900.0 and given.summary()["push_force_N"] == 1.598e6
+    assert qr.simulate(2900.0, 0.2).summary()["push_force_N"] is None
+    padded = qr.simulate(alpha0=0.2, F1=419.85, F2=804.57, push_force=1.598e6, t_end=2.0)
+    assert padded.summary()["push_force_N"] == 1.598e6 and math.isclose(padded.t[-1], 2.0)
+
+
+def test_neither_energy_nor_force_is_one_clear_error():
+    with pytest.raises(qr.ParameterError, match="stored_energy/push_force"):
+        qr.simulate(alpha0=0.2)
+    with pytest.raises(TypeError, match="alpha0"):
+        qr.simulate(2900.0)
+    with pytest.raises(qr.UnitError):
+        qr.simulate(alpha0=0.2, push_force="3 m")
