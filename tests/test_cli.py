@@ -101,7 +101,9 @@ def test_demo_prints_the_comparison(tmp_path):
     assert f"{tmp_path / 'demo' / 'report.html'}" in r.stdout
     assert "0.4056 kN" in r.stdout and "0.4198 kN" in r.stdout
     assert "2.9154 kJ" in r.stdout
-    from quality import html_faults  # the report holds Table 7 too, and is valid HTML
+    from quality import html_faults, table_faults  # the report holds Table 7 too, and is valid HTML
+
+    assert table_faults(r.stdout) == []
 
     report = (tmp_path / "demo" / "report.html").read_text(encoding="utf-8")
     table7 = report[report.index('<h2 id="table7">'):report.index("</table>", report.index('<h2 id="table7">'))]
@@ -148,8 +150,12 @@ def test_run_and_report_commands(tmp_path):
     assert r.exit_code == 0, r.output
     assert (tmp_path / "o" / "report.html").exists() and (tmp_path / "o" / "figures" / "fig13_response.png").exists()
     assert "Wrote 15 files" in r.stdout
+    from quality import table_faults
+
+    assert table_faults(r.stdout) == []
     r = run("report", str(EXAMPLES / "larger_push.toml"), "--out", str(tmp_path / "r"))
     assert r.exit_code == 0, r.output
+    assert table_faults(r.stdout) == []
     # the report and the manifest that fingerprints it (a later run into the folder checks it)
     assert sorted(p.name for p in (tmp_path / "r").iterdir()) == ["manifest.json", "report.html"]
 

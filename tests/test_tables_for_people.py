@@ -1,0 +1,63 @@
+"""Tables for people (issue 11): every command's terminal output shows human names, rounded numbers with units,
+no JSON keys (``push_force_N``), no 16-digit floats, no ``None``, no raw exponents (``1.6e+04``).
+
+``bench`` is covered by its table function on a result of the same shape (a run takes minutes); ``demo``,
+``run``, ``report`` (tests/test_cli.py) and ``uq`` (tests/test_uq.py) where their tests already run them."""
+
+from pathlib import Path
+
+import pytest
+from quality import table_faults
+from typer.testing import CliRunner
+
+from quickrelease.cli import app
+
+EXAMPLES = Path(__file__).parent.parent / "examples"
+runner = CliRunner()
+
+COMMANDS = {
+    "simulate": ["simulate", "--force", "1598 kN", "--alpha0", "0.2"],
+    "simulate-case": ["simulate", EXAMPLES / "larger_push.toml"],
+    "identify": ["identify", "--energy", "2.90 kJ", "--alpha0", "0.2", "--alpha-final", "0.7378", "--stop-time",
+                 "1.05"],
+    "sweep": ["sweep", EXAMPLES / "larger_push.toml", "--grid", "force=500 kN:3000 kN:3", "--grid",
+              "alpha0=0.1:0.5:3", "--file", "{tmp}/sweep.nc"],
+    "synth": ["synth", EXAMPLES / "paper.toml", "--file", "{tmp}/rec.csv"],
+    "synth-building": ["synth", EXAMPLES / "building.toml", "--building", "--file", "{tmp}/b.csv"],
+    "fit": ["fit", EXAMPLES / "fit.toml"],
+    "building": ["building", EXAMPLES / "building.toml"],
+    "campaign": ["campaign", EXAMPLES / "campaign.toml"],
+    "building-campaign": ["campaign", EXAMPLES / "building_campaign.toml"],
+    "plan": ["plan", EXAMPLES / "plan.toml"],
+}
+
+
+@pytest.mark.parametrize("name", list(COMMANDS))
+def test_every_command_prints_tables_for_people(name, tmp_path):
+    args = [str(a).replace("{tmp}", str(tmp_path)) for a in COMMANDS[name]]
+    r = runner.invoke(app, args)
+    assert r.exit_code == 0, r.output
+    assert r.stdout.strip(), "nothing printed"
+    assert table_faults(r.stdout) == []
+
+
+def test_bench_table_for_people(monkeypatch, capsys):
+    import quickrelease.bench
+    import quickrelease.cli as cli
+
+    result = {"kernel_stop_times_per_s": 2597249.123456789, "scipy_solve_ivp_cases_per_s": 964.0123456789,
+              "speedup_vs_solve_ivp": 2694.1234567, "max_rel_error_vs_mpmath": 1.234567891234e-13,
+              "dask_samples": None, "dask_wall_s": 12.3456789012}
+    monkeypatch.setattr(quickrelease.bench, "run_bench", lambda **_: result)
+    cli.bench(quick=True, as_json=False)
+    assert table_faults(capsys.readouterr().out) == []
+
+
+def test_the_checker_finds_what_people_should_not_meet():
+    """The checker itself: each fault of the old tables is found (issue 11's examples)."""
+    assert table_faults("push_force_N 1.598e+06")  # a JSON key, a raw exponent
+    assert table_faults("feasible stop times [0.9906441799358865, 1.2] s")  # 16 digits
+    assert table_faults("stop time t_F  None")
+    assert table_faults("friction 1.6e+04 N")
+    assert not table_faults("note: column 'u_m' of 'rec.csv': 4 missing sample(s); push force P 1598 kN; "
+                            "2.0e-5 s; 1,000,000 samples; 419.85 ± 0.40 N")
