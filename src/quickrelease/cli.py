@@ -140,6 +140,16 @@ def _energy(device, force: str | None, energy: str | None, alpha0: float) -> tup
     return strain_energy(P, alpha0, device).total, P
 
 
+def _check_case_optional(case) -> None:
+    """The optional packages the case's record files need (``.parquet``: pyarrow, ...), checked before any
+    work: one line, exit 2."""
+    from .distributed import check_optional
+    from .records import record_files
+
+    building = getattr(case, "building", None)
+    check_optional(files=record_files(case.record) + record_files(getattr(building, "record", None)))
+
+
 @contextlib.contextmanager
 def _busy(what: str) -> Iterator[None]:
     """A spinner with ``what`` on stderr while a long computation runs, when stderr is a terminal (never in
@@ -335,6 +345,7 @@ def run_command(
     from .workflow import results_folder, run_case, write_results
 
     case = load_case(case_file)
+    _check_case_optional(case)
     results_folder(case, out, overwrite=overwrite)  # pre-flight: refuse before the work
     result = run_case(case)
     paths = write_results(result, out, overwrite=overwrite)
@@ -375,6 +386,7 @@ def report(
     from .workflow import results_folder, run_case, write_results
 
     case = load_case(case_file)
+    _check_case_optional(case)
     results_folder(case, out, figures=False, data=False, overwrite=overwrite)
     paths = write_results(run_case(case), out, figures=False, data=False, overwrite=overwrite)
     _echo(f"Wrote {paths['report']}")
@@ -665,6 +677,7 @@ def fit_command(
     from .fit import fit_record
 
     case = load_case(case_file)
+    _check_case_optional(case)
     if case.record is not None:
         from .workflow import results_folder, run_case, write_results
 
@@ -733,6 +746,7 @@ def building_command(
     if model is not None and model not in MODELS:
         raise ParameterError("--model", model, ", ".join(MODELS))
     case = load_case(case_file, require_test=False)
+    _check_case_optional(case)
     data = load_building(case)
     if not data.channels:
         raise QuickReleaseError(f"{case_file}: no [building.record]: the building command needs the building's "
