@@ -3,6 +3,7 @@
 ``html_faults(text)``: well-formed (every non-void element closed, in order), no duplicate ``id``, every local
 link (``href="#x"``, ``xlink:href="#x"``, ``url(#x)``) resolves to an ``id`` of the page.
 ``table_faults(text)``: a command's table output without JSON keys, long numbers, ``None`` or raw exponents.
+``report_number_faults(page)``: the same for the numeric cells of a report's tables.
 ``figure_faults(fig)``: every axis that shows tick labels has a label with a unit in brackets, units written
 one way (``m/s²``, never ``m/s^2`` or ``m s-2``), every labelled artist in a legend, every text at one of the
 package style's font sizes.
@@ -144,6 +145,7 @@ NUMBER = re.compile(r"(?<![\w.])[-+]?(\d[\d,]*(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?
 RAW_EXPONENT = re.compile(r"\d[eE][-+]0\d|\d[eE]\+\d")
 #: The paper's and the building's symbols that look like keys: slider friction, superstructure period, damping.
 SYMBOLS = {"F_s", "T_s", "zeta_s"}
+PLUS_MINUS = re.compile(r"[-+]?[\d.]+(?:[eE][-+]?\d+)? ±")
 QUOTED = re.compile(r"'[^'\n]*'|\"[^\"\n]*\"")
 
 
@@ -168,7 +170,16 @@ def table_faults(text: str, digits: int = 8) -> list[str]:
             faults.append(f"line {n}: None: {line.strip()}")
         if RAW_EXPONENT.search(bare):
             faults.append(f"line {n}: raw exponent: {line.strip()}")
-        for match in NUMBER.finditer(bare):
+        for match in NUMBER.finditer(PLUS_MINUS.sub("±", bare)):  # a value before ± has the digits of its error
             if _significant(match.group(1)) > digits:
                 faults.append(f"line {n}: {match.group(0)} has more than {digits} significant digits")
     return faults
+
+
+def report_number_faults(page: str, digits: int = 5) -> list[str]:
+    """:func:`table_faults` over the numeric cells (``<td class="num">``) of an HTML report: one number format
+    in every table (5 significant digits at most, no raw exponents, no None)."""
+    cells = re.findall(r'<td class="num"[^>]*>(.*?)</td>', page, re.S)
+    if not cells:
+        return ["no numeric cells"]
+    return table_faults("\n".join(cells), digits=digits)

@@ -55,7 +55,9 @@ def _num(value: float | None, fmt: str | None = None) -> str:
         return "&ndash;"
     if isinstance(value, float) and not math.isfinite(value):
         return "&ndash;"
-    return number(float(value)) if fmt is None else format(value, fmt)
+    if fmt is None:
+        return number(float(value))
+    return format(value, fmt).replace("e+0", "e").replace("e-0", "e-").replace("e+", "e")  # 2.5e-8, not 2.5e-08
 
 
 def _se(value: float | None) -> str:
