@@ -31,6 +31,7 @@ def test_device_keyword_against_the_equations(device):
         eq8_alpha_final(E_S, A0, F1, F2, d.L1), rel=1e-12)
     aF = 0.7378
     limits = qr.friction_limits(E_S, A0, aF, device=device)
+    assert all(type(v) is float for v in limits.values())  # plain floats for scalar inputs (a readable repr)
     assert limits["F1_max"] == pytest.approx(E_S / (2 * d.L1 * (math.sin(aF) - math.sin(A0))), rel=1e-12)  # Eq. 11
     assert limits["F2_max"] == pytest.approx(E_S / (4 * d.L1 * (math.cos(A0) - math.cos(aF))), rel=1e-12)  # Eq. 12
     for model, c in (("distributed", 2 / 3), ("lumped", 1.0), (0.8, 0.8)):

@@ -15,6 +15,8 @@ from __future__ import annotations
 import warnings
 from typing import Any
 
+import numpy as np
+
 from . import dynamics
 from ._validate import renamed
 from .device import Device, preset
@@ -141,5 +143,6 @@ def friction_limits(stored_energy, alpha0, alpha_final, *old, device: Device | N
     paper's by default. Returns ``{"F1_max": F1*, "F2_max": F2*}``.
     """
     (L1,) = _device_numbers("friction_limits", old, ("L1",), device, depth=1)
-    return dynamics.friction_limits(si(stored_energy, "energy", "E_S"), si(alpha0, "angle", "alpha0"),
-                                    si(alpha_final, "angle", "alpha_final"), L1)
+    limits = dynamics.friction_limits(si(stored_energy, "energy", "E_S"), si(alpha0, "angle", "alpha0"),
+                                      si(alpha_final, "angle", "alpha_final"), L1)
+    return {k: float(v) if np.ndim(v) == 0 else v for k, v in limits.items()}  # floats for scalars, as elsewhere
