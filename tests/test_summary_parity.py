@@ -1,5 +1,6 @@
-"""``Response.summary()`` is what ``quickrelease simulate --json`` prints: the same keys, the same values
-(issue 11), the push force P and the device's name included."""
+"""``Response.summary()`` is what ``quickrelease simulate --json`` prints, ``Identification.summary()`` what
+``quickrelease identify --json`` prints: the same keys, the same values (issue 11), the push force P and the
+device's name included."""
 
 import json
 import math
@@ -13,8 +14,8 @@ import quickrelease as qr
 FLAGS = ["--alpha0", "0.2", "--f1", "419.85 N", "--f2", "804.57 N"]
 
 
-def _cli_json(*args: str) -> dict:
-    done = subprocess.run([sys.executable, "-m", "quickrelease", "simulate", *args, "--json"],
+def _cli_json(*args: str, command: str = "simulate") -> dict:
+    done = subprocess.run([sys.executable, "-m", "quickrelease", command, *args, "--json"],
                           capture_output=True, text=True, check=True)
     return json.loads(done.stdout)
 
@@ -56,3 +57,22 @@ def test_neither_energy_nor_force_is_one_clear_error():
         qr.simulate(2900.0)
     with pytest.raises(qr.UnitError):
         qr.simulate(alpha0=0.2, push_force="3 m")
+
+
+@pytest.mark.parametrize(("flags", "api"), [
+    (["--force", "1598 kN"], {"push_force": "1598 kN"}),
+    (["--energy", "2.90 kJ"], {"stored_energy": 2900.0}),
+])
+def test_identification_summary_is_the_cli_json(flags, api):
+    printed = _cli_json(*flags, "--alpha0", "0.2", "--alpha-final", "0.7378", "--stop-time", "1.05 s",
+                        command="identify")
+    summary = qr.identify_friction(0.2, 0.7378, 1.05, **api).summary()
+    assert list(summary) == list(printed)
+    for key, value in printed.items():
+        if isinstance(value, float):
+            assert summary[key] == pytest.approx(value, rel=1e-12), key
+        elif key == "feasible_stop_time_s":
+            assert summary[key] == pytest.approx(value, rel=1e-12)
+        else:
+            assert summary[key] == value, key
+    assert printed["device"] == "paper"

@@ -313,7 +313,7 @@ def identify(
         raise QuickReleaseError(f"{missing} is missing: give the flag or [observations] in the case file")
     result = identify_friction(case.alpha0, case.alpha_final, case.stop_time, stored_energy=case.stored_energy,
                                device=case.device, mass_model=case.mass_model)
-    summary = {**result.summary(), "push_force_N": case.push_force, "device": case.device.name}
+    summary = {**result.summary(), "push_force_N": case.push_force}  # the P that stored E_S, when given
     if as_json:
         _print_json(summary)
         return

@@ -77,8 +77,7 @@ class CaseResult(Summarised):
         """The identification: the keys of ``quickrelease identify --json``."""
         if self.identification is None:
             return None
-        return {**self.identification.summary(), "push_force_N": self.case.push_force,
-                "device": self.case.device.name}
+        return {**self.identification.summary(), "push_force_N": self.case.push_force}
 
 
 def run_case(case: Case, *, state_diagram: bool = True, plan: bool | None = None) -> CaseResult:
