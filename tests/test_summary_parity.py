@@ -4,20 +4,20 @@ device's name included."""
 
 import json
 import math
-import subprocess
-import sys
 
 import pytest
+from typer.testing import CliRunner
 
 import quickrelease as qr
+from quickrelease.cli import app
 
 FLAGS = ["--alpha0", "0.2", "--f1", "419.85 N", "--f2", "804.57 N"]
 
 
 def _cli_json(*args: str, command: str = "simulate") -> dict:
-    done = subprocess.run([sys.executable, "-m", "quickrelease", command, *args, "--json"],
-                          capture_output=True, text=True, check=True)
-    return json.loads(done.stdout)
+    r = CliRunner().invoke(app, [command, *args, "--json"])
+    assert r.exit_code == 0, r.output
+    return json.loads(r.stdout)
 
 
 @pytest.mark.parametrize(("flags", "api"), [
