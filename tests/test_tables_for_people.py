@@ -61,3 +61,21 @@ def test_the_checker_finds_what_people_should_not_meet():
     assert table_faults("friction 1.6e+04 N")
     assert not table_faults("note: column 'u_m' of 'rec.csv': 4 missing sample(s); push force P 1598 kN; "
                             "2.0e-5 s; 1,000,000 samples; 419.85 ± 0.40 N")
+
+
+def test_the_display_helpers_round_as_results_are_quoted():
+    """Hand-written expectations: the value rounded where its standard error (two digits) is, one SI prefix."""
+    from quickrelease.display import estimate_row, interval, key_for, plus_minus, quantity
+
+    assert plus_minus(420.023, 0.398, "N") == "420.02 ± 0.40 N"
+    assert plus_minus(1.598e6, 3.9e4, "N") == "1598 ± 39 kN"
+    assert plus_minus(223.0, 996.0, "N/rad") == "200 ± 1000 N/rad"
+    assert plus_minus(2.1, None, "m/s^2") == "2.1 m/s²"
+    assert quantity(1.598e6, "N") == "1598 kN" and quantity(None, "s") == "-"
+    assert interval([0.99064418, 1.2139], "s") == "[0.99064, 1.2139] s"
+    assert estimate_row("F1", 420.023, 0.398, (419.243, 420.803)) == (
+        "hinge friction F1", "420.02 N", "0.40 N", "[419.24, 420.80] N")
+    assert estimate_row("k1", 1.2345678e7, 2.3e5, (1.2e7, 1.3e7)) == (
+        "initial stiffness k1", "12.346 MN/m", "0.23 MN/m", "[12.000, 13.000] MN/m")
+    assert estimate_row("offset_a", 0.0012, 3e-5, None, "m/s^2")[0::3] == ("offset of a", "-")
+    assert key_for("damping_ratio") == ("damping ratio zeta", "")

@@ -187,7 +187,8 @@ def plus_minus(value: float | None, se: float | None, unit: str = "", se_digits:
     if abs(v) >= 1e6 or (v != 0 and abs(v) < 1e-3) or e < 1e-4:  # far from 1: both in the exponent form
         text = f"{number(v)} ± {number(e, se_digits)}"
     else:
-        places = min(_decimals(e, se_digits), 8)
+        e = float(f"{e:.{se_digits}g}")  # the error to its digits first: 996 -> 1000 (then hundreds, not tens)
+        places = min(se_digits - 1 - math.floor(math.log10(e)), 8)
         if places >= 0:
             text = f"{v:.{places}f} ± {e:.{places}f}"
         else:  # an error of hundreds or more: both rounded to its two digits (223 ± 996 -> 200 ± 1000)
