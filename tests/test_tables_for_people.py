@@ -50,7 +50,9 @@ def test_bench_table_for_people(monkeypatch, capsys):
               "dask_samples": None, "dask_wall_s": 12.3456789012}
     monkeypatch.setattr(quickrelease.bench, "run_bench", lambda **_: result)
     cli.bench(quick=True, as_json=False)
-    assert table_faults(capsys.readouterr().out) == []
+    out = capsys.readouterr().out
+    assert table_faults(out) == []
+    assert "kernel stop times" in out and "2.5972e6 /s" in out  # a rate, not seconds
 
 
 def test_the_checker_finds_what_people_should_not_meet():

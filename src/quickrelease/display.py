@@ -14,6 +14,7 @@ from typing import Any
 
 #: (key suffix, unit as printed, whether SI prefixes k/M/G apply), longest suffix first.
 UNIT_SUFFIXES: tuple[tuple[str, str, bool], ...] = (
+    ("_per_s", "/s", False),  # a rate: cases per second (bench)
     ("_rad_s2", "rad/s²", False),
     ("_rad_s", "rad/s", False),
     ("_m_s2", "m/s²", False),
