@@ -921,7 +921,7 @@ def plan(
     if as_json:
         _print_json(summary)
         return
-    from .display import number, quantity
+    from .display import number, plus_minus, quantity
 
     _echo(f"{result.case.title}: P = {quantity(plan_result.push_force, 'N')} at alpha0 = "
           f"{quantity(plan_result.alpha0, 'rad')}, E_S = {quantity(plan_result.stored_energy, 'J')}")
@@ -929,8 +929,8 @@ def plan(
         ft = plan_result.fuse
         _table(f"Fuse and angle choices inside the target {ft.target[0] / 1e3:.6g} to {ft.target[1] / 1e3:.6g} kN "
                f"(rupture strength {ft.rupture_strength / 1e6:.4g} ± {ft.rupture_strength_std / 1e6:.3g} MPa)",
-               [(f"{1e3 * c.diameter:.4g}", f"{c.alpha0:.4g}", f"{c.push_force / 1e3:.5g} ± {c.push_force_std / 1e3:.3g}",
-                 f"{c.stored_energy:.5g}", f"{100 * c.probability_within:.3g}%" + (" <- best" if c is ft.best else ""))
+               [(number(1e3 * c.diameter, 4), number(c.alpha0, 4), plus_minus(c.push_force / 1e3, c.push_force_std / 1e3),
+                 number(c.stored_energy), f"{100 * c.probability_within:.3g}%" + (" <- best" if c is ft.best else ""))
                 for c in ft.choices if c.within],
                ("d [mm]", "alpha0 [rad]", "P [kN]", "E_S [J]", "P inside the target"))
         for text in ft.warnings:
@@ -947,8 +947,9 @@ def plan(
     from .display import unit_text
 
     _table(f"Release envelope: {env.friction} ({env.samples:,} sample(s))", [
-        (label, unit_text(unit), f"{env.nominal[k]:.4g}", f"{env.ranges[k]['p5']:.4g}", f"{env.ranges[k]['p95']:.4g}",
-         f"{env.ranges[k]['max']:.4g}") for k, (unit, label) in ENVELOPE_QUANTITIES.items()],
+        (label, unit_text(unit), number(env.nominal[k], 4), number(env.ranges[k]["p5"], 4),
+         number(env.ranges[k]["p95"], 4), number(env.ranges[k]["max"], 4))
+        for k, (unit, label) in ENVELOPE_QUANTITIES.items()],
         ("quantity", "unit", "nominal", "5%", "95%", "max"))
     if plan_result.clearance is not None:
         c = plan_result.clearance
