@@ -1,4 +1,5 @@
-"""Batch kernels vs scipy (solve_ivp; quad + brentq) in the same run, accuracy vs mpmath, uq 1e8 on Dask.
+"""Batch kernels on the bench and the wide sample vs scipy (solve_ivp; quad + brentq) in the same run, accuracy
+vs mpmath, one core vs all cores, the targets of issue 12, uq 1e8 on Dask.
 
 Run: python benchmarks/bench_batch.py [--quick]   (the same as: quickrelease bench [--quick] [--json])
 """

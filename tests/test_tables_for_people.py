@@ -1,8 +1,8 @@
 """Tables for people (issue 11): every command's terminal output shows human names, rounded numbers with units,
 no JSON keys (``push_force_N``), no 16-digit floats, no ``None``, no raw exponents (``1.6e+04``).
 
-``bench`` is covered by its table function on a result of the same shape (a run takes minutes); ``demo``,
-``run``, ``report`` (tests/test_cli.py) and ``uq`` (tests/test_uq.py) where their tests already run them."""
+``bench`` (tests/test_bench.py, on its tiny run), ``demo``, ``run``, ``report`` (tests/test_cli.py) and ``uq``
+(tests/test_uq.py) are checked where their tests already run them."""
 
 from pathlib import Path
 
@@ -39,20 +39,6 @@ def test_every_command_prints_tables_for_people(name, tmp_path):
     assert r.exit_code == 0, r.output
     assert r.stdout.strip(), "nothing printed"
     assert table_faults(r.stdout) == []
-
-
-def test_bench_table_for_people(monkeypatch, capsys):
-    import quickrelease.bench
-    import quickrelease.cli as cli
-
-    result = {"kernel_stop_times_per_s": 2597249.123456789, "scipy_solve_ivp_cases_per_s": 964.0123456789,
-              "speedup_vs_solve_ivp": 2694.1234567, "max_rel_error_vs_mpmath": 1.234567891234e-13,
-              "dask_samples": None, "dask_wall_s": 12.3456789012}
-    monkeypatch.setattr(quickrelease.bench, "run_bench", lambda **_: result)
-    cli.bench(quick=True, as_json=False)
-    out = capsys.readouterr().out
-    assert table_faults(out) == []
-    assert "kernel stop times" in out and "2.5972e6 /s" in out  # a rate, not seconds
 
 
 def test_the_checker_finds_what_people_should_not_meet():

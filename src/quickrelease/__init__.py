@@ -11,6 +11,7 @@ Table 7). SI units throughout.
 from __future__ import annotations
 
 from . import building, closed_form, decay, dynamics, kinematics, statics
+from ._threads import using_threads
 from .building import FreeVibration, Isolation, TwoDOF, free_vibration
 from .closed_form import (
     angular_acceleration,
@@ -60,5 +61,5 @@ __all__ = [
     "InternalForces", "StrainEnergy", "fuse_force", "internal_forces", "push_force", "strain_energy",
     "parse_quantity", "closed_form", "dynamics", "kinematics", "statics", "__version__",
     "building", "decay", "Isolation", "TwoDOF", "FreeVibration", "free_vibration",
-    "BuildingChannel", "IsolationFit", "fit_isolation", "compare_models",
+    "BuildingChannel", "IsolationFit", "fit_isolation", "compare_models", "using_threads",
 ]

@@ -1,17 +1,28 @@
-"""Benchmarks of the batch kernels against scipy, measured in the same run (``quickrelease bench``).
+"""Benchmarks of the batch kernels on two samples, against scipy and mpmath in the same run (``quickrelease bench``).
 
-* Throughput on one core (the process is pinned to one CPU while measuring): cases per second of the
-  stop-time kernel (:func:`batch.stop_time`) and of the identification kernel (:func:`batch.identify`)
-  on random cases of the valid parameter space (:func:`sampling.random_releases`, 15% reaching the
-  geometric limit).
-* The same work done the ordinary way, per case, on a sample: scipy ``solve_ivp`` (DOP853, rtol 1e-10,
-  atol 1e-12, terminal events at alpha_dot = 0 and alpha = pi/2) for the stop time; scipy ``quad`` of
-  Eq. 10 inside ``brentq`` on F1 for the identification. Speed-ups are per case.
-* Accuracy of each against mpmath references (:mod:`reference`, 30 digits) on the same cases: relative
-  error of t_F; for the identification, the error of F1 and F2 relative to their bounds F1*, F2*
-  (the natural scale: F1 may be near zero).
-* ``uq`` with 1e8 samples on a LocalCluster of two Dask workers: wall time and peak memory of the whole
-  process tree (skipped with ``quick``).
+For each sample, the *bench sample* (:func:`sampling.random_releases`: typical releases, 15% reaching the geometric
+limit) and the *wide sample* (:func:`sampling.wide_releases`: the whole valid space, its hard corners
+over-weighted, in the strata of :data:`sampling.WIDE_STRATA`):
+
+* Throughput on one core (the process pinned to one CPU, the kernels on one thread): cases per second of the
+  stop-time kernel (:func:`batch.stop_time`) and of the identification kernel (:func:`batch.identify`, on the
+  friction stops of the same cases), by the wall clock and by the process's CPU time (they differ when the machine
+  is busy).
+* On all cores (``threads``, default every core numba may use): the same rates, their ratio to one core, and
+  whether the results are the same bytes.
+* The same work the ordinary way, one case at a time, on an accuracy set drawn from the same distribution: scipy
+  ``solve_ivp`` (DOP853, rtol 1e-10, atol 1e-12, terminal events at alpha_dot = 0 and alpha = pi/2) for the stop
+  time; ``quad`` of Eq. 10 inside ``brentq`` on F1 for the identification. Speed-ups are per case.
+* Accuracy of each against the 30-digit mpmath references (:mod:`reference`) on the accuracy set: relative error
+  of t_F; for the identification the error of F1 and F2 relative to their bounds F1*, F2* (the natural scale: F1
+  may be near zero). Median and worst; on the wide sample per stratum too (the accuracy set draws the same number
+  of cases from each stratum; the sample's median weighs them by the strata's shares), with the worst stratum
+  named and the conditioning of its worst case: the *1-ulp input sensitivity*, how far the exact answer moves
+  when one input moves by one unit in the last place (the most over the inputs, by mpmath). An error below it is
+  as small as the inputs' rounding allows.
+* A status line per target of issue 12 (met, not met, not measured).
+* ``uq`` with 1e8 samples on a LocalCluster of two Dask workers: wall time and peak memory of the whole process
+  tree (skipped with ``quick``).
 """
 
 from __future__ import annotations
@@ -19,42 +30,122 @@ from __future__ import annotations
 import math
 import os
 import time
+from collections.abc import Callable
 from contextlib import contextmanager
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from . import batch
-from .reference import identify_mp, stop_time_mp
-from .sampling import random_releases
+from ._threads import check_threads, max_threads, using_threads
+from .sampling import WIDE_STRATA, random_releases, wide_releases
 
-__all__ = ["run_bench"]
+__all__ = ["run_bench", "Sizes", "QUICK", "FULL", "TARGETS"]
+
+_KEYS = ("E_S", "alpha0", "F1", "F2", "c", "m1", "m2", "L1")
+
+
+@dataclass(frozen=True)
+class Sizes:
+    """How much a bench run measures."""
+
+    cases: int
+    """Cases of each sample for the kernels' throughput."""
+    stop_time: int
+    """Accuracy set of the stop time: cases of the bench sample, and of each stratum of the wide sample."""
+    identify: int
+    """Accuracy set of the identification: the same (friction stops only)."""
+    repeat: int = 3
+    """Timed runs of each kernel (the best counts)."""
+    strata_conditioning: bool = True
+    """The 1-ulp sensitivity of every stratum's worst case (else only of the sample's worst case)."""
+
+
+#: ``quickrelease bench --quick``: about half a minute on a quiet 2-core machine.
+QUICK = Sizes(cases=100_000, stop_time=10, identify=5, repeat=2, strata_conditioning=False)
+#: ``quickrelease bench``: a few minutes (the 1e8-sample uq run on Dask included).
+FULL = Sizes(cases=1_000_000, stop_time=60, identify=20, repeat=3, strata_conditioning=True)
+
+#: The targets of issue 12: (key, text, sample, what, bound); ``what`` names the measured value.
+TARGETS: tuple[tuple[str, str, str, str, float], ...] = (
+    ("stop_time_rate_bench", "stop time, bench sample, one core >= 1e7 cases/s", "bench", "stop_time.cases_per_s",
+     1e7),
+    ("stop_time_rate_wide", "stop time, wide sample, one core >= 4e6 cases/s", "wide", "stop_time.cases_per_s", 4e6),
+    ("identify_rate_bench", "identification, bench sample, one core >= 2e6 cases/s", "bench",
+     "identify.cases_per_s", 2e6),
+    ("identify_rate_wide", "identification, wide sample, one core >= 1e6 cases/s", "wide", "identify.cases_per_s",
+     1e6),
+)
+_ACCURACY_MEDIAN, _ACCURACY_WORST, _CORES = 1e-12, 1e-10, 1.8
+#: An error within this many times the 1-ulp input sensitivity is what rounding the inputs alone could cause.
+_CONDITIONED = 4.0
 
 
 @contextmanager
 def _one_core():
-    if not hasattr(os, "sched_getaffinity"):
-        yield
-        return
-    old = os.sched_getaffinity(0)
-    os.sched_setaffinity(0, {min(old)})
-    try:
-        yield
-    finally:
-        os.sched_setaffinity(0, old)
+    """Pin the process to one CPU (where the OS allows) and the kernels to one thread."""
+    with using_threads(1):
+        if not hasattr(os, "sched_getaffinity"):
+            yield
+            return
+        old = os.sched_getaffinity(0)
+        os.sched_setaffinity(0, {min(old)})
+        try:
+            yield
+        finally:
+            os.sched_setaffinity(0, old)
 
 
-def _rate(func, n: int, repeat: int = 3) -> float:
-    func()  # warm up (compilation, caches)
-    best = math.inf
+def _timed(func: Callable[[], Any], n: int, repeat: int) -> tuple[float, float, Any]:
+    """(cases/s by the wall clock, cases/s by the process's CPU time, the result): the best of ``repeat`` runs
+    after a warm-up (compilation, caches)."""
+    result = func()
+    wall = cpu = math.inf
     for _ in range(repeat):
-        t0 = time.perf_counter()
-        func()
-        best = min(best, time.perf_counter() - t0)
-    return n / best
+        w0, c0 = time.perf_counter(), time.process_time()
+        result = func()
+        wall, cpu = min(wall, time.perf_counter() - w0), min(cpu, time.process_time() - c0)
+    return n / wall, n / max(cpu, 1e-9), result
 
+
+def _same_bytes(a: batch._Result, b: batch._Result) -> bool:
+    da, db = a.to_dict(), b.to_dict()
+    return da.keys() == db.keys() and all(np.asarray(da[k]).tobytes() == np.asarray(db[k]).tobytes() for k in da)
+
+
+def _observations(cases: dict[str, np.ndarray], st: batch.BatchStop) -> dict[str, np.ndarray]:
+    """The friction stops of ``cases`` as identification inputs (alpha0, alpha_F, t_F, E_S, c, m1, m2, L1)."""
+    fr = st.stopped_by == 0
+    return dict(alpha0=cases["alpha0"][fr], alpha_final=st.alpha_final[fr], stop_time=st.stop_time[fr],
+                E_S=cases["E_S"][fr], c=cases["c"][fr], m1=cases["m1"][fr], m2=cases["m2"][fr], L1=cases["L1"][fr])
+
+
+def _throughput(cases: dict[str, np.ndarray], threads: int, repeat: int) -> dict[str, dict[str, Any]]:
+    """Kernel rates on one core and on ``threads`` threads, and whether both give the same bytes."""
+    n = len(cases["E_S"])
+    with _one_core():
+        st_wall, st_cpu, st1 = _timed(lambda: batch.stop_time(**cases), n, repeat)
+        obs = _observations(cases, st1)
+        m = len(obs["E_S"])
+        id_wall, id_cpu, id1 = _timed(lambda: batch.identify(**obs), m, repeat)
+    with using_threads(threads):
+        st_all, st_all_cpu, stn = _timed(lambda: batch.stop_time(**cases), n, repeat)
+        id_all, id_all_cpu, idn = _timed(lambda: batch.identify(**obs), m, repeat)
+    return {
+        "stop_time": {"cases": n, "cases_per_s": st_wall, "cpu_cases_per_s": st_cpu, "all_cores_cases_per_s": st_all,
+                      "all_cores_cpu_cases_per_s": st_all_cpu, "all_cores_ratio": st_all / st_wall,
+                      "all_cores_identical": _same_bytes(st1, stn)},
+        "identify": {"cases": m, "cases_per_s": id_wall, "cpu_cases_per_s": id_cpu, "all_cores_cases_per_s": id_all,
+                     "all_cores_cpu_cases_per_s": id_all_cpu, "all_cores_ratio": id_all / id_wall,
+                     "all_cores_identical": _same_bytes(id1, idn), "infeasible": int(np.sum(id1.status != 0))},
+    }
+
+
+# -- the ordinary way: scipy one case at a time ----------------------------------------------------------------
 
 def _solve_ivp_stop(E_S, alpha0, F1, F2, k, m2, L1) -> float:
+    """t_F [s] by solve_ivp (DOP853, rtol 1e-10, atol 1e-12) on Eq. 3-4 with terminal events (stop, flat)."""
     from scipy.integrate import solve_ivp
 
     q = 1.0 / (m2 * L1)
@@ -74,10 +165,12 @@ def _solve_ivp_stop(E_S, alpha0, F1, F2, k, m2, L1) -> float:
     flat.terminal, flat.direction = True, 1
     ad0 = math.sqrt(E_S / (m2 * L1 * L1 * (k + math.sin(alpha0) ** 2)))
     sol = solve_ivp(rhs, (0.0, 1e4), [alpha0, ad0], method="DOP853", rtol=1e-10, atol=1e-12, events=(stop, flat))
-    return min(te[0] for te in sol.t_events if te.size)
+    times = [te[0] for te in sol.t_events if te.size]
+    return min(times) if times else math.nan
 
 
 def _quad_brentq_identify(alpha0, aF, tF, E_S, k, m2, L1) -> tuple[float, float]:
+    """(F1, F2) [N] by brentq on F1 in [0, F1*] of quad(Eq. 10) = t_F (epsrel 1e-12)."""
     from scipy.integrate import quad
     from scipy.optimize import brentq
 
@@ -97,72 +190,259 @@ def _quad_brentq_identify(alpha0, aF, tF, E_S, k, m2, L1) -> tuple[float, float]
     return F1, F2s * (1 - F1 / F1s)
 
 
-def run_bench(quick: bool = False, seed: int = 0, log=print) -> dict[str, Any]:
-    """Run the benchmarks; returns the numbers (the ``--json`` keys). ``log`` receives progress lines."""
+# -- accuracy against mpmath ------------------------------------------------------------------------------------
+
+def _strata(sample: str) -> list[tuple[str, float]]:
+    return [(name, share) for name, share, _ in WIDE_STRATA] if sample == "wide" else [("bench", 1.0)]
+
+
+def _accuracy_cases(sample: str, per: int, seed: int, friction_stops: bool) -> tuple[dict[str, np.ndarray], Any]:
+    """``per`` cases of the bench sample, or ``per`` of each stratum of the wide sample (fewer where a stratum
+    has fewer friction stops, asked for with ``friction_stops``); with their kernel stops."""
+    if sample == "bench":
+        draw = random_releases(per if not friction_stops else 3 * per, seed=seed,
+                               limit_share=0.0 if friction_stops else 0.15)
+        draw["stratum"] = np.zeros(len(draw["E_S"]), dtype=int)
+    else:
+        draw = wide_releases(max(200, int(per / 0.05) * 4), seed=seed, strata=True)
+    st = batch.stop_time(**{k: draw[k] for k in _KEYS})
+    keep = np.zeros(len(draw["E_S"]), dtype=bool)
+    for j in range(len(_strata(sample))):
+        ok = (draw["stratum"] == j) & ((st.stopped_by == 0) if friction_stops else (st.stopped_by != 2))
+        keep[np.flatnonzero(ok)[:per]] = True
+    return {k: v[keep] for k, v in draw.items()}, batch.BatchStop(st.stop_time[keep], st.alpha_final[keep],
+                                                                   st.stopped_by[keep])
+
+
+def _k(case: dict[str, np.ndarray], i: int) -> float:
+    return float(case["c"][i] * case["m1"][i] / case["m2"][i])
+
+
+def _stop_args(case: dict[str, np.ndarray], i: int) -> tuple[float, ...]:
+    return (float(case["E_S"][i]), float(case["alpha0"][i]), float(case["F1"][i]), float(case["F2"][i]), _k(case, i),
+            float(case["m2"][i]), float(case["L1"][i]))
+
+
+def _stop_sensitivity(args: tuple[float, ...]) -> float:
+    """Most relative change of the exact t_F when one input (E_S, alpha0, F1, F2, k, m2, L1) moves by one ulp."""
+    from .reference import stop_time_mpf
+
+    t0 = stop_time_mpf(*args)[0]
+    out = 0.0
+    for j, x in enumerate(args):
+        moved = list(args)
+        moved[j] = float(np.nextafter(x, math.inf))
+        out = max(out, float(abs(stop_time_mpf(*moved)[0] / t0 - 1)))
+    return out
+
+
+def _identify_sensitivity(args: tuple[float, ...], F1: float) -> float:
+    """Most change of the exact (F1/F1*, F2/F2*) when one input (alpha0, alpha_F, t_F, E_S, k, m2, L1) moves by
+    one ulp."""
+    from .reference import identify_lambda_mp
+
+    lam, F1s, F2s = identify_lambda_mp(*args, start=F1)
+    out = 0.0
+    for j, x in enumerate(args):
+        moved = list(args)
+        moved[j] = float(np.nextafter(x, math.inf))
+        lm, F1m, F2m = identify_lambda_mp(*moved, start=F1)
+        out = max(out, float(abs(lm * F1m - lam * F1s) / F1s), float(abs((1 - lm) * F2m - (1 - lam) * F2s) / F2s))
+    return out
+
+
+def _weighted_median(values: np.ndarray, weights: np.ndarray) -> float:
+    order = np.argsort(values)
+    cum = np.cumsum(weights[order])
+    return float(values[order][np.searchsorted(cum, 0.5 * cum[-1])])
+
+
+def _stats(err: np.ndarray, stratum: np.ndarray, sample: str) -> tuple[float | None, float | None]:
+    """(median weighted by the strata's shares, worst) of the finite errors; None where there are none."""
+    ok = np.isfinite(err)
+    if not ok.any():
+        return None, None
+    shares = np.array([s for _, s in _strata(sample)])
+    counts = np.bincount(stratum[ok], minlength=shares.size)
+    w = shares[stratum[ok]] / counts[stratum[ok]]
+    return _weighted_median(err[ok], w), float(np.max(err[ok]))
+
+
+def _stop_accuracy(sample: str, sizes: Sizes, seed: int, log) -> dict[str, Any]:
+    from .reference import stop_time_mp
+
+    case, st = _accuracy_cases(sample, sizes.stop_time, seed, friction_stops=False)
+    n = len(case["E_S"])
+    ref, ivp, ivp_time = np.empty(n), np.empty(n), np.empty(n)
+    for i in range(n):
+        args = _stop_args(case, i)
+        t0 = time.perf_counter()
+        try:
+            ivp[i] = _solve_ivp_stop(*args)
+        except (ValueError, RuntimeError, ZeroDivisionError, OverflowError):
+            ivp[i] = math.nan
+        ivp_time[i] = time.perf_counter() - t0
+        ref[i] = stop_time_mp(*args)[0]
+        if (i + 1) % 20 == 0 or i + 1 == n:
+            log(f"  {sample} sample: {i + 1}/{n} stop times against mpmath")
+    with np.errstate(invalid="ignore"):
+        err_k, err_ivp = np.abs(st.stop_time / ref - 1), np.abs(ivp / ref - 1)
+    return _accuracy_summary(sample, case["stratum"], err_k, err_ivp, ivp_time, "solve_ivp",
+                             lambda i: _stop_sensitivity(_stop_args(case, i)), sizes)
+
+
+def _identify_accuracy(sample: str, sizes: Sizes, seed: int, log) -> dict[str, Any]:
     import warnings
 
-    n = 200_000 if quick else 1_000_000
-    cases = random_releases(n, seed=seed)
-    out: dict[str, Any] = {"cases": n, "quick": quick}
-    m = 20 if quick else 60
-    sample = random_releases(m, seed=seed + 1)
-    ks = sample["c"] * sample["m1"] / sample["m2"]
-    args = [(sample["E_S"][i], sample["alpha0"][i], sample["F1"][i], sample["F2"][i], ks[i], sample["m2"][i],
-             sample["L1"][i]) for i in range(m)]
-    mi = 8 if quick else 20
-    ident_sample = random_releases(mi, seed=seed + 2, limit_share=0.0)
-    ki = ident_sample["c"] * ident_sample["m1"] / ident_sample["m2"]
-    sti = batch.stop_time(**ident_sample)
-    iargs = [(ident_sample["alpha0"][i], sti.alpha_final[i], sti.stop_time[i], ident_sample["E_S"][i], ki[i],
-              ident_sample["m2"][i], ident_sample["L1"][i]) for i in range(mi)]
-    with _one_core():
-        out["stop_time_cases_per_s"] = _rate(lambda: batch.stop_time(**cases), n)
-        st = batch.stop_time(**cases)
-        fr = st.stopped_by == 0
-        obs = dict(alpha0=cases["alpha0"][fr], alpha_final=st.alpha_final[fr], stop_time=st.stop_time[fr],
-                   E_S=cases["E_S"][fr], c=cases["c"][fr], m1=cases["m1"][fr], m2=cases["m2"][fr], L1=cases["L1"][fr])
-        out["identify_cases_per_s"] = _rate(lambda: batch.identify(**obs), int(fr.sum()))
-        log(f"kernels: {out['stop_time_cases_per_s']:,.0f} stop times/s, {out['identify_cases_per_s']:,.0f} "
-            "identifications/s on one core")
-        # the ordinary way, one case at a time, on samples
-        t0 = time.perf_counter()
-        t_ivp = np.array([_solve_ivp_stop(*a) for a in args])
-        per_ivp = (time.perf_counter() - t0) / m
+    from .reference import identify_lambda_mp
+
+    case, st = _accuracy_cases(sample, sizes.identify, seed, friction_stops=True)
+    n = len(case["E_S"])
+    ident = batch.identify(case["alpha0"], st.alpha_final, st.stop_time, case["E_S"], case["c"], case["m1"],
+                           case["m2"], case["L1"])
+    err_k, err_q, q_time = np.full(n, np.nan), np.full(n, np.nan), np.empty(n)
+    args = [(float(case["alpha0"][i]), float(st.alpha_final[i]), float(st.stop_time[i]), float(case["E_S"][i]),
+             _k(case, i), float(case["m2"][i]), float(case["L1"][i])) for i in range(n)]
+    for i in range(n):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             t0 = time.perf_counter()
-            qb = [_quad_brentq_identify(*a) for a in iargs]
-            per_qb = (time.perf_counter() - t0) / mi
-    out["solve_ivp_cases_per_s"] = 1.0 / per_ivp
-    out["stop_time_speedup_vs_solve_ivp"] = out["stop_time_cases_per_s"] * per_ivp
-    out["quad_brentq_cases_per_s"] = 1.0 / per_qb
-    out["identify_speedup_vs_quad_brentq"] = out["identify_cases_per_s"] * per_qb
-    log(f"scipy, one case at a time: solve_ivp {1 / per_ivp:,.0f} cases/s, quad + brentq {1 / per_qb:,.1f} cases/s")
-    # accuracy against mpmath on the same sample cases
-    log(f"accuracy vs mpmath: 30-digit references of {len(args)} stop times and {len(iargs)} identifications "
-        "(tens of seconds) ...")
-    ref = np.array([stop_time_mp(*a)[0] for a in args])
-    kern = batch.stop_time(**sample).stop_time
-    err_k = np.abs(kern / ref - 1)
-    err_ivp = np.abs(t_ivp / ref - 1)
-    out.update(stop_time_median_rel_error=float(np.median(err_k)), stop_time_max_rel_error=float(np.max(err_k)),
-               solve_ivp_median_rel_error=float(np.median(err_ivp)), solve_ivp_max_rel_error=float(np.max(err_ivp)))
-    ident = batch.identify(ident_sample["alpha0"], sti.alpha_final, sti.stop_time, ident_sample["E_S"],
-                           ident_sample["c"], ident_sample["m1"], ident_sample["m2"], ident_sample["L1"])
-    err_i, err_q = [], []
-    for i, a in enumerate(iargs):
-        F1, F2 = identify_mp(*a)
-        F1s, F2s = ident.F1_max[i], ident.F2_max[i]
-        err_i.append(max(abs(ident.F1[i] - F1) / F1s, abs(ident.F2[i] - F2) / F2s))
-        err_q.append(max(abs(qb[i][0] - F1) / F1s, abs(qb[i][1] - F2) / F2s))
-    out.update(identify_median_rel_error=float(np.median(err_i)), identify_max_rel_error=float(np.max(err_i)),
-               quad_brentq_median_rel_error=float(np.median(err_q)), quad_brentq_max_rel_error=float(np.max(err_q)),
-               accuracy_cases_stop_time=m, accuracy_cases_identify=mi)
-    log(f"accuracy vs mpmath: kernel t_F median {out['stop_time_median_rel_error']:.1e} max "
-        f"{out['stop_time_max_rel_error']:.1e}; identification median {out['identify_median_rel_error']:.1e} max "
-        f"{out['identify_max_rel_error']:.1e}")
+            try:
+                qb = _quad_brentq_identify(*args[i])
+            except (ValueError, RuntimeError, ZeroDivisionError, OverflowError):
+                qb = (math.nan, math.nan)
+            q_time[i] = time.perf_counter() - t0
+        start = float(ident.F1[i]) if ident.status[i] == 0 else None
+        try:
+            lam, F1s, F2s = identify_lambda_mp(*args[i], start=start)
+        except (ValueError, ZeroDivisionError):  # no root on the line in exact arithmetic either: nothing to compare
+            continue
+        if ident.status[i] == 0:
+            err_k[i] = max(float(abs(ident.F1[i] / F1s - lam)), float(abs(ident.F2[i] / F2s - (1 - lam))))
+        if math.isfinite(qb[0]):
+            err_q[i] = max(float(abs(qb[0] / F1s - lam)), float(abs(qb[1] / F2s - (1 - lam))))
+        if (i + 1) % 10 == 0 or i + 1 == n:
+            log(f"  {sample} sample: {i + 1}/{n} identifications against mpmath")
+    out = _accuracy_summary(sample, case["stratum"], err_k, err_q, q_time, "quad_brentq",
+                            lambda i: _identify_sensitivity(args[i], float(ident.F1[i])), sizes)
+    out["infeasible"] = int(np.sum(ident.status != 0))
+    return out
+
+
+def _accuracy_summary(sample, stratum, err_k, err_b, base_time, base, sensitivity, sizes) -> dict[str, Any]:
+    """Median and worst of the kernel and the baseline, per stratum on the wide sample, the baseline's rate
+    (per case, the strata weighed by their shares) and the conditioning of the worst case(s)."""
+    shares = np.array([s for _, s in _strata(sample)])
+    counts = np.bincount(stratum, minlength=shares.size)
+    w = shares[stratum] / counts[stratum]
+    out: dict[str, Any] = {"accuracy_cases": int(err_k.size)}
+    out["median_rel_error"], out["max_rel_error"] = _stats(err_k, stratum, sample)
+    out[f"{base}_median_rel_error"], out[f"{base}_max_rel_error"] = _stats(err_b, stratum, sample)
+    out[f"{base}_cases_per_s"] = float(w.sum() / np.sum(w * base_time))
+    out[f"{base}_failures"] = int(np.sum(~np.isfinite(err_b)))
+    worst = int(np.argmax(np.where(np.isfinite(err_k), err_k, -1.0)))
+    out["worst_case_sensitivity_1ulp"] = sensitivity(worst) if np.isfinite(err_k[worst]) else None
+    if sample == "wide":
+        rows = []
+        for j, (name, _) in enumerate(_strata(sample)):
+            sel = np.flatnonzero((stratum == j) & np.isfinite(err_k))
+            row: dict[str, Any] = {"stratum": name, "cases": int(sel.size), "median_rel_error": None,
+                                   "max_rel_error": None, f"{base}_max_rel_error": None, "sensitivity_1ulp": None}
+            if sel.size:
+                bad = sel[int(np.argmax(err_k[sel]))]
+                row.update(median_rel_error=float(np.median(err_k[sel])), max_rel_error=float(err_k[bad]))
+                fb = err_b[sel][np.isfinite(err_b[sel])]
+                row[f"{base}_max_rel_error"] = float(np.max(fb)) if fb.size else None
+                if bad == worst:
+                    row["sensitivity_1ulp"] = out["worst_case_sensitivity_1ulp"]
+                elif sizes.strata_conditioning:
+                    row["sensitivity_1ulp"] = sensitivity(bad)
+            rows.append(row)
+        out["strata"] = rows
+        out["worst_stratum"] = WIDE_STRATA[int(stratum[worst])][0]
+    return out
+
+
+# -- the run ----------------------------------------------------------------------------------------------------
+
+def _sample(sample: str, n: int, seed: int) -> dict[str, np.ndarray]:
+    return random_releases(n, seed=seed) if sample == "bench" else wide_releases(n, seed=seed)
+
+
+def _status(value: float | None, bound: float, above: bool) -> str:
+    if value is None or not math.isfinite(value):
+        return "not measured"
+    return "met" if (value >= bound if above else value <= bound) else "not met"
+
+
+def _targets(out: dict[str, Any], cores: int) -> list[dict[str, Any]]:
+    """One line per target of issue 12: what, the value measured, and met / not met / not measured."""
+    rows = []
+    for key, text, sample, what, bound in TARGETS:
+        group, name = what.split(".")
+        value = out[sample][group][name]
+        rows.append({"target": key, "text": text, "value": value, "status": _status(value, bound, True)})
+    for sample in ("bench", "wide"):
+        for group, label in (("stop_time", "stop time t_F"), ("identify", "identification F1, F2")):
+            g = out[sample][group]
+            med, worst = g["median_rel_error"], g["max_rel_error"]
+            status = ("not measured" if med is None else
+                      "met" if med <= _ACCURACY_MEDIAN and worst <= _ACCURACY_WORST else "not met")
+            sens = g["worst_case_sensitivity_1ulp"]
+            where = f" in '{g['worst_stratum']}'" if "worst_stratum" in g else ""
+            note = "" if worst is None else f" (worst {worst:.1e}{where}" + (
+                "" if sens is None else f"; one ulp of an input moves the exact answer by {sens:.1e} there") + (
+                ": as accurate as the inputs' rounding allows" if sens and worst <= _CONDITIONED * sens else "") + ")"
+            rows.append({"target": f"{group}_accuracy_{sample}", "value": [med, worst], "status": status,
+                         "text": f"{label} vs mpmath, {sample} sample: median <= 1e-12, worst <= 1e-10{note}"})
+    for sample in ("bench", "wide"):
+        ratio = min(out[sample]["stop_time"]["all_cores_ratio"], out[sample]["identify"]["all_cores_ratio"])
+        same = out[sample]["stop_time"]["all_cores_identical"] and out[sample]["identify"]["all_cores_identical"]
+        status = "not measured" if cores < 2 else ("met" if ratio >= _CORES and same else "not met")
+        rows.append({"target": f"two_cores_{sample}", "value": ratio, "status": status,
+                     "text": f"two cores >= 1.8x one core, {sample} sample, the same bytes (measured on {cores} "
+                             f"thread(s): {ratio:.2f}x, {'identical' if same else 'DIFFERENT'})"})
+    return rows
+
+
+def run_bench(quick: bool = False, seed: int = 0, log: Callable[[str], Any] = print, *, threads: int | None = None,
+              sizes: Sizes | None = None) -> dict[str, Any]:
+    """Run the benchmarks; returns the numbers (the ``--json`` keys).
+
+    Parameters
+    ----------
+    quick : bool
+        :data:`QUICK` sizes and no Dask run (else :data:`FULL`).
+    seed : int
+        Seed of the samples.
+    log : callable
+        Receives progress lines.
+    threads : int, optional
+        Threads of the all-cores measurement, 1 to ``numba.config.NUMBA_NUM_THREADS`` (default: all of them;
+        the two-core target is "not measured" with fewer than two).
+    sizes : Sizes, optional
+        Overrides the sizes of ``quick``.
+    """
+    cores = max_threads() if threads is None else check_threads(threads)
+    sizes = sizes or (QUICK if quick else FULL)
+    out: dict[str, Any] = {"quick": quick, "seed": seed, "threads": cores, "cpu_count": os.cpu_count()}
+    for k, (sample, draw) in enumerate((("bench", "sampling.random_releases"), ("wide", "sampling.wide_releases"))):
+        cases = _sample(sample, sizes.cases, seed + 10 * k)
+        group = {"sample": draw, **_throughput(cases, cores, sizes.repeat)}
+        log(f"{sample} sample ({draw}, {sizes.cases:,} cases), one core: "
+            f"{group['stop_time']['cases_per_s']:,.0f} stop times/s, {group['identify']['cases_per_s']:,.0f} "
+            f"identifications/s; {cores} threads: {group['stop_time']['all_cores_ratio']:.2f}x and "
+            f"{group['identify']['all_cores_ratio']:.2f}x")
+        log(f"{sample} sample: scipy one case at a time and 30-digit mpmath references (progress below) ...")
+        group["stop_time"].update(_stop_accuracy(sample, sizes, seed + 10 * k + 1, log))
+        group["identify"].update(_identify_accuracy(sample, sizes, seed + 10 * k + 2, log))
+        for name, base in (("stop_time", "solve_ivp"), ("identify", "quad_brentq")):
+            g = group[name]
+            g[f"speedup_vs_{base}"] = g["cases_per_s"] / g[f"{base}_cases_per_s"]
+        out[sample] = group
+    out["targets"] = _targets(out, cores)
     if not quick:
-        out.update(_uq_dask_1e8(log))
+        out["uq_dask"] = _uq_dask_1e8(log)
     return out
 
 
@@ -175,7 +455,7 @@ def _uq_dask_1e8(log) -> dict[str, Any]:
     try:
         import psutil  # comes with dask.distributed
     except ImportError:
-        return {"uq_dask_skipped": "dask not installed (pip install 'quickrelease[dask]')"}
+        return {"skipped": "dask not installed (pip install 'quickrelease[dask]')"}
     from .case import load_case
     from .uq import run_uq
 
@@ -206,5 +486,5 @@ def _uq_dask_1e8(log) -> dict[str, Any]:
         stop.set()
         thread.join()
     log(f"uq 1e8 samples on 2 Dask workers: {wall:.1f} s, peak memory {peak[0] / 2**30:.2f} GiB")
-    return {"uq_dask_samples": 100_000_000, "uq_dask_workers": 2, "uq_dask_wall_s": wall,
-            "uq_dask_peak_memory_GiB": peak[0] / 2**30, "uq_dask_F1_p50_N": result.percentiles["F1"]["p50"]}
+    return {"samples": 100_000_000, "workers": 2, "wall_s": wall, "peak_memory_GiB": peak[0] / 2**30,
+            "F1_p50_N": result.percentiles["F1"]["p50"]}

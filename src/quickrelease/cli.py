@@ -98,6 +98,15 @@ EnergyOpt = Annotated[str | None, typer.Option("--energy", help="Stored strain e
 Alpha0Opt = Annotated[str | None, typer.Option("--alpha0", help="Angle of the bars with the loading axis at release, e.g. '0.2' or '11.46 deg'.")]
 MassOpt = Annotated[str | None, typer.Option("--mass-model", metavar="<distributed|lumped|C>", help="distributed (c = 2/3, default), lumped (c = 1) or a number c.")]
 JsonOpt = Annotated[bool, typer.Option("--json", help="Print one JSON object instead of a table.")]
+ThreadsOpt = Annotated[int | None, typer.Option("--threads", "-t", help="Threads of the compiled kernels, 1 to the cores numba may use (default: all; results do not depend on it).")]
+
+
+def _check_threads(threads: int | None, backend: str = "numpy") -> None:
+    """--threads: an integer in [1, NUMBA_NUM_THREADS], and not with the Dask backend (checked before any work)."""
+    from ._threads import check_threads, refuse_with_dask
+
+    check_threads(threads, "--threads")
+    refuse_with_dask(threads, backend, "--threads")
 
 
 def _fail(message: str) -> None:
@@ -450,6 +459,7 @@ def uq(
     workers: Annotated[int, typer.Option("--workers", help="Workers of the LocalCluster.")] = 2,
     out: Annotated[Path | None, typer.Option("--out", "-o", help="Folder for chunks, uq.json and the corner figure.")] = None,
     resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted run in --out (same inputs only).")] = False,
+    threads: Annotated[int | None, typer.Option("--threads", "-t", help="Threads of the compiled kernels, 1 to the cores numba may use (default: all; results do not depend on it); numpy backend only (a Dask task runs on one thread).")] = None,
     overwrite: OverwriteOpt = False,
     as_json: JsonOpt = False,
 ) -> None:
@@ -457,10 +467,11 @@ def uq(
     from .case import load_case
     from .uq import run_uq
 
+    _check_threads(threads, backend)
     case = load_case(case_file)
     result = run_uq(case, samples, seed=seed, chunk=chunk, backend=backend, scheduler=scheduler, workers=workers,
                     out=out, resume=resume, overwrite=overwrite, progress=not as_json and sys.stderr.isatty(),
-                    log=lambda line: _echo(f"note: {line}", err=True))
+                    log=lambda line: _echo(f"note: {line}", err=True), threads=threads)
     if as_json:
         _print_json(result.summary())
         return
@@ -493,6 +504,7 @@ def sweep_command(
     workers: Annotated[int, typer.Option("--workers", help="Workers of the LocalCluster.")] = 2,
     resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted dask sweep in --file (same inputs only).")] = False,
     block_rows: Annotated[int | None, typer.Option("--block-rows", help="Rows of the first grid per Dask block (default: about 10^6 points a block).")] = None,
+    threads: Annotated[int | None, typer.Option("--threads", "-t", help="Threads of the compiled kernels, 1 to the cores numba may use (default: all; results do not depend on it); numpy backend only (a Dask task runs on one thread).")] = None,
     overwrite: OverwriteOpt = False,
     as_json: JsonOpt = False,
 ) -> None:
@@ -502,13 +514,14 @@ def sweep_command(
     from .runfolder import provenance
     from .sweep import heatmap_figure, parse_grid, sweep
 
+    _check_threads(threads, backend)
     out = _file_option(file, out_old, "sweep")
     grids = dict(parse_grid(g) for g in grid)
     case = load_case(case_file)
     with _busy("sweeping the grid"):
         ds = sweep(case, grids, backend=backend, out=out, scheduler=scheduler, workers=workers,
                    block_rows=block_rows, resume=resume, overwrite=overwrite,
-                   log=lambda line: _echo(f"note: {line}", err=True))
+                   log=lambda line: _echo(f"note: {line}", err=True), threads=threads)
         figs = save_figure(heatmap_figure(ds), out.parent, out.name.rsplit(".", 1)[0] + "_heatmaps")
     summary = {"file": str(out), "dims": {k: int(v) for k, v in ds.sizes.items()},
                "stop_time_s": [float(ds.stop_time.min()),  # creeping cases (stopped_by 2, t_F = inf): counted apart
@@ -903,6 +916,7 @@ def _building_campaign_tables(result) -> None:
 def plan(
     case_file: Annotated[Path, typer.Argument(help="Case file: the planned push ([test] force, alpha0), the friction estimate, and optionally [fuse], [building], [plan].")],
     out: Annotated[Path | None, typer.Option("--out", "-o", help="Also write plan.json, the figures and report.html here.")] = None,
+    threads: ThreadsOpt = None,
     overwrite: OverwriteOpt = False,
     as_json: JsonOpt = False,
 ) -> None:
@@ -910,11 +924,12 @@ def plan(
     from .case import load_case
     from .workflow import results_folder, run_case, write_results
 
+    _check_threads(threads)
     case = load_case(case_file)
     if out is not None:
         results_folder(case, out, plan=True, overwrite=overwrite)  # pre-flight
     with _busy("planning the test"):
-        result = run_case(case, plan=True)
+        result = run_case(case, plan=True, threads=threads)
     plan_result = result.plan
     paths = write_results(result, out, overwrite=overwrite) if out is not None else {}
     summary = plan_result.summary()
@@ -972,18 +987,65 @@ def plan(
 @_guard
 def bench(
     quick: Annotated[bool, typer.Option("--quick", help="Smaller samples; skip the 1e8-sample Dask run.")] = False,
+    threads: Annotated[int | None, typer.Option("--threads", "-t", help="Threads of the all-cores measurement, 1 to the cores numba may use (default: all).")] = None,
     as_json: JsonOpt = False,
 ) -> None:
-    """Benchmarks: kernel throughput on one core vs scipy (same run), accuracy vs mpmath, uq 1e8 on Dask."""
+    """Benchmarks on the bench and the wide sample: kernel throughput on one core and on all, vs scipy (same run), accuracy vs mpmath, the targets of issue 12."""
     from .bench import run_bench
 
-    result = run_bench(quick=quick, log=(lambda line: None) if as_json else (lambda line: _echo(line, err=True)))
+    _check_threads(threads)
+    result = run_bench(quick=quick, threads=threads, log=lambda line: _echo(line, err=True))
     if as_json:
         _print_json(result)
         return
-    from .display import quantity_rows
+    _bench_tables(result)
 
-    _table("quickrelease bench", quantity_rows(result), ("quantity", "value"))
+
+def _bench_tables(result: dict[str, Any]) -> None:
+
+    def e(x):  # an error to two digits, exponents written one way (7.8e-6)
+        return "-" if x is None else f"{x:.1e}".replace("e-0", "e-").replace("e+0", "e").replace("e+", "e")
+
+    n = result["threads"]
+    for sample in ("bench", "wide"):
+        g = result[sample]
+        st, idn = g["stop_time"], g["identify"]
+        rows = [
+            ("one core, wall [cases/s]", f"{st['cases_per_s']:,.0f}", f"{idn['cases_per_s']:,.0f}"),
+            ("one core, CPU time [cases/s]", f"{st['cpu_cases_per_s']:,.0f}", f"{idn['cpu_cases_per_s']:,.0f}"),
+            (f"{n} thread(s), wall [cases/s]", f"{st['all_cores_cases_per_s']:,.0f}",
+             f"{idn['all_cores_cases_per_s']:,.0f}"),
+            (f"{n} thread(s) / one core; same bytes", f"{st['all_cores_ratio']:.2f}x; {st['all_cores_identical']}",
+             f"{idn['all_cores_ratio']:.2f}x; {idn['all_cores_identical']}"),
+            ("scipy one case at a time [cases/s]", f"solve_ivp {st['solve_ivp_cases_per_s']:,.0f}",
+             f"quad + brentq {idn['quad_brentq_cases_per_s']:,.1f}"),
+            ("speed-up vs scipy", f"{st['speedup_vs_solve_ivp']:,.0f}x", f"{idn['speedup_vs_quad_brentq']:,.0f}x"),
+            ("kernel error vs mpmath: median, worst", f"{e(st['median_rel_error'])}, {e(st['max_rel_error'])}",
+             f"{e(idn['median_rel_error'])}, {e(idn['max_rel_error'])}"),
+            ("1-ulp input sensitivity at the worst", e(st["worst_case_sensitivity_1ulp"]),
+             e(idn["worst_case_sensitivity_1ulp"])),
+            ("scipy error vs mpmath: median, worst",
+             f"{e(st['solve_ivp_median_rel_error'])}, {e(st['solve_ivp_max_rel_error'])}",
+             f"{e(idn['quad_brentq_median_rel_error'])}, {e(idn['quad_brentq_max_rel_error'])}"),
+            ("cases: kernels; accuracy vs mpmath", f"{st['cases']:,}; {st['accuracy_cases']}",
+             f"{idn['cases']:,}; {idn['accuracy_cases']}"),
+        ]
+        _table(f"{sample} sample ({g['sample']})", rows, ("", "stop time t_F", "identification F1, F2"))
+        if sample == "wide":
+            rows = [(a["stratum"], f"{a['cases']}, {b['cases']}", e(a["median_rel_error"]), e(a["max_rel_error"]),
+                     e(a["sensitivity_1ulp"]), e(b["median_rel_error"]), e(b["max_rel_error"]), e(b["sensitivity_1ulp"]))
+                    for a, b in zip(st["strata"], idn["strata"], strict=True)]
+            _table(f"wide sample by stratum: error vs mpmath (worst t_F in '{st['worst_stratum']}', worst F1, F2 in "
+                   f"'{idn['worst_stratum']}')", rows,
+                   ("stratum", "cases", "t_F median", "t_F worst", "1-ulp sens.", "F1,F2 median", "F1,F2 worst",
+                    "1-ulp sens."))
+    for t in result["targets"]:
+        _echo(f"{t['status']:>12}: {t['text']}")
+    if "uq_dask" in result:
+        u = result["uq_dask"]
+        _echo(u["skipped"] if "skipped" in u else
+              f"uq, 1e8 samples on {u['workers']} Dask workers: {u['wall_s']:.1f} s, peak memory "
+              f"{u['peak_memory_GiB']:.2f} GiB")
 
 
 def main() -> None:

@@ -2,12 +2,14 @@
 
 :func:`map_chunks` submits one task per chunk to a cluster (an existing scheduler, or a LocalCluster
 of single-threaded worker processes) and yields results as they finish, so the caller can store each
-one at once; no more than a few chunks are in flight beyond the workers' count, which bounds memory.
+one at once; no more than a few chunks are in flight beyond the workers' count, which bounds memory. Each task
+runs its compiled kernels on one thread (:func:`quickrelease.using_threads`): the parallelism is the workers'.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Iterator
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -77,6 +79,8 @@ def map_chunks(func: Callable[..., Any], arguments: list[tuple], scheduler: str 
     client, cluster = _client(scheduler, workers)
     from dask.distributed import as_completed
 
+    func = partial(on_one_thread, func)
+
     try:
         limit = in_flight or 2 * max(workers, len(client.scheduler_info().get("workers", {})) or 1)
         pending = iter(arguments)
@@ -92,6 +96,14 @@ def map_chunks(func: Callable[..., Any], arguments: list[tuple], scheduler: str 
         client.close()
         if cluster is not None:
             cluster.close()
+
+
+def on_one_thread(func: Callable[..., Any], *args: Any) -> Any:
+    """``func(*args)`` with the compiled kernels on one thread (what a Dask task runs)."""
+    from ._threads import using_threads
+
+    with using_threads(1):
+        return func(*args)
 
 
 def _take(iterator, n: int) -> list:

@@ -21,6 +21,7 @@ import numpy as np
 from . import batch
 from ._style import STYLE as _STYLE
 from ._style import styled, unit_text
+from ._threads import check_threads, using_threads
 from ._validate import check_size
 from .building import FreeVibration, Isolation, free_vibration, pushed_state
 from .case import BuildingSpec, Case, Distribution
@@ -395,13 +396,20 @@ def _percentiles(values: np.ndarray) -> dict[str, float]:
 
 
 def release_envelope(case: Case, E_S: float | None = None, alpha0: float | None = None, samples: int | None = None,
-                     seed: int | None = None) -> Envelope:
-    """The release envelope of a case (or of another E_S, alpha0) over its friction estimate (batch kernels)."""
+                     seed: int | None = None, *, threads: int | None = None) -> Envelope:
+    """The release envelope of a case (or of another E_S, alpha0) over its friction estimate (batch kernels).
+
+    ``threads``: threads of the compiled kernels, 1 to ``numba.config.NUMBA_NUM_THREADS`` (default: numba's
+    current count, all cores unless changed; :func:`quickrelease.using_threads`); the envelope is the same for
+    any count.
+    """
+    check_threads(threads)
     E_S = case.stored_energy if E_S is None else E_S
     alpha0 = case.alpha0 if alpha0 is None else alpha0
     n = case.plan.samples if samples is None else samples
     check_size("samples", n, n, "friction samples")
-    fs = friction_samples(case, n, case.plan.seed if seed is None else seed)
+    with using_threads(threads):  # the friction samples may come from identifying scattered observations
+        fs = friction_samples(case, n, case.plan.seed if seed is None else seed)
     F1, F2 = fs.nominal
     d = case.device
     c = case.mass_factor
@@ -413,8 +421,9 @@ def release_envelope(case: Case, E_S: float | None = None, alpha0: float | None 
         out["width_final"] = 2.0 * d.L1 * np.sin(out["alpha_final"])
         return out, np.atleast_1d(r.stopped_by)
 
-    nominal, _ = run(np.array([F1]), np.array([F2]))
-    values, stopped = run(fs.F1, fs.F2)
+    with using_threads(threads):
+        nominal, _ = run(np.array([F1]), np.array([F2]))
+        values, stopped = run(fs.F1, fs.F2)
     values["F1"], values["F2"] = fs.F1, fs.F2
     return Envelope(friction=fs.description, F1=float(F1), F2=float(F2), samples=int(fs.F1.size),
                     nominal={k: float(v[0]) for k, v in nominal.items()},
@@ -711,17 +720,19 @@ class PlanResult(Summarised):
         return out
 
 
-def plan_case(case: Case, *, clearance_samples: int = 200) -> PlanResult:
+def plan_case(case: Case, *, clearance_samples: int = 200, threads: int | None = None) -> PlanResult:
     """Plan the test of a case: fuse and angle choices (``[fuse]``), member checks, release envelope over the
     friction estimate, and the clearance with the building (``[building]``).
 
-    The planned push is the case's P and alpha0 (``[test]``); E_S from Eq. 2 unless given.
+    The planned push is the case's P and alpha0 (``[test]``); E_S from Eq. 2 unless given. ``threads``: threads
+    of the release envelope's compiled kernels (:func:`release_envelope`; default all cores).
 
     Raises
     ------
     QuickReleaseError
         When the case has no push force (member checks need P).
     """
+    check_threads(threads)
     if case.push_force is None:
         raise QuickReleaseError(f"{case.source}: planning needs the push force: give [test] force")
     P, a0 = case.push_force, case.alpha0
@@ -738,7 +749,7 @@ def plan_case(case: Case, *, clearance_samples: int = 200) -> PlanResult:
                                   case.device)
     members = member_checks(P, a0, case.device, strength)
     notes += members.notes
-    envelope = release_envelope(case)
+    envelope = release_envelope(case, threads=threads)
     if envelope.clipped_share:
         notes.append(f"{100 * envelope.clipped_share:.2f}% of the friction draws were negative (set to 0) or "
                      "infeasible (dropped)")

@@ -27,6 +27,7 @@ import numpy as np
 
 from . import batch
 from ._style import STYLE, styled
+from ._threads import check_threads, refuse_with_dask, using_threads
 from ._validate import check_size, check_workers
 from .case import Case
 from .errors import ParameterError, QuickReleaseError
@@ -171,7 +172,7 @@ def _check_optional(out: str | Path | None, backend: str) -> None:
 
 def sweep(case: Case, grids: dict[str, np.ndarray], *, backend: str = "numpy", out: str | Path | None = None,
           scheduler: str | None = None, workers: int = 2, block_rows: int | None = None, resume: bool = False,
-          overwrite: bool = False, log: Any = None):
+          overwrite: bool = False, log: Any = None, threads: int | None = None):
     """Release envelope over a grid of inputs; returns an xarray Dataset (dims: the grid names, in order).
 
     Parameters
@@ -193,11 +194,17 @@ def sweep(case: Case, grids: dict[str, np.ndarray], *, backend: str = "numpy", o
         Replace a Zarr store holding another sweep (or discard an unfinished one).
     log : callable, optional
         Receives one line per note (how many blocks a resume computes).
+    threads : int, optional
+        Threads of the compiled kernels, 1 to ``numba.config.NUMBA_NUM_THREADS`` (numpy backend only; default:
+        numba's current count, all cores unless changed; :func:`quickrelease.using_threads`). The values are
+        the same for any count. Refused with the Dask backend, whose tasks run on one thread each.
     """
     grids = {k: np.asarray(v, dtype=float) for k, v in grids.items()}
     _validate(grids, case)
     if backend not in ("numpy", "dask"):
         raise ParameterError("backend", backend, "'numpy' or 'dask'")
+    check_threads(threads)
+    refuse_with_dask(threads, backend)
     if backend == "dask" and (out is None or not str(out).endswith(".zarr")):
         raise ParameterError("out", out, "a path ending in .zarr (the dask backend streams blocks into Zarr)")
     if out is not None and Path(out).suffix not in (".nc", ".zarr"):
@@ -226,7 +233,9 @@ def sweep(case: Case, grids: dict[str, np.ndarray], *, backend: str = "numpy", o
         else:
             check_target(out, "file")
     if backend == "numpy":
-        ds = _dataset(case, grids, _compute(case, grids, base), base)
+        with using_threads(threads):
+            data = _compute(case, grids, base)
+        ds = _dataset(case, grids, data, base)
         if folder is not None:
             with folder.staged() as work:
                 ds.to_zarr(work, mode="w")  # the manifest is (re)written complete by the commit

@@ -24,6 +24,7 @@ import numpy as np
 
 from . import batch
 from ._style import STYLE, styled
+from ._threads import check_threads, refuse_with_dask, using_threads
 from ._validate import check_seed, check_size, check_workers
 from .case import Case
 from .display import Summarised
@@ -307,7 +308,7 @@ def _as_case(name: str, value: float, case: Case) -> dict[str, Any]:
 def run_uq(case: Case, samples: int, *, seed: int = 0, chunk: int = DEFAULT_CHUNK, backend: str = "numpy",
            scheduler: str | None = None, workers: int = 2, out: str | Path | None = None, resume: bool = False,
            overwrite: bool = False, figures: bool = True, progress: bool = False,
-           log: Any = None) -> UQResult:
+           log: Any = None, threads: int | None = None) -> UQResult:
     """Monte Carlo over the case's input scatter: the distribution of the identified F1 and F2.
 
     Parameters
@@ -338,6 +339,10 @@ def run_uq(case: Case, samples: int, *, seed: int = 0, chunk: int = DEFAULT_CHUN
         Show a progress bar (rich).
     log : callable, optional
         Receives one line per note (a damaged chunk recomputed).
+    threads : int, optional
+        Threads of the compiled kernels, 1 to ``numba.config.NUMBA_NUM_THREADS`` (numpy backend only; default:
+        numba's current count, all cores unless changed; :func:`quickrelease.using_threads`). The result is the
+        same for any count. Refused with the Dask backend, whose tasks run on one thread each.
     """
     _check(case)
     if not isinstance(samples, int | np.integer) or samples < 1:
@@ -351,10 +356,19 @@ def run_uq(case: Case, samples: int, *, seed: int = 0, chunk: int = DEFAULT_CHUN
     check_optional(backend=backend)  # before any work and before the output folder
     check_seed("seed", seed)
     check_workers("workers", workers)
+    check_threads(threads)
+    refuse_with_dask(threads, backend)
     check_size("chunk", chunk, chunk, "samples in a chunk")
     check_size("samples", samples, -(-samples // chunk), f"chunks of {chunk}", bytes_each=_CHUNK_BYTES)
     if resume and out is None:
         raise ParameterError("resume", True, "runs with an output folder (out)")
+    with using_threads(threads):
+        return _run(case, samples, seed, chunk, backend, scheduler, workers, out, resume, overwrite, figures,
+                    progress, log)
+
+
+def _run(case, samples, seed, chunk, backend, scheduler, workers, out, resume, overwrite, figures, progress,
+         log) -> UQResult:
     sizes = [min(chunk, samples - i) for i in range(0, samples, chunk)]
     folder = None
     if out is not None:  # pre-flight: before any work

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from ._threads import check_threads
 from .case import Case
 from .display import Summarised
 from .fit import FitResult, fit_record
@@ -80,14 +81,17 @@ class CaseResult(Summarised):
         return {**self.identification.summary(), "push_force_N": self.case.push_force}
 
 
-def run_case(case: Case, *, state_diagram: bool = True, plan: bool | None = None) -> CaseResult:
+def run_case(case: Case, *, state_diagram: bool = True, plan: bool | None = None,
+             threads: int | None = None) -> CaseResult:
     """Do what the case asks: fit a measured record, identify F1, F2 from stop observations, then simulate.
 
     With a ``[record]``, the fitted friction (and E_S, c when estimated) drives the simulation; else with
     observations, the identified friction; a ``[friction]`` table, if also present, is then only
     reported in the inputs. The test plan (:func:`quickrelease.planning.plan_case`) is made when ``plan``
-    is true, or by default when the case has a ``[fuse]`` or ``[building]`` table.
+    is true, or by default when the case has a ``[fuse]`` or ``[building]`` table. ``threads``: threads of the
+    plan's release envelope (1 to ``numba.config.NUMBA_NUM_THREADS``; default all cores), checked first.
     """
+    check_threads(threads)
     ident = fit = None
     E_S, mass_model = case.stored_energy, case.mass_model
     if case.has_observations:
@@ -122,7 +126,7 @@ def run_case(case: Case, *, state_diagram: bool = True, plan: bool | None = None
         if building is not None and case.building is not None:
             spec, note = identified_building(case.building, building)
             plan_input = plan_input.replace(building=spec)
-        planned = plan_case(plan_input)
+        planned = plan_case(plan_input, threads=threads)
         if note is not None:
             planned = dataclasses.replace(planned, notes=(*planned.notes, note))
     return CaseResult(case=case, response=response, strain=case.strain(), identification=ident,
