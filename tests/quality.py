@@ -2,6 +2,8 @@
 
 ``html_faults(text)``: well-formed (every non-void element closed, in order), no duplicate ``id``, every local
 link (``href="#x"``, ``xlink:href="#x"``, ``url(#x)``) resolves to an ``id`` of the page.
+``table_faults(text)``: a command's table output without JSON keys, long numbers, ``None`` or raw exponents.
+``report_number_faults(page)``: the same for the numeric cells of a report's tables.
 ``figure_faults(fig)``: every axis that shows tick labels has a label with a unit in brackets, units written
 one way (``m/s²``, never ``m/s^2`` or ``m s-2``), every labelled artist in a legend, every text at one of the
 package style's font sizes.
@@ -133,3 +135,51 @@ def figure_faults(fig) -> list[str]:
         if text.get_fontsize() not in FONT_SIZES:
             faults.append(f"font size {text.get_fontsize()} (not one of {sorted(FONT_SIZES)}): {content[:40]!r}")
     return faults
+
+
+#: A JSON key with its unit suffix (``push_force_N``, ``stop_time_s``, ``peak_v_dot_m_s``) shown to a person.
+JSON_KEY = re.compile(r"\b[A-Za-z]\w*?_(?:N|s|m|J|rad|kg|Hz|Pa|deg|m_s|m_s2|rad_s|rad_s2|N_m)\b")
+#: A number as printed: sign, digits (with thousands separators), decimals, exponent.
+NUMBER = re.compile(r"(?<![\w.])[-+]?(\d[\d,]*(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?(?![\w.])")
+#: Python's raw float exponent (``1.6e+04``, ``2.5e-08``): a number nobody formatted.
+RAW_EXPONENT = re.compile(r"\d[eE][-+]0\d|\d[eE]\+\d")
+#: The paper's and the building's symbols that look like keys: slider friction, superstructure period, damping.
+SYMBOLS = {"F_s", "T_s", "zeta_s"}
+PLUS_MINUS = re.compile(r"[-+]?[\d.]+(?:[eE][-+]?\d+)? ±")
+QUOTED = re.compile(r"'[^'\n]*'|\"[^\"\n]*\"")
+
+
+def _significant(mantissa: str) -> int:
+    digits = mantissa.replace(",", "")
+    whole = "." not in digits
+    digits = digits.replace(".", "").lstrip("0")
+    return len(digits.rstrip("0") if whole else digits)
+
+
+def table_faults(text: str, digits: int = 8) -> list[str]:
+    """What a person should not meet in a command's table output (not its ``--json``): JSON keys with unit
+    suffixes (``push_force_N``), numbers with more than ``digits`` significant digits, Python's ``None``, raw
+    float exponents (``1.6e+04``). Quoted text (file and column names, the TOML a command suggests) is
+    left alone."""
+    faults = []
+    for n, line in enumerate(text.splitlines(), 1):
+        bare = QUOTED.sub("''", line)
+        for key in set(JSON_KEY.findall(bare)) - SYMBOLS:
+            faults.append(f"line {n}: JSON key {key!r}: {line.strip()}")
+        if re.search(r"\bNone\b", bare):
+            faults.append(f"line {n}: None: {line.strip()}")
+        if RAW_EXPONENT.search(bare):
+            faults.append(f"line {n}: raw exponent: {line.strip()}")
+        for match in NUMBER.finditer(PLUS_MINUS.sub("±", bare)):  # a value before ± has the digits of its error
+            if _significant(match.group(1)) > digits:
+                faults.append(f"line {n}: {match.group(0)} has more than {digits} significant digits")
+    return faults
+
+
+def report_number_faults(page: str, digits: int = 5) -> list[str]:
+    """:func:`table_faults` over the numeric cells (``<td class="num">``) of an HTML report: one number format
+    in every table (5 significant digits at most, no raw exponents, no None)."""
+    cells = re.findall(r'<td class="num"[^>]*>(.*?)</td>', page, re.S)
+    if not cells:
+        return ["no numeric cells"]
+    return table_faults("\n".join(cells), digits=digits)

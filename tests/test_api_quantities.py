@@ -56,8 +56,11 @@ def test_identify_strain_energy_and_final_angle_take_quantities():
     assert q.F1 == ref.F1 and q.F2 == ref.F2
     dev = qr.preset("paper")
     assert qr.strain_energy(1598 * ureg.kN, 0.2, dev).total == qr.strain_energy(1598e3, 0.2, dev).total
-    assert qr.final_angle(2900.0, 0.2, 400.0, 800.0, dev.L1 * 1000 * ureg.mm) == pytest.approx(
-        qr.final_angle(2900.0, 0.2, 400.0, 800.0, dev.L1), rel=1e-15)
+    assert qr.final_angle(2.9 * ureg.kJ, 0.2, 0.4 * ureg.kN, 800.0, device=dev) == pytest.approx(
+        qr.final_angle(2900.0, 0.2, 400.0, 800.0, device=dev), rel=1e-15)
+    with pytest.warns(DeprecationWarning):  # the old trailing L1 still takes a Quantity
+        assert qr.final_angle(2900.0, 0.2, 400.0, 800.0, dev.L1 * 1000 * ureg.mm) == pytest.approx(
+            qr.final_angle(2900.0, 0.2, 400.0, 800.0, device=dev), rel=1e-15)
 
 
 def test_one_vocabulary_old_names_still_work_with_a_warning():

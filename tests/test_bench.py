@@ -131,6 +131,9 @@ def test_cli_bench_json_and_table(result, monkeypatch):
     assert r.exit_code == 0, r.output
     assert calls[-1] == (False, None)
     assert "wide sample by stratum" in r.stdout and "short of the limit" in r.stdout
+    from quality import table_faults  # tables for people (issue 11)
+
+    assert table_faults(r.stdout) == []
     lines = [line for line in r.stdout.splitlines() if line.strip().startswith(("met:", "not met:", "not measured:"))]
     assert len(lines) == len(result["targets"])
 

@@ -307,6 +307,9 @@ def test_campaign_command_on_the_shipped_example(tmp_path):
     assert [rel["push_force_N"] for rel in data["releases"]] == [434e3, 631e3, 828e3, 1025e3, 1222e3]
     report = (tmp_path / "report.html").read_text(encoding="utf-8")
     assert '<figure id="campaign_building"><svg' in report and "R5" in report and "zeta_eq" in report
+    from quality import report_number_faults
+
+    assert report_number_faults(report) == []
     assert (tmp_path / "figures" / "campaign_building.png").stat().st_size > 1000
 
 

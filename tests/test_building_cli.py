@@ -152,7 +152,8 @@ def test_building_table_output(tmp_path):
     _write_record(tmp_path, duration=8.0, seed=2)
     r = run("building", _case(tmp_path, _building_toml()))
     assert r.exit_code == 0, r.output
-    assert "period_s" in r.stdout and "friction_N" in r.stdout and "Decay cross-check" in r.stdout
+    assert "period T" in r.stdout and "slider friction F_s" in r.stdout and "Decay cross-check" in r.stdout
+    assert "period_s" not in r.stdout and "friction_N" not in r.stdout  # human names, not JSON keys
 
 
 @pytest.mark.parametrize("what, fragments", [

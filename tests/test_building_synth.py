@@ -219,7 +219,8 @@ def test_synth_cli_prints_and_writes_the_prediction(tmp_path, monkeypatch):
                             "--file", "r2.csv"])
     assert r.exit_code == 0, r.output
     assert "Precision of a bilinear fit to it (Cramer-Rao bound)" in r.stdout
-    for label in ("k1_N_m", "k2_N_m", "Fy_N", "damping_ratio", "friction_N", "release_time_s", "offset_a"):
+    for label in ("initial stiffness k1", "post-yield stiffness k2", "yield force F_y", "damping ratio zeta",
+                  "slider friction F_s", "release instant", "offset of a"):
         assert label in r.stdout, label
 
 

@@ -451,6 +451,9 @@ def test_synth_then_fit_on_the_command_line(tmp_path):
     assert abs(fit["F1_N"] - 419.8499) < 4 * fit["F1_se_N"]
     report = (out / "report.html").read_text()
     assert 'id="fit-F1"' in report and '<figure id="fit_channels"><svg' in report
+    from quality import report_number_faults
+
+    assert report_number_faults(report) == []
     assert (out / "figures" / "fit_channels.png").stat().st_size > 20_000
 
 

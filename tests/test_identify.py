@@ -101,7 +101,7 @@ def test_round_trip(E_S, alpha0, share, stop_fraction, model):
     aF_target = alpha0 + stop_fraction * (np.pi / 2 - alpha0)
     from quickrelease import friction_limits
 
-    lim = friction_limits(E_S, alpha0, aF_target, 2.477)
+    lim = friction_limits(E_S, alpha0, aF_target)  # the paper's device (L1 = 2.477 m)
     F1 = share * lim["F1_max"]
     F2 = (1 - share) * lim["F2_max"]
     s = simulate(E_S, alpha0, F1, F2, mass_model=model, method="rk", n_points=10)

@@ -143,8 +143,11 @@ def test_report_contents(paper_run):
     result, _, out = paper_run
     text = (out / "report.html").read_text()
     F1, F2 = mp_identify(2900, 0.2, 0.7378, 1.05)
-    assert f">{result.identification.F1:.6g}<" in text and f">{F1:.6g}<" in text
-    assert f">{result.identification.F2:.6g}<" in text and f">{F2:.6g}<" in text
+    assert f">{result.identification.F1:.5g}<" in text and f">{F1:.5g}<" in text
+    assert f">{result.identification.F2:.5g}<" in text and f">{F2:.5g}<" in text
+    from quality import report_number_faults  # one number format in every table: 5 significant digits at most
+
+    assert text.count('<td class="num"') > 40 and report_number_faults(text) == []
     for stem in PAPER_FIGURES:
         assert f'<figure id="{stem}"><svg' in text, stem
     assert text.count("<svg") == len(PAPER_FIGURES)

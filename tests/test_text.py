@@ -107,6 +107,9 @@ def test_campaign_names_and_title_in_every_output(tmp_path):
     assert (out / "figures" / "campaign_friction.png").stat().st_size > 1000
     page = (out / "report.html").read_text(encoding="utf-8")
     assert html.escape("Prüfung 試験 $x$ $^$ --", quote=True) in page
+    from quality import report_number_faults
+
+    assert report_number_faults(page) == []
 
 
 def test_synth_case_out_is_valid_toml_for_any_file_name(tmp_path):

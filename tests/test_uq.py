@@ -155,6 +155,9 @@ def test_uq_cli_writes_the_corner_figure(case_path, tmp_path):
     r = CliRunner().invoke(app, ["uq", str(case_path), "--samples", "20000", "--out", str(tmp_path / "o")])
     assert r.exit_code == 0, r.output
     assert "dF1/dstop_time" in r.stdout and "97.5%" in r.stdout
+    from quality import table_faults
+
+    assert table_faults(r.stdout) == []
     assert (tmp_path / "o" / "uq_corner.png").stat().st_size > 20_000
     import hashlib
 

@@ -10,21 +10,20 @@ Table 7). SI units throughout.
 
 from __future__ import annotations
 
-from . import building, decay, dynamics, kinematics, statics
+from . import building, closed_form, decay, dynamics, kinematics, statics
 from ._threads import using_threads
 from .building import FreeVibration, Isolation, TwoDOF, free_vibration
-from .device import DEVICE_KEYS, Device, load_device, preset, preset_names
-from .dynamics import (
-    MASS_MODELS,
+from .closed_form import (
     angular_acceleration,
     dissipated_energy,
     final_angle,
     friction_limits,
     initial_rate,
     kinetic_energy,
-    mass_factor,
     reaches_geometric_limit,
 )
+from .device import DEVICE_KEYS, Device, load_device, preset, preset_names
+from .dynamics import MASS_MODELS, mass_factor
 from .errors import (
     DeviceFileError,
     InfeasibleObservationError,
@@ -60,7 +59,7 @@ __all__ = [
     "Identification", "identify_friction", "stop_time_on_line",
     "Response", "STOP_REASONS", "METHODS", "simulate", "stop_time",
     "InternalForces", "StrainEnergy", "fuse_force", "internal_forces", "push_force", "strain_energy",
-    "parse_quantity", "dynamics", "kinematics", "statics", "__version__",
+    "parse_quantity", "closed_form", "dynamics", "kinematics", "statics", "__version__",
     "building", "decay", "Isolation", "TwoDOF", "FreeVibration", "free_vibration",
     "BuildingChannel", "IsolationFit", "fit_isolation", "compare_models", "using_threads",
 ]

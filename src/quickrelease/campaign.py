@@ -412,6 +412,10 @@ def run_campaign(path: str | Path):
 
         return run_building_campaign(path, data)
     title, notes, variables, cases = load_campaign(path)
+    from .distributed import check_optional
+    from .records import record_files
+
+    check_optional(files=[f for _, case in cases for f in record_files(case.record)])  # before the first fit
     if len(cases) < 3:
         raise QuickReleaseError(f"{path}: {len(cases)} test(s): a friction law needs at least 3")
     tests = []

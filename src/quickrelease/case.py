@@ -77,9 +77,12 @@ class Distribution:
         return rng.uniform(self.loc, self.loc + self.scale, n)
 
     def describe(self, unit: str) -> str:
+        """The distribution for a person, in SI ``unit`` with its prefix: ``normal(mean 1598 kN, std 16 kN)``."""
+        from .display import quantity
+
         if self.kind == "normal":
-            return f"normal(mean {self.loc:.6g} {unit}, std {self.scale:.4g} {unit})"
-        return f"uniform({self.loc:.6g} {unit}, {self.loc + self.scale:.6g} {unit})"
+            return f"normal(mean {quantity(self.loc, unit)}, std {quantity(self.scale, unit, 4)})"
+        return f"uniform({quantity(self.loc, unit)}, {quantity(self.loc + self.scale, unit)})"
 
 
 @dataclass(frozen=True)

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import contextlib
 import json
-import math
 import sys
 from collections.abc import Callable, Iterator
 from functools import wraps
@@ -150,6 +149,16 @@ def _energy(device, force: str | None, energy: str | None, alpha0: float) -> tup
     return strain_energy(P, alpha0, device).total, P
 
 
+def _check_case_optional(case) -> None:
+    """The optional packages the case's record files need (``.parquet``: pyarrow, ...), checked before any
+    work: one line, exit 2."""
+    from .distributed import check_optional
+    from .records import record_files
+
+    building = getattr(case, "building", None)
+    check_optional(files=record_files(case.record) + record_files(getattr(building, "record", None)))
+
+
 @contextlib.contextmanager
 def _busy(what: str) -> Iterator[None]:
     """A spinner with ``what`` on stderr while a long computation runs, when stderr is a terminal (never in
@@ -181,12 +190,6 @@ def _table(title: str, rows: list[tuple[str, ...]], headers: tuple[str, ...]) ->
     for row in rows:
         table.add_row(*(escape(_clean(str(cell))) for cell in row))
     Console().print(table)  # the terminal's width (80 columns when not a terminal)
-
-
-def _fmt(value: Any) -> str:
-    if isinstance(value, float):
-        return f"{value:.6g}"
-    return str(value)
 
 
 def _file_option(file: Path, out_old: Path | None, command: str) -> Path:
@@ -276,12 +279,12 @@ def simulate(
         case = case.replace(F1=F1_case, F2=F2_case)
     response = run(case.stored_energy, case.alpha0, case.F1 or 0.0, case.F2 or 0.0, device=case.device,
                    mass_model=case.mass_model, method=case.method, dt=case.dt, n_points=case.n_points,
-                   rk_method=case.rk_method)
+                   rk_method=case.rk_method, push_force=case.push_force)
     if case_file is None:  # no case file: a friction left out is zero, and the user is told so
         for flag, given, name in (("--f1", f1, "F1"), ("--f2", f2, "F2")):
             if given is None:
                 _echo(f"note: {flag} not given: {name} = 0 N (frictionless)", err=True)
-    summary = {"push_force_N": case.push_force, **response.summary(), "device": case.device.name}
+    summary = response.summary()
     if as_json:
         _print_json(summary)
         return
@@ -319,7 +322,7 @@ def identify(
         raise QuickReleaseError(f"{missing} is missing: give the flag or [observations] in the case file")
     result = identify_friction(case.alpha0, case.alpha_final, case.stop_time, stored_energy=case.stored_energy,
                                device=case.device, mass_model=case.mass_model)
-    summary = {**result.summary(), "push_force_N": case.push_force, "device": case.device.name}
+    summary = {**result.summary(), "push_force_N": case.push_force}  # the P that stored E_S, when given
     if as_json:
         _print_json(summary)
         return
@@ -351,6 +354,7 @@ def run_command(
     from .workflow import results_folder, run_case, write_results
 
     case = load_case(case_file)
+    _check_case_optional(case)
     results_folder(case, out, overwrite=overwrite)  # pre-flight: refuse before the work
     result = run_case(case)
     paths = write_results(result, out, overwrite=overwrite)
@@ -391,6 +395,7 @@ def report(
     from .workflow import results_folder, run_case, write_results
 
     case = load_case(case_file)
+    _check_case_optional(case)
     results_folder(case, out, figures=False, data=False, overwrite=overwrite)
     paths = write_results(run_case(case), out, figures=False, data=False, overwrite=overwrite)
     _echo(f"Wrote {paths['report']}")
@@ -429,7 +434,7 @@ def demo(
                      "files": sorted(str(p) for p in paths.values())})
         return
     _echo(f"Device: {dev.name} (Table 2); mass model: {mass_model}")
-    terms = [(k, f"{v:.2f}") for k, v in cmp.E_S_breakdown.items()]
+    terms = [(k.replace("_", " "), f"{v:.2f}") for k, v in cmp.E_S_breakdown.items()]
     terms.append(("total E_S", f"{cmp.E_S_eq2:.2f}"))
     _table("E_S by term (Eq. 2) [J]", terms, ("term", "J"))
     _table("Table 7: the paper and quickrelease", cmp.rows(), ("quantity", "paper", "quickrelease", "note"))
@@ -470,18 +475,21 @@ def uq(
     if as_json:
         _print_json(result.summary())
         return
-    rows = [(k, v) for k, v in result.inputs.items()]
+    from .display import key_for, number, quantity
+
+    rows = [(key_for(k)[0], v) for k, v in result.inputs.items()]
     _table("Uncertain inputs", rows, ("input", "distribution"))
     p = result.percentiles
     _table(f"Identified friction over {result.samples:,} samples (seed {result.seed})", [
-        (name, f"{result.nominal[name]:.2f}", f"{p[name]['p2.5']:.2f}", f"{p[name]['p50']:.2f}",
-         f"{p[name]['p97.5']:.2f}", f"{result.std[name]:.2f}") for name in ("F1", "F2")],
-        ("friction [N]", "nominal", "2.5%", "50%", "97.5%", "std"))
+        (key_for(name)[0], *(quantity(v, "N") for v in (result.nominal[name], p[name]["p2.5"], p[name]["p50"],
+                                                         p[name]["p97.5"], result.std[name])))
+         for name in ("F1", "F2")], ("friction", "nominal", "2.5%", "50%", "97.5%", "std"))
     _echo(f"correlation(F1, F2) = {result.correlation:.4f}; infeasible samples: "
-               f"{100 * result.infeasible_share:.2f}%; percentile resolution {result.resolution['F1']:.3g} N")
-    sens = [(f"d{f}/d{x}", f"{v:.6g}", f"{result.sensitivities_fd[f][x]:.6g}")
-            for f in ("F1", "F2") for x, v in result.sensitivities[f].items()]
-    _table("Local sensitivities at the nominal point (SI units)", sens, ("derivative", "implicit function", "finite diff."))
+          f"{100 * result.infeasible_share:.2f}%; percentile resolution {quantity(result.resolution['F1'], 'N', 3)}")
+    sens = [(f"d{f}/d{x}", f"N/{key_for(x)[1]}" if key_for(x)[1] else "N", number(v),
+             number(result.sensitivities_fd[f][x])) for f in ("F1", "F2") for x, v in result.sensitivities[f].items()]
+    _table("Local sensitivities at the nominal point", sens, ("derivative", "unit", "implicit function",
+                                                                "finite diff."))
 
 
 @app.command("sweep")
@@ -530,8 +538,10 @@ def sweep_command(
         return
     from .display import quantity_rows
 
-    _table(f"Sweep over {' x '.join(f'{k} ({v})' for k, v in summary['dims'].items())}",
-           quantity_rows(summary, skip=("dims", "provenance")), ("quantity", "value (min, max)"))
+    rows = quantity_rows(summary, skip=("dims", "provenance", "figures"))
+    rows.append(("figures", ", ".join(summary["figures"])))
+    _table(f"Sweep over {' x '.join(f'{k} ({v})' for k, v in summary['dims'].items())}", rows,
+           ("quantity", "value (min, max)"))
 
 
 @app.command()
@@ -588,13 +598,16 @@ def synth(
     if as_json:
         _print_json(summary)
         return
+    from .display import key_for, quantity
+
     t = syn.truth
     _echo(f"Wrote {out} ({syn.t.size} rows at {syn.rate:g} Hz, channels {', '.join(names)}); friction "
-               f"{syn.notes[0].removeprefix('friction ')}: F1 = {t['F1']:.6g} N, F2 = {t['F2']:.6g} N; release at "
-               f"{t['release_time']:g} s, stop {t['stop_time']:.6g} s later at alpha_F = {t['alpha_final']:.6g} rad")
+          f"{syn.notes[0].removeprefix('friction ')}: F1 = {quantity(t['F1'], 'N')}, F2 = {quantity(t['F2'], 'N')}; "
+          f"release at {quantity(t['release_time'], 's')}, stop {quantity(t['stop_time'], 's')} later at alpha_F = "
+          f"{quantity(t['alpha_final'], 'rad')}")
     _table("Precision of a fit to such a record (Cramer-Rao bound at the truth)", [
-        ("F1", f"{pred['F1_se_N']:.4g} N", f"{100 * pred['F1_rel_se']:.3g}%"),
-        ("F2", f"{pred['F2_se_N']:.4g} N", f"{100 * pred['F2_rel_se']:.3g}%"),
+        (key_for("F1")[0], quantity(pred["F1_se_N"], "N", 2), f"{100 * pred['F1_rel_se']:.2g}%"),
+        (key_for("F2")[0], quantity(pred["F2_se_N"], "N", 2), f"{100 * pred['F2_rel_se']:.2g}%"),
         ("correlation(F1, F2)", f"{pred['correlation_F1_F2']:+.4f}", ""),
     ], ("", "standard error", "relative"))
     if case_out is not None:
@@ -638,20 +651,23 @@ def _synth_building(case, channels: str | None, rate: str | None, noise: list[st
     if as_json:
         _print_json(summary)
         return
+    from .display import key_for, quantity, split_key
+
     t = syn.truth
-    stop = "still moving at the end" if t["stop_time_s"] is None else f"sticks {t['stop_time_s']:.6g} s later"
-    sup = "" if t["model"] != "2dof" else (f" (superstructure {t['superstructure_mass_kg']:.6g} kg, T_s = "
-                                           f"{t['superstructure_period_s']:.6g} s, zeta_s = "
-                                           f"{t['superstructure_damping_ratio']:.4g})")
+    stop = "still moving at the end" if t["stop_time_s"] is None else f"sticks {quantity(t['stop_time_s'], 's')} later"
+    sup = "" if t["model"] != "2dof" else (f" (superstructure {quantity(t['superstructure_mass_kg'], 'kg')}, T_s = "
+                                           f"{quantity(t['superstructure_period_s'], 's')}, zeta_s = "
+                                           f"{quantity(t['superstructure_damping_ratio'])})")
     _echo(f"Wrote {out} ({syn.t.size} rows at {syn.rate:g} Hz, channels {', '.join(names)}); {t['model']} isolation, "
-          f"T = {t['period_s']:.6g} s, zeta = {t['damping_ratio']:.4g}, F_s = {t['friction_N']:.6g} N{sup}; released from "
-          f"d0 = {1e3 * t['d0_m']:.6g} mm at {t['release_time_s']:g} s, {stop}")
+          f"T = {quantity(t['period_s'], 's')}, zeta = {quantity(t['damping_ratio'])}, F_s = "
+          f"{quantity(t['friction_N'], 'N')}{sup}; released from d0 = {quantity(1e3 * t['d0_m'])} mm at "
+          f"{quantity(t['release_time_s'], 's')}, {stop}")
     for note in syn.notes:
         _echo(f"note: {note}")
     _table(f"Precision of a {t['model']} fit to it (Cramer-Rao bound)",
-           [(key, f"{row['truth']:.6g} {row['unit']}".rstrip(" -"),
-             f"{row['se']:.4g} {row['unit']}".rstrip(" -") if math.isfinite(row["se"]) else "not determined",
-             "" if row["relative_se"] is None or not math.isfinite(row["se"]) else f"{100 * row['relative_se']:.3g}%")
+           [(key_for(split_key(key)[0], row["unit"])[0], quantity(row["truth"], row["unit"]),
+             quantity(row["se"], row["unit"], 2) if math.isfinite(row["se"]) else "not determined",
+             "" if row["relative_se"] is None or not math.isfinite(row["se"]) else f"{100 * row['relative_se']:.2g}%")
             for key, row in pred.physical().items()], ("parameter", "truth", "standard error", "relative"))
     for warning in pred.warnings:
         _echo(f"warning: {warning}")
@@ -674,6 +690,7 @@ def fit_command(
     from .fit import fit_record
 
     case = load_case(case_file)
+    _check_case_optional(case)
     if case.record is not None:
         from .workflow import results_folder, run_case, write_results
 
@@ -700,23 +717,24 @@ def fit_command(
     if as_json:
         _print_json(summary)
         return
-    rows = []
-    for name in fit.names:
-        lo, hi = fit.ci95[name]
-        rows.append((name, f"{fit.estimates[name]:.6g}", f"{fit.std_errors[name]:.3g}", f"[{lo:.6g}, {hi:.6g}]")
-                    if math.isfinite(fit.std_errors[name]) else (name, f"{fit.estimates[name]:.6g}", "inf",
-                                                                 "not identified"))
+    from .display import estimate_row, quantity
+    from .records import CHANNELS
+
+    units = {f"offset_{n}": unit for n, (_, unit, _) in CHANNELS.items()}
+    rows = [estimate_row(name, fit.estimates[name], fit.std_errors[name], fit.ci95[name], units.get(name))
+            for name in fit.names]
     chi2 = "n/a (no degrees of freedom)" if fit.chi2_reduced is None else f"{fit.chi2_reduced:.4g}"
     title = f"Fit of {case.title}: {'converged' if fit.converged else 'NOT converged'}, " \
             f"reduced chi-square {chi2}, start values from {fit.start_source}"
-    _table(title, rows, ("parameter (SI)", "estimate", "std. error", "95% interval"))
+    _table(title, rows, ("parameter", "estimate", "std. error", "95% interval"))
     if fit.residual_rms:
-        _table("Channels", [(n, str(fit.samples[n]), f"{fit.noise[n]:.3g}", fit.noise_source[n],
-                             f"{fit.residual_rms[n]:.3g}") for n in fit.residual_rms],
-               ("channel", "samples", "noise (SI)", "from", "rms residual"))
+        unit = {n: CHANNELS[n][1] if n in CHANNELS else "" for n in fit.residual_rms}
+        _table("Channels", [(n, str(fit.samples[n]), quantity(fit.noise[n], unit[n], 3), fit.noise_source[n],
+                             quantity(fit.residual_rms[n], unit[n], 3)) for n in fit.residual_rms],
+               ("channel", "samples", "noise std", "from", "rms residual"))
     i1, i2 = fit.names.index("F1"), fit.names.index("F2")
-    _echo(f"correlation(F1, F2) = {fit.correlation[i1, i2]:+.4f}; model stop t_F = {fit.stop_time:.6g} s at "
-               f"alpha_F = {fit.alpha_final:.6g} rad")
+    _echo(f"correlation(F1, F2) = {fit.correlation[i1, i2]:+.4f}; model stop t_F = {quantity(fit.stop_time, 's')} "
+          f"at alpha_F = {quantity(fit.alpha_final, 'rad')}")
     for text in (*fit.notes, *fit.warnings):
         _echo(f"note: {text}" if text in fit.notes else f"warning: {text}")
     if paths:
@@ -741,6 +759,7 @@ def building_command(
     if model is not None and model not in MODELS:
         raise ParameterError("--model", model, ", ".join(MODELS))
     case = load_case(case_file, require_test=False)
+    _check_case_optional(case)
     data = load_building(case)
     if not data.channels:
         raise QuickReleaseError(f"{case_file}: no [building.record]: the building command needs the building's "
@@ -768,21 +787,24 @@ def building_command(
 
 def _building_tables(result, summary: dict[str, Any], title: str) -> None:
     """The building's estimates, channels, comparison and decay cross-check as tables; notes and warnings."""
+    from .building import RECORD_CHANNELS
+    from .display import estimate_row, key_for, number, quantity, split_key
+
     fit = result.fit
-    units = {"period_s": "s", "k1_N_m": "N/m", "k2_N_m": "N/m", "Fy_N": "N", "damping_ratio": "-", "friction_N": "N"}
     rows = []
-    for key, unit in units.items():
-        if key in summary and summary[key] is not None:
-            ci = summary.get(f"{key}_ci95")
-            interval = "not identified" if key in summary.get("not_identified", ()) else \
-                "-" if not ci else f"[{_fmt(ci[0])}, {_fmt(ci[1])}]"
-            rows.append((key, f"{summary[key]:.6g}", interval, unit))
+    for key in ("period_s", "k1_N_m", "k2_N_m", "Fy_N", "damping_ratio", "friction_N"):
+        if summary.get(key) is not None:
+            name, unit, _ = split_key(key)
+            human, value, _, interval = estimate_row(name, summary[key], None, summary.get(f"{key}_ci95"), unit)
+            rows.append((human, value, "not identified" if key in summary.get("not_identified", ()) else interval))
     state = "converged" if fit.converged else "NOT converged"
     _table(f"{title}: {fit.model} isolation model, {state}, reduced chi-square {fit.chi2_reduced:.4g}, "
-           f"AIC {fit.aic:.6g}, BIC {fit.bic:.6g}", rows, ("parameter", "estimate", "95% interval", "unit"))
-    _table("Channels", [(c.name, c.kind, str(fit.samples[c.name]), f"{fit.noise[c.name]:.3g}", fit.noise_source[c.name],
-                         f"{fit.residual_rms[c.name]:.3g}", f"{fit.whiteness_p[c.name]:.3g}") for c in fit.channels],
-           ("channel", "kind", "samples", "noise (SI)", "from", "rms residual", "whiteness p"))
+           f"AIC {fit.aic:.6g}, BIC {fit.bic:.6g}", rows, ("parameter", "estimate", "95% interval"))
+    unit = {c.name: RECORD_CHANNELS[c.name][1] if c.name in RECORD_CHANNELS else "" for c in fit.channels}
+    _table("Channels", [(c.name, c.kind, str(fit.samples[c.name]), quantity(fit.noise[c.name], unit[c.name], 3),
+                         fit.noise_source[c.name], quantity(fit.residual_rms[c.name], unit[c.name], 3),
+                         number(fit.whiteness_p[c.name], 3)) for c in fit.channels],
+           ("channel", "kind", "samples", "noise std", "from", "rms residual", "whiteness p"))
     if result.comparison:
         _table("Model comparison (lowest BIC first)", [
             (r["model"], str(r["parameters"]), f"{r['aic']:.6g}", f"{r['delta_aic']:.4g}", f"{r['bic']:.6g}",
@@ -791,8 +813,9 @@ def _building_tables(result, summary: dict[str, Any], title: str) -> None:
     rows = result.decay_check.get("rows", [])
     if rows:
         _table("Decay cross-check (model-free, combined decrement law)", [
-            (r["parameter"], f"{r['fit']:.6g}", f"{r['decay']:.6g}", f"{r['difference_in_se']:+.3g}") for r in rows],
-            ("parameter (SI)", "fit", "decay", "difference [SE]"))
+            (key_for(r["parameter"])[0], quantity(r["fit"], key_for(r["parameter"])[1]),
+             quantity(r["decay"], key_for(r["parameter"])[1]), f"{r['difference_in_se']:+.3g}") for r in rows],
+            ("parameter", "fit", "decay", "difference [SE]"))
     for text in result.notes:
         _echo(f"note: {text}")
     for text in result.warnings:
@@ -828,27 +851,27 @@ def campaign(
             _listing(paths, out)
         return
 
-    def pm(value, se):
-        return f"{value:.2f}" + ("" if se is None else f" ± {se:.2g}")
+    from .display import number, plus_minus, quantity
 
     _table(f"{result.title}: friction per test", [
-        (t.name, f"{(t.case.push_force or float('nan')) / 1e3:.0f}", f"{t.case.alpha0:.4g}", pm(t.F1, t.F1_se),
-         pm(t.F2, t.F2_se), t.method) for t in result.tests],
-        ("test", "P [kN]", "alpha0 [rad]", "F1 [N]", "F2 [N]", "from"))
+        (t.name, quantity(t.case.push_force, "N"), quantity(t.case.alpha0, "rad"), plus_minus(t.F1, t.F1_se, "N"),
+         plus_minus(t.F2, t.F2_se, "N"), t.method) for t in result.tests],
+        ("test", "push force P", "release angle alpha0", "F1", "F2", "from"))
     rows = []
     for law in result.laws.values():
         _, _, _, scale, unit = VARIABLES[law.variable]
-        rows.append((f"{law.friction} = a + b {law.variable}", f"{law.intercept:.4g} ± {law.intercept_se:.2g}",
-                     f"{law.slope / scale:.4g} ± {law.slope_se / scale:.2g} N/{unit}", f"{law.p_value:.2g}",
+        rows.append((f"{law.friction} = a + b {law.variable}", plus_minus(law.intercept, law.intercept_se, "N"),
+                     plus_minus(law.slope / scale, law.slope_se / scale, f"N/{unit}"), number(law.p_value, 2),
                      "yes" if law.significant else "no"))
     _table("Friction laws (weighted least squares; p of slope = 0)", rows,
-           ("law", "a [N]", "b", "p", "significant at 5%"))
+           ("law", "a", "b", "p", "significant at 5%"))
     for friction, joint in result.joint.items():
         terms = joint.summary()["terms"]
         units = {n: VARIABLES[n][3:] if n in VARIABLES else (1.0, "") for n in terms}
         _echo(f"joint law {friction} = a + " + " + ".join(f"b_{v} {v}" for v in joint.variables) + ": " + ", ".join(
-            f"{'a' if n == 'intercept' else 'b_' + n} = {v['value'] / units[n][0]:.4g} ± {v['se'] / units[n][0]:.2g} "
-            f"N{'/' + units[n][1] if units[n][1] else ''} (p = {v['p_value']:.2g})" for n, v in terms.items()))
+            f"{'a' if n == 'intercept' else 'b_' + n} = "
+            f"{plus_minus(v['value'] / units[n][0], v['se'] / units[n][0], 'N' + ('/' + units[n][1] if units[n][1] else ''))}"
+            f" (p = {number(v['p_value'], 2)})" for n, v in terms.items()))
     if paths:
         _listing(paths, out)
 
@@ -856,15 +879,15 @@ def campaign(
 def _building_campaign_tables(result) -> None:
     """The tables of a building campaign: each release's estimates, then the laws in the amplitude."""
     from .building_campaign import BUILDING_VARIABLES, QUANTITIES
+    from .display import number, plus_minus
 
     qs = result.columns  # the quantities with laws, then those reported per release (2dof: T_s, zeta_s)
     rows = []
     for r in result.releases:
-        cells = [r.name, f"{abs(r.d0) * 1e2:.4g}", "" if r.force is None else f"{r.force / 1e3:.4g}"]
+        cells = [r.name, number(abs(r.d0) * 1e2, 4), "-" if r.force is None else number(r.force / 1e3, 4)]
         for q in qs:
             scale = QUANTITIES[q][2]
-            cells.append(f"{r.values[q] * scale:#.5g} ± {r.std_errors[q] * scale:.2g}" if math.isfinite(r.std_errors[q])
-                         else f"{r.values[q] * scale:#.5g} (not identified)")
+            cells.append(plus_minus(r.values[q] * scale, r.std_errors[q] * scale))
         rows.append(tuple(cells))
     _table(f"{result.title}: the {result.model} isolation system per release (± standard error)", rows,
            ("release", "|d0| [cm]", "P [kN]", *(f"{QUANTITIES[q][4]} [{QUANTITIES[q][3]}]" for q in qs)))
@@ -873,10 +896,11 @@ def _building_campaign_tables(result) -> None:
         _, _, y_scale, y_unit, symbol = QUANTITIES[law.quantity]
         _, _, x_scale, x_unit = BUILDING_VARIABLES[law.variable]
         factor = y_scale / x_scale
-        rows.append((f"{symbol} = a + b {law.variable}", f"{law.intercept * y_scale:#.5g} ± "
-                     f"{law.intercept_se * y_scale:.2g} {y_unit}", f"{law.slope * factor:.4g} ± "
-                     f"{law.slope_se * factor:.2g} {y_unit}" + (f"/{x_unit}" if x_unit != "-" else ""),
-                     f"{law.p_value:.2g}", "yes" if law.significant else "no"))
+        rows.append((f"{symbol} = a + b {law.variable}", plus_minus(law.intercept * y_scale, law.intercept_se * y_scale,
+                                                                    y_unit),
+                     plus_minus(law.slope * factor, law.slope_se * factor,
+                                y_unit + (f"/{x_unit}" if x_unit != "-" else "")),
+                     number(law.p_value, 2), "yes" if law.significant else "no"))
     _table("Laws in the amplitude (weighted least squares; p of slope = 0)", rows,
            ("law", "a", "b", "p", "significant at 5%"))
     for r in result.releases:
@@ -912,30 +936,35 @@ def plan(
     if as_json:
         _print_json(summary)
         return
-    _echo(f"{result.case.title}: P = {plan_result.push_force / 1e3:.6g} kN at alpha0 = {plan_result.alpha0:.4g} "
-               f"rad, E_S = {plan_result.stored_energy:.6g} J")
+    from .display import number, plus_minus, quantity
+
+    _echo(f"{result.case.title}: P = {quantity(plan_result.push_force, 'N')} at alpha0 = "
+          f"{quantity(plan_result.alpha0, 'rad')}, E_S = {quantity(plan_result.stored_energy, 'J')}")
     if plan_result.fuse is not None:
         ft = plan_result.fuse
         _table(f"Fuse and angle choices inside the target {ft.target[0] / 1e3:.6g} to {ft.target[1] / 1e3:.6g} kN "
                f"(rupture strength {ft.rupture_strength / 1e6:.4g} ± {ft.rupture_strength_std / 1e6:.3g} MPa)",
-               [(f"{1e3 * c.diameter:.4g}", f"{c.alpha0:.4g}", f"{c.push_force / 1e3:.5g} ± {c.push_force_std / 1e3:.3g}",
-                 f"{c.stored_energy:.5g}", f"{100 * c.probability_within:.3g}%" + (" <- best" if c is ft.best else ""))
+               [(number(1e3 * c.diameter, 4), number(c.alpha0, 4), plus_minus(c.push_force / 1e3, c.push_force_std / 1e3),
+                 number(c.stored_energy), f"{100 * c.probability_within:.3g}%" + (" <- best" if c is ft.best else ""))
                 for c in ft.choices if c.within],
                ("d [mm]", "alpha0 [rad]", "P [kN]", "E_S [J]", "P inside the target"))
         for text in ft.warnings:
             _echo(f"warning: {text}")
     m = plan_result.members
     _table(f"Member checks (fuse stress N4/A4 = {m.fuse_stress / 1e6:.4g} MPa)", [
-        (c.member, c.check, f"{c.demand / (1e6 if c.unit == 'Pa' else 1e3):.4g}",
-         "-" if c.capacity is None else f"{c.capacity / (1e6 if c.unit == 'Pa' else 1e3):.4g}",
+        (c.member, c.check, number(c.demand / (1e6 if c.unit == 'Pa' else 1e3), 4),
+         "-" if c.capacity is None else number(c.capacity / (1e6 if c.unit == 'Pa' else 1e3), 4),
          "MPa" if c.unit == "Pa" else "kN", "skipped" if c.utilisation is None else f"{c.utilisation:.3f}")
         for c in m.checks], ("member", "check", "demand", "capacity", "unit", "utilisation"))
     from .planning import ENVELOPE_QUANTITIES
 
     env = plan_result.envelope
+    from .display import unit_text
+
     _table(f"Release envelope: {env.friction} ({env.samples:,} sample(s))", [
-        (label, unit, f"{env.nominal[k]:.4g}", f"{env.ranges[k]['p5']:.4g}", f"{env.ranges[k]['p95']:.4g}",
-         f"{env.ranges[k]['max']:.4g}") for k, (unit, label) in ENVELOPE_QUANTITIES.items()],
+        (label, unit_text(unit), number(env.nominal[k], 4), number(env.ranges[k]["p5"], 4),
+         number(env.ranges[k]["p95"], 4), number(env.ranges[k]["max"], 4))
+        for k, (unit, label) in ENVELOPE_QUANTITIES.items()],
         ("quantity", "unit", "nominal", "5%", "95%", "max"))
     if plan_result.clearance is not None:
         c = plan_result.clearance
@@ -973,8 +1002,9 @@ def bench(
 
 
 def _bench_tables(result: dict[str, Any]) -> None:
-    def e(x):
-        return "-" if x is None else f"{x:.1e}"
+
+    def e(x):  # an error to two digits, exponents written one way (7.8e-6)
+        return "-" if x is None else f"{x:.1e}".replace("e-0", "e-").replace("e+0", "e").replace("e+", "e")
 
     n = result["threads"]
     for sample in ("bench", "wide"):

@@ -14,6 +14,7 @@ from typing import Any
 
 #: (key suffix, unit as printed, whether SI prefixes k/M/G apply), longest suffix first.
 UNIT_SUFFIXES: tuple[tuple[str, str, bool], ...] = (
+    ("_per_s", "/s", False),  # a rate: cases per second (bench)
     ("_rad_s2", "rad/s²", False),
     ("_rad_s", "rad/s", False),
     ("_m_s2", "m/s²", False),
@@ -60,6 +61,34 @@ NAMES: dict[str, str] = {
 
 _PREFIXES = ((1e9, "G"), (1e6, "M"), (1e3, "k"))
 
+#: Units whose values take the SI prefixes k, M, G in tables (forces, energies, stresses, stiffnesses).
+PREFIXABLE = frozenset({"N", "J", "Pa", "N/m", "N·s/m", "W"})
+
+#: Parameters known by a bare name (a fit's unknowns, the building's estimates): name -> (human name, unit).
+#: A name not here is shown with its underscores as spaces; ``offset_<channel>`` is "offset of <channel>".
+PARAMETERS: dict[str, tuple[str, str]] = {
+    "force": ("push force P", "N"),
+    "push_force": ("push force P", "N"),
+    "alpha0": ("release angle alpha0", "rad"),
+    "F1": ("hinge friction F1", "N"),
+    "F2": ("rail friction F2", "N"),
+    "energy": ("stored energy E_S", "J"),
+    "stored_energy": ("stored energy E_S", "J"),
+    "mass_factor": ("mass factor c", ""),
+    "release_time": ("release instant", "s"),
+    "period": ("period T", "s"),
+    "k1": ("initial stiffness k1", "N/m"),
+    "k2": ("post-yield stiffness k2", "N/m"),
+    "Fy": ("yield force F_y", "N"),
+    "damping_ratio": ("damping ratio zeta", ""),
+    "friction": ("slider friction F_s", "N"),
+    "d0": ("initial displacement d0", "m"),
+    "superstructure_period": ("superstructure period T_s", "s"),
+    "superstructure_damping_ratio": ("superstructure damping ratio zeta_s", ""),
+    "alpha_final": ("final angle alpha_F", "rad"),
+    "stop_time": ("stop time t_F", "s"),
+}
+
 
 def split_key(key: str) -> tuple[str, str, bool]:
     """(name, unit, prefixable) of a summary key: ``"push_force_N"`` -> ``("push_force", "N", True)``;
@@ -76,13 +105,14 @@ def label(key: str) -> str:
     return NAMES.get(name, name.replace("_", " "))
 
 
-def number(value: float, digits: int = 5) -> str:
-    """``value`` rounded to ``digits`` significant digits, without a trailing exponent where it fits."""
+def number(value: float, digits: int = 5, zeros: bool = False) -> str:
+    """``value`` rounded to ``digits`` significant digits, without a trailing exponent where it fits;
+    ``zeros``: keep trailing zeros (``0.40``, an uncertainty's two digits)."""
     if not math.isfinite(value):
         return str(value)
     if value == 0.0:
         return "0"
-    text = f"{value:.{digits}g}"
+    text = f"{value:#.{digits}g}".rstrip(".") if zeros else f"{value:.{digits}g}"
     return text.replace("e+0", "e").replace("e-0", "e-").replace("e+", "e")
 
 
@@ -114,6 +144,100 @@ def value_text(key: str, value: Any, digits: int = 5) -> str:
         inner = ", ".join(number(float(v) / factor, digits) for v in value)
         return f"[{inner}] {prefix}{unit}".rstrip()
     return str(value)
+
+
+def unit_text(unit: str) -> str:
+    """A unit as a person reads it: ``"m/s^2"`` -> ``"m/s²"``; ``"-"`` (dimensionless) -> ``""``."""
+    return "" if unit in ("-", "1") else unit.replace("^2", "²").replace("^3", "³")
+
+
+def key_for(name: str, unit: str | None = None) -> tuple[str, str]:
+    """(human name, unit) of a parameter known by a bare name: ``"F1"`` -> ``("hinge friction F1", "N")``;
+    ``unit`` (SI, e.g. a record channel's) overrides the table's; ``offset_u`` -> ``("offset of u", unit)``."""
+    human, known = PARAMETERS.get(name, (None, ""))
+    if human is None and name.startswith("offset_"):
+        human = f"offset of {name.removeprefix('offset_')}"
+    return human or name.replace("_", " "), unit_text(known if unit is None else unit)
+
+
+def quantity(value: float | None, unit: str = "", digits: int = 5) -> str:
+    """``value`` [SI ``unit``] for a person: ``(1.598e6, "N")`` -> ``"1598 kN"``; ``None`` -> ``"-"``."""
+    if value is None:
+        return "-"
+    unit = unit_text(unit)
+    factor, prefix = _scale([float(value)], unit in PREFIXABLE)
+    return f"{number(float(value) / factor, digits)} {prefix}{unit}".rstrip()
+
+
+def _decimals(se: float, digits: int) -> int:
+    """Decimal places that show ``se`` with ``digits`` significant digits."""
+    return max(0, digits - 1 - math.floor(math.log10(abs(se))))
+
+
+def plus_minus(value: float | None, se: float | None, unit: str = "", se_digits: int = 2) -> str:
+    """``value ± se`` with the unit once, ``value`` rounded where ``se`` is (``se`` to two significant digits),
+    as a result is quoted: ``(420.023, 0.398, "N")`` -> ``"420.02 ± 0.40 N"``; ``(1.598e6, 3.9e4, "N")``
+    -> ``"1598 ± 39 kN"``. Without a finite, positive ``se``: the value alone (5 significant digits)."""
+    if value is None:
+        return "-"
+    if se is not None and math.isinf(se) and math.isfinite(value):  # a parameter the record does not see
+        return f"{quantity(value, unit)} (not identified)"
+    if se is None or not math.isfinite(se) or se <= 0 or not math.isfinite(value):
+        return quantity(value, unit)
+    unit = unit_text(unit)
+    factor, prefix = _scale([float(value)], unit in PREFIXABLE)
+    v, e = float(value) / factor, float(se) / factor
+    if abs(v) >= 1e6 or (v != 0 and abs(v) < 1e-3) or e < 1e-4:  # far from 1: both in the exponent form
+        text = f"{number(v)} ± {number(e, se_digits)}"
+    else:
+        e = float(f"{e:.{se_digits}g}")  # the error to its digits first: 996 -> 1000 (then hundreds, not tens)
+        places = min(se_digits - 1 - math.floor(math.log10(e)), 8)
+        if places >= 0:
+            text = f"{v:.{places}f} ± {e:.{places}f}"
+        else:  # an error of hundreds or more: both rounded to its two digits (223 ± 996 -> 200 ± 1000)
+            text = f"{round(v, places):.0f} ± {round(e, places):.0f}"
+    return f"{text} {prefix}{unit}".rstrip()
+
+
+def interval(bounds: Iterable[float] | None, unit: str = "", digits: int = 5) -> str:
+    """``[lo, hi] unit`` with one SI prefix for both ends; ``None`` -> ``"-"``."""
+    if bounds is None:
+        return "-"
+    values = [float(b) for b in bounds]
+    unit = unit_text(unit)
+    factor, prefix = _scale(values, unit in PREFIXABLE)
+    inner = ", ".join(number(v / factor, digits) for v in values)
+    return f"[{inner}] {prefix}{unit}".rstrip()
+
+
+def _alike(values: list[float], lead: float, digits: int = 5) -> list[str]:
+    """``values`` with the decimal places that show ``lead`` to ``digits`` significant digits (an interval
+    printed like its estimate: ``[2.0000, 2.0001]``, not ``[2, 2.0001]``); exponent form far from 1."""
+    if not math.isfinite(lead) or lead == 0.0 or not 1e-3 <= abs(lead) < 1e6 \
+            or not all(math.isfinite(v) for v in values):
+        return [number(v, digits) for v in values]
+    places = min(_decimals(lead, digits), 9)
+    return [f"{v:.{places}f}" for v in values]
+
+
+def estimate_row(name: str, value: float | None, se: float | None = None, ci: Iterable[float] | None = None,
+                 unit: str | None = None) -> tuple[str, str, str, str]:
+    """(parameter, estimate, standard error, 95% interval) of one estimate for the tables of fits: the
+    parameter's human name (:func:`key_for`), the value to 5 significant digits, the error to 2, all three
+    with the unit and the SI prefix of the value (``12.346 MN/m``, ``0.23 MN/m``)."""
+    human, u = key_for(name, unit)
+    if value is None:
+        return human, "-", "-", "-"
+    factor, prefix = _scale([float(value)], u in PREFIXABLE)
+    suffix = f" {prefix}{u}".rstrip()
+    lead = float(value) / factor
+    if se is not None and math.isinf(se):  # a parameter the record does not see: no error, no interval
+        return human, _alike([lead], lead)[0] + suffix, "not identified", "not identified"
+    se_text = "-" if se is None or not math.isfinite(se) else number(float(se) / factor, 2, zeros=True) + suffix
+    ci = None if ci is None else list(ci)
+    ci_text = "-" if ci is None or any(b is None for b in ci) else \
+        "[" + ", ".join(_alike([float(b) / factor for b in ci], lead)) + "]" + suffix
+    return human, _alike([lead], lead)[0] + suffix, se_text, ci_text
 
 
 def quantity_rows(summary: Mapping[str, Any], skip: Iterable[str] = ()) -> list[tuple[str, str]]:

@@ -8,13 +8,55 @@ runs its compiled kernels on one thread (:func:`quickrelease.using_threads`): th
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from functools import partial
+from pathlib import Path
 from typing import Any
 
 from .errors import QuickReleaseError
 
-__all__ = ["map_chunks"]
+__all__ = ["map_chunks", "check_optional", "OPTIONAL"]
+
+#: The optional packages each backend or file type needs: key (a backend name, or a file suffix) ->
+#: (importable packages, what to install).
+OPTIONAL: dict[str, tuple[tuple[str, ...], str]] = {
+    "dask": (("dask", "distributed"), "pip install 'quickrelease[dask]'"),
+    ".zarr": (("zarr",), "pip install 'quickrelease[dask]'"),
+    ".parquet": (("pyarrow",), "pip install 'quickrelease[dask]' (or pyarrow)"),
+    ".feather": (("pyarrow",), "pip install 'quickrelease[dask]' (or pyarrow)"),
+    ".xlsx": (("openpyxl",), "pip install openpyxl"),
+    ".xls": (("xlrd",), "pip install xlrd"),
+    ".h5": (("tables",), "pip install tables"),
+    ".hdf5": (("tables",), "pip install tables"),
+}
+
+
+def _installed(package: str) -> bool:
+    from importlib.util import find_spec
+
+    try:
+        return find_spec(package) is not None
+    except (ImportError, ValueError):  # a broken or half-installed package counts as missing
+        return False
+
+
+def check_optional(*, backend: str = "numpy", files: Iterable[str | Path] = ()) -> None:
+    """Check, before any work, that the optional packages the ``backend`` and the ``files`` (read or written,
+    by suffix: ``.zarr``, ``.parquet``, ``.xlsx``, ...) need are installed; else one
+    :class:`~quickrelease.errors.QuickReleaseError` line naming what needs what and how to install it (the
+    command line's exit 2), instead of a traceback after minutes of computing."""
+    wants: list[tuple[str, str]] = []
+    if backend in OPTIONAL:
+        wants.append((f"the {backend} backend", backend))
+    for file in files:
+        suffix = Path(file).suffix.lower()
+        if suffix in OPTIONAL:
+            wants.append((str(file), suffix))
+    for what, key in wants:
+        packages, install = OPTIONAL[key]
+        missing = [p for p in packages if not _installed(p)]
+        if missing:
+            raise QuickReleaseError(f"{what} needs {', '.join(missing)} (not installed): {install}")
 
 
 def _client(scheduler: str | None, workers: int):

@@ -79,7 +79,8 @@ class Identification(Summarised):
         return self.F1 / self.F1_max
 
     def summary(self) -> dict[str, Any]:
-        """The identification in numbers, units in the key names (JSON-ready)."""
+        """The identification in numbers, units in the key names (JSON-ready): the keys of
+        ``quickrelease identify --json``, the device's name last."""
         return {
             "F1_N": self.F1,
             "F2_N": self.F2,
@@ -95,6 +96,7 @@ class Identification(Summarised):
             "feasible_stop_time_s": list(self.feasible_stop_times),
             "mass_factor": self.mass_factor,
             "boundary": self.boundary,
+            "device": self.device.name,
         }
 
 

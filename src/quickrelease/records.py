@@ -43,6 +43,7 @@ from .units import parse_quantity
 __all__ = [
     "CHANNELS", "DISPLACEMENT_CHANNELS", "RecordError", "ChannelSpec", "RecordSpec", "Channel", "Record",
     "RATE_OF", "channel_model", "release_channels", "parse_record_spec", "load_record", "read_table", "detect_release",
+    "record_files",
 ]
 
 #: Channel name -> (quantity kind, SI unit, description).
@@ -570,6 +571,14 @@ class Record:
 _READERS = {".csv": "read_csv", ".txt": "read_csv", ".tsv": "read_csv", ".parquet": "read_parquet",
             ".feather": "read_feather", ".xlsx": "read_excel", ".xls": "read_excel", ".json": "read_json",
             ".h5": "read_hdf", ".hdf5": "read_hdf"}
+
+
+def record_files(spec: RecordSpec | None) -> list[Path]:
+    """The files a record reads: its own and those of channels with a file of their own."""
+    if spec is None:
+        return []
+    files = [spec.file, *(c.file for c in spec.channels.values() if c.file is not None)]
+    return list(dict.fromkeys(files))
 
 
 def read_table(path: Path):

@@ -15,9 +15,11 @@ import html
 import math
 import os
 import re
+from collections.abc import Iterable, Sequence
 from typing import Any
 
 from .device import DEVICE_KEYS
+from .display import key_for, number, plus_minus, unit_text
 from .workflow import FIGURES, CaseResult
 
 __all__ = ["render_report", "render_campaign_report", "render_building_report", "building_section"]
@@ -46,18 +48,48 @@ def _e(text: Any) -> str:
     return html.escape(str(text), quote=True)
 
 
-def _num(value: float | None, fmt: str = ".6g") -> str:
+def _num(value: float | None, fmt: str | None = None) -> str:
+    """A number of the report: 5 significant digits (as the command line's tables), or ``fmt``; a dash for
+    None and non-finite values."""
     if value is None:
         return "&ndash;"
     if isinstance(value, float) and not math.isfinite(value):
         return "&ndash;"
-    return format(value, fmt)
+    if fmt is None:
+        return number(float(value))
+    return format(value, fmt).replace("e+0", "e").replace("e-0", "e-").replace("e+", "e")  # 2.5e-8, not 2.5e-08
+
+
+def _se(value: float | None) -> str:
+    """An uncertainty of the report: 2 significant digits (``0.40``), as the command line's tables."""
+    if value is None or not math.isfinite(value):
+        return "&ndash;"
+    return number(float(value), 2, zeros=True)
+
+
+def _html_table(headers: Sequence[str] | None, rows: Iterable[Sequence[Any]], *, num: Iterable[int] = (),
+                cls: str | None = None, row_headers: bool = False) -> str:
+    """The report's one table builder. ``headers``: column titles (text, escaped here; None: no head row);
+    ``rows``: cells as HTML (escape text with :func:`_e`; a cell ``(html, id)`` carries an id); the columns in
+    ``num`` are numbers (right-aligned, class ``num``); ``row_headers``: each row's first cell is its header."""
+    numeric = set(num)
+
+    def cell(k: int, value: Any) -> str:
+        text, ident = value if isinstance(value, tuple) else (value, None)
+        attrs = (" class=\"num\"" if k in numeric else "") + (f" id=\"{_e(ident)}\"" if ident else "")
+        if row_headers and k == 0:
+            return f"<th scope=\"row\"{attrs}>{text}</th>"
+        return f"<td{attrs}>{text}</td>"
+
+    head = "" if headers is None else "<thead><tr>" + "".join(f"<th>{_e(h)}</th>" for h in headers) + "</tr></thead>"
+    body = "".join("<tr>" + "".join(cell(k, v) for k, v in enumerate(row)) + "</tr>" for row in rows)
+    klass = "" if cls is None else f" class=\"{_e(cls)}\""
+    return f"<table{klass}>{head}<tbody>{body}</tbody></table>"
 
 
 def _table(rows: list[tuple[str, str, str]], headers: tuple[str, str, str] = ("quantity", "value", "unit")) -> str:
-    head = "".join(f"<th>{_e(h)}</th>" for h in headers)
-    body = "".join(f"<tr><td>{_e(a)}</td><td class=\"num\">{b}</td><td>{_e(c)}</td></tr>" for a, b, c in rows)
-    return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
+    """A (quantity, value, unit) table: the quantity and unit as text, the value as HTML."""
+    return _html_table(headers, [(_e(a), b, _e(c)) for a, b, c in rows], num=(1,))
 
 
 def _svg_inline(svg: str, prefix: str) -> str:
@@ -96,8 +128,7 @@ def _front(title: str, prov: dict[str, Any], what: str, extra: list[tuple[str, s
     else:
         rows.append((what, "none (built in Python)"))
     rows += list(extra)
-    body = "".join(f"<tr><th scope=\"row\">{_e(k)}</th><td>{v}</td></tr>" for k, v in rows)
-    parts = [f"<h1>{_e(title)}</h1>", f"<table class=\"front\"><tbody>{body}</tbody></table>"]
+    parts = [f"<h1>{_e(title)}</h1>", _html_table(None, [(_e(k), v) for k, v in rows], cls="front", row_headers=True)]
     if entry:
         parts.append(f"<details id=\"input-text\"><summary>The {_e(what)} as read</summary>"
                      f"<pre class=\"input\">{_e(entry['text'])}</pre></details>")
@@ -115,19 +146,17 @@ def _signoff(info: dict[str, str] | None, prov: dict[str, Any]) -> str:
             ("organisation", info.get("organisation")),
             ("analysed with", f"quickrelease {prov['quickrelease']} on {report_date()}"),
             ("checked by", None), ("signature and date", None)]
-    body = "".join(f"<tr><th scope=\"row\">{_e(k)}</th><td>{'' if v is None else _e(v)}</td></tr>" for k, v in rows)
+    table = _html_table(None, [(_e(k), "" if v is None else _e(v)) for k, v in rows], cls="signoff", row_headers=True)
     note = "" if info else ("<p class=\"meta\">Give a <code>[report]</code> table (operator, organisation, test_id) "
                             "in the case file to fill this block.</p>")
-    return f"<h2 id=\"sign-off\">Sign-off</h2><table class=\"signoff\"><tbody>{body}</tbody></table>{note}"
+    return f"<h2 id=\"sign-off\">Sign-off</h2>{table}{note}"
 
 
 def _paper_section(cmp) -> str:
     """Table 7 of the paper beside ours (:class:`~quickrelease.paper.PaperComparison`)."""
-    rows = "".join(f"<tr><td>{_e(q)}</td><td class=\"num\">{_e(p)}</td><td class=\"num\">{_e(o)}</td>"
-                   f"<td>{_e(n)}</td></tr>" for q, p, o, n in cmp.rows())
-    return ("<h2 id=\"table7\">The paper and quickrelease (Table 7)</h2>"
-            "<table><thead><tr><th>quantity</th><th>paper</th><th>quickrelease</th><th>note</th></tr></thead>"
-            f"<tbody>{rows}</tbody></table>"
+    table = _html_table(("quantity", "paper", "quickrelease", "note"),
+                        [tuple(_e(c) for c in row) for row in cmp.rows()], num=(1, 2))
+    return ("<h2 id=\"table7\">The paper and quickrelease (Table 7)</h2>" + table +
             "<p>The paper's values as printed (rounded); ours computed for the same device and test, with what "
             "explains each difference.</p>")
 
@@ -174,8 +203,8 @@ def render_report(result: CaseResult, svgs: dict[str, str]) -> str:
             ("bar force N1 = P / (2 cos α0)", _num(f.N1 / 1e3), "kN"),
             ("head bending moment M2 = P L2 / 4", _num(f.M2 / 1e3), "kN m"),
         ]))
-        terms = [(name.replace("_", " "), _num(value, ".2f"), "J") for name, value in st.terms().items()]
-        terms.append(("total E_S (Eq. 2)", _num(st.total, ".2f"), "J"))
+        terms = [(name.replace("_", " "), _num(value), "J") for name, value in st.terms().items()]
+        terms.append(("total E_S (Eq. 2)", _num(st.total), "J"))
         parts.append(_table(terms, ("term of Eq. 2", "energy", "unit")))
         if case.energy_given:
             parts.append(f"<p>The case gives E_S = {_num(case.stored_energy)} J; Eq. 2 at this P gives "
@@ -248,23 +277,19 @@ def _fit_section(fit, svgs: dict[str, str]) -> str:
     for name in fit.names:
         unit = _PARAM_UNITS.get(name) or CHANNELS[name.removeprefix("offset_")][1]
         lo, hi = fit.ci95[name]
+        ident = {"F1": "fit-F1", "F2": "fit-F2"}.get(name)
         interval = f"[{_num(lo)}, {_num(hi)}]" if math.isfinite(fit.std_errors[name]) else "not identified"
-        ident = {"F1": ' id="fit-F1"', "F2": ' id="fit-F2"'}.get(name, "")
-        rows.append(f"<tr><td>{_e(name)}</td><td class=\"num\"{ident}>{_num(fit.estimates[name])}</td>"
-                    f"<td class=\"num\">{_num(fit.std_errors[name], '.3g')}</td>"
-                    f"<td class=\"num\">{interval}</td><td>{_e(unit)}</td></tr>")
-    parts.append("<table><thead><tr><th>parameter</th><th>estimate</th><th>standard error</th><th>95% interval</th>"
-                 f"<th>unit</th></tr></thead><tbody>{''.join(rows)}</tbody></table>")
+        rows.append((_e(name), (_num(fit.estimates[name]), ident), _se(fit.std_errors[name]), interval, _e(unit)))
+    parts.append(_html_table(("parameter", "estimate", "standard error", "95% interval", "unit"), rows,
+                             num=(1, 2, 3)))
     i1, i2 = fit.names.index("F1"), fit.names.index("F2")
     parts.append(f"<p>Correlation of F1 and F2: {_num(float(fit.correlation[i1, i2]), '+.4f')}; condition number of "
                  f"the correlation matrix {_num(fit.condition_number, '.3g')}.</p>")
     if fit.residual_rms:
-        ch_rows = "".join(
-            f"<tr><td>{_e(n)}</td><td class=\"num\">{fit.samples[n]}</td><td class=\"num\">"
-            f"{_num(fit.noise[n], '.3g')}</td><td>{_e(fit.noise_source[n])}</td><td class=\"num\">"
-            f"{_num(fit.residual_rms[n], '.3g')}</td><td>{_e(CHANNELS[n][1])}</td></tr>" for n in fit.residual_rms)
-        parts.append("<table><thead><tr><th>channel</th><th>samples</th><th>noise σ</th><th>from</th>"
-                     f"<th>rms residual</th><th>unit</th></tr></thead><tbody>{ch_rows}</tbody></table>")
+        parts.append(_html_table(("channel", "samples", "noise σ", "from", "rms residual", "unit"), [
+            (_e(n), str(fit.samples[n]), _num(fit.noise[n], ".3g"), _e(fit.noise_source[n]),
+             _num(fit.residual_rms[n], ".3g"), _e(unit_text(CHANNELS[n][1]))) for n in fit.residual_rms],
+            num=(1, 2, 4)))
     for text in fit.warnings:
         parts.append(f"<p class=\"flag\">Warning: {_e(text)}</p>")
     for text in fit.notes:
@@ -314,10 +339,8 @@ def building_section(result, svgs: dict[str, str]) -> str:
                                              f"{_num(None if ci[1] is None else ci[1] * scale)}]"
         if key in s.get("not_identified", ()):
             interval = "not identified"
-        rows.append(f"<tr><td>{_e(label)}</td><td class=\"num\" id=\"building-{key}\">{_num(s[key] * scale)}</td>"
-                    f"<td class=\"num\">{interval}</td><td>{_e(unit)}</td></tr>")
-    parts.append("<table><thead><tr><th>isolation system</th><th>estimate</th><th>95% interval</th><th>unit</th>"
-                 f"</tr></thead><tbody>{''.join(rows)}</tbody></table>")
+        rows.append((_e(label), (_num(s[key] * scale), f"building-{key}"), interval, _e(unit)))
+    parts.append(_html_table(("isolation system", "estimate", "95% interval", "unit"), rows, num=(1, 2)))
     rows = []
     for name in fit.names:
         label, unit, scale = _BUILDING_PARAMS.get(name, (name, "", 1.0))
@@ -328,33 +351,25 @@ def building_section(result, svgs: dict[str, str]) -> str:
         lo, hi = fit.ci95[name]
         interval = "not identified" if fit.interval_method[name] == "not identified" else \
             f"[{_num(lo * scale)}, {_num(hi * scale)}]"
-        rows.append(f"<tr><td>{_e(name)}</td><td>{_e(label)}</td><td class=\"num\">{_num(fit.estimates[name] * scale)}"
-                    f"</td><td class=\"num\">{_num(fit.std_errors[name] * scale, '.3g')}</td><td class=\"num\">"
-                    f"{interval}</td><td>{_e(fit.interval_method[name])}</td>"
-                    f"<td>{_e(unit)}</td></tr>")
-    parts.append("<details><summary>Every fitted parameter</summary><table><thead><tr><th>parameter</th><th></th>"
-                 "<th>estimate</th><th>standard error</th><th>95% interval</th><th>interval</th><th>unit</th></tr>"
-                 f"</thead><tbody>{''.join(rows)}</tbody></table>"
+        rows.append((_e(name), _e(label), _num(fit.estimates[name] * scale), _se(fit.std_errors[name] * scale),
+                     interval, _e(fit.interval_method[name]), _e(unit)))
+    table = _html_table(("parameter", "", "estimate", "standard error", "95% interval", "interval", "unit"), rows,
+                        num=(2, 3, 4))
+    parts.append(f"<details><summary>Every fitted parameter</summary>{table}"
                  f"<p>Condition number of the correlations {_num(fit.condition_number, '.3g')}.</p></details>")
-    ch_rows = "".join(
-        f"<tr><td>{_e(c.name)}</td><td class=\"num\">{fit.samples[c.name]}</td><td class=\"num\">"
-        f"{_num(fit.noise[c.name], '.3g')}</td><td>{_e(fit.noise_source[c.name])}</td><td class=\"num\">"
-        f"{_num(fit.residual_rms[c.name], '.3g')}</td><td class=\"num\">{_num(fit.whiteness_p[c.name], '.3g')}</td>"
-        f"<td>{_e(CHANNEL_KINDS.get(c.kind, ''))}</td></tr>" for c in fit.channels)
-    parts.append("<table><thead><tr><th>channel</th><th>samples</th><th>noise σ</th><th>from</th><th>rms residual</th>"
-                 f"<th>whiteness p (Ljung-Box)</th><th>unit</th></tr></thead><tbody>{ch_rows}</tbody></table>")
+    parts.append(_html_table(("channel", "samples", "noise σ", "from", "rms residual", "whiteness p (Ljung-Box)",
+                              "unit"), [
+        (_e(c.name), str(fit.samples[c.name]), _num(fit.noise[c.name], ".3g"), _e(fit.noise_source[c.name]),
+         _num(fit.residual_rms[c.name], ".3g"), _num(fit.whiteness_p[c.name], ".3g"),
+         _e(unit_text(CHANNEL_KINDS.get(c.kind, "")))) for c in fit.channels], num=(1, 2, 4, 5)))
     if result.comparison:
         parts.append("<h3>Model comparison</h3>")
         def white(r):
             return ", ".join(f"{k}: {_num(v, '.3g')}" for k, v in r["whiteness_p"].items())
 
-        rows = "".join(
-            f"<tr><td>{_e(r['model'])}</td><td class=\"num\">{r['parameters']}</td><td class=\"num\">"
-            f"{_num(r['chi2'])}</td><td class=\"num\">{_num(r['aic'])}</td><td class=\"num\">"
-            f"{_num(r['delta_aic'])}</td><td class=\"num\">{_num(r['bic'])}</td><td class=\"num\">"
-            f"{_num(r['delta_bic'])}</td><td>{_e(white(r))}</td></tr>" for r in result.comparison)
-        parts.append("<table><thead><tr><th>model</th><th>parameters</th><th>χ²</th><th>AIC</th><th>ΔAIC</th><th>BIC</th>"
-                     f"<th>ΔBIC</th><th>whiteness p</th></tr></thead><tbody>{rows}</tbody></table>")
+        parts.append(_html_table(("model", "parameters", "χ²", "AIC", "ΔAIC", "BIC", "ΔBIC", "whiteness p"), [
+            (_e(r["model"]), str(r["parameters"]), _num(r["chi2"]), _num(r["aic"]), _num(r["delta_aic"]),
+             _num(r["bic"]), _num(r["delta_bic"]), _e(white(r))) for r in result.comparison], num=range(1, 7)))
         parts.append("<p>Lowest BIC first; a difference above about 10 is strong support for the lower one. Small "
                      "whiteness p-values: the residuals keep structure the model does not explain.</p>")
     parts.append("<h3>Decay cross-check (model-free)</h3>")
@@ -373,11 +388,9 @@ def building_section(result, svgs: dict[str, str]) -> str:
         parts.append(f"<p>{text}</p>")
     rows = result.decay_check.get("rows", [])
     if rows:
-        body = "".join(f"<tr><td>{_e(r['parameter'])}</td><td class=\"num\">{_num(r['fit'])}</td><td class=\"num\">"
-                       f"{_num(r['decay'])}</td><td class=\"num\">{_num(r['decay_se'], '.3g')}</td>"
-                       f"<td class=\"num\">{_num(r['difference_in_se'], '+.3g')}</td></tr>" for r in rows)
-        parts.append("<table><thead><tr><th>parameter (SI)</th><th>fit</th><th>decay analysis</th><th>decay SE</th>"
-                     f"<th>difference [SE]</th></tr></thead><tbody>{body}</tbody></table>")
+        parts.append(_html_table(("parameter", "fit", "decay analysis", "decay SE", "difference [SE]", "unit"), [
+            (_e(key_for(r["parameter"])[0]), _num(r["fit"]), _num(r["decay"]), _se(r["decay_se"]),
+             _num(r["difference_in_se"], "+.3g"), _e(key_for(r["parameter"])[1])) for r in rows], num=(1, 2, 3, 4)))
         parts.append("<p>The combined decrement law is exact for the linear model with sliders: a few standard errors "
                      "of difference are expected (fit and decay share the record); tens mean the record and the model "
                      "disagree.</p>")
@@ -430,13 +443,11 @@ def _plan_section(plan, svgs: dict[str, str]) -> str:
         parts.append(_figure(svgs, "plan_choices"))
     m = plan.members
     parts.append("<h3>Member checks</h3>")
-    rows = "".join(f"<tr><td>{_e(c.member)}</td><td>{_e(c.check)}</td><td class=\"num\">"
-                   f"{_num(c.demand / (1e6 if c.unit == 'Pa' else 1e3))}</td><td class=\"num\">"
-                   f"{_num(None if c.capacity is None else c.capacity / (1e6 if c.unit == 'Pa' else 1e3))}</td>"
-                   f"<td>{'MPa' if c.unit == 'Pa' else 'kN'}</td><td class=\"num\">{_num(c.utilisation, '.3f')}</td>"
-                   f"<td>{_e(c.note)}</td></tr>" for c in m.checks)
-    parts.append("<table><thead><tr><th>member</th><th>check</th><th>demand</th><th>capacity</th><th>unit</th>"
-                 f"<th>utilisation</th><th>note</th></tr></thead><tbody>{rows}</tbody></table>")
+    parts.append(_html_table(("member", "check", "demand", "capacity", "unit", "utilisation", "note"), [
+        (_e(c.member), _e(c.check), _num(c.demand / (1e6 if c.unit == "Pa" else 1e3)),
+         _num(None if c.capacity is None else c.capacity / (1e6 if c.unit == "Pa" else 1e3)),
+         "MPa" if c.unit == "Pa" else "kN", _num(c.utilisation, ".3f"), _e(c.note)) for c in m.checks],
+        num=(2, 3, 5)))
     over = [k for k, v in m.utilisation().items() if v is not None and v > 1]
     if over:
         parts.append(f"<p class=\"flag\">Over capacity: {_e(', '.join(over))}.</p>")
@@ -446,13 +457,10 @@ def _plan_section(plan, svgs: dict[str, str]) -> str:
     parts.append(f"<p>Friction: {_e(env.friction)}; nominal F1 = {_num(env.F1)} N, "
                  f"F2 = {_num(env.F2)} N; {env.samples:,} sample(s); "
                  f"{_num(100 * env.geometric_limit_share, '.3g')}% reach the flat rhombus.</p>")
-    rows = "".join(f"<tr><td>{_e(label)}</td><td class=\"num\">{_num(env.nominal[k])}</td>"
-                   f"<td class=\"num\">{_num(env.ranges[k]['p5'])}</td>"
-                   f"<td class=\"num\">{_num(env.ranges[k]['p95'])}</td>"
-                   f"<td class=\"num\">{_num(env.ranges[k]['max'])}</td><td>{_e(unit)}</td></tr>"
-                   for k, (unit, label) in ENVELOPE_QUANTITIES.items())
-    parts.append("<table><thead><tr><th>quantity</th><th>nominal</th><th>5%</th><th>95%</th><th>max</th>"
-                 f"<th>unit</th></tr></thead><tbody>{rows}</tbody></table>")
+    parts.append(_html_table(("quantity", "nominal", "5%", "95%", "max", "unit"), [
+        (_e(label), _num(env.nominal[k]), _num(env.ranges[k]["p5"]), _num(env.ranges[k]["p95"]),
+         _num(env.ranges[k]["max"]), _e(unit_text(unit))) for k, (unit, label) in ENVELOPE_QUANTITIES.items()],
+        num=(1, 2, 3, 4)))
     parts.append(_figure(svgs, "plan_envelope"))
     if plan.clearance is not None:
         c = plan.clearance
@@ -538,36 +546,26 @@ def render_campaign_report(result, svgs: dict[str, str]) -> str:
         parts.append(signoff)
         return _page(f"{result.title}", parts)
     parts.append("<h2>Friction per test</h2>")
-    rows = []
-    for t in result.tests:
-        def pm(value, se):
-            return _num(value, ".2f") + ("" if se is None else f" ± {_num(se, '.2g')}")
-        rows.append(f"<tr><td>{_e(t.name)}</td><td class=\"num\">{_num((t.case.push_force or math.nan) / 1e3, '.0f')}"
-                    f"</td><td class=\"num\">{_num(t.case.alpha0)}</td><td class=\"num\">"
-                    f"{_num(t.case.stored_energy, '.0f')}</td><td class=\"num\">{pm(t.F1, t.F1_se)}</td>"
-                    f"<td class=\"num\">{pm(t.F2, t.F2_se)}</td><td>{_e(t.method)}</td></tr>")
-    parts.append("<table><thead><tr><th>test</th><th>P [kN]</th><th>α0 [rad]</th><th>E_S [J]</th>"
-                 "<th>F1 [N] (± SE)</th><th>F2 [N] (± SE)</th><th>from</th></tr></thead>"
-                 f"<tbody>{''.join(rows)}</tbody></table>")
+    parts.append(_html_table(("test", "P [kN]", "α0 [rad]", "E_S [J]", "F1 [N] (± SE)", "F2 [N] (± SE)", "from"), [
+        (_e(t.name), _num((t.case.push_force or math.nan) / 1e3), _num(t.case.alpha0), _num(t.case.stored_energy),
+         _e(plus_minus(t.F1, t.F1_se)), _e(plus_minus(t.F2, t.F2_se)), _e(t.method)) for t in result.tests],
+        num=range(1, 6)))
     parts.append("<h2>Friction laws F = a + b x</h2>")
     rows = []
     for law in result.laws.values():
         _, label, _, scale, unit = VARIABLES[law.variable]
         verdict = "<strong>yes</strong>" if law.significant else "no"
-        rows.append(f"<tr><td>{law.friction}</td><td>{_e(label)}</td><td class=\"num\">{_num(law.intercept)} ± "
-                    f"{_num(law.intercept_se, '.2g')}</td><td class=\"num\">{_num(law.slope / scale)} ± "
-                    f"{_num(law.slope_se / scale, '.2g')} N/{_e(unit)}</td>"
-                    f"<td class=\"num\">{_num(law.p_value, '.2g')}</td>"
-                    f"<td>{verdict}</td><td class=\"num\">{_num(law.chi2_reduced, '.3g')}</td></tr>")
-    parts.append("<table><thead><tr><th>friction</th><th>x</th><th>a [N]</th><th>b</th><th>p (b = 0)</th>"
-                 "<th>slope significant at 5%</th><th>reduced χ²</th></tr></thead>"
-                 f"<tbody>{''.join(rows)}</tbody></table>")
+        rows.append((_e(law.friction), _e(label), _e(plus_minus(law.intercept, law.intercept_se)),
+                     _e(plus_minus(law.slope / scale, law.slope_se / scale, f"N/{unit}")), _num(law.p_value, ".2g"),
+                     verdict, _num(law.chi2_reduced, ".3g")))
+    parts.append(_html_table(("friction", "x", "a [N]", "b", "p (b = 0)", "slope significant at 5%", "reduced χ²"),
+                             rows, num=(2, 3, 4, 6)))
     parts.append("<p>Weighted by the tests' standard errors when every test has one; a reduced χ² above 1 (more "
                  "scatter about the line than the standard errors explain) inflates the law's covariance.</p>")
     for friction, joint in result.joint.items():
         terms = joint.summary()["terms"]
         units = {n: VARIABLES[n][3:] if n in VARIABLES else (1.0, "") for n in terms}
-        text = ", ".join(f"{_e(n)}: {_num(v['value'] / units[n][0])} ± {_num(v['se'] / units[n][0], '.2g')} "
+        text = ", ".join(f"{_e(n)}: {_e(plus_minus(v['value'] / units[n][0], v['se'] / units[n][0]))} "
                          f"N{'/' + units[n][1] if units[n][1] else ''} (p = {_num(v['p_value'], '.2g')})"
                          for n, v in terms.items())
         parts.append(f"<p>Joint law for {friction}: {text}.</p>")
@@ -584,23 +582,20 @@ def _building_campaign_section(result, svgs: dict[str, str]) -> list[str]:
 
     parts = [f"<h2>The isolation system per release ({_e(result.model)} model, mass "
              f"{_num(result.mass / 1e3)} t)</h2>"]
-    head = "".join(f"<th>{_e(QUANTITIES[q][4])} [{_e(QUANTITIES[q][3])}] (95% interval)</th>"
-                   for q in result.columns)
+    head = [f"{QUANTITIES[q][4]} [{QUANTITIES[q][3]}] (95% interval)" for q in result.columns]
     rows = []
     for r in result.releases:
         cells = []
         for q in result.columns:
             scale = QUANTITIES[q][2]
             lo, hi = r.ci95[q]
-            cells.append(f"<td class=\"num\">{_num(r.values[q] * scale, '#.5g')} [{_num(lo * scale, '#.5g')}, "
-                         f"{_num(hi * scale, '#.5g')}]</td>")
-        force = "" if r.force is None else _num(r.force / 1e3, ".4g")
+            cells.append(f"{_num(r.values[q] * scale)} [{_num(lo * scale)}, {_num(hi * scale)}]")
+        force = "&ndash;" if r.force is None else _num(r.force / 1e3)
         warn = "; ".join(([f"refitted from {r.restarted_from}'s estimates"] if r.restarted_from else [])
                          + list(r.fit.warnings))
-        rows.append(f"<tr><td>{_e(r.name)}</td><td class=\"num\">{_num(abs(r.d0) * 1e2)}</td>"
-                    f"<td class=\"num\">{force}</td>{''.join(cells)}<td>{_e(warn)}</td></tr>")
-    parts.append(f"<table><thead><tr><th>release</th><th>|d0| [cm]</th><th>P [kN]</th>{head}<th>warnings</th>"
-                 f"</tr></thead><tbody>{''.join(rows)}</tbody></table>")
+        rows.append((_e(r.name), _num(abs(r.d0) * 1e2), force, *cells, _e(warn)))
+    parts.append(_html_table(("release", "|d0| [cm]", "P [kN]", *head, "warnings"), rows,
+                             num=range(1, 3 + len(head))))
     parts.append("<h2>Laws in the amplitude q = a + b x</h2>")
     rows = []
     for law in result.laws.values():
@@ -608,15 +603,12 @@ def _building_campaign_section(result, svgs: dict[str, str]) -> list[str]:
         x_label, _, x_scale, x_unit = BUILDING_VARIABLES[law.variable]
         per = f"/{x_unit}" if x_unit != "-" else ""
         verdict = "<strong>yes</strong>" if law.significant else "no"
-        rows.append(f"<tr><td>{_e(symbol)}</td><td>{_e(x_label)}</td><td class=\"num\">"
-                    f"{_num(law.intercept * y_scale, '#.5g')} ± {_num(law.intercept_se * y_scale, '.2g')} {_e(y_unit)}"
-                    f"</td><td class=\"num\">{_num(law.slope * y_scale / x_scale)} ± "
-                    f"{_num(law.slope_se * y_scale / x_scale, '.2g')} {_e(y_unit + per)}</td>"
-                    f"<td class=\"num\">{_num(law.p_value, '.2g')}</td><td>{verdict}</td>"
-                    f"<td class=\"num\">{_num(law.chi2_reduced, '.3g')}</td></tr>")
-    parts.append("<table><thead><tr><th>quantity</th><th>x</th><th>a</th><th>b</th><th>p (b = 0)</th>"
-                 "<th>slope significant at 5%</th><th>reduced χ²</th></tr></thead>"
-                 f"<tbody>{''.join(rows)}</tbody></table>")
+        rows.append((_e(symbol), _e(x_label), _e(plus_minus(law.intercept * y_scale, law.intercept_se * y_scale,
+                                                             y_unit)),
+                     _e(plus_minus(law.slope * y_scale / x_scale, law.slope_se * y_scale / x_scale, y_unit + per)),
+                     _num(law.p_value, ".2g"), verdict, _num(law.chi2_reduced, ".3g")))
+    parts.append(_html_table(("quantity", "x", "a", "b", "p (b = 0)", "slope significant at 5%", "reduced χ²"), rows,
+                             num=(2, 3, 4, 6)))
     parts.append("<p>Each release fitted on its own; the laws weighted by the releases' standard errors (a "
                  "reduced χ² above 1 inflates the law's covariance). A linear spring with viscous damping and "
                  "Coulomb sliders keeps T, ζ and F_s constant, while its equivalent damping ζ_eq (the cycle's "

@@ -85,6 +85,8 @@ class Response(Summarised):
     """Solver that produced the response: ``energy``, ``rk`` or ``explicit``."""
     stats: dict[str, Any] = field(default_factory=dict)
     """Solver statistics (steps, function evaluations, time step)."""
+    push_force: float | None = None
+    """P, the push force at release that stored E_S (Eq. 2) [N]; ``None`` when E_S was given directly."""
 
     # -- derived time histories -------------------------------------------------
     @property
@@ -153,9 +155,12 @@ class Response(Summarised):
 
     # -- summaries ---------------------------------------------------------------
     def summary(self) -> dict[str, Any]:
-        """The release in numbers, with units in the key names (JSON-ready)."""
+        """The release in numbers, with units in the key names (JSON-ready): the keys and values
+        ``quickrelease simulate --json`` prints, the push force P first (``None`` when E_S was given) and the
+        device's name last."""
         moving = self.t <= self.stop_time
         return {
+            "push_force_N": self.push_force,
             "method": self.method,
             "mass_factor": self.mass_factor,
             "stored_energy_J": self.stored_energy,
@@ -174,6 +179,7 @@ class Response(Summarised):
             "peak_u_ddot_m_s2": float(np.max(np.abs(self.u_ddot[moving]))),
             "peak_v_ddot_m_s2": float(np.max(np.abs(self.v_ddot[moving]))),
             "samples": int(self.t.size),
+            "device": self.device.name,
         }
 
     def to_dict(self) -> dict[str, np.ndarray]:
@@ -257,4 +263,5 @@ class Response(Summarised):
             stopped_by=self.stopped_by,
             method=self.method,
             stats=self.stats,
+            push_force=self.push_force,
         )

@@ -476,9 +476,33 @@ def _solve_explicit(fi: FirstIntegral, dt: float | None = None, max_steps: int =
 _SOLVERS = {"energy": _solve_energy, "rk": _solve_rk, "explicit": _solve_explicit}
 
 
+def _energy_from(stored_energy, push_force, alpha0: float, device: Device) -> tuple[float, float | None]:
+    """(E_S, P) of a release given by its stored energy, or by its push force (E_S by Eq. 2). Given both, E_S
+    is the one simulated and P is kept as reported (a test may report the jack's P beside an E_S of its own)."""
+    if stored_energy is None and push_force is None:
+        raise ParameterError("stored_energy/push_force", "neither", "at least one of the two (E_S [J], or P [N] "
+                             "for E_S by Eq. 2)")
+    P = None if push_force is None else si_scalar(push_force, "force", "push_force")
+    if stored_energy is not None:
+        return stored_energy, P
+    from .statics import strain_energy
+
+    return strain_energy(P, alpha0, device).total, P
+
+
+class _Required:
+    """The default of an argument that must be given but follows an optional one (``simulate``'s alpha0)."""
+
+    def __repr__(self) -> str:
+        return "<required>"
+
+
+_REQUIRED: Any = _Required()
+
+
 @renamed(E_S="stored_energy")
-def simulate(stored_energy: float, alpha0: float, F1: float = 0.0, F2: float = 0.0, *,
-             device: Device | None = None, mass_model: str | float = "distributed",
+def simulate(stored_energy: float | None = None, alpha0: float = _REQUIRED, F1: float = 0.0, F2: float = 0.0, *,
+             push_force: float | None = None, device: Device | None = None, mass_model: str | float = "distributed",
              method: str = "energy", dt: float | None = None, n_points: int = 1001,
              t_end: float | None = None, rtol: float = RK_RTOL, atol: float | None = None,
              rk_method: str = "DOP853") -> Response:
@@ -486,12 +510,17 @@ def simulate(stored_energy: float, alpha0: float, F1: float = 0.0, F2: float = 0
 
     Parameters
     ----------
-    stored_energy : float
-        Strain energy E_S stored before release [J] (e.g. ``strain_energy(P, alpha0, device).total``).
+    stored_energy : float, optional
+        Strain energy E_S stored before release [J] (e.g. ``strain_energy(P, alpha0, device).total``);
+        from ``push_force`` by Eq. 2 when left out.
     alpha0 : float
         Angle of the bars with the loading axis at release [rad], in (0, pi/2).
     F1, F2 : float
         Coulomb friction at the central hinges and at the rail supports [N], >= 0.
+    push_force : float, optional
+        Push force P at release [N]: E_S by Eq. 2 when ``stored_energy`` is left out. Kept in the response
+        (``summary()["push_force_N"]``, as ``quickrelease simulate --force`` prints it); given beside
+        ``stored_energy`` it is only recorded.
     device : Device, optional
         The device; the paper's (Table 2) by default.
     mass_model : {"distributed", "lumped"} or float
@@ -516,6 +545,12 @@ def simulate(stored_energy: float, alpha0: float, F1: float = 0.0, F2: float = 0
     -------
     Response
     """
+    if alpha0 is _REQUIRED:
+        raise TypeError("simulate() missing the release angle alpha0")
+    device = device or preset("paper")
+    alpha0 = si_scalar(alpha0, "angle", "alpha0")
+    check_angle("alpha0", alpha0)
+    stored_energy, push_force = _energy_from(stored_energy, push_force, alpha0, device)
     E_S, alpha0, F1, F2 = _release_args(stored_energy, alpha0, F1, F2)
     dt = None if dt is None else si_scalar(dt, "time", "dt")
     t_end = None if t_end is None else si_scalar(t_end, "time", "t_end")
@@ -524,7 +559,6 @@ def simulate(stored_energy: float, alpha0: float, F1: float = 0.0, F2: float = 0
     if not isinstance(n_points, int | np.integer) or n_points < 2:
         raise ParameterError("n_points", n_points, "integers >= 2")
     check_size("n_points", n_points, n_points, "time samples")
-    device = device or preset("paper")
     c = dynamics.mass_factor(mass_model)
     fi = FirstIntegral(E_S, alpha0, F1, F2, device.m1, device.m2, device.L1, c)
     t_stop = fi.horizon()  # t_F, or where the returned history of a creeping release ends (t_F = inf)
@@ -540,7 +574,7 @@ def simulate(stored_energy: float, alpha0: float, F1: float = 0.0, F2: float = 0
         stored_energy=float(E_S), alpha0=float(alpha0), F1=float(F1), F2=float(F2),
         mass_factor=c, device=device, stop_time=float(out["stop_time"]),
         alpha_final=float(out["alpha_final"]), stopped_by=stopped_by, method=method,
-        stats=out["stats"],
+        stats=out["stats"], push_force=push_force,
     )
     if t_end is not None:
         check_positive("t_end", t_end, "s")

@@ -163,19 +163,11 @@ def _dataset(case: Case, grids: dict[str, np.ndarray], data: dict[str, np.ndarra
 
 
 def _check_optional(out: str | Path | None, backend: str) -> None:
-    """The optional packages the output and the backend need, checked before any work (one line, no traceback
-    after minutes of computing)."""
-    from importlib.util import find_spec
+    """The optional packages the output and the backend need, checked before any work
+    (:func:`quickrelease.distributed.check_optional`)."""
+    from .distributed import check_optional
 
-    needs = []
-    if out is not None and Path(out).suffix == ".zarr":
-        needs.append("zarr")
-    if backend == "dask":
-        needs += ["dask", "distributed"]
-    missing = [name for name in needs if find_spec(name) is None]
-    if missing:
-        what = "the dask backend" if backend == "dask" else f"{out} (a Zarr store)"
-        raise QuickReleaseError(f"{what} needs {', '.join(missing)}: pip install 'quickrelease[dask]'")
+    check_optional(backend=backend, files=() if out is None else (out,))
 
 
 def sweep(case: Case, grids: dict[str, np.ndarray], *, backend: str = "numpy", out: str | Path | None = None,

@@ -351,6 +351,9 @@ def run_uq(case: Case, samples: int, *, seed: int = 0, chunk: int = DEFAULT_CHUN
         raise ParameterError("chunk", chunk, "integers >= 1")
     if backend not in ("numpy", "dask"):
         raise ParameterError("backend", backend, "'numpy' or 'dask'")
+    from .distributed import check_optional
+
+    check_optional(backend=backend)  # before any work and before the output folder
     check_seed("seed", seed)
     check_workers("workers", workers)
     check_threads(threads)

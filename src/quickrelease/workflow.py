@@ -72,14 +72,13 @@ class CaseResult(Summarised):
 
     def summary(self) -> dict[str, Any]:
         """The release summary: the keys of ``quickrelease simulate --json``."""
-        return {"push_force_N": self.case.push_force, **self.response.summary(), "device": self.case.device.name}
+        return self.response.summary()
 
     def identification_summary(self) -> dict[str, Any] | None:
         """The identification: the keys of ``quickrelease identify --json``."""
         if self.identification is None:
             return None
-        return {**self.identification.summary(), "push_force_N": self.case.push_force,
-                "device": self.case.device.name}
+        return {**self.identification.summary(), "push_force_N": self.case.push_force}
 
 
 def run_case(case: Case, *, state_diagram: bool = True, plan: bool | None = None,
@@ -104,7 +103,7 @@ def run_case(case: Case, *, state_diagram: bool = True, plan: bool | None = None
         F1, F2, E_S, mass_model = fit.F1, fit.F2, fit.energy, fit.mass_factor
     elif ident is None:
         F1, F2, _ = case_friction(case)
-    common = dict(device=case.device, mass_model=mass_model)
+    common = dict(device=case.device, mass_model=mass_model, push_force=case.push_force)
     response = simulate(E_S, case.alpha0, F1, F2, method=case.method, dt=case.dt,
                         n_points=case.n_points, t_end=case.t_end, rk_method=case.rk_method, **common)
     states: list[Response] = []
