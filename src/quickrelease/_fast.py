@@ -16,11 +16,14 @@ import os
 import types
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from . import _kernels, dynamics
 
 _HALF_PI = 0.5 * math.pi
+#: Grading steps past a near-singularity's distance that the graded rule goes on panelling (calibrated against
+#: the full 544-node rule of ``_kernels.graded_unit`` and mpmath: tests/test_kernels_wide.py).
+GRADED_REACH = 1
 
 
 #: The modules whose functions the kernels of this file compile in (inline): their sources stamp the cache.
@@ -109,83 +112,161 @@ def tier_constants() -> tuple[float, float, float, float]:
     return _kernels.NEAR_RATIO, _kernels.HARD_RATIO, _kernels.MASS_RATIO**2, _kernels.MASS_HARD**2
 
 
+#: Cases per block of the parallel loops (``prange`` over blocks): each case's arithmetic is its own, so the
+#: results do not depend on how the blocks are shared among the threads (a test checks 1 and 2 threads agree
+#: bit for bit).
+BLOCK = 256
+#: fastmath only where it is harmless and pays: the node sums (reassociated, contracted into fused multiply-adds, so
+#: the compiler vectorises them), never the classifier or the near-limit arithmetic of the setup.
+_NODE_MATH = {"reassoc", "contract"}
+
+
+@njit(cache=True, nogil=True, fastmath=_NODE_MATH)
+def _friction_nodes(x, w, lo, width, sm, sA, cA, cb, sn, kk):
+    """sum_j w_j sqrt((k + sin^2 alpha) / (C q^2)) over the nodes lo + width x_j of one panel, times width (the
+    friction integrand of ``_kernels``: sigma = sigma_m u^2, C = cos(a - phi) q + sin(a - phi) sigma) [-]."""
+    acc = 0.0
+    for j in range(x.size):
+        u = lo + width * x[j]
+        sg = (u * u) * sm
+        s2 = sg * sg
+        q2 = 1.0 - s2
+        q = math.sqrt(q2)
+        sal = sA * (1.0 - 2.0 * s2) - cA * 2.0 * sg * q
+        C = cb * q + sn * sg
+        acc += w[j] * math.sqrt((kk + sal * sal) / (C * q2))
+    return acc * width
+
+
+@njit(cache=True, nogil=True, fastmath=_NODE_MATH)
+def _limit_nodes(x, w, lo, width, sm, Kl, A, B, kk):
+    """sum_j w_j u_j sqrt(k + sin^2 alpha) / sqrt(K q^2) over the nodes u_j = lo + width x_j of one panel, times
+    width (the geometric-limit integrand of ``_kernels``: K = K_lim + 2 A sigma^2 + 2 B sigma q) [-]."""
+    acc = 0.0
+    for j in range(x.size):
+        u = lo + width * x[j]
+        s = (u * u) * sm
+        s2 = s * s
+        q2 = 1.0 - s2
+        sal = 1.0 - 2.0 * s2
+        K = Kl + 2.0 * A * s2 + 2.0 * B * s * math.sqrt(q2)
+        acc += w[j] * u * math.sqrt(kk + sal * sal) / math.sqrt(K * q2)
+    return acc * width
+
+
 @njit(cache=True, nogil=True)
+def _panel_count(distance, grading, reach, panels):
+    """Graded panels towards an end whose near-singularity lies ``distance`` from it (in w): the last panel
+    [0, r^J / 2] ends ``reach`` grading steps inside that distance, J in [0, panels] [-]."""
+    if not distance > 0.0:
+        return panels
+    j = math.ceil(math.log(2.0 * distance) / math.log(grading)) + reach
+    return min(max(j, 0), panels)
+
+
+@njit(cache=True, nogil=True)
+def _panel_sum(regime, x, w, lo, width, sm, sA, cA, cb, sn, Kl, A, B, kk):
+    if regime == 0:
+        return _friction_nodes(x, w, lo, width, sm, sA, cA, cb, sn, kk)
+    return _limit_nodes(x, w, lo, width, sm, Kl, A, B, kk)
+
+
+@njit(cache=True, nogil=True)
+def _graded_sum(regime, ratio, msq, x, w, grading, reach, panels, sm, sA, cA, cb, sn, Kl, A, B, kk):
+    """The graded rule of ``_kernels.graded_unit`` with only the panels a case needs: towards w = 0 down to
+    ``sqrt(ratio)`` (the end's near-singularity), towards w = 1 down to ``sqrt(msq) / 2`` (the mass factor's
+    complex zero), each ``reach`` steps further; the rest of each half is one panel [-]."""
+    jl = _panel_count(math.sqrt(ratio) if ratio > 0.0 else 0.0, grading, reach, panels)
+    jr = _panel_count(0.5 * math.sqrt(msq), grading, reach, panels)
+    acc = 0.0
+    hi = 0.5
+    for _ in range(jl):  # [r^(j+1)/2, r^j/2] towards 0
+        lo = hi * grading
+        acc += _panel_sum(regime, x, w, lo, hi - lo, sm, sA, cA, cb, sn, Kl, A, B, kk)
+        hi = lo
+    acc += _panel_sum(regime, x, w, 0.0, hi, sm, sA, cA, cb, sn, Kl, A, B, kk)
+    hi = 0.5
+    for _ in range(jr):  # mirrored towards 1
+        lo = hi * grading
+        acc += _panel_sum(regime, x, w, 1.0 - hi, hi - lo, sm, sA, cA, cb, sn, Kl, A, B, kk)
+        hi = lo
+    acc += _panel_sum(regime, x, w, 1.0 - hi, hi, sm, sA, cA, cb, sn, Kl, A, B, kk)
+    return acc
+
+
+@njit(cache=True, nogil=True)
+def _stop_one(E, sa0, ca0, a0, F1, F2, kk, m2, L1, x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq,
+              grading, reach, panels):
+    """(t_F, alpha_F, regime code, tier) of one release (0 friction, 1 limit, 2 creeps: t_F = inf)."""
+    A = 2.0 * F1 * L1
+    B = 4.0 * F2 * L1
+    R = math.hypot(A, B)
+    Kl = _limit_margin(E, A, B, sa0, ca0)
+    if _creeps(Kl, E, A, B):  # creeps towards pi/2 and never arrives (dynamics.creeps_terms)
+        return math.inf, _HALF_PI, 2, 0
+    to_limit = _limit_sweep(a0)  # pi/2 - alpha0, two-term pi/2
+    if Kl > 0.0:  # the rhombus becomes flat first: anchor pi/2
+        regime = 1
+        delta = to_limit
+        sm = math.sin(0.5 * delta)
+        qm = math.sqrt(1.0 - sm * sm)
+        ratio = Kl / (Kl + 2.0 * A * sm * sm + 2.0 * B * sm * qm)
+        aF = _HALF_PI
+        sA = 1.0
+        cA = 0.0
+        cb = 0.0
+        s = 1.0
+        pref = 4.0 * sm * L1 * math.sqrt(m2)
+    else:  # friction stop at alpha_F (Eq. 8)
+        regime = 0
+        s = (A * sa0 - B * ca0) / R + E / R  # u of dynamics.sweep_terms, rounded the same way
+        delta = _sweep(E, A, B, R, sa0, ca0)
+        if delta >= to_limit:
+            # a friction stop at pi/2 within rounding: sin, cos of alpha_F - phi there, as numpy does
+            delta = to_limit
+            s = A / R
+            cb = B / R
+        else:
+            delta = max(delta, 0.0)
+            cb = _stop_cos(E, A, B, R, sa0, ca0)  # cos(alpha_F - phi), as numpy computes it
+        sA = (B * cb + A * s) / R
+        cA = (A * cb - B * s) / R
+        aF = min(a0 + delta, _HALF_PI)
+        sm = math.sin(0.5 * delta)
+        qm = math.sqrt(1.0 - sm * sm)
+        ratio = cb / (cb * qm + s * sm)
+        pref = 4.0 * L1 * math.sqrt(sm) * math.sqrt(m2) / math.sqrt(2.0 * R)
+    msq = (kk + sa0 * sa0) / (delta * delta) if delta > 0.0 else math.inf
+    tier = _tier(ratio, msq, near, hard, mass_sq, mass_hard_sq)
+    if tier == 2:
+        acc = _graded_sum(regime, ratio, msq, x16, w16, grading, reach, panels, sm, sA, cA, cb, s, Kl, A, B, kk)
+    elif tier == 1:
+        acc = _panel_sum(regime, x24, w24, 0.0, 1.0, sm, sA, cA, cb, s, Kl, A, B, kk)
+    else:
+        acc = _panel_sum(regime, x16, w16, 0.0, 1.0, sm, sA, cA, cb, s, Kl, A, B, kk)
+    return pref * acc, aF, regime, tier
+
+
+@njit(cache=True, nogil=True, parallel=True)
 def stop_kernel(E, sa0_in, ca0_in, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq,
                 t_out, aF_out, code_out):
-    """t_F, alpha_F and the regime code (0 friction, 1 limit, 2 creeps to the limit: t_F = inf, -1: graded tier,
-    left to numpy).
+    """t_F, alpha_F and the regime code (0 friction, 1 limit, 2 creeps to the limit: t_F = inf) of every case, every
+    tier compiled (the graded one with the panels it needs: :func:`_graded_sum`), over numba's threads (blocks of
+    :data:`BLOCK` cases; each case's arithmetic is independent of the others).
 
     sin and cos of alpha0 come in computed by numpy, as the numpy kernels compute them, so the classifier
     sees the same numbers on both paths."""
-    for i in range(E.size):
-        sa0 = sa0_in[i]
-        ca0 = ca0_in[i]
-        A = 2.0 * F1[i] * L1[i]
-        B = 4.0 * F2[i] * L1[i]
-        R = math.hypot(A, B)
-        Kl = _limit_margin(E[i], A, B, sa0, ca0)
-        if _creeps(Kl, E[i], A, B):  # creeps towards pi/2 and never arrives (dynamics.creeps_terms)
-            t_out[i] = math.inf
-            aF_out[i] = _HALF_PI
-            code_out[i] = 2
-            continue
-        to_limit = _limit_sweep(a0[i])  # pi/2 - alpha0, two-term pi/2
-        if Kl > 0.0:  # the rhombus becomes flat first: anchor pi/2
-            delta = to_limit
-            sm = math.sin(0.5 * delta)
-            qm = math.sqrt(1.0 - sm * sm)
-            ratio = Kl / (Kl + 2.0 * A * sm * sm + 2.0 * B * sm * qm)
-            msq = (k[i] + sa0 * sa0) / (delta * delta)
-            aF_out[i] = _HALF_PI
-            tier = _tier(ratio, msq, near, hard, mass_sq, mass_hard_sq)
-            if tier == 2:
-                code_out[i] = -1
-                continue
-            x, w = (x24, w24) if tier == 1 else (x16, w16)
-            acc = 0.0
-            for j in range(x.size):
-                s = sm * x[j] * x[j]
-                s2 = s * s
-                q2 = 1.0 - s2
-                sal = 1.0 - 2.0 * s2
-                K = Kl + 2.0 * A * s2 + 2.0 * B * s * math.sqrt(q2)
-                acc += w[j] * x[j] * math.sqrt(k[i] + sal * sal) / math.sqrt(K * q2)
-            t_out[i] = 4.0 * sm * L1[i] * math.sqrt(m2[i]) * acc
-            code_out[i] = 1
-        else:  # friction stop at alpha_F (Eq. 8)
-            s = (A * sa0 - B * ca0) / R + E[i] / R  # u of dynamics.sweep_terms, rounded the same way
-            delta = _sweep(E[i], A, B, R, sa0, ca0)
-            if delta >= to_limit:
-                # a friction stop at pi/2 within rounding: sin, cos of alpha_F - phi there, as numpy does
-                delta = to_limit
-                s = A / R
-                cb = B / R
-            else:
-                delta = max(delta, 0.0)
-                cb = _stop_cos(E[i], A, B, R, sa0, ca0)  # cos(alpha_F - phi), as numpy computes it
-            sA = (B * cb + A * s) / R
-            cA = (A * cb - B * s) / R
-            aF_out[i] = min(a0[i] + delta, _HALF_PI)
-            sm = math.sin(0.5 * delta)
-            qm = math.sqrt(1.0 - sm * sm)
-            ratio = cb / (cb * qm + s * sm)
-            msq = (k[i] + sa0 * sa0) / (delta * delta) if delta > 0.0 else math.inf
-            tier = _tier(ratio, msq, near, hard, mass_sq, mass_hard_sq)
-            if tier == 2:
-                code_out[i] = -1
-                continue
-            x, w = (x24, w24) if tier == 1 else (x16, w16)
-            acc = 0.0
-            for j in range(x.size):
-                sg = sm * x[j] * x[j]
-                s2 = sg * sg
-                q2 = 1.0 - s2
-                q = math.sqrt(q2)
-                sal = sA * (1.0 - 2.0 * s2) - cA * 2.0 * sg * q
-                C = cb * q + s * sg
-                acc += w[j] * math.sqrt((k[i] + sal * sal) / (C * q2))
-            t_out[i] = 4.0 * L1[i] * math.sqrt(sm) * math.sqrt(m2[i]) / math.sqrt(2.0 * R) * acc
-            code_out[i] = 0
+    n = E.size
+    grading = _kernels.GRADING
+    reach = GRADED_REACH
+    panels = _kernels.N_PANELS
+    for b in prange((n + BLOCK - 1) // BLOCK):
+        for i in range(b * BLOCK, min(n, (b + 1) * BLOCK)):
+            t, aF, code, _ = _stop_one(E[i], sa0_in[i], ca0_in[i], a0[i], F1[i], F2[i], k[i], m2[i], L1[i], x16, w16,
+                                       x24, w24, near, hard, mass_sq, mass_hard_sq, grading, reach, panels)
+            t_out[i] = t
+            aF_out[i] = aF
+            code_out[i] = code
 
 
 @njit(cache=True, nogil=True)
@@ -326,5 +407,6 @@ def peak_accel_kernel(E, a0, aE, F1, F2, k, m2, L1, n, pu_out, pv_out):
 
 #: Every kernel defined in this file (cached by numba under this file's name): flushed together when the
 #: modules they inline change (the functions compiled from dynamics and _kernels are stamped with their own files).
-KERNELS = (_tier, stop_kernel, identify_kernel, _refined, peak_accel_kernel)
+KERNELS = (_tier, _friction_nodes, _limit_nodes, _panel_count, _panel_sum, _graded_sum, _stop_one, stop_kernel,
+           identify_kernel, _refined, peak_accel_kernel)
 _refresh_stale_cache(KERNELS)

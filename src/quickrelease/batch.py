@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from . import _kernels, dynamics
-from ._kernels import HALF_PI, Releases, gauss_unit, graded_unit
+from ._kernels import HALF_PI, gauss_unit, graded_unit
 
 __all__ = [
     "CHUNK", "BatchStop", "BatchRelease", "BatchIdentification", "IDENTIFY_STATUS", "STOPPED_BY",
@@ -209,7 +209,7 @@ def stop_time(E_S, alpha0, F1, F2, c=2.0 / 3.0, m1=None, m2=None, L1=None, *, ch
 
 
 def _stop_arrays(E_S, alpha0, F1, F2, k, m2, L1, chunk):
-    """Flat arrays in, (t_F, alpha_F, code) out: the compiled loop, numpy for the graded tier."""
+    """Flat arrays in, (t_F, alpha_F, code) out: the compiled loop (every tier, numba's threads)."""
     from . import _fast
 
     n = E_S.size
@@ -217,15 +217,9 @@ def _stop_arrays(E_S, alpha0, F1, F2, k, m2, L1, chunk):
     aF = np.empty(n)
     code = np.empty(n, dtype=np.int8)
     x16, w16, x24, w24 = _fast.rules()
-    for sl in _chunks(n, max(chunk, 65536)):
+    for sl in _chunks(n, max(chunk, 1 << 20)):
         _fast.stop_kernel(E_S[sl], np.sin(alpha0[sl]), np.cos(alpha0[sl]), alpha0[sl], F1[sl], F2[sl], k[sl], m2[sl],
                           L1[sl], x16, w16, x24, w24, *_fast.tier_constants(), t[sl], aF[sl], code[sl])
-    graded = np.nonzero(code < 0)[0]
-    if graded.size:
-        rel = Releases.build(E_S[graded], alpha0[graded], F1[graded], F2[graded], k[graded], m2[graded], L1[graded])
-        t[graded] = rel.stop_time()
-        aF[graded] = rel.alpha_final
-        code[graded] = rel.regime
     return t, aF, code
 
 
