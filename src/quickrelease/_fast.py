@@ -117,11 +117,12 @@ def tier_constants() -> tuple[float, float, float, float]:
 #: bit for bit).
 BLOCK = 256
 #: fastmath only where it is harmless and pays: the node sums (reassociated, contracted into fused multiply-adds, so
-#: the compiler vectorises them), never the classifier or the near-limit arithmetic of the setup.
+#: the compiler vectorises them; with numpy's error model, so that a division is not a branch), never the
+#: classifier or the near-limit arithmetic of the setup.
 _NODE_MATH = {"reassoc", "contract"}
 
 
-@njit(cache=True, nogil=True, fastmath=_NODE_MATH)
+@njit(cache=True, nogil=True, fastmath=_NODE_MATH, error_model="numpy")
 def _friction_nodes(x, w, lo, width, sm, sA, cA, cb, sn, kk):
     """sum_j w_j sqrt((k + sin^2 alpha) / (C q^2)) over the nodes lo + width x_j of one panel, times width (the
     friction integrand of ``_kernels``: sigma = sigma_m u^2, C = cos(a - phi) q + sin(a - phi) sigma) [-]."""
@@ -138,7 +139,7 @@ def _friction_nodes(x, w, lo, width, sm, sA, cA, cb, sn, kk):
     return acc * width
 
 
-@njit(cache=True, nogil=True, fastmath=_NODE_MATH)
+@njit(cache=True, nogil=True, fastmath=_NODE_MATH, error_model="numpy")
 def _limit_nodes(x, w, lo, width, sm, Kl, A, B, kk):
     """sum_j w_j u_j sqrt(k + sin^2 alpha) / sqrt(K q^2) over the nodes u_j = lo + width x_j of one panel, times
     width (the geometric-limit integrand of ``_kernels``: K = K_lim + 2 A sigma^2 + 2 B sigma q) [-]."""
@@ -269,89 +270,168 @@ def stop_kernel(E, sa0_in, ca0_in, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, ne
             code_out[i] = code
 
 
+#: Nodes of the longest rule: the graded one with every panel (:func:`_graded_sum`).
+MAX_NODES = 32 * (_kernels.N_PANELS + 1)
+
+
+@njit(cache=True, nogil=True, fastmath=_NODE_MATH, error_model="numpy")
+def _line_nodes(x, w, lo, width, sm, sA, cA, c1, c2, kk, P, d, b, off):
+    """The node values of the identification on one panel (nodes lo + width x_j), written at ``off``:
+    ``P = w sqrt(k + sin^2 alpha) / q``, ``b`` the remaining energy of pure rail friction and ``d = a - b`` (a that of
+    pure hinge friction), both over E_S w^2, so that ``K = E_S w^2 (b + lambda d)``; returns
+    (sum P / sqrt(b), sum P / sqrt(a)): the two ends t_F(F1 = 0), t_F(F1 = F1*) over their prefactor [-]."""
+    t_lo = 0.0
+    t_hi = 0.0
+    for j in range(x.size):
+        u = lo + width * x[j]
+        sg = (u * u) * sm
+        q = math.sqrt(1.0 - sg * sg)
+        sal = sA * (1.0 - 2.0 * sg * sg) - cA * 2.0 * sg * q
+        p = (w[j] * width) * math.sqrt(kk + sal * sal) / q
+        aj = (cA * q + sA * sg) / c1
+        bj = (sA * q - cA * sg) / c2
+        P[off + j] = p
+        d[off + j] = aj - bj
+        b[off + j] = bj
+        t_lo += p / math.sqrt(bj)
+        t_hi += p / math.sqrt(aj)
+    return t_lo, t_hi
+
+
+@njit(cache=True, nogil=True, fastmath=_NODE_MATH, error_model="numpy")
+def _line_sums(P, d, b, n, lam):
+    """(sum P h^-1/2, sum P d h^-3/2, sum P d^2 h^-5/2) with h = b + lambda d over the first n nodes: t(lambda) and
+    its first two derivatives over their prefactors (1, -1/2, 3/4) [-]."""
+    t0 = 0.0
+    t1 = 0.0
+    t2 = 0.0
+    for j in range(n):
+        h = b[j] + lam * d[j]
+        r = 1.0 / math.sqrt(h)
+        pr = P[j] * r
+        e = d[j] / h
+        t0 += pr
+        t1 += pr * e
+        t2 += pr * e * e
+    return t0, t1, t2
+
+
 @njit(cache=True, nogil=True)
-def identify_kernel(a0, aF, tF, E, k, m2, L1, x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq, tol, max_iter,
-                    lam_out, F1max_out, F2max_out, tlo_out, thi_out, status_out, iter_out):
-    """Newton in lambda = F1/F1* on the line of Eq. 13 (status -1: graded tier, left to numpy)."""
-    P = np.empty(24)
-    a = np.empty(24)
-    b = np.empty(24)
-    for i in range(a0.size):
-        if status_out[i] != 0:
-            continue
-        sA = math.sin(aF[i])
-        cA = math.cos(aF[i])
-        half = 0.5 * (aF[i] - a0[i])
-        sm = math.sin(half)
-        ch = math.cos(half)
-        c1 = cA * ch + sA * sm
-        c2 = sA * ch - cA * sm
-        F1max_out[i] = E[i] / (4.0 * L1[i] * c1 * sm)
-        F2max_out[i] = E[i] / (8.0 * L1[i] * c2 * sm)
-        ratio = cA / c1
-        sa0 = math.sin(a0[i])
-        msq = (k[i] + sa0 * sa0) / (aF[i] - a0[i]) ** 2
-        tier = _tier(ratio, msq, near, hard, mass_sq, mass_hard_sq)
-        if tier == 2:
-            status_out[i] = -1
-            continue
-        x, w = (x24, w24) if tier == 1 else (x16, w16)
-        n = x.size
-        pref = 4.0 * sm * L1[i] * math.sqrt(m2[i] / E[i])
+def _identify_one(a0, aF, tF, E, kk, m2, L1, x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq, tol, max_iter,
+                  grading, reach, panels, P, d, b):
+    """(lambda, F1*, F2*, t_lo, t_hi, status, iterations) of one observation: Halley's method in lambda = F1/F1* on
+    the line of Eq. 13 (t(lambda) increasing and convex; cubic convergence, 3-4 steps; Newton's step where Halley's
+    denominator is not safely positive), on the rule of the stop-time kernel (graded panels where needed)."""
+    sA = math.sin(aF)
+    cA = math.cos(aF)
+    half = 0.5 * (aF - a0)
+    sm = math.sin(half)
+    ch = math.cos(half)
+    c1 = cA * ch + sA * sm
+    c2 = sA * ch - cA * sm
+    F1max = E / (4.0 * L1 * c1 * sm)
+    F2max = E / (8.0 * L1 * c2 * sm)
+    ratio = cA / c1
+    sa0 = math.sin(a0)
+    msq = (kk + sa0 * sa0) / (aF - a0) ** 2
+    tier = _tier(ratio, msq, near, hard, mass_sq, mass_hard_sq)
+    if tier == 2:
+        jl = _panel_count(math.sqrt(ratio) if ratio > 0.0 else 0.0, grading, reach, panels)
+        jr = _panel_count(0.5 * math.sqrt(msq), grading, reach, panels)
         lo = 0.0
         hi = 0.0
-        for j in range(n):
-            sg = sm * x[j] * x[j]
-            q = math.sqrt(1.0 - sg * sg)
-            sal = sA * (1.0 - 2.0 * sg * sg) - cA * 2.0 * sg * q
-            P[j] = w[j] * math.sqrt(k[i] + sal * sal) / q
-            a[j] = (cA * q + sA * sg) / c1
-            b[j] = (sA * q - cA * sg) / c2
-            lo += P[j] / math.sqrt(b[j])
-            hi += P[j] / math.sqrt(a[j])
-        lo *= pref
-        hi *= pref
-        tlo_out[i] = lo
-        thi_out[i] = hi
-        # an observation within rounding of an end of the feasible interval is that end (F1 = 0 or F2 = 0)
-        # (on either side of it: the end is the solution there, to within what rounding can tell)
-        if abs(tF[i] - lo) <= _slack(lo, a0[i], aF[i], 0.0):
-            lam_out[i] = 0.0
-            iter_out[i] = 0
-            continue
-        # (the F1* end's sensitivity to alpha_F near pi/2 widens it outwards only)
-        if abs(tF[i] - hi) <= _slack(hi, a0[i], aF[i], 0.0) or hi < tF[i] <= hi + _slack(hi, a0[i], aF[i], 1.0):
-            lam_out[i] = 1.0
-            iter_out[i] = 0
-            continue
-        if tF[i] < lo:
-            status_out[i] = 1
-            continue
-        if tF[i] > hi:
-            status_out[i] = 2
-            continue
-        lam = 1.0
-        iterations = 0
-        if hi > tF[i]:
-            while iterations < max_iter:
-                iterations += 1
-                tv = 0.0
-                dv = 0.0
-                for j in range(n):
-                    d = a[j] - b[j]
-                    r = 1.0 / math.sqrt(b[j] + lam * d)
-                    tv += P[j] * r
-                    dv += P[j] * d * r * r * r
-                slope = -0.5 * pref * dv
-                step = (pref * tv - tF[i]) / slope
-                new = min(max(lam - step, 0.0), 1.0)
-                # converged to tol, or to the rounding floor of lambda (t known to a few ulps)
-                done = abs(new - lam) <= max(tol, 8.0 * 2.220446049250313e-16 * pref * tv / abs(slope))
-                lam = new
-                if done:
-                    break
-        lam_out[i] = lam
-        iter_out[i] = iterations
+        n = 0
+        top = 0.5
+        for _ in range(jl):
+            bottom = top * grading
+            tl, th = _line_nodes(x16, w16, bottom, top - bottom, sm, sA, cA, c1, c2, kk, P, d, b, n)
+            lo += tl
+            hi += th
+            n += x16.size
+            top = bottom
+        tl, th = _line_nodes(x16, w16, 0.0, top, sm, sA, cA, c1, c2, kk, P, d, b, n)
+        lo += tl
+        hi += th
+        n += x16.size
+        top = 0.5
+        for _ in range(jr):
+            bottom = top * grading
+            tl, th = _line_nodes(x16, w16, 1.0 - top, top - bottom, sm, sA, cA, c1, c2, kk, P, d, b, n)
+            lo += tl
+            hi += th
+            n += x16.size
+            top = bottom
+        tl, th = _line_nodes(x16, w16, 1.0 - top, top, sm, sA, cA, c1, c2, kk, P, d, b, n)
+        lo += tl
+        hi += th
+        n += x16.size
+    elif tier == 1:
+        lo, hi = _line_nodes(x24, w24, 0.0, 1.0, sm, sA, cA, c1, c2, kk, P, d, b, 0)
+        n = x24.size
+    else:
+        lo, hi = _line_nodes(x16, w16, 0.0, 1.0, sm, sA, cA, c1, c2, kk, P, d, b, 0)
+        n = x16.size
+    pref = 4.0 * sm * L1 * math.sqrt(m2 / E)
+    lo *= pref
+    hi *= pref
+    # an observation within rounding of an end of the feasible interval is that end (F1 = 0 or F2 = 0)
+    # (on either side of it: the end is the solution there, to within what rounding can tell)
+    if abs(tF - lo) <= _slack(lo, a0, aF, 0.0):
+        return 0.0, F1max, F2max, lo, hi, 0, 0
+    # (the F1* end's sensitivity to alpha_F near pi/2 widens it outwards only)
+    if abs(tF - hi) <= _slack(hi, a0, aF, 0.0) or hi < tF <= hi + _slack(hi, a0, aF, 1.0):
+        return 1.0, F1max, F2max, lo, hi, 0, 0
+    if tF < lo:
+        return math.nan, F1max, F2max, lo, hi, 1, 0
+    if tF > hi:
+        return math.nan, F1max, F2max, lo, hi, 2, 0
+    # start where a one-node model t = lo / sqrt(1 + lambda ((lo / hi)^2 - 1)), exact at both ends, meets t_F
+    lam = min(max(((lo / tF) ** 2 - 1.0) / ((lo / hi) ** 2 - 1.0), 0.0), 1.0)
+    iterations = 0
+    while iterations < max_iter:
+        iterations += 1
+        t0, t1, t2 = _line_sums(P, d, b, n, lam)
+        f = pref * t0 - tF
+        slope = -0.5 * pref * t1
+        curve = 0.75 * pref * t2
+        newton = f / slope
+        denom = 1.0 - 0.5 * newton * curve / slope
+        step = newton / denom if denom > 0.5 else newton
+        new = min(max(lam - step, 0.0), 1.0)
+        # converged to tol, or to the rounding floor of lambda (t known to a few ulps)
+        done = abs(new - lam) <= max(tol, 8.0 * 2.220446049250313e-16 * pref * t0 / abs(slope))
+        lam = new
+        if done:
+            break
+    return lam, F1max, F2max, lo, hi, 0, iterations
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def identify_kernel(a0, aF, tF, E, k, m2, L1, x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq, tol, max_iter,
+                    lam_out, F1max_out, F2max_out, tlo_out, thi_out, status_out, iter_out):
+    """lambda = F1/F1* of every observation (:func:`_identify_one`; cases with a nonzero status on entry are left
+    as they are), over numba's threads in blocks of :data:`BLOCK` cases."""
+    n_cases = a0.size
+    grading = _kernels.GRADING
+    reach = GRADED_REACH
+    panels = _kernels.N_PANELS
+    for blk in prange((n_cases + BLOCK - 1) // BLOCK):
+        P = np.empty(MAX_NODES)
+        d = np.empty(MAX_NODES)
+        b = np.empty(MAX_NODES)
+        for i in range(blk * BLOCK, min(n_cases, (blk + 1) * BLOCK)):
+            if status_out[i] != 0:
+                continue
+            lam, F1max, F2max, lo, hi, status, iterations = _identify_one(
+                a0[i], aF[i], tF[i], E[i], k[i], m2[i], L1[i], x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq,
+                tol, max_iter, grading, reach, panels, P, d, b)
+            lam_out[i] = lam
+            F1max_out[i] = F1max
+            F2max_out[i] = F2max
+            tlo_out[i] = lo
+            thi_out[i] = hi
+            status_out[i] = status
+            iter_out[i] = iterations
 
 
 _accel = njit(cache=True, nogil=True)(_kernels.head_hinge_acceleration)
@@ -408,5 +488,5 @@ def peak_accel_kernel(E, a0, aE, F1, F2, k, m2, L1, n, pu_out, pv_out):
 #: Every kernel defined in this file (cached by numba under this file's name): flushed together when the
 #: modules they inline change (the functions compiled from dynamics and _kernels are stamped with their own files).
 KERNELS = (_tier, _friction_nodes, _limit_nodes, _panel_count, _panel_sum, _graded_sum, _stop_one, stop_kernel,
-           identify_kernel, _refined, peak_accel_kernel)
+           _line_nodes, _line_sums, _identify_one, identify_kernel, _refined, peak_accel_kernel)
 _refresh_stale_cache(KERNELS)
