@@ -92,8 +92,7 @@ _limit_margin = _jit(dynamics.limit_margin_terms, _limit_dissipation=_jit(
 _limit_sweep = _jit(dynamics.limit_sweep)
 _creeps = _jit(dynamics.creeps_terms)
 _stop_terms = _jit(dynamics._stop_terms, limit_margin_terms=_limit_margin)
-_sweep = _jit(dynamics.sweep_terms, _stop_terms=_stop_terms)
-_stop_cos = _jit(dynamics.stop_cosine_terms, _stop_terms=_stop_terms)
+_sweep_sides = _jit(dynamics.sweep_sides)
 _slack = njit(cache=True, nogil=True)(_kernels.feasible_slack)
 
 
@@ -220,20 +219,24 @@ def _stop_one(E, sa0, ca0, a0, F1, F2, kk, m2, L1, x16, w16, x24, w24, near, har
         pref = 4.0 * sm * L1 * math.sqrt(m2)
     else:  # friction stop at alpha_F (Eq. 8)
         regime = 0
-        s = (A * sa0 - B * ca0) / R + E / R  # u of dynamics.sweep_terms, rounded the same way
-        delta = _sweep(E, A, B, R, sa0, ca0)
+        # the terms of dynamics.sweep_terms once: delta = atan2(N, D), cb = cos(alpha_F - phi), s = u (as numpy)
+        s0, cv, e, s, cb = _stop_terms(E, A, B, R, sa0, ca0)
+        N, D = _sweep_sides(s0, cv, e, s, cb)
+        delta = math.atan2(N, D)
         if delta >= to_limit:
             # a friction stop at pi/2 within rounding: sin, cos of alpha_F - phi there, as numpy does
             delta = to_limit
             s = A / R
             cb = B / R
+            sm = math.sin(0.5 * delta)
         else:
             delta = max(delta, 0.0)
-            cb = _stop_cos(E, A, B, R, sa0, ca0)  # cos(alpha_F - phi), as numpy computes it
+            # sin(delta / 2) from (N, D) = r (sin delta, cos delta), D >= 0: N / sqrt(2 r (r + D)), no call
+            r = math.sqrt(N * N + D * D)  # ~1: N, D are a sine and a cosine up to rounding
+            sm = N / math.sqrt(2.0 * r * (r + D)) if N > 0.0 else 0.0
         sA = (B * cb + A * s) / R
         cA = (A * cb - B * s) / R
         aF = min(a0 + delta, _HALF_PI)
-        sm = math.sin(0.5 * delta)
         qm = math.sqrt(1.0 - sm * sm)
         ratio = cb / (cb * qm + s * sm)
         pref = 4.0 * L1 * math.sqrt(sm) * math.sqrt(m2) / math.sqrt(2.0 * R)
