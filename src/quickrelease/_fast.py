@@ -196,19 +196,28 @@ def _graded_sum(regime, ratio, msq, x, w, grading, reach, panels, sm, sA, cA, cb
 
 @njit(cache=True, nogil=True)
 def _stop_one(E, sa0, ca0, a0, F1, F2, kk, m2, L1, x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq,
-              grading, reach, panels):
-    """(t_F, alpha_F, regime code, tier) of one release (0 friction, 1 limit, 2 creeps: t_F = inf)."""
+              grading, reach, panels, with_angle):
+    """(t_F, alpha_F, regime code, tier, N, D) of one release (0 friction, 1 limit, 2 creeps: t_F = inf).
+
+    A friction stop's sweep is ``delta = atan2(N, D)`` (Eq. 8, :func:`dynamics.sweep_sides`); nothing here needs
+    delta itself but alpha_F (the quadrature takes sin(delta / 2) from N and D, the tier the chord 2 sin(delta / 2)),
+    so without ``with_angle`` alpha_F is left NaN for friction stops, for the caller to take as numpy's
+    ``min(alpha0 + max(atan2(N, D), 0), pi/2)``: the angle of the single-case solver to the last bit, and one
+    vectorised call instead of one scalar atan2 a case (a third of the setup). Whether the stop is at pi/2 within
+    rounding (``delta >= pi/2 - alpha0``, as numpy decides it) is read from the sign of
+    ``N sin(alpha0) - D cos(alpha0) ~ sin(delta - (pi/2 - alpha0))`` away from 0, from atan2 itself near 0."""
     A = 2.0 * F1 * L1
     B = 4.0 * F2 * L1
     R = math.hypot(A, B)
     Kl = _limit_margin(E, A, B, sa0, ca0)
+    N = 0.0
+    D = 1.0
     if _creeps(Kl, E, A, B):  # creeps towards pi/2 and never arrives (dynamics.creeps_terms)
-        return math.inf, _HALF_PI, 2, 0
+        return math.inf, _HALF_PI, 2, 0, N, D
     to_limit = _limit_sweep(a0)  # pi/2 - alpha0, two-term pi/2
     if Kl > 0.0:  # the rhombus becomes flat first: anchor pi/2
         regime = 1
-        delta = to_limit
-        sm = math.sin(0.5 * delta)
+        sm = math.sin(0.5 * to_limit)
         qm = math.sqrt(1.0 - sm * sm)
         ratio = Kl / (Kl + 2.0 * A * sm * sm + 2.0 * B * sm * qm)
         aF = _HALF_PI
@@ -222,25 +231,30 @@ def _stop_one(E, sa0, ca0, a0, F1, F2, kk, m2, L1, x16, w16, x24, w24, near, har
         # the terms of dynamics.sweep_terms once: delta = atan2(N, D), cb = cos(alpha_F - phi), s = u (as numpy)
         s0, cv, e, s, cb = _stop_terms(E, A, B, R, sa0, ca0)
         N, D = _sweep_sides(s0, cv, e, s, cb)
-        delta = math.atan2(N, D)
-        if delta >= to_limit:
+        g = N * sa0 - D * ca0
+        delta = math.nan
+        if with_angle or abs(g) <= 1e-9:
+            delta = math.atan2(N, D)
+            flat = delta >= to_limit
+        else:
+            flat = g > 0.0
+        if flat:
             # a friction stop at pi/2 within rounding: sin, cos of alpha_F - phi there, as numpy does
-            delta = to_limit
             s = A / R
             cb = B / R
-            sm = math.sin(0.5 * delta)
+            sm = math.sin(0.5 * to_limit)
+            aF = min(a0 + to_limit, _HALF_PI)
         else:
-            delta = max(delta, 0.0)
             # sin(delta / 2) from (N, D) = r (sin delta, cos delta), D >= 0: N / sqrt(2 r (r + D)), no call
             r = math.sqrt(N * N + D * D)  # ~1: N, D are a sine and a cosine up to rounding
             sm = N / math.sqrt(2.0 * r * (r + D)) if N > 0.0 else 0.0
+            aF = min(a0 + max(delta, 0.0), _HALF_PI) if with_angle else math.nan
         sA = (B * cb + A * s) / R
         cA = (A * cb - B * s) / R
-        aF = min(a0 + delta, _HALF_PI)
         qm = math.sqrt(1.0 - sm * sm)
         ratio = cb / (cb * qm + s * sm)
         pref = 4.0 * L1 * math.sqrt(sm) * math.sqrt(m2) / math.sqrt(2.0 * R)
-    msq = (kk + sa0 * sa0) / (delta * delta) if delta > 0.0 else math.inf
+    msq = (kk + sa0 * sa0) / (4.0 * sm * sm) if sm > 0.0 else math.inf  # over the chord (_kernels.tier_of)
     tier = _tier(ratio, msq, near, hard, mass_sq, mass_hard_sq)
     if tier == 2:
         acc = _graded_sum(regime, ratio, msq, x16, w16, grading, reach, panels, sm, sA, cA, cb, s, Kl, A, B, kk)
@@ -248,7 +262,7 @@ def _stop_one(E, sa0, ca0, a0, F1, F2, kk, m2, L1, x16, w16, x24, w24, near, har
         acc = _panel_sum(regime, x24, w24, 0.0, 1.0, sm, sA, cA, cb, s, Kl, A, B, kk)
     else:
         acc = _panel_sum(regime, x16, w16, 0.0, 1.0, sm, sA, cA, cb, s, Kl, A, B, kk)
-    return pref * acc, aF, regime, tier
+    return pref * acc, aF, regime, tier, N, D
 
 
 @njit(cache=True, nogil=True, parallel=True)
@@ -256,20 +270,37 @@ def stop_kernel(E, sa0_in, ca0_in, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, ne
                 t_out, aF_out, code_out):
     """t_F, alpha_F and the regime code (0 friction, 1 limit, 2 creeps to the limit: t_F = inf) of every case, every
     tier compiled (the graded one with the panels it needs: :func:`_graded_sum`), over numba's threads (blocks of
-    :data:`BLOCK` cases; each case's arithmetic is independent of the others).
+    :data:`BLOCK` cases; each case's arithmetic is independent of the others). alpha_F by the compiled atan2
+    (:func:`stop_kernel_sides` leaves it to numpy).
 
     sin and cos of alpha0 come in computed by numpy, as the numpy kernels compute them, so the classifier
     sees the same numbers on both paths."""
     n = E.size
-    grading = _kernels.GRADING
-    reach = GRADED_REACH
-    panels = _kernels.N_PANELS
     for b in prange((n + BLOCK - 1) // BLOCK):
         for i in range(b * BLOCK, min(n, (b + 1) * BLOCK)):
-            t, aF, code, _ = _stop_one(E[i], sa0_in[i], ca0_in[i], a0[i], F1[i], F2[i], k[i], m2[i], L1[i], x16, w16,
-                                       x24, w24, near, hard, mass_sq, mass_hard_sq, grading, reach, panels)
+            t, aF, code, _, _, _ = _stop_one(E[i], sa0_in[i], ca0_in[i], a0[i], F1[i], F2[i], k[i], m2[i], L1[i],
+                                             x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq, _kernels.GRADING,
+                                             GRADED_REACH, _kernels.N_PANELS, True)
             t_out[i] = t
             aF_out[i] = aF
+            code_out[i] = code
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def stop_kernel_sides(E, sa0_in, ca0_in, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, near, hard, mass_sq,
+                      mass_hard_sq, t_out, aF_out, N_out, D_out, code_out):
+    """:func:`stop_kernel` without the atan2 of a friction stop: its alpha_F NaN, its ``(N, D)`` written out
+    (``delta = atan2(N, D)``; (0, 1) elsewhere) for the caller (``batch._stop_arrays``)."""
+    n = E.size
+    for b in prange((n + BLOCK - 1) // BLOCK):
+        for i in range(b * BLOCK, min(n, (b + 1) * BLOCK)):
+            t, aF, code, _, N, D = _stop_one(E[i], sa0_in[i], ca0_in[i], a0[i], F1[i], F2[i], k[i], m2[i], L1[i],
+                                             x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq, _kernels.GRADING,
+                                             GRADED_REACH, _kernels.N_PANELS, False)
+            t_out[i] = t
+            aF_out[i] = aF
+            N_out[i] = N
+            D_out[i] = D
             code_out[i] = code
 
 
@@ -491,5 +522,5 @@ def peak_accel_kernel(E, a0, aE, F1, F2, k, m2, L1, n, pu_out, pv_out):
 #: Every kernel defined in this file (cached by numba under this file's name): flushed together when the
 #: modules they inline change (the functions compiled from dynamics and _kernels are stamped with their own files).
 KERNELS = (_tier, _friction_nodes, _limit_nodes, _panel_count, _panel_sum, _graded_sum, _stop_one, stop_kernel,
-           _line_nodes, _line_sums, _identify_one, identify_kernel, _refined, peak_accel_kernel)
+           stop_kernel_sides, _line_nodes, _line_sums, _identify_one, identify_kernel, _refined, peak_accel_kernel)
 _refresh_stale_cache(KERNELS)

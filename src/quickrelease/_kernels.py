@@ -139,7 +139,8 @@ def graded_unit(n: int = N_NODES, panels: int = N_PANELS, r: float = GRADING) ->
 
 def tier_of(end_ratio, mass_ratio_sq):
     """The quadrature tier of each case: 0 (16 nodes), 1 (24 nodes) or 2 (graded), from the ratio of the
-    factor that may vanish at the end and ``(k + sin^2 alpha0) / delta^2`` (see the module notes).
+    factor that may vanish at the end and ``(k + sin^2 alpha0) / chord^2`` with the chord ``2 sin(delta / 2)``
+    of the sweep (within 11% of delta; the identification takes delta itself) (see the module notes).
     The one criterion: used by the numpy kernels, the identification and (compiled) :mod:`._fast`."""
     hard = (end_ratio < HARD_RATIO) | (mass_ratio_sq < MASS_HARD**2)
     near = (end_ratio < NEAR_RATIO) | (mass_ratio_sq < MASS_RATIO**2)
@@ -230,7 +231,7 @@ class Releases:
                   cb, s, sigma_m, delta, anchor, np.zeros(E_S.shape, dtype=np.int8))
         # tiers: a nearly singular end, or a near-singular mass factor close to the start
         with np.errstate(divide="ignore", invalid="ignore"):
-            rel.tier = tier_of(rel._end_ratio(), (k + sa0 * sa0) / (delta * delta))
+            rel.tier = tier_of(rel._end_ratio(), (k + sa0 * sa0) / (4.0 * sigma_m * sigma_m))
         return rel
 
     def _end_ratio(self) -> np.ndarray:

@@ -209,17 +209,26 @@ def stop_time(E_S, alpha0, F1, F2, c=2.0 / 3.0, m1=None, m2=None, L1=None, *, ch
 
 
 def _stop_arrays(E_S, alpha0, F1, F2, k, m2, L1, chunk):
-    """Flat arrays in, (t_F, alpha_F, code) out: the compiled loop (every tier, numba's threads)."""
+    """Flat arrays in, (t_F, alpha_F, code) out: the compiled loop (every tier, numba's threads); a friction stop's
+    alpha_F = min(alpha0 + max(atan2(N, D), 0), pi/2) by numpy, as the single-case solver computes it."""
     from . import _fast
 
     n = E_S.size
     t = np.empty(n)
     aF = np.empty(n)
+    N = np.empty(n)
+    D = np.empty(n)
     code = np.empty(n, dtype=np.int8)
     x16, w16, x24, w24 = _fast.rules()
     for sl in _chunks(n, max(chunk, 1 << 20)):
-        _fast.stop_kernel(E_S[sl], np.sin(alpha0[sl]), np.cos(alpha0[sl]), alpha0[sl], F1[sl], F2[sl], k[sl], m2[sl],
-                          L1[sl], x16, w16, x24, w24, *_fast.tier_constants(), t[sl], aF[sl], code[sl])
+        _fast.stop_kernel_sides(E_S[sl], np.sin(alpha0[sl]), np.cos(alpha0[sl]), alpha0[sl], F1[sl], F2[sl], k[sl],
+                                m2[sl], L1[sl], x16, w16, x24, w24, *_fast.tier_constants(), t[sl], aF[sl], N[sl],
+                                D[sl], code[sl])
+    angle = np.arctan2(N, D, out=N)
+    np.maximum(angle, 0.0, out=angle)
+    angle += alpha0
+    np.minimum(angle, HALF_PI, out=angle)
+    np.copyto(aF, angle, where=np.isnan(aF))
     return t, aF, code
 
 
