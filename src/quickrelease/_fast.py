@@ -1,11 +1,13 @@
 """Compiled (numba) loops of the batch kernels: the formulas of :mod:`quickrelease._kernels`, fused.
 
 numpy evaluates ``_kernels`` one operation at a time, about 17 passes over the (nodes x cases) arrays;
-here each case is one loop over its 16 or 24 nodes with every intermediate in registers, which is what
-it takes to reach millions of cases a second on one core. The formulas, node rules and tier criteria
-are those of ``_kernels`` (a test checks the two agree case by case); cases of the graded tier (a nearly
-singular end, rare) are flagged here with code -1 and finished by the numpy implementation.
-Compiled on first use and cached on disk (``cache=True``).
+here each case is one pass: its setup (the classifier and Eq. 8, plain arithmetic, no fastmath) in registers,
+then its node sums, vectorised across the nodes (``fastmath`` reassociation and contraction, numpy's error
+model: AVX-512 square roots and divisions). The formulas, node rules and tier criteria are those of ``_kernels``
+(a test checks the two agree case by case), every tier compiled: the graded one with only the panels a case needs
+(:func:`_graded_sum`). The loops over cases run over numba's threads (``prange`` over blocks of :data:`BLOCK`
+cases: all cores unless ``numba.set_num_threads`` says otherwise); each case is computed alone, so the results
+are bit-identical on any number of threads. Compiled on first use and cached on disk (``cache=True``).
 """
 
 from __future__ import annotations

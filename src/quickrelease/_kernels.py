@@ -63,14 +63,14 @@ GRADING = 0.2
 #: singularity of the integrand at a distance of about sqrt(ratio) from w = 0, ratio being its value at
 #: the end over its value at the start. Below NEAR_RATIO the 24-node rule, below HARD_RATIO the graded
 #: rule. Calibrated against the full graded rule (itself within 1e-15 of mpmath) on 400k cases of the bench and
-#: wide samples: the 16-node rule's worst error 4e-13, the 24-node rule's 6.2e-13. (HARD_RATIO was 0.01 and
+#: wide samples: the 16-node rule's worst error 4.5e-13, the 24-node rule's 9.3e-13. (HARD_RATIO was 0.01 and
 #: MASS_RATIO 0.5, worst 4.9e-11 and 3.4e-12, when the graded rule cost 544 nodes.)
 HARD_RATIO = 0.05
 NEAR_RATIO = 0.3
 #: Cases whose sqrt(k + sin^2 alpha0) is below this share of the angle swept take the 24-node rule
 #: (a complex zero of the mass factor k + sin^2 alpha near the start of a long sweep).
 MASS_RATIO = 1.0
-#: ... and below this share the graded rule (24 nodes leave ~6e-13 at 0.25, 1e-7 at 0.01).
+#: ... and below this share the graded rule (24 nodes leave ~1e-12 at 0.25, 1e-7 at 0.01).
 MASS_HARD = 0.25
 
 #: ``creep`` (:func:`quickrelease.dynamics.creeps_terms`): the margin within rounding of 0 without rail friction;
