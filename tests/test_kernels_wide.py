@@ -126,14 +126,16 @@ def test_identification_as_the_numpy_reference_in_few_steps(wide):
 
 
 @pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="numba has one thread here")
-def test_one_and_two_threads_bit_identical(wide):
-    sub, obs = _observations(wide)
+def test_one_and_two_threads_bit_identical():
+    """Enough cases for several chunks of the threaded stop-time path and blocks of the identification's prange."""
+    cases = wide_releases(3 * batch.THREAD_CHUNK + 1001, seed=13)
+    sub, obs = _observations(cases)
     before = numba.get_num_threads()
     runs = []
     try:
         for threads in (1, 2):
             numba.set_num_threads(threads)
-            stop = batch.stop_time(*(wide[key] for key in KEYS))
+            stop = batch.stop_time(*(cases[key] for key in KEYS))
             ident = batch.identify(*obs)
             runs.append((stop.stop_time, stop.alpha_final, stop.stopped_by, ident.F1, ident.F2, ident.iterations))
     finally:

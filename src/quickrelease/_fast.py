@@ -288,13 +288,14 @@ def stop_kernel(E, sa0_in, ca0_in, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, ne
             code_out[i] = code
 
 
-@njit(cache=True, nogil=True, parallel=True)
+@njit(cache=True, nogil=True)
 def stop_kernel_sides(E, sa0_in, ca0_in, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, near, hard, mass_sq,
                       mass_hard_sq, t_out, aF_out, N_out, D_out, code_out):
     """:func:`stop_kernel` without the atan2 of a friction stop: its alpha_F NaN, its ``(N, D)`` written out
-    (``delta = atan2(N, D)``; (0, 1) elsewhere) for the caller (``batch._stop_arrays``)."""
+    (``delta = atan2(N, D)``; (0, 1) elsewhere) for the caller. One thread, without the GIL: ``batch._stop_arrays``
+    runs it on numba's thread count of chunks at once, each with its numpy pre- and post-processing."""
     n = E.size
-    for b in prange((n + BLOCK - 1) // BLOCK):
+    for b in range((n + BLOCK - 1) // BLOCK):
         for i in range(b * BLOCK, min(n, (b + 1) * BLOCK)):
             t, aF, code, _, N, D = _stop_one(E[i], sa0_in[i], ca0_in[i], a0[i], F1[i], F2[i], k[i], m2[i], L1[i],
                                              x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq, _kernels.GRADING,

@@ -208,27 +208,48 @@ def stop_time(E_S, alpha0, F1, F2, c=2.0 / 3.0, m1=None, m2=None, L1=None, *, ch
     return BatchStop(t.reshape(shape), aF.reshape(shape), code.reshape(shape))
 
 
-def _stop_arrays(E_S, alpha0, F1, F2, k, m2, L1, chunk):
-    """Flat arrays in, (t_F, alpha_F, code) out: the compiled loop (every tier, numba's threads); a friction stop's
-    alpha_F = min(alpha0 + max(atan2(N, D), 0), pi/2) by numpy, as the single-case solver computes it."""
+#: Cases per chunk of the threaded stop-time path (:func:`_stop_arrays`).
+THREAD_CHUNK = 32768
+
+
+def _stop_chunk(E_S, alpha0, F1, F2, k, m2, L1, t, aF, code):
+    """One chunk of :func:`_stop_arrays`, in place: sin, cos of alpha0 by numpy (as the numpy kernels), the compiled
+    loop, and a friction stop's alpha_F = min(alpha0 + max(atan2(N, D), 0), pi/2) by numpy, as the single-case
+    solver computes it (every step releases the GIL)."""
     from . import _fast
 
-    n = E_S.size
-    t = np.empty(n)
-    aF = np.empty(n)
-    N = np.empty(n)
-    D = np.empty(n)
-    code = np.empty(n, dtype=np.int8)
-    x16, w16, x24, w24 = _fast.rules()
-    for sl in _chunks(n, max(chunk, 1 << 20)):
-        _fast.stop_kernel_sides(E_S[sl], np.sin(alpha0[sl]), np.cos(alpha0[sl]), alpha0[sl], F1[sl], F2[sl], k[sl],
-                                m2[sl], L1[sl], x16, w16, x24, w24, *_fast.tier_constants(), t[sl], aF[sl], N[sl],
-                                D[sl], code[sl])
+    N = np.empty(E_S.size)
+    D = np.empty(E_S.size)
+    _fast.stop_kernel_sides(E_S, np.sin(alpha0), np.cos(alpha0), alpha0, F1, F2, k, m2, L1, *_fast.rules(),
+                            *_fast.tier_constants(), t, aF, N, D, code)
     angle = np.arctan2(N, D, out=N)
     np.maximum(angle, 0.0, out=angle)
     angle += alpha0
     np.minimum(angle, HALF_PI, out=angle)
     np.copyto(aF, angle, where=np.isnan(aF))
+
+
+def _stop_arrays(E_S, alpha0, F1, F2, k, m2, L1, chunk):
+    """Flat arrays in, (t_F, alpha_F, code) out: chunks of :data:`THREAD_CHUNK` cases on numba's current number of
+    threads (``numba.set_num_threads``; :func:`quickrelease.using_threads`), each case computed alone (the results
+    do not depend on the number of threads, bit for bit)."""
+    import numba
+
+    n = E_S.size
+    t = np.empty(n)
+    aF = np.empty(n)
+    code = np.empty(n, dtype=np.int8)
+    threads = min(numba.get_num_threads(), -(-n // THREAD_CHUNK))
+    slices = list(_chunks(n, THREAD_CHUNK))
+    args = [(E_S[sl], alpha0[sl], F1[sl], F2[sl], k[sl], m2[sl], L1[sl], t[sl], aF[sl], code[sl]) for sl in slices]
+    if threads <= 1:
+        for a in args:
+            _stop_chunk(*a)
+    else:  # a pool per call (a few threads started for at least two chunks of work; nothing left to a fork)
+        from concurrent.futures import ThreadPoolExecutor
+
+        with ThreadPoolExecutor(threads, thread_name_prefix="quickrelease-stop") as pool:
+            list(pool.map(lambda a: _stop_chunk(*a), args))
     return t, aF, code
 
 
