@@ -98,12 +98,12 @@ def _lambda_tolerance(ident, t_F):
     return 1e-12 + 64.0 * EPS * t_F / (ident.stop_time_max - ident.stop_time_min)
 
 
-def test_identification_every_tier_against_mpmath(wide):
-    """A friction stop of the 24-node tier and one of the graded tier (mpmath's identification takes seconds a
-    case; tests/test_batch.py checks the 16-node tier, the numpy reference below the whole sample)."""
-    sub, obs = _observations(_take(wide, _picks(wide, 1)[1:3]))
+def test_identification_graded_tier_against_mpmath(wide):
+    """A friction stop of the graded tier (mpmath's identification takes seconds a case; tests/test_batch.py
+    checks the 16-node tier against mpmath, the numpy reference below every tier on the whole sample)."""
+    sub, obs = _observations(_take(wide, _picks(wide, 1)[2:3]))
     ident = batch.identify(*obs)
-    assert np.all(ident.status == 0) and sorted(sub["tier"]) == [1, 2]
+    assert np.all(ident.status == 0) and list(sub["tier"]) == [2]
     tol = _lambda_tolerance(ident, obs[2])
     for i in range(obs[0].size):
         F1, F2 = identify_mp(obs[0][i], obs[1][i], obs[2][i], obs[3][i], sub["k"][i], sub["m2"][i], sub["L1"][i])
