@@ -1,11 +1,13 @@
 """Compiled (numba) loops of the batch kernels: the formulas of :mod:`quickrelease._kernels`, fused.
 
 numpy evaluates ``_kernels`` one operation at a time, about 17 passes over the (nodes x cases) arrays;
-here each case is one loop over its 16 or 24 nodes with every intermediate in registers, which is what
-it takes to reach millions of cases a second on one core. The formulas, node rules and tier criteria
-are those of ``_kernels`` (a test checks the two agree case by case); cases of the graded tier (a nearly
-singular end, rare) are flagged here with code -1 and finished by the numpy implementation.
-Compiled on first use and cached on disk (``cache=True``).
+here each case is one pass: its setup (the classifier and Eq. 8, plain arithmetic, no fastmath) in registers,
+then its node sums, vectorised across the nodes (``fastmath`` reassociation and contraction, numpy's error
+model: AVX-512 square roots and divisions). The formulas, node rules and tier criteria are those of ``_kernels``
+(a test checks the two agree case by case), every tier compiled: the graded one with only the panels a case needs
+(:func:`_graded_sum`). The loops over cases run over numba's threads (``prange`` over blocks of :data:`BLOCK`
+cases: all cores unless ``numba.set_num_threads`` says otherwise); each case is computed alone, so the results
+are bit-identical on any number of threads. Compiled on first use and cached on disk (``cache=True``).
 """
 
 from __future__ import annotations
@@ -16,11 +18,14 @@ import os
 import types
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from . import _kernels, dynamics
 
 _HALF_PI = 0.5 * math.pi
+#: Grading steps past a near-singularity's distance that the graded rule goes on panelling (calibrated against
+#: the full 544-node rule of ``_kernels.graded_unit`` and mpmath: tests/test_kernels_wide.py).
+GRADED_REACH = 1
 
 
 #: The modules whose functions the kernels of this file compile in (inline): their sources stamp the cache.
@@ -89,8 +94,7 @@ _limit_margin = _jit(dynamics.limit_margin_terms, _limit_dissipation=_jit(
 _limit_sweep = _jit(dynamics.limit_sweep)
 _creeps = _jit(dynamics.creeps_terms)
 _stop_terms = _jit(dynamics._stop_terms, limit_margin_terms=_limit_margin)
-_sweep = _jit(dynamics.sweep_terms, _stop_terms=_stop_terms)
-_stop_cos = _jit(dynamics.stop_cosine_terms, _stop_terms=_stop_terms)
+_sweep_sides = _jit(dynamics.sweep_sides)
 _slack = njit(cache=True, nogil=True)(_kernels.feasible_slack)
 
 
@@ -109,168 +113,362 @@ def tier_constants() -> tuple[float, float, float, float]:
     return _kernels.NEAR_RATIO, _kernels.HARD_RATIO, _kernels.MASS_RATIO**2, _kernels.MASS_HARD**2
 
 
+#: Cases per block of the parallel loops (``prange`` over blocks): each case's arithmetic is its own, so the
+#: results do not depend on how the blocks are shared among the threads (a test checks 1 and 2 threads agree
+#: bit for bit).
+BLOCK = 256
+#: fastmath only where it is harmless and pays: the node sums (reassociated, contracted into fused multiply-adds, so
+#: the compiler vectorises them; with numpy's error model, so that a division is not a branch), never the
+#: classifier or the near-limit arithmetic of the setup.
+_NODE_MATH = {"reassoc", "contract"}
+
+
+@njit(cache=True, nogil=True, fastmath=_NODE_MATH, error_model="numpy")
+def _friction_nodes(x, w, lo, width, sm, sA, cA, cb, sn, kk):
+    """sum_j w_j sqrt((k + sin^2 alpha) / (C q^2)) over the nodes lo + width x_j of one panel, times width (the
+    friction integrand of ``_kernels``: sigma = sigma_m u^2, C = cos(a - phi) q + sin(a - phi) sigma) [-]."""
+    acc = 0.0
+    for j in range(x.size):
+        u = lo + width * x[j]
+        sg = (u * u) * sm
+        s2 = sg * sg
+        q2 = 1.0 - s2
+        q = math.sqrt(q2)
+        sal = sA * (1.0 - 2.0 * s2) - cA * 2.0 * sg * q
+        C = cb * q + sn * sg
+        acc += w[j] * math.sqrt((kk + sal * sal) / (C * q2))
+    return acc * width
+
+
+@njit(cache=True, nogil=True, fastmath=_NODE_MATH, error_model="numpy")
+def _limit_nodes(x, w, lo, width, sm, Kl, A, B, kk):
+    """sum_j w_j u_j sqrt(k + sin^2 alpha) / sqrt(K q^2) over the nodes u_j = lo + width x_j of one panel, times
+    width (the geometric-limit integrand of ``_kernels``: K = K_lim + 2 A sigma^2 + 2 B sigma q) [-]."""
+    acc = 0.0
+    for j in range(x.size):
+        u = lo + width * x[j]
+        s = (u * u) * sm
+        s2 = s * s
+        q2 = 1.0 - s2
+        sal = 1.0 - 2.0 * s2
+        K = Kl + 2.0 * A * s2 + 2.0 * B * s * math.sqrt(q2)
+        acc += w[j] * u * math.sqrt(kk + sal * sal) / math.sqrt(K * q2)
+    return acc * width
+
+
 @njit(cache=True, nogil=True)
+def _panel_count(distance, grading, reach, panels):
+    """Graded panels towards an end whose near-singularity lies ``distance`` from it (in w): the last panel
+    [0, r^J / 2] ends ``reach`` grading steps inside that distance, J in [0, panels] [-]."""
+    if not distance > 0.0:
+        return panels
+    j = math.ceil(math.log(2.0 * distance) / math.log(grading)) + reach
+    return min(max(j, 0), panels)
+
+
+@njit(cache=True, nogil=True)
+def _panel_sum(regime, x, w, lo, width, sm, sA, cA, cb, sn, Kl, A, B, kk):
+    if regime == 0:
+        return _friction_nodes(x, w, lo, width, sm, sA, cA, cb, sn, kk)
+    return _limit_nodes(x, w, lo, width, sm, Kl, A, B, kk)
+
+
+@njit(cache=True, nogil=True)
+def _graded_sum(regime, ratio, msq, x, w, grading, reach, panels, sm, sA, cA, cb, sn, Kl, A, B, kk):
+    """The graded rule of ``_kernels.graded_unit`` with only the panels a case needs: towards w = 0 down to
+    ``sqrt(ratio)`` (the end's near-singularity), towards w = 1 down to ``sqrt(msq) / 2`` (the mass factor's
+    complex zero), each ``reach`` steps further; the rest of each half is one panel [-]."""
+    jl = _panel_count(math.sqrt(ratio) if ratio > 0.0 else 0.0, grading, reach, panels)
+    jr = _panel_count(0.5 * math.sqrt(msq), grading, reach, panels)
+    acc = 0.0
+    hi = 0.5
+    for _ in range(jl):  # [r^(j+1)/2, r^j/2] towards 0
+        lo = hi * grading
+        acc += _panel_sum(regime, x, w, lo, hi - lo, sm, sA, cA, cb, sn, Kl, A, B, kk)
+        hi = lo
+    acc += _panel_sum(regime, x, w, 0.0, hi, sm, sA, cA, cb, sn, Kl, A, B, kk)
+    hi = 0.5
+    for _ in range(jr):  # mirrored towards 1
+        lo = hi * grading
+        acc += _panel_sum(regime, x, w, 1.0 - hi, hi - lo, sm, sA, cA, cb, sn, Kl, A, B, kk)
+        hi = lo
+    acc += _panel_sum(regime, x, w, 1.0 - hi, hi, sm, sA, cA, cb, sn, Kl, A, B, kk)
+    return acc
+
+
+@njit(cache=True, nogil=True)
+def _stop_one(E, sa0, ca0, a0, F1, F2, kk, m2, L1, x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq,
+              grading, reach, panels, with_angle):
+    """(t_F, alpha_F, regime code, tier, N, D) of one release (0 friction, 1 limit, 2 creeps: t_F = inf).
+
+    A friction stop's sweep is ``delta = atan2(N, D)`` (Eq. 8, :func:`dynamics.sweep_sides`); nothing here needs
+    delta itself but alpha_F (the quadrature takes sin(delta / 2) from N and D, the tier the chord 2 sin(delta / 2)),
+    so without ``with_angle`` alpha_F is left NaN for friction stops, for the caller to take as numpy's
+    ``min(alpha0 + max(atan2(N, D), 0), pi/2)``: the angle of the single-case solver to the last bit, and one
+    vectorised call instead of one scalar atan2 a case (a third of the setup). Whether the stop is at pi/2 within
+    rounding (``delta >= pi/2 - alpha0``, as numpy decides it) is read from the sign of
+    ``N sin(alpha0) - D cos(alpha0) ~ sin(delta - (pi/2 - alpha0))`` away from 0, from atan2 itself near 0."""
+    A = 2.0 * F1 * L1
+    B = 4.0 * F2 * L1
+    R = math.hypot(A, B)
+    Kl = _limit_margin(E, A, B, sa0, ca0)
+    N = 0.0
+    D = 1.0
+    if _creeps(Kl, E, A, B):  # creeps towards pi/2 and never arrives (dynamics.creeps_terms)
+        return math.inf, _HALF_PI, 2, 0, N, D
+    to_limit = _limit_sweep(a0)  # pi/2 - alpha0, two-term pi/2
+    if Kl > 0.0:  # the rhombus becomes flat first: anchor pi/2
+        regime = 1
+        sm = math.sin(0.5 * to_limit)
+        qm = math.sqrt(1.0 - sm * sm)
+        ratio = Kl / (Kl + 2.0 * A * sm * sm + 2.0 * B * sm * qm)
+        aF = _HALF_PI
+        sA = 1.0
+        cA = 0.0
+        cb = 0.0
+        s = 1.0
+        pref = 4.0 * sm * L1 * math.sqrt(m2)
+    else:  # friction stop at alpha_F (Eq. 8)
+        regime = 0
+        # the terms of dynamics.sweep_terms once: delta = atan2(N, D), cb = cos(alpha_F - phi), s = u (as numpy)
+        s0, cv, e, s, cb = _stop_terms(E, A, B, R, sa0, ca0)
+        N, D = _sweep_sides(s0, cv, e, s, cb)
+        g = N * sa0 - D * ca0
+        delta = math.nan
+        if with_angle or abs(g) <= 1e-9:
+            delta = math.atan2(N, D)
+            flat = delta >= to_limit
+        else:
+            flat = g > 0.0
+        if flat:
+            # a friction stop at pi/2 within rounding: sin, cos of alpha_F - phi there, as numpy does
+            s = A / R
+            cb = B / R
+            sm = math.sin(0.5 * to_limit)
+            aF = min(a0 + to_limit, _HALF_PI)
+        else:
+            # sin(delta / 2) from (N, D) = r (sin delta, cos delta), D >= 0: N / sqrt(2 r (r + D)), no call
+            r = math.sqrt(N * N + D * D)  # ~1: N, D are a sine and a cosine up to rounding
+            sm = N / math.sqrt(2.0 * r * (r + D)) if N > 0.0 else 0.0
+            aF = min(a0 + max(delta, 0.0), _HALF_PI) if with_angle else math.nan
+        sA = (B * cb + A * s) / R
+        cA = (A * cb - B * s) / R
+        qm = math.sqrt(1.0 - sm * sm)
+        ratio = cb / (cb * qm + s * sm)
+        pref = 4.0 * L1 * math.sqrt(sm) * math.sqrt(m2) / math.sqrt(2.0 * R)
+    msq = (kk + sa0 * sa0) / (4.0 * sm * sm) if sm > 0.0 else math.inf  # over the chord (_kernels.tier_of)
+    tier = _tier(ratio, msq, near, hard, mass_sq, mass_hard_sq)
+    if tier == 2:
+        acc = _graded_sum(regime, ratio, msq, x16, w16, grading, reach, panels, sm, sA, cA, cb, s, Kl, A, B, kk)
+    elif tier == 1:
+        acc = _panel_sum(regime, x24, w24, 0.0, 1.0, sm, sA, cA, cb, s, Kl, A, B, kk)
+    else:
+        acc = _panel_sum(regime, x16, w16, 0.0, 1.0, sm, sA, cA, cb, s, Kl, A, B, kk)
+    return pref * acc, aF, regime, tier, N, D
+
+
+@njit(cache=True, nogil=True, parallel=True)
 def stop_kernel(E, sa0_in, ca0_in, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq,
                 t_out, aF_out, code_out):
-    """t_F, alpha_F and the regime code (0 friction, 1 limit, 2 creeps to the limit: t_F = inf, -1: graded tier,
-    left to numpy).
+    """t_F, alpha_F and the regime code (0 friction, 1 limit, 2 creeps to the limit: t_F = inf) of every case, every
+    tier compiled (the graded one with the panels it needs: :func:`_graded_sum`), over numba's threads (blocks of
+    :data:`BLOCK` cases; each case's arithmetic is independent of the others). alpha_F by the compiled atan2
+    (:func:`stop_kernel_sides` leaves it to numpy).
 
     sin and cos of alpha0 come in computed by numpy, as the numpy kernels compute them, so the classifier
     sees the same numbers on both paths."""
-    for i in range(E.size):
-        sa0 = sa0_in[i]
-        ca0 = ca0_in[i]
-        A = 2.0 * F1[i] * L1[i]
-        B = 4.0 * F2[i] * L1[i]
-        R = math.hypot(A, B)
-        Kl = _limit_margin(E[i], A, B, sa0, ca0)
-        if _creeps(Kl, E[i], A, B):  # creeps towards pi/2 and never arrives (dynamics.creeps_terms)
-            t_out[i] = math.inf
-            aF_out[i] = _HALF_PI
-            code_out[i] = 2
-            continue
-        to_limit = _limit_sweep(a0[i])  # pi/2 - alpha0, two-term pi/2
-        if Kl > 0.0:  # the rhombus becomes flat first: anchor pi/2
-            delta = to_limit
-            sm = math.sin(0.5 * delta)
-            qm = math.sqrt(1.0 - sm * sm)
-            ratio = Kl / (Kl + 2.0 * A * sm * sm + 2.0 * B * sm * qm)
-            msq = (k[i] + sa0 * sa0) / (delta * delta)
-            aF_out[i] = _HALF_PI
-            tier = _tier(ratio, msq, near, hard, mass_sq, mass_hard_sq)
-            if tier == 2:
-                code_out[i] = -1
-                continue
-            x, w = (x24, w24) if tier == 1 else (x16, w16)
-            acc = 0.0
-            for j in range(x.size):
-                s = sm * x[j] * x[j]
-                s2 = s * s
-                q2 = 1.0 - s2
-                sal = 1.0 - 2.0 * s2
-                K = Kl + 2.0 * A * s2 + 2.0 * B * s * math.sqrt(q2)
-                acc += w[j] * x[j] * math.sqrt(k[i] + sal * sal) / math.sqrt(K * q2)
-            t_out[i] = 4.0 * sm * L1[i] * math.sqrt(m2[i]) * acc
-            code_out[i] = 1
-        else:  # friction stop at alpha_F (Eq. 8)
-            s = (A * sa0 - B * ca0) / R + E[i] / R  # u of dynamics.sweep_terms, rounded the same way
-            delta = _sweep(E[i], A, B, R, sa0, ca0)
-            if delta >= to_limit:
-                # a friction stop at pi/2 within rounding: sin, cos of alpha_F - phi there, as numpy does
-                delta = to_limit
-                s = A / R
-                cb = B / R
-            else:
-                delta = max(delta, 0.0)
-                cb = _stop_cos(E[i], A, B, R, sa0, ca0)  # cos(alpha_F - phi), as numpy computes it
-            sA = (B * cb + A * s) / R
-            cA = (A * cb - B * s) / R
-            aF_out[i] = min(a0[i] + delta, _HALF_PI)
-            sm = math.sin(0.5 * delta)
-            qm = math.sqrt(1.0 - sm * sm)
-            ratio = cb / (cb * qm + s * sm)
-            msq = (k[i] + sa0 * sa0) / (delta * delta) if delta > 0.0 else math.inf
-            tier = _tier(ratio, msq, near, hard, mass_sq, mass_hard_sq)
-            if tier == 2:
-                code_out[i] = -1
-                continue
-            x, w = (x24, w24) if tier == 1 else (x16, w16)
-            acc = 0.0
-            for j in range(x.size):
-                sg = sm * x[j] * x[j]
-                s2 = sg * sg
-                q2 = 1.0 - s2
-                q = math.sqrt(q2)
-                sal = sA * (1.0 - 2.0 * s2) - cA * 2.0 * sg * q
-                C = cb * q + s * sg
-                acc += w[j] * math.sqrt((k[i] + sal * sal) / (C * q2))
-            t_out[i] = 4.0 * L1[i] * math.sqrt(sm) * math.sqrt(m2[i]) / math.sqrt(2.0 * R) * acc
-            code_out[i] = 0
+    n = E.size
+    for b in prange((n + BLOCK - 1) // BLOCK):
+        for i in range(b * BLOCK, min(n, (b + 1) * BLOCK)):
+            t, aF, code, _, _, _ = _stop_one(E[i], sa0_in[i], ca0_in[i], a0[i], F1[i], F2[i], k[i], m2[i], L1[i],
+                                             x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq, _kernels.GRADING,
+                                             GRADED_REACH, _kernels.N_PANELS, True)
+            t_out[i] = t
+            aF_out[i] = aF
+            code_out[i] = code
 
 
 @njit(cache=True, nogil=True)
-def identify_kernel(a0, aF, tF, E, k, m2, L1, x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq, tol, max_iter,
-                    lam_out, F1max_out, F2max_out, tlo_out, thi_out, status_out, iter_out):
-    """Newton in lambda = F1/F1* on the line of Eq. 13 (status -1: graded tier, left to numpy)."""
-    P = np.empty(24)
-    a = np.empty(24)
-    b = np.empty(24)
-    for i in range(a0.size):
-        if status_out[i] != 0:
-            continue
-        sA = math.sin(aF[i])
-        cA = math.cos(aF[i])
-        half = 0.5 * (aF[i] - a0[i])
-        sm = math.sin(half)
-        ch = math.cos(half)
-        c1 = cA * ch + sA * sm
-        c2 = sA * ch - cA * sm
-        F1max_out[i] = E[i] / (4.0 * L1[i] * c1 * sm)
-        F2max_out[i] = E[i] / (8.0 * L1[i] * c2 * sm)
-        ratio = cA / c1
-        sa0 = math.sin(a0[i])
-        msq = (k[i] + sa0 * sa0) / (aF[i] - a0[i]) ** 2
-        tier = _tier(ratio, msq, near, hard, mass_sq, mass_hard_sq)
-        if tier == 2:
-            status_out[i] = -1
-            continue
-        x, w = (x24, w24) if tier == 1 else (x16, w16)
-        n = x.size
-        pref = 4.0 * sm * L1[i] * math.sqrt(m2[i] / E[i])
+def stop_kernel_sides(E, sa0_in, ca0_in, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, near, hard, mass_sq,
+                      mass_hard_sq, t_out, aF_out, N_out, D_out, code_out):
+    """:func:`stop_kernel` without the atan2 of a friction stop: its alpha_F NaN, its ``(N, D)`` written out
+    (``delta = atan2(N, D)``; (0, 1) elsewhere) for the caller. One thread, without the GIL: ``batch._stop_arrays``
+    runs it on numba's thread count of chunks at once, each with its numpy pre- and post-processing."""
+    n = E.size
+    for b in range((n + BLOCK - 1) // BLOCK):
+        for i in range(b * BLOCK, min(n, (b + 1) * BLOCK)):
+            t, aF, code, _, N, D = _stop_one(E[i], sa0_in[i], ca0_in[i], a0[i], F1[i], F2[i], k[i], m2[i], L1[i],
+                                             x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq, _kernels.GRADING,
+                                             GRADED_REACH, _kernels.N_PANELS, False)
+            t_out[i] = t
+            aF_out[i] = aF
+            N_out[i] = N
+            D_out[i] = D
+            code_out[i] = code
+
+
+#: Nodes of the longest rule: the graded one with every panel (:func:`_graded_sum`).
+MAX_NODES = 32 * (_kernels.N_PANELS + 1)
+
+
+@njit(cache=True, nogil=True, fastmath=_NODE_MATH, error_model="numpy")
+def _line_nodes(x, w, lo, width, sm, sA, cA, c1, c2, kk, P, d, b, off):
+    """The node values of the identification on one panel (nodes lo + width x_j), written at ``off``:
+    ``P = w sqrt(k + sin^2 alpha) / q``, ``b`` the remaining energy of pure rail friction and ``d = a - b`` (a that of
+    pure hinge friction), both over E_S w^2, so that ``K = E_S w^2 (b + lambda d)``; returns
+    (sum P / sqrt(b), sum P / sqrt(a)): the two ends t_F(F1 = 0), t_F(F1 = F1*) over their prefactor [-]."""
+    t_lo = 0.0
+    t_hi = 0.0
+    for j in range(x.size):
+        u = lo + width * x[j]
+        sg = (u * u) * sm
+        q = math.sqrt(1.0 - sg * sg)
+        sal = sA * (1.0 - 2.0 * sg * sg) - cA * 2.0 * sg * q
+        p = (w[j] * width) * math.sqrt(kk + sal * sal) / q
+        aj = (cA * q + sA * sg) / c1
+        bj = (sA * q - cA * sg) / c2
+        P[off + j] = p
+        d[off + j] = aj - bj
+        b[off + j] = bj
+        t_lo += p / math.sqrt(bj)
+        t_hi += p / math.sqrt(aj)
+    return t_lo, t_hi
+
+
+@njit(cache=True, nogil=True, fastmath=_NODE_MATH, error_model="numpy")
+def _line_sums(P, d, b, n, lam):
+    """(sum P h^-1/2, sum P d h^-3/2, sum P d^2 h^-5/2) with h = b + lambda d over the first n nodes: t(lambda) and
+    its first two derivatives over their prefactors (1, -1/2, 3/4) [-]."""
+    t0 = 0.0
+    t1 = 0.0
+    t2 = 0.0
+    for j in range(n):
+        h = b[j] + lam * d[j]
+        r = 1.0 / math.sqrt(h)
+        pr = P[j] * r
+        e = d[j] / h
+        t0 += pr
+        t1 += pr * e
+        t2 += pr * e * e
+    return t0, t1, t2
+
+
+@njit(cache=True, nogil=True)
+def _identify_one(a0, aF, tF, E, kk, m2, L1, x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq, tol, max_iter,
+                  grading, reach, panels, P, d, b):
+    """(lambda, F1*, F2*, t_lo, t_hi, status, iterations) of one observation: Halley's method in lambda = F1/F1* on
+    the line of Eq. 13 (t(lambda) increasing and convex; cubic convergence, 3-4 steps; Newton's step where Halley's
+    denominator is not safely positive), on the rule of the stop-time kernel (graded panels where needed)."""
+    sA = math.sin(aF)
+    cA = math.cos(aF)
+    half = 0.5 * (aF - a0)
+    sm = math.sin(half)
+    ch = math.cos(half)
+    c1 = cA * ch + sA * sm
+    c2 = sA * ch - cA * sm
+    F1max = E / (4.0 * L1 * c1 * sm)
+    F2max = E / (8.0 * L1 * c2 * sm)
+    ratio = cA / c1
+    sa0 = math.sin(a0)
+    msq = (kk + sa0 * sa0) / (aF - a0) ** 2
+    tier = _tier(ratio, msq, near, hard, mass_sq, mass_hard_sq)
+    if tier == 2:
+        jl = _panel_count(math.sqrt(ratio) if ratio > 0.0 else 0.0, grading, reach, panels)
+        jr = _panel_count(0.5 * math.sqrt(msq), grading, reach, panels)
         lo = 0.0
         hi = 0.0
-        for j in range(n):
-            sg = sm * x[j] * x[j]
-            q = math.sqrt(1.0 - sg * sg)
-            sal = sA * (1.0 - 2.0 * sg * sg) - cA * 2.0 * sg * q
-            P[j] = w[j] * math.sqrt(k[i] + sal * sal) / q
-            a[j] = (cA * q + sA * sg) / c1
-            b[j] = (sA * q - cA * sg) / c2
-            lo += P[j] / math.sqrt(b[j])
-            hi += P[j] / math.sqrt(a[j])
-        lo *= pref
-        hi *= pref
-        tlo_out[i] = lo
-        thi_out[i] = hi
-        # an observation within rounding of an end of the feasible interval is that end (F1 = 0 or F2 = 0)
-        # (on either side of it: the end is the solution there, to within what rounding can tell)
-        if abs(tF[i] - lo) <= _slack(lo, a0[i], aF[i], 0.0):
-            lam_out[i] = 0.0
-            iter_out[i] = 0
-            continue
-        # (the F1* end's sensitivity to alpha_F near pi/2 widens it outwards only)
-        if abs(tF[i] - hi) <= _slack(hi, a0[i], aF[i], 0.0) or hi < tF[i] <= hi + _slack(hi, a0[i], aF[i], 1.0):
-            lam_out[i] = 1.0
-            iter_out[i] = 0
-            continue
-        if tF[i] < lo:
-            status_out[i] = 1
-            continue
-        if tF[i] > hi:
-            status_out[i] = 2
-            continue
-        lam = 1.0
-        iterations = 0
-        if hi > tF[i]:
-            while iterations < max_iter:
-                iterations += 1
-                tv = 0.0
-                dv = 0.0
-                for j in range(n):
-                    d = a[j] - b[j]
-                    r = 1.0 / math.sqrt(b[j] + lam * d)
-                    tv += P[j] * r
-                    dv += P[j] * d * r * r * r
-                slope = -0.5 * pref * dv
-                step = (pref * tv - tF[i]) / slope
-                new = min(max(lam - step, 0.0), 1.0)
-                # converged to tol, or to the rounding floor of lambda (t known to a few ulps)
-                done = abs(new - lam) <= max(tol, 8.0 * 2.220446049250313e-16 * pref * tv / abs(slope))
-                lam = new
-                if done:
-                    break
-        lam_out[i] = lam
-        iter_out[i] = iterations
+        n = 0
+        top = 0.5
+        for _ in range(jl):
+            bottom = top * grading
+            tl, th = _line_nodes(x16, w16, bottom, top - bottom, sm, sA, cA, c1, c2, kk, P, d, b, n)
+            lo += tl
+            hi += th
+            n += x16.size
+            top = bottom
+        tl, th = _line_nodes(x16, w16, 0.0, top, sm, sA, cA, c1, c2, kk, P, d, b, n)
+        lo += tl
+        hi += th
+        n += x16.size
+        top = 0.5
+        for _ in range(jr):
+            bottom = top * grading
+            tl, th = _line_nodes(x16, w16, 1.0 - top, top - bottom, sm, sA, cA, c1, c2, kk, P, d, b, n)
+            lo += tl
+            hi += th
+            n += x16.size
+            top = bottom
+        tl, th = _line_nodes(x16, w16, 1.0 - top, top, sm, sA, cA, c1, c2, kk, P, d, b, n)
+        lo += tl
+        hi += th
+        n += x16.size
+    elif tier == 1:
+        lo, hi = _line_nodes(x24, w24, 0.0, 1.0, sm, sA, cA, c1, c2, kk, P, d, b, 0)
+        n = x24.size
+    else:
+        lo, hi = _line_nodes(x16, w16, 0.0, 1.0, sm, sA, cA, c1, c2, kk, P, d, b, 0)
+        n = x16.size
+    pref = 4.0 * sm * L1 * math.sqrt(m2 / E)
+    lo *= pref
+    hi *= pref
+    # an observation within rounding of an end of the feasible interval is that end (F1 = 0 or F2 = 0)
+    # (on either side of it: the end is the solution there, to within what rounding can tell)
+    if abs(tF - lo) <= _slack(lo, a0, aF, 0.0):
+        return 0.0, F1max, F2max, lo, hi, 0, 0
+    # (the F1* end's sensitivity to alpha_F near pi/2 widens it outwards only)
+    if abs(tF - hi) <= _slack(hi, a0, aF, 0.0) or hi < tF <= hi + _slack(hi, a0, aF, 1.0):
+        return 1.0, F1max, F2max, lo, hi, 0, 0
+    if tF < lo:
+        return math.nan, F1max, F2max, lo, hi, 1, 0
+    if tF > hi:
+        return math.nan, F1max, F2max, lo, hi, 2, 0
+    # start where a one-node model t = lo / sqrt(1 + lambda ((lo / hi)^2 - 1)), exact at both ends, meets t_F
+    lam = min(max(((lo / tF) ** 2 - 1.0) / ((lo / hi) ** 2 - 1.0), 0.0), 1.0)
+    iterations = 0
+    while iterations < max_iter:
+        iterations += 1
+        t0, t1, t2 = _line_sums(P, d, b, n, lam)
+        f = pref * t0 - tF
+        slope = -0.5 * pref * t1
+        curve = 0.75 * pref * t2
+        newton = f / slope
+        denom = 1.0 - 0.5 * newton * curve / slope
+        step = newton / denom if denom > 0.5 else newton
+        new = min(max(lam - step, 0.0), 1.0)
+        # converged to tol, or to the rounding floor of lambda (t known to a few ulps)
+        done = abs(new - lam) <= max(tol, 8.0 * 2.220446049250313e-16 * pref * t0 / abs(slope))
+        lam = new
+        if done:
+            break
+    return lam, F1max, F2max, lo, hi, 0, iterations
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def identify_kernel(a0, aF, tF, E, k, m2, L1, x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq, tol, max_iter,
+                    lam_out, F1max_out, F2max_out, tlo_out, thi_out, status_out, iter_out):
+    """lambda = F1/F1* of every observation (:func:`_identify_one`; cases with a nonzero status on entry are left
+    as they are), over numba's threads in blocks of :data:`BLOCK` cases."""
+    n_cases = a0.size
+    grading = _kernels.GRADING
+    reach = GRADED_REACH
+    panels = _kernels.N_PANELS
+    for blk in prange((n_cases + BLOCK - 1) // BLOCK):
+        P = np.empty(MAX_NODES)
+        d = np.empty(MAX_NODES)
+        b = np.empty(MAX_NODES)
+        for i in range(blk * BLOCK, min(n_cases, (blk + 1) * BLOCK)):
+            if status_out[i] != 0:
+                continue
+            lam, F1max, F2max, lo, hi, status, iterations = _identify_one(
+                a0[i], aF[i], tF[i], E[i], k[i], m2[i], L1[i], x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq,
+                tol, max_iter, grading, reach, panels, P, d, b)
+            lam_out[i] = lam
+            F1max_out[i] = F1max
+            F2max_out[i] = F2max
+            tlo_out[i] = lo
+            thi_out[i] = hi
+            status_out[i] = status
+            iter_out[i] = iterations
 
 
 _accel = njit(cache=True, nogil=True)(_kernels.head_hinge_acceleration)
@@ -326,5 +524,6 @@ def peak_accel_kernel(E, a0, aE, F1, F2, k, m2, L1, n, pu_out, pv_out):
 
 #: Every kernel defined in this file (cached by numba under this file's name): flushed together when the
 #: modules they inline change (the functions compiled from dynamics and _kernels are stamped with their own files).
-KERNELS = (_tier, stop_kernel, identify_kernel, _refined, peak_accel_kernel)
+KERNELS = (_tier, _friction_nodes, _limit_nodes, _panel_count, _panel_sum, _graded_sum, _stop_one, stop_kernel,
+           stop_kernel_sides, _line_nodes, _line_sums, _identify_one, identify_kernel, _refined, peak_accel_kernel)
 _refresh_stale_cache(KERNELS)

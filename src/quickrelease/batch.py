@@ -8,7 +8,7 @@ processed in chunks that fit the CPU cache.
 
 * :func:`stop_time` - t_F, alpha_F and why the motion ended (the fast kernel).
 * :func:`release` - the same plus the stroke u_F, the opening v_F and the peak velocities.
-* :func:`identify` - F1, F2 on the line of Eq. 13 from (alpha0, alpha_F, t_F, E_S), by Newton's
+* :func:`identify` - F1, F2 on the line of Eq. 13 from (alpha0, alpha_F, t_F, E_S), by Halley's
   method in lambda = F1/F1* on the same nodes (which do not depend on F1); infeasible cases are
   flagged with a reason code (:data:`IDENTIFY_STATUS`), never dropped.
 
@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from . import _kernels, dynamics
-from ._kernels import HALF_PI, Releases, gauss_unit, graded_unit
+from ._kernels import HALF_PI, gauss_unit, graded_unit
 
 __all__ = [
     "CHUNK", "BatchStop", "BatchRelease", "BatchIdentification", "IDENTIFY_STATUS", "STOPPED_BY",
@@ -176,7 +176,7 @@ class BatchIdentification(_Result):
     status: np.ndarray
     """0 ok, else the reason (see :data:`IDENTIFY_STATUS`)."""
     iterations: np.ndarray
-    """Newton iterations used."""
+    """Halley iterations used (Newton's where Halley's step is not safe)."""
 
     @property
     def feasible(self) -> np.ndarray:
@@ -208,24 +208,49 @@ def stop_time(E_S, alpha0, F1, F2, c=2.0 / 3.0, m1=None, m2=None, L1=None, *, ch
     return BatchStop(t.reshape(shape), aF.reshape(shape), code.reshape(shape))
 
 
-def _stop_arrays(E_S, alpha0, F1, F2, k, m2, L1, chunk):
-    """Flat arrays in, (t_F, alpha_F, code) out: the compiled loop, numpy for the graded tier."""
+#: Cases per chunk of the threaded stop-time path (:func:`_stop_arrays`): small enough that the threads, taking
+#: the next chunk as they finish one, end together (a few per thread), large enough that a chunk costs ~1 ms.
+THREAD_CHUNK = 8192
+
+
+def _stop_chunk(E_S, alpha0, F1, F2, k, m2, L1, t, aF, code):
+    """One chunk of :func:`_stop_arrays`, in place: sin, cos of alpha0 by numpy (as the numpy kernels), the compiled
+    loop, and a friction stop's alpha_F = min(alpha0 + max(atan2(N, D), 0), pi/2) by numpy, as the single-case
+    solver computes it (every step releases the GIL)."""
     from . import _fast
+
+    N = np.empty(E_S.size)
+    D = np.empty(E_S.size)
+    _fast.stop_kernel_sides(E_S, np.sin(alpha0), np.cos(alpha0), alpha0, F1, F2, k, m2, L1, *_fast.rules(),
+                            *_fast.tier_constants(), t, aF, N, D, code)
+    angle = np.arctan2(N, D, out=N)
+    np.maximum(angle, 0.0, out=angle)
+    angle += alpha0
+    np.minimum(angle, HALF_PI, out=angle)
+    np.copyto(aF, angle, where=np.isnan(aF))
+
+
+def _stop_arrays(E_S, alpha0, F1, F2, k, m2, L1, chunk):
+    """Flat arrays in, (t_F, alpha_F, code) out: chunks of :data:`THREAD_CHUNK` cases on numba's current number of
+    threads (``numba.set_num_threads``; :func:`quickrelease.using_threads`), each case computed alone (the results
+    do not depend on the number of threads, bit for bit)."""
+    import numba
 
     n = E_S.size
     t = np.empty(n)
     aF = np.empty(n)
     code = np.empty(n, dtype=np.int8)
-    x16, w16, x24, w24 = _fast.rules()
-    for sl in _chunks(n, max(chunk, 65536)):
-        _fast.stop_kernel(E_S[sl], np.sin(alpha0[sl]), np.cos(alpha0[sl]), alpha0[sl], F1[sl], F2[sl], k[sl], m2[sl],
-                          L1[sl], x16, w16, x24, w24, *_fast.tier_constants(), t[sl], aF[sl], code[sl])
-    graded = np.nonzero(code < 0)[0]
-    if graded.size:
-        rel = Releases.build(E_S[graded], alpha0[graded], F1[graded], F2[graded], k[graded], m2[graded], L1[graded])
-        t[graded] = rel.stop_time()
-        aF[graded] = rel.alpha_final
-        code[graded] = rel.regime
+    threads = min(numba.get_num_threads(), -(-n // THREAD_CHUNK))
+    slices = list(_chunks(n, THREAD_CHUNK))
+    args = [(E_S[sl], alpha0[sl], F1[sl], F2[sl], k[sl], m2[sl], L1[sl], t[sl], aF[sl], code[sl]) for sl in slices]
+    if threads <= 1:
+        for a in args:
+            _stop_chunk(*a)
+    else:  # a pool per call (a few threads started for at least two chunks of work; nothing left to a fork)
+        from concurrent.futures import ThreadPoolExecutor
+
+        with ThreadPoolExecutor(threads, thread_name_prefix="quickrelease-stop") as pool:
+            list(pool.map(lambda a: _stop_chunk(*a), args))
     return t, aF, code
 
 
@@ -362,8 +387,9 @@ def identify(alpha0, alpha_final, stop_time, E_S, c=2.0 / 3.0, m1=None, m2=None,
     On the line of Eq. 13 every case stops at alpha_final; with lambda = F1/F1*, the remaining energy
     is ``K = E_S w^2 (lambda a + (1 - lambda) b)`` at the quadrature nodes, where a and b are the
     normalized remaining energies of pure hinge and pure rail friction. The nodes, a and b do not
-    depend on lambda, so each Newton step costs one square root per node. t(lambda) is increasing and
-    convex, so Newton's method from lambda = 1 converges monotonically.
+    depend on lambda, so each step costs one square root and one division per node. t(lambda) is increasing
+    and convex; Halley's method from lambda = 1 (its first two derivatives from the same sums) converges in 3-4
+    steps, Newton's step taken where Halley's denominator is not safely positive.
 
     Returns
     -------
@@ -391,15 +417,6 @@ def identify(alpha0, alpha_final, stop_time, E_S, c=2.0 / 3.0, m1=None, m2=None,
     _fast.identify_kernel(alpha0, aF, tF, E_S, k, m2, L1, x16, w16, x24, w24, *_fast.tier_constants(), tol,
                           max_iter, lam, out["F1_max"], out["F2_max"], out["stop_time_min"], out["stop_time_max"],
                           status, iters)
-    graded = np.nonzero(status < 0)[0]
-    if graded.size:
-        res = _identify_chunk(alpha0[graded], aF[graded], tF[graded], E_S[graded], k[graded], m2[graded],
-                              L1[graded], tol, max_iter)
-        for name in ("F1_max", "F2_max", "stop_time_min", "stop_time_max"):
-            out[name][graded] = res[name]
-        lam[graded] = res["F1"] / res["F1_max"]
-        status[graded] = res["status"]
-        iters[graded] = res["iterations"]
     out["F1"] = lam * out["F1_max"]
     out["F2"] = (1.0 - lam) * out["F2_max"]
     bad = status != 0
@@ -449,6 +466,8 @@ def _newton_on_line(x, wt, sigma_m, sA, cA, c1_0, c2_0, k, pref, target, tol, ma
 
 
 def _identify_chunk(alpha0, aF, tF, E_S, k, m2, L1, tol, max_iter) -> dict[str, Any]:
+    """The numpy reference of the compiled ``_fast.identify_kernel`` (Newton's method on the full graded rule of
+    ``_kernels``): tests check the two agree."""
     sA, cA = np.sin(aF), np.cos(aF)
     half = 0.5 * (aF - alpha0)
     sigma_m = np.sin(half)

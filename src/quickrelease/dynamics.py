@@ -294,10 +294,16 @@ def sweep_terms(E_S, A, B, R, sin_alpha0, cos_alpha0):
     (compiled as is by :mod:`quickrelease._fast`). Meaningful for the friction regime
     (``limit_margin_terms <= 0``); the geometric limit's sweep is ``pi/2 - alpha0`` (:func:`limit_sweep`).
     """
-    s, cv, e, u, cu = _stop_terms(E_S, A, B, R, sin_alpha0, cos_alpha0)
+    return np.arctan2(*sweep_sides(*_stop_terms(E_S, A, B, R, sin_alpha0, cos_alpha0)))
+
+
+def sweep_sides(s, cv, e, u, cu):
+    """``(N, D) = (sin(delta), cos(delta))`` of the friction-stop sweep from the terms of :func:`_stop_terms` [-]
+    (see :func:`sweep_terms`: ``delta = atan2(N, D)``). Pure arithmetic (compiled as is by :mod:`quickrelease._fast`,
+    which takes the half-angle sine ``sin(delta / 2)`` from N and D without a call)."""
     N = e * (cv + s * (u + s) / (cu + cv))
     D = cu * cv + u * s
-    return np.arctan2(N, D)
+    return N, D
 
 
 def stop_cosine_terms(E_S, A, B, R, sin_alpha0, cos_alpha0):
