@@ -104,6 +104,8 @@ COMMANDS: dict[str, Command] = {
                                "--json"), {"--noise": "x={}", "--offset": "x={}"}, command="synth",
                                skip=("--seed", "--jitter", "--missing")),  # checked as for the device (above)
     "demo": Command(("--file", "demo",), {}),
+    "plan": Command(("{case}", "--json"), {}),
+    "bench": Command(("--quick", "--json"), {}),  # --threads is its only value option: every value fuzzed is refused
     "building": Command(("{building_case}", "--json"), {}),  # --model is checked before the case is read
 }
 
