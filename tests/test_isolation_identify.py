@@ -67,7 +67,7 @@ def test_tables_and_report_say_not_identified(capsys):
     result = _never_yielding()
     _building_tables(result, result.summary(), "never yields")
     out = capsys.readouterr().out
-    row = next(line for line in out.splitlines() if "Fy_N" in line)
+    row = next(line for line in out.splitlines() if "yield force" in line)
     assert "not identified" in row, out
     html = building_section(result, {})
     assert html.count("not identified") >= 2  # the engineering table and the table of every parameter

@@ -605,10 +605,14 @@ def synth(
           f"{syn.notes[0].removeprefix('friction ')}: F1 = {quantity(t['F1'], 'N')}, F2 = {quantity(t['F2'], 'N')}; "
           f"release at {quantity(t['release_time'], 's')}, stop {quantity(t['stop_time'], 's')} later at alpha_F = "
           f"{quantity(t['alpha_final'], 'rad')}")
+    def se_row(f: str) -> tuple[str, str, str]:  # None: a standard error this record cannot give (SE inf)
+        se, rel = pred[f"{f}_se_N"], pred[f"{f}_rel_se"]
+        return (key_for(f)[0], "not identified" if se is None else quantity(se, "N", 2),
+                "-" if rel is None else f"{100 * rel:.2g}%")
+
+    corr = pred["correlation_F1_F2"]
     _table("Precision of a fit to such a record (Cramer-Rao bound at the truth)", [
-        (key_for("F1")[0], quantity(pred["F1_se_N"], "N", 2), f"{100 * pred['F1_rel_se']:.2g}%"),
-        (key_for("F2")[0], quantity(pred["F2_se_N"], "N", 2), f"{100 * pred['F2_rel_se']:.2g}%"),
-        ("correlation(F1, F2)", f"{pred['correlation_F1_F2']:+.4f}", ""),
+        se_row("F1"), se_row("F2"), ("correlation(F1, F2)", "-" if corr is None else f"{corr:+.4f}", ""),
     ], ("", "standard error", "relative"))
     if case_out is not None:
         _echo(f"Wrote {case_out}: quickrelease fit {case_out}")

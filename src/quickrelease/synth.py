@@ -245,10 +245,14 @@ def predicted_errors(case: Case, synthetic: SyntheticRecord, options: FitOptions
     opts = replace(options or case.fit, absolute_sigma=True, use_observations=False)
     res = fit_record(case, synthetic.record(noise_free=True), options=opts)
     i1, i2 = res.names.index("F1"), res.names.index("F2")
-    return {"F1_se_N": res.std_errors["F1"], "F2_se_N": res.std_errors["F2"],
-            "F1_rel_se": res.std_errors["F1"] / synthetic.truth["F1"] if synthetic.truth["F1"] else float("nan"),
-            "F2_rel_se": res.std_errors["F2"] / synthetic.truth["F2"] if synthetic.truth["F2"] else float("nan"),
-            "correlation_F1_F2": float(res.correlation[i1, i2]), "std_errors": res.std_errors,
+
+    def finite(x: float) -> float | None:  # a parameter this record cannot see (SE inf): null, and said in warnings
+        return float(x) if math.isfinite(x) else None
+
+    se = {name: finite(v) for name, v in res.std_errors.items()}
+    rel = {f: None if se[f] is None or not synthetic.truth[f] else se[f] / synthetic.truth[f] for f in ("F1", "F2")}
+    return {"F1_se_N": se["F1"], "F2_se_N": se["F2"], "F1_rel_se": rel["F1"], "F2_rel_se": rel["F2"],
+            "correlation_F1_F2": finite(float(res.correlation[i1, i2])), "std_errors": se,
             "warnings": list(res.warnings)}
 
 
