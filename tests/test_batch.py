@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from quickrelease import _fast, _kernels, batch, simulate, stop_time
+from quickrelease import _kernels, batch, simulate, stop_time
 from quickrelease.reference import identify_mp, stop_time_mp
 from quickrelease.sampling import random_releases
 
@@ -84,8 +84,7 @@ def test_compiled_and_numpy_kernels_agree(cases):
     t_np = rel.stop_time()
     n = k.size
     t, aF, code = np.empty(n), np.empty(n), np.empty(n, dtype=np.int8)
-    _fast.stop_kernel(sub["E_S"], np.sin(sub["alpha0"]), np.cos(sub["alpha0"]), sub["alpha0"], sub["F1"], sub["F2"], k,
-                      sub["m2"], sub["L1"], *_fast.rules(), *_fast.tier_constants(), t, aF, code)
+    batch._stop_chunk(sub["E_S"], sub["alpha0"], sub["F1"], sub["F2"], k, sub["m2"], sub["L1"], t, aF, code)
     assert np.all(code == rel.regime) and np.any(rel.tier == 2)  # every tier compiled, the graded one included
     assert np.max(np.abs(t / t_np - 1)) < 1e-14
     assert np.max(np.abs(aF - rel.alpha_final)) < 1e-15

@@ -395,12 +395,10 @@ def test_item18_creep_every_method_agrees(ulps):
     numpy_path = _kernels.Releases.build(*(np.array([v]) for v in (E, a0, F1, F2, 2 / 3 * PAPER.m1 / PAPER.m2,
                                                                     PAPER.m2, PAPER.L1)))
     assert int(numpy_path.regime[0]) == 2 and numpy_path.stop_time()[0] == math.inf
-    from quickrelease import _fast  # the compiled loop itself decides (not only its graded-tier fallback to numpy)
-
+    # the compiled loop itself decides (not only its graded-tier fallback to numpy)
     t, aF, code = np.empty(1), np.empty(1), np.empty(1, dtype=np.int8)
-    one = [np.array([v]) for v in (E, math.sin(a0), math.cos(a0), a0, F1, F2, 2 / 3 * PAPER.m1 / PAPER.m2,
-                                   PAPER.m2, PAPER.L1)]
-    _fast.stop_kernel(*one, *_fast.rules(), *_fast.tier_constants(), t, aF, code)
+    one = [np.array([v]) for v in (E, a0, F1, F2, 2 / 3 * PAPER.m1 / PAPER.m2, PAPER.m2, PAPER.L1)]
+    batch._stop_chunk(*one, t, aF, code)  # the compiled loop (_fast.stop_kernel_sides) as batch calls it
     assert (int(code[0]), t[0], aF[0]) == (2, math.inf, math.pi / 2)
 
 
@@ -560,5 +558,5 @@ def test_fast_kernel_cache_flushed_when_the_modules_it_inlines_change(tmp_path):
     # every kernel compiled from this file is covered, and the stamp of the installed cache is of today's sources
     own = {v for v in vars(_fast).values() if hasattr(v, "py_func") and v.py_func.__code__.co_filename == _fast.__file__}
     assert own and own <= set(_fast.KERNELS)
-    with open(f"{_fast.stop_kernel._cache.cache_path}/{_fast._STAMP_FILE}") as f:
+    with open(f"{_fast.stop_kernel_sides._cache.cache_path}/{_fast._STAMP_FILE}") as f:
         assert f.read() == _fast._dependency_stamp()

@@ -200,12 +200,12 @@ def _graded_sum(regime, ratio, msq, x, w, grading, reach, panels, sm, sA, cA, cb
 
 @njit(cache=True, nogil=True)
 def _stop_one(E, sa0, ca0, a0, F1, F2, kk, m2, L1, x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq,
-              grading, reach, panels, with_angle):
+              grading, reach, panels):
     """(t_F, alpha_F, regime code, tier, N, D) of one release (0 friction, 1 limit, 2 creeps: t_F = inf).
 
     A friction stop's sweep is ``delta = atan2(N, D)`` (Eq. 8, :func:`dynamics.sweep_sides`); nothing here needs
     delta itself but alpha_F (the quadrature takes sin(delta / 2) from N and D, the tier the chord 2 sin(delta / 2)),
-    so without ``with_angle`` alpha_F is left NaN for friction stops, for the caller to take as numpy's
+    so alpha_F is left NaN for friction stops, for the caller to take as numpy's
     ``min(alpha0 + max(atan2(N, D), 0), pi/2)``: the angle of the single-case solver to the last bit, and one
     vectorised call instead of one scalar atan2 a case (a third of the setup). Whether the stop is at pi/2 within
     rounding (``delta >= pi/2 - alpha0``, as numpy decides it) is read from the sign of
@@ -236,12 +236,7 @@ def _stop_one(E, sa0, ca0, a0, F1, F2, kk, m2, L1, x16, w16, x24, w24, near, har
         s0, cv, e, s, cb = _stop_terms(E, A, B, R, sa0, ca0)
         N, D = _sweep_sides(s0, cv, e, s, cb)
         g = N * sa0 - D * ca0
-        delta = math.nan
-        if with_angle or abs(g) <= 1e-9:
-            delta = math.atan2(N, D)
-            flat = delta >= to_limit
-        else:
-            flat = g > 0.0
+        flat = math.atan2(N, D) >= to_limit if abs(g) <= 1e-9 else g > 0.0
         if flat:
             # a friction stop at pi/2 within rounding: sin, cos of alpha_F - phi there, as numpy does
             s = A / R
@@ -252,7 +247,7 @@ def _stop_one(E, sa0, ca0, a0, F1, F2, kk, m2, L1, x16, w16, x24, w24, near, har
             # sin(delta / 2) from (N, D) = r (sin delta, cos delta), D >= 0: N / sqrt(2 r (r + D)), no call
             r = math.sqrt(N * N + D * D)  # ~1: N, D are a sine and a cosine up to rounding
             sm = N / math.sqrt(2.0 * r * (r + D)) if N > 0.0 else 0.0
-            aF = min(a0 + max(delta, 0.0), _HALF_PI) if with_angle else math.nan
+            aF = math.nan
         sA = (B * cb + A * s) / R
         cA = (A * cb - B * s) / R
         qm = math.sqrt(1.0 - sm * sm)
@@ -269,39 +264,21 @@ def _stop_one(E, sa0, ca0, a0, F1, F2, kk, m2, L1, x16, w16, x24, w24, near, har
     return pref * acc, aF, regime, tier, N, D
 
 
-@njit(cache=True, nogil=True, parallel=True)
-def stop_kernel(E, sa0_in, ca0_in, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq,
-                t_out, aF_out, code_out):
-    """t_F, alpha_F and the regime code (0 friction, 1 limit, 2 creeps to the limit: t_F = inf) of every case, every
-    tier compiled (the graded one with the panels it needs: :func:`_graded_sum`), over numba's threads (blocks of
-    :data:`BLOCK` cases; each case's arithmetic is independent of the others). alpha_F by the compiled atan2
-    (:func:`stop_kernel_sides` leaves it to numpy).
-
-    sin and cos of alpha0 come in computed by numpy, as the numpy kernels compute them, so the classifier
-    sees the same numbers on both paths."""
-    n = E.size
-    for b in prange((n + BLOCK - 1) // BLOCK):
-        for i in range(b * BLOCK, min(n, (b + 1) * BLOCK)):
-            t, aF, code, _, _, _ = _stop_one(E[i], sa0_in[i], ca0_in[i], a0[i], F1[i], F2[i], k[i], m2[i], L1[i],
-                                             x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq, _kernels.GRADING,
-                                             GRADED_REACH, _kernels.N_PANELS, True)
-            t_out[i] = t
-            aF_out[i] = aF
-            code_out[i] = code
-
-
 @njit(cache=True, nogil=True)
 def stop_kernel_sides(E, sa0_in, ca0_in, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, near, hard, mass_sq,
                       mass_hard_sq, t_out, aF_out, N_out, D_out, code_out):
-    """:func:`stop_kernel` without the atan2 of a friction stop: its alpha_F NaN, its ``(N, D)`` written out
-    (``delta = atan2(N, D)``; (0, 1) elsewhere) for the caller. One thread, without the GIL: ``batch._stop_arrays``
-    runs it on numba's thread count of chunks at once, each with its numpy pre- and post-processing."""
+    """t_F, alpha_F and the regime code (0 friction, 1 limit, 2 creeps to the limit: t_F = inf) of every case, every
+    tier compiled (the graded one with the panels it needs: :func:`_graded_sum`); a friction stop's alpha_F is left
+    NaN and its ``(N, D)`` written out (``delta = atan2(N, D)``; (0, 1) elsewhere) for the caller (sin and cos of
+    alpha0 come in computed by numpy, as the numpy kernels compute them). One thread, without the GIL:
+    ``batch._stop_arrays`` runs it on numba's thread count of chunks at once, each with its numpy pre- and
+    post-processing (:func:`batch._stop_chunk`)."""
     n = E.size
     for b in range((n + BLOCK - 1) // BLOCK):
         for i in range(b * BLOCK, min(n, (b + 1) * BLOCK)):
             t, aF, code, _, N, D = _stop_one(E[i], sa0_in[i], ca0_in[i], a0[i], F1[i], F2[i], k[i], m2[i], L1[i],
                                              x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq, _kernels.GRADING,
-                                             GRADED_REACH, _kernels.N_PANELS, False)
+                                             GRADED_REACH, _kernels.N_PANELS)
             t_out[i] = t
             aF_out[i] = aF
             N_out[i] = N
@@ -533,6 +510,6 @@ def peak_accel_kernel(E, a0, aE, F1, F2, k, m2, L1, n, pu_out, pv_out):
 
 #: Every kernel defined in this file (cached by numba under this file's name): flushed together when the
 #: modules they inline change (the functions compiled from dynamics and _kernels are stamped with their own files).
-KERNELS = (_tier, _friction_nodes, _limit_nodes, _panel_count, _panel_sum, _graded_sum, _stop_one, stop_kernel,
+KERNELS = (_tier, _friction_nodes, _limit_nodes, _panel_count, _panel_sum, _graded_sum, _stop_one,
            stop_kernel_sides, _line_nodes, _line_sums, _identify_one, identify_kernel, _refined, peak_accel_kernel)
 _refresh_stale_cache(KERNELS)
