@@ -27,6 +27,7 @@ from scipy import stats
 from .decay import DecayAnalysis, analyse_decay, hysteresis_loop
 from .display import Summarised
 from .errors import ParameterError, QuickReleaseError
+from .export import jsonable
 from .isolation_fit import BuildingChannel, IsolationFit, compare_models, decay_check, fit_isolation
 
 __all__ = ["BuildingResult", "analyse_building", "MODELS", "physical_estimates"]
@@ -74,26 +75,11 @@ class BuildingResult(Summarised):
         out.update({"aic": self.fit.aic, "bic": self.fit.bic, "residual_rms": dict(self.fit.residual_rms),
                     "converged": self.fit.converged, "release_time_s": self.fit.release_time,
                     "d0_m": self.fit.parameters.get("d0"), "warnings": list(self.warnings),
-                    "notes": list(self.notes), "comparison": [_jsonable(r) for r in self.comparison],
-                    "decay_check": _jsonable({k: v for k, v in self.decay_check.items() if k != "analysis"}),
-                    "decay": None if self.decay is None else _jsonable(self.decay.summary(self.fit.mass)),
-                    "fit": _jsonable(self.fit.summary())})
+                    "notes": list(self.notes), "comparison": [jsonable(r) for r in self.comparison],
+                    "decay_check": jsonable({k: v for k, v in self.decay_check.items() if k != "analysis"}),
+                    "decay": None if self.decay is None else jsonable(self.decay.summary(self.fit.mass)),
+                    "fit": jsonable(self.fit.summary())})
         return out
-
-
-def _jsonable(obj: Any) -> Any:
-    """Plain JSON values: tuples as lists, numpy scalars as floats, nan and inf as None."""
-    if isinstance(obj, dict):
-        return {str(k): _jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple | np.ndarray):
-        return [_jsonable(v) for v in list(obj)]
-    if isinstance(obj, bool | np.bool_):
-        return bool(obj)
-    if isinstance(obj, int | np.integer):
-        return int(obj)
-    if isinstance(obj, float | np.floating):
-        return float(obj) if math.isfinite(float(obj)) else None
-    return obj
 
 
 def physical_estimates(fit: IsolationFit) -> dict[str, Any]:
@@ -140,7 +126,7 @@ def physical_estimates(fit: IsolationFit) -> dict[str, Any]:
     put("damping_ratio", "damping_ratio", float(iso.damping_ratio))
     put("friction_N", "friction", float(iso.friction))
     out["interval_method"] = dict(fit.interval_method)
-    return {k: _jsonable(v) for k, v in out.items()}
+    return {k: jsonable(v) for k, v in out.items()}
 
 
 def _k2_interval(fit: IsolationFit) -> list[float] | None:

@@ -72,6 +72,7 @@ from ._style import styled
 from .building import pushed_state
 from .campaign import LinearLaw, fit_line, iter_tests, law_panel, weights_or_none
 from .errors import ParameterError, QuickReleaseError
+from .export import jsonable
 from .isolation_fit import PARAMETER_BOUNDS, BuildingChannel, IsolationFit, _isolation, fit_isolation
 
 __all__ = ["BuildingRelease", "ReleaseEstimates", "BuildingCampaignResult", "fit_building_campaign",
@@ -192,26 +193,13 @@ class ReleaseEstimates:
         raise ParameterError("variable", variable, ", ".join(BUILDING_VARIABLES))
 
     def summary(self) -> dict[str, Any]:
-        return _json_safe({
+        return jsonable({
             "name": self.name, "d0_m": self.d0, "d0_given_m": self.d0_given, "push_force_N": self.force,
             "estimates": self.values, "std_errors": self.std_errors,
             "ci95": {k: list(v) for k, v in self.ci95.items()}, "interval_method": self.interval_method,
             "units": {k: QUANTITIES[k][1] for k in self.values}, "chi2_reduced": self.fit.chi2_reduced,
             "converged": self.fit.converged, "warnings": list(self.fit.warnings),
             "restarted_from": self.restarted_from})
-
-
-def _json_safe(value):
-    """NaN and infinities as None (JSON has none), recursively."""
-    if isinstance(value, dict):
-        return {k: _json_safe(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_json_safe(v) for v in value]
-    if isinstance(value, (float, np.floating)):
-        return float(value) if math.isfinite(value) else None
-    if isinstance(value, np.integer):
-        return int(value)
-    return value
 
 
 def law_standard_error(estimate: float, interval: tuple[float, float], bounds: tuple[float, float],
@@ -349,7 +337,7 @@ class BuildingCampaignResult:
             y_unit, x_unit = QUANTITIES[law.quantity][1], BUILDING_VARIABLES[law.variable][1]
             slope_unit = y_unit if x_unit == "-" else (f"1/{x_unit}" if y_unit == "-" else f"{y_unit}/{x_unit}")
             laws.append({**law.summary(), "units": {"a": y_unit, "b": slope_unit}})
-        return _json_safe({"kind": "building", "title": self.title, "campaign": self.source, "model": self.model,
+        return jsonable({"kind": "building", "title": self.title, "campaign": self.source, "model": self.model,
                            "mass_kg": self.mass, "superstructure_mass_kg": self.superstructure_mass,
                            "variables": list(self.variables), "quantities": list(self.quantities),
                            "reported": list(self.reported), "releases": [r.summary() for r in self.releases],

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import math
 import os
 import tempfile
 from collections.abc import Iterator
@@ -24,6 +25,22 @@ __all__ = ["atomic_path", "write_json", "write_text", "write_csv", "read_csv", "
 
 #: Time-history columns and their units (the CSV header carries the unit in the name).
 COLUMN_UNITS: dict[str, str] = {column: unit for column, (_, unit, _) in TIME_HISTORIES.items()}
+
+
+def jsonable(obj: Any) -> Any:
+    """Plain JSON values, recursively: tuples and arrays as lists, numpy scalars as Python numbers, NaN and
+    infinities as None (JSON has none: a standard error a record cannot give, a bound never reached)."""
+    if isinstance(obj, dict):
+        return {str(k): jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple | np.ndarray):
+        return [jsonable(v) for v in list(obj)]
+    if isinstance(obj, bool | np.bool_):
+        return bool(obj)
+    if isinstance(obj, int | np.integer):
+        return int(obj)
+    if isinstance(obj, float | np.floating):
+        return float(obj) if math.isfinite(float(obj)) else None
+    return obj
 
 
 @contextlib.contextmanager

@@ -35,6 +35,7 @@ from .case import Case, FitOptions
 from .device import Device
 from .display import Summarised
 from .errors import InfeasibleObservationError, QuickReleaseError
+from .export import jsonable
 from .records import (
     DISPLACEMENT_CHANNELS,
     Record,
@@ -162,7 +163,7 @@ class FitResult(Summarised):
     def summary(self) -> dict[str, Any]:
         """JSON-ready summary: the keys of ``quickrelease fit --json`` (a standard error or interval the record
         does not identify, inf or nan, as None)."""
-        return _json_safe(self._summary())
+        return jsonable(self._summary())
 
     def _summary(self) -> dict[str, Any]:
         def pair(name):
@@ -193,17 +194,6 @@ class FitResult(Summarised):
             out["observations"] = {k: {"observed": o, "sigma": s, "fitted": f}
                                    for k, (o, s, f) in self.observations.items()}
         return out
-
-
-def _json_safe(value: Any) -> Any:
-    """NaN and infinities as None (JSON has none), recursively."""
-    if isinstance(value, dict):
-        return {k: _json_safe(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_json_safe(v) for v in value]
-    if isinstance(value, float | np.floating):
-        return float(value) if math.isfinite(value) else None
-    return value
 
 
 def observation_sigma(case: Case) -> dict[str, float]:

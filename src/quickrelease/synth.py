@@ -240,19 +240,16 @@ def predicted_errors(case: Case, synthetic: SyntheticRecord, options: FitOptions
     """
     from dataclasses import replace
 
+    from .export import jsonable
     from .fit import fit_record
 
     opts = replace(options or case.fit, absolute_sigma=True, use_observations=False)
     res = fit_record(case, synthetic.record(noise_free=True), options=opts)
     i1, i2 = res.names.index("F1"), res.names.index("F2")
-
-    def finite(x: float) -> float | None:  # a parameter this record cannot see (SE inf): null, and said in warnings
-        return float(x) if math.isfinite(x) else None
-
-    se = {name: finite(v) for name, v in res.std_errors.items()}
+    se = jsonable(res.std_errors)  # a parameter this record cannot see (SE inf): None, and said in the warnings
     rel = {f: None if se[f] is None or not synthetic.truth[f] else se[f] / synthetic.truth[f] for f in ("F1", "F2")}
     return {"F1_se_N": se["F1"], "F2_se_N": se["F2"], "F1_rel_se": rel["F1"], "F2_rel_se": rel["F2"],
-            "correlation_F1_F2": finite(float(res.correlation[i1, i2])), "std_errors": se,
+            "correlation_F1_F2": jsonable(res.correlation[i1, i2]), "std_errors": se,
             "warnings": list(res.warnings)}
 
 
