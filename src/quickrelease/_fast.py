@@ -1,13 +1,16 @@
 """Compiled (numba) loops of the batch kernels: the formulas of :mod:`quickrelease._kernels`, fused.
 
-numpy evaluates ``_kernels`` one operation at a time, about 17 passes over the (nodes x cases) arrays;
-here each case is one pass: its setup (the classifier and Eq. 8, plain arithmetic, no fastmath) in registers,
-then its node sums, vectorised across the nodes (``fastmath`` reassociation and contraction, numpy's error
-model: AVX-512 square roots and divisions). The formulas, node rules and tier criteria are those of ``_kernels``
-(a test checks the two agree case by case), every tier compiled: the graded one with only the panels a case needs
-(:func:`_graded_sum`). The loops over cases run over numba's threads (``prange`` over blocks of :data:`BLOCK`
-cases: all cores unless ``numba.set_num_threads`` says otherwise); each case is computed alone, so the results
-are bit-identical on any number of threads. Compiled on first use and cached on disk (``cache=True``).
+numpy evaluates ``_kernels`` one operation at a time, about 17 passes over the (nodes x cases) arrays; here the
+stop time goes in blocks of :data:`STOP_BLOCK` cases: the library calls of the setup one case at a time (sin and
+cos of alpha0: libm's, which numpy calls too, so the same bits), the rest of the setup (the classifier and Eq. 8,
+plain IEEE arithmetic, no fastmath) for both regimes at once and selected without a branch, which the compiler
+vectorises across the cases (:func:`_setup_vector`), then each case's node sums, vectorised across its nodes
+(``fastmath`` reassociation only). Every function here has numpy's error model (a division by zero gives inf or
+NaN, as numpy's does, and never raises). The formulas, node rules and tier criteria are those of ``_kernels`` (a
+test checks the two agree case by case), every tier compiled: the graded one with only the panels a case needs
+(:func:`_graded_sum`). The identification runs over numba's threads (``prange`` over blocks of :data:`BLOCK` cases),
+the stop time over a thread pool of chunks (``batch._stop_arrays``); each case is computed alone, so the results are
+bit-identical on any number of threads. Compiled on first use and cached on disk (``cache=True``).
 """
 
 from __future__ import annotations
@@ -83,10 +86,11 @@ def rules() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
 
 
 def _jit(fn, **calls):
-    """``fn`` compiled as written (cached, nogil), the module-level functions it calls bound to compiled ones."""
+    """``fn`` compiled as written (cached, nogil, numpy's error model: a division by zero gives inf or NaN as numpy's
+    does, never an exception), the module-level functions it calls bound to compiled ones."""
     if calls:
         fn = types.FunctionType(fn.__code__, {**fn.__globals__, **calls}, fn.__name__, fn.__defaults__)
-    return njit(cache=True, nogil=True)(fn)
+    return njit(cache=True, nogil=True, error_model="numpy")(fn)
 
 
 #: The classifier of the stop and the cancellation-free sweep of Eq. 8, compiled from the very functions
@@ -99,10 +103,10 @@ _creeps = _jit(dynamics.creeps_terms)
 _stop_terms = _jit(dynamics._stop_terms, limit_margin_terms=_limit_margin)
 _sweep_sides = _jit(dynamics.sweep_sides)
 _amplitude = _jit(dynamics.amplitude_terms)
-_slack = njit(cache=True, nogil=True)(_kernels.feasible_slack)
+_slack = njit(cache=True, nogil=True, error_model="numpy")(_kernels.feasible_slack)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _tier(ratio, msq, near, hard, mass_sq, mass_hard_sq):
     """The rule of a case, as ``_kernels.tier_of``: 2 graded (left to numpy), 1 the 24-node rule, 0 16 nodes."""
     if ratio < hard or msq < mass_hard_sq:
@@ -162,7 +166,7 @@ def _limit_nodes(x, w, lo, width, sm, Kl, A, B, kk):
     return acc * width
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _panel_count(distance, grading, reach, panels):
     """Graded panels towards an end whose near-singularity lies ``distance`` from it (in w): the last panel
     [0, r^J / 2] ends ``reach`` grading steps inside that distance, J in [0, panels] [-]."""
@@ -172,14 +176,14 @@ def _panel_count(distance, grading, reach, panels):
     return min(max(j, 0), panels)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _panel_sum(regime, x, w, lo, width, sm, sA, cA, cb, sn, Kl, A, B, kk):
     if regime == 0:
         return _friction_nodes(x, w, lo, width, sm, sA, cA, cb, sn, kk)
     return _limit_nodes(x, w, lo, width, sm, Kl, A, B, kk)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _graded_sum(regime, ratio, msq, x, w, grading, reach, panels, sm, sA, cA, cb, sn, Kl, A, B, kk):
     """The graded rule of ``_kernels.graded_unit`` with only the panels a case needs: towards w = 0 down to
     ``sqrt(ratio)`` (the end's near-singularity), towards w = 1 down to ``sqrt(msq) / 2`` (the mass factor's
@@ -202,7 +206,7 @@ def _graded_sum(regime, ratio, msq, x, w, grading, reach, panels, sm, sA, cA, cb
     return acc
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _stop_one(E, sa0, ca0, a0, F1, F2, kk, m2, L1, x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq,
               grading, reach, panels):
     """(t_F, alpha_F, regime code, tier, N, D) of one release (0 friction, 1 limit, 2 creeps: t_F = inf).
@@ -320,7 +324,7 @@ STOP_BLOCK = 128
 _ROWS = 22
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _setup_calls(E, a0, F1, F2, kk, m2, L1, lo, hi, W):
     """The library calls of the setup of cases lo..hi-1, one case at a time, into the scratch W: sin and cos of
     alpha0 (libm's, which numpy calls too: the same bits), the classifier's margin K_lim and, where it is > 0 (the
@@ -453,7 +457,7 @@ def stop_kernel_sides(E, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, near, hard, 
             code_out[i] = reg
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def friction_angles(delta, a0, aF):
     """alpha_F = min(alpha0 + max(delta, 0), pi/2) where the stop-time kernel left alpha_F NaN (friction stops), from
     the sweep ``delta = atan2(N, D)`` that numpy computed (Eq. 8), in place: the arithmetic of the single-case
@@ -509,7 +513,7 @@ def _line_sums(P, d, b, n, lam):
     return t0, t1, t2
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _identify_one(a0, aF, tF, E, kk, m2, L1, x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq, tol, max_iter,
                   grading, reach, panels, P, d, b):
     """(lambda, F1*, F2*, t_lo, t_hi, status, iterations) of one observation: Halley's method in lambda = F1/F1* on
@@ -599,7 +603,7 @@ def _identify_one(a0, aF, tF, E, kk, m2, L1, x16, w16, x24, w24, near, hard, mas
     return lam, F1max, F2max, lo, hi, 0, iterations
 
 
-@njit(cache=True, nogil=True, parallel=True)
+@njit(cache=True, nogil=True, parallel=True, error_model="numpy")
 def identify_kernel(a0, aF, tF, E, k, m2, L1, x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq, tol, max_iter,
                     lam_out, F1max_out, F2max_out, tlo_out, thi_out, status_out, iter_out):
     """lambda = F1/F1* of every observation (:func:`_identify_one`; cases with a nonzero status on entry are left
@@ -634,14 +638,14 @@ def identify_kernel(a0, aF, tF, E, k, m2, L1, x16, w16, x24, w24, near, hard, ma
             iter_out[i] = iterations
 
 
-_accel = njit(cache=True, nogil=True)(_kernels.head_hinge_acceleration)
+_accel = njit(cache=True, nogil=True, error_model="numpy")(_kernels.head_hinge_acceleration)
 #: ``_kernels.refine_peak`` compiled as written, its call of ``head_hinge_acceleration`` bound to ``_accel``.
-_refine_peak = njit(cache=True, nogil=True)(types.FunctionType(
+_refine_peak = njit(cache=True, nogil=True, error_model="numpy")(types.FunctionType(
     _kernels.refine_peak.__code__, {**_kernels.refine_peak.__globals__, "head_hinge_acceleration": _accel},
     "refine_peak", _kernels.refine_peak.__defaults__))
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _refined(best, j, n, a0, h, E, s0, c0, A, B, F1, F2, k, m2, L1, which):
     """The best sample j's value, raised to the maximum at a root of the jerk in [a_(j-1), a_j] or
     [a_j, a_(j+1)] when one lies there (``_kernels.refine_peak``)."""
@@ -653,7 +657,7 @@ def _refined(best, j, n, a0, h, E, s0, c0, A, B, F1, F2, k, m2, L1, which):
     return out
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def peak_accel_kernel(E, a0, aE, F1, F2, k, m2, L1, n, pu_out, pv_out):
     """Peaks of |u_ddot| and |v_ddot| over [alpha0, alpha_end] (the numpy ``batch._peak_accelerations``):
     n equally spaced angles (sines and cosines by rotation, no trigonometric call per angle) pick the best
