@@ -287,6 +287,39 @@ def _sqrt(typingctx, x):
     return _nbtypes.float64(_nbtypes.float64), codegen
 
 
+def _libm(name):
+    """libm's ``name`` (a double -> double function) called as an opaque function (``nobuiltin``): never replaced by
+    the compiler, never vectorised. numba's ``math.sin`` is LLVM's ``llvm.sin`` intrinsic, which a vectorised loop turns
+    into the vector library's ``sin`` where numba has one (Intel's SVML), whose last bits differ from libm's; numpy's
+    ``sin`` and ``cos`` are libm's, and the single-case solver takes sin and cos of alpha0 from them."""
+
+    @intrinsic
+    def call(typingctx, x):
+        if x is not _nbtypes.float64:
+            return None
+
+        def codegen(context, builder, signature, args):
+            double = _ir.DoubleType()
+            fn = _cgutils_function(builder.module, _ir.FunctionType(double, [double]), name)
+            fn.attributes.add("nobuiltin")
+            return builder.call(fn, args)
+
+        return _nbtypes.float64(_nbtypes.float64), codegen
+
+    return call
+
+
+def _cgutils_function(module, fnty, name):
+    """The declaration of the external function ``name`` in ``module`` (added once)."""
+    from numba.core import cgutils
+
+    return cgutils.get_or_insert_function(module, fnty, name)
+
+
+_libm_sin = _libm("sin")
+_libm_cos = _libm("cos")
+
+
 def _jit_vector(fn, **calls):
     """``fn`` compiled as :func:`_jit` does, with numpy's error model (a division by zero gives inf or NaN, not a
     branch that raises): for the branch-free loops that compute both sides of a choice and select one, which the
@@ -331,8 +364,8 @@ def _setup_calls(E, a0, F1, F2, kk, m2, L1, lo, hi, W):
     geometric limit), ``sin((pi/2 - alpha0) / 2)``; with the inputs the vectorised part reads."""
     for i in range(lo, hi):
         j = i - lo
-        s = math.sin(a0[i])
-        c = math.cos(a0[i])
+        s = _libm_sin(a0[i])
+        c = _libm_cos(a0[i])
         A = 2.0 * F1[i] * L1[i]
         B = 4.0 * F2[i] * L1[i]
         k = _limit_margin(E[i], A, B, s, c)
@@ -345,7 +378,7 @@ def _setup_calls(E, a0, F1, F2, kk, m2, L1, lo, hi, W):
         W[_SA0 * STOP_BLOCK + j] = s
         W[_CA0 * STOP_BLOCK + j] = c
         W[_KL * STOP_BLOCK + j] = k
-        W[_SL * STOP_BLOCK + j] = math.sin(0.5 * _limit_sweep(a0[i])) if k > 0.0 else 0.0
+        W[_SL * STOP_BLOCK + j] = _libm_sin(0.5 * _limit_sweep(a0[i])) if k > 0.0 else 0.0
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
