@@ -3,8 +3,8 @@
 * the block kernel gives, case by case and bit for bit, what the one-case loop ``_fast._stop_one`` gives (the
   vectorised setup computes both regimes and selects one: a wrong select, a row mixed up or a case left out of the
   scalar path shows as a difference), on the bench and wide samples and on cases built to sit on every branch;
-* numba's ``math.sin`` and ``math.cos`` (libm, called in the compiled loop) round as numpy's ``sin`` and ``cos``,
-  which the single-case solver calls: the same alpha0 terms on every path;
+* the compiled loop's sin and cos (libm's, called opaquely) round as numpy's ``sin`` and ``cos``, which the
+  single-case solver calls: the same alpha0 terms on every path;
 * ``dynamics.amplitude_terms`` (R = sqrt(A^2 + B^2), the library's hypot) within one ulp of mpmath from subnormal
   to 1e300 inputs, and the same bits in numpy and compiled.
 """
@@ -89,11 +89,13 @@ def test_block_kernel_is_the_one_case_loop_bit_for_bit(source):
 
 
 def test_libm_sine_and_cosine_are_numpys():
+    """The kernel's sin and cos (libm's, called opaquely: never vectorised, so never Intel's SVML) round as numpy's."""
+
     @njit
     def sincos(x, s, c):
         for i in range(x.size):
-            s[i] = math.sin(x[i])
-            c[i] = math.cos(x[i])
+            s[i] = _fast._libm_sin(x[i])
+            c[i] = _fast._libm_cos(x[i])
 
     rng = np.random.default_rng(3)
     x = np.concatenate([rng.uniform(0.0, math.pi / 2, 200_000), np.geomspace(1e-300, 1e-2, 2000),
