@@ -491,6 +491,24 @@ def stop_kernel_sides(E, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, near, hard, 
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
+def screen_flags(E, F1, F2, L1, negligible, bad, tiny):
+    """The cases batch cannot hand to the kernels as they are, in one pass; returns how many: ``bad`` where E_S is not
+    positive and finite or ``A = 2 F1 L1``, ``B = 4 F2 L1`` overflow, ``tiny`` where the friction work to the flat
+    rhombus, at most ``A + B``, is below ``negligible`` E_S (``batch._screen``: the same products, rounded alike)."""
+    count = 0
+    for i in range(E.size):
+        A = 2.0 * F1[i] * L1[i]
+        B = 4.0 * F2[i] * L1[i]
+        b = not (math.isfinite(E[i]) and E[i] > 0.0 and math.isfinite(A) and math.isfinite(B))
+        t = (not b) and A + B <= negligible * E[i]
+        bad[i] = b
+        tiny[i] = t
+        if b or t:
+            count += 1
+    return count
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
 def friction_angles(delta, a0, aF):
     """alpha_F = min(alpha0 + max(delta, 0), pi/2) where the stop-time kernel left alpha_F NaN (friction stops), from
     the sweep ``delta = atan2(N, D)`` that numpy computed (Eq. 8), in place: the arithmetic of the single-case
@@ -725,6 +743,6 @@ def peak_accel_kernel(E, a0, aE, F1, F2, k, m2, L1, n, pu_out, pv_out):
 #: Every kernel defined in this file (cached by numba under this file's name): flushed together when the
 #: modules they inline change (the functions compiled from dynamics and _kernels are stamped with their own files).
 KERNELS = (_tier, _friction_nodes, _limit_nodes, _panel_count, _panel_sum, _graded_sum, _stop_one,
-           _setup_calls, _setup_vector, stop_kernel_sides, friction_angles, _line_nodes, _line_sums, _identify_one,
-           identify_kernel, _refined, peak_accel_kernel)
+           _setup_calls, _setup_vector, stop_kernel_sides, screen_flags, friction_angles, _line_nodes, _line_sums,
+           _identify_one, identify_kernel, _refined, peak_accel_kernel)
 _refresh_stale_cache(KERNELS)

@@ -146,12 +146,13 @@ NEGLIGIBLE_WORK = 2.0**-64
 
 def _screen(E_S, F1, F2, L1):
     """(F1, F2, E_S, bad) for the kernels: negligible friction set to 0, cases outside the floating-point
-    range marked ``bad`` and replaced by a harmless case (their outputs are then set to NaN)."""
-    with np.errstate(over="ignore", invalid="ignore"):
-        A, B = 2.0 * F1 * L1, 4.0 * F2 * L1
-        bad = ~(np.isfinite(E_S) & (E_S > 0) & np.isfinite(A) & np.isfinite(B))
-        tiny = ~bad & (A + B <= NEGLIGIBLE_WORK * E_S)
-    if not (bad.any() or tiny.any()):
+    range marked ``bad`` and replaced by a harmless case (their outputs are then set to NaN). One compiled pass
+    (:func:`quickrelease._fast.screen_flags`); the inputs themselves come back where no case needs either."""
+    from . import _fast
+
+    bad = np.empty(E_S.shape, dtype=bool)
+    tiny = np.empty(E_S.shape, dtype=bool)
+    if _fast.screen_flags(E_S, F1, F2, L1, NEGLIGIBLE_WORK, bad, tiny) == 0:
         return F1, F2, E_S, bad
     F1, F2, E_S = (np.where(tiny | bad, 0.0, F1), np.where(tiny | bad, 0.0, F2), np.where(bad, 1.0, E_S))
     return F1, F2, E_S, bad
