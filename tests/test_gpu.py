@@ -353,3 +353,26 @@ def test_api_refuses_without_a_gpu(monkeypatch, tmp_path):
     with pytest.raises(ParameterError, match="backend = cuda"):
         batch.stop_time(1e3, 0.5, 100.0, 100.0, backend="cuda")
     assert not _gpu.gpu_available()
+
+
+# -- quickrelease bench's GPU section --------------------------------------------------------------------------------
+
+def test_bench_gpu_section(numpy_gpu, monkeypatch):
+    """Without a GPU: None and one line saying so; with one (numpy standing in): throughput and agreement."""
+    from quickrelease import bench
+
+    sizes = bench.Sizes(cases=300, stop_time=1, identify=1, repeat=1)
+    log: list[str] = []
+    monkeypatch.setattr(_gpu, "gpu_available", lambda: False)
+    assert bench._gpu_section(sizes, 0, log.append) is None and "no GPU found" in log[0]
+    monkeypatch.setattr(_gpu, "gpu_available", lambda: True)
+    monkeypatch.setattr(_gpu, "device_name", lambda: ("numpy stand-in", "0"))
+    out = bench._gpu_section(sizes, 0, log.append)
+    json.dumps(out, allow_nan=False)
+    assert out["device"] == "numpy stand-in"
+    for sample in ("bench", "wide"):
+        g = out[sample]
+        assert g["cases"] == bench.GPU_SCALE * 300 and g["stop_time_cases_per_s"] > 0
+        assert g["stop_time_max_rel_diff"] <= RTOL and g["alpha_final_max_rel_diff"] <= RTOL
+        assert g["identify_ends_max_rel_diff"] <= RTOL and g["identify_F1_max_diff_over_tolerance"] <= 1.0
+        assert g["stopped_by_identical"] and g["identify_status_identical"]

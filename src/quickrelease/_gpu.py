@@ -85,6 +85,22 @@ def array_module():
     return cupy
 
 
+def synchronize(xp) -> None:
+    """Wait for the device's queued work (timing): CuPy's current device; nothing for numpy."""
+    cuda = getattr(xp, "cuda", None)
+    if cuda is not None:
+        cuda.Device().synchronize()
+
+
+def device_name() -> tuple[str, str]:
+    """(the current CUDA device's name, CuPy's version)."""
+    import cupy
+
+    props = cupy.cuda.runtime.getDeviceProperties(cupy.cuda.Device().id)
+    name = props["name"].decode() if isinstance(props["name"], bytes) else str(props["name"])
+    return name, cupy.__version__
+
+
 def to_host(a) -> np.ndarray:
     """A numpy array of ``a`` (a CuPy array is copied off the device)."""
     get = getattr(a, "get", None)

@@ -1045,6 +1045,20 @@ def _bench_tables(result: dict[str, Any]) -> None:
                     "1-ulp sens."))
     for t in result["targets"]:
         _echo(f"{t['status']:>12}: {t['text']}")
+    gpu = result.get("gpu")
+    if gpu is None:
+        _echo("GPU: none found (CuPy with a CUDA device; pip install 'quickrelease[gpu]'): the gpu backend not measured")
+    else:
+        rows = [(f"{sample}: on the device [cases/s]", f"{gpu[sample]['stop_time_cases_per_s']:,.0f}",
+                 f"{gpu[sample]['identify_cases_per_s']:,.0f}") for sample in ("bench", "wide")]
+        rows += [(f"{sample}: from host arrays [cases/s]", f"{gpu[sample]['stop_time_end_to_end_cases_per_s']:,.0f}",
+                  f"{gpu[sample]['identify_end_to_end_cases_per_s']:,.0f}") for sample in ("bench", "wide")]
+        rows += [(f"{sample}: max rel. difference from the CPU", e(gpu[sample]["stop_time_max_rel_diff"]),
+                  f"ends {e(gpu[sample]['identify_ends_max_rel_diff'])}; F1 "
+                  f"{gpu[sample]['identify_F1_max_diff_over_tolerance']:.2f} of its tolerance")
+                 for sample in ("bench", "wide")]
+        _table(f"gpu backend on {gpu['device']} (CuPy {gpu['cupy']}, float64)", rows,
+               ("", "stop time t_F", "identification F1, F2"))
     if "uq_dask" in result:
         u = result["uq_dask"]
         _echo(u["skipped"] if "skipped" in u else
