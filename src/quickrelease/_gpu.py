@@ -460,32 +460,47 @@ def _line_nodes(xp, x, w, start, width, c):
     return P, a, b
 
 
+def _graded_counts(xp, c):
+    """(jl, jr): the graded panels of each case towards w = 0 and towards w = 1 (``_fast._graded_sum``) [-]."""
+    jl = panel_counts(xp, xp.where(c["ratio"] > 0.0, xp.sqrt(xp.abs(c["ratio"])), 0.0))
+    return jl, panel_counts(xp, 0.5 * xp.sqrt(c["msq"]))
+
+
 def _line_arrays(xp, c, tier):
-    """(P, a, b) node arrays (n_nodes x cases) of one tier; the graded tier's unused panels have P = 0, a = b = 1
-    (they add nothing), its rows only as many panels as the most demanding case needs [-]."""
+    """(P, a, b) node arrays (n_nodes x cases) of one tier. The graded tier's panels are laid out case by case in
+    the order ``_fast._identify_one`` sums them (slot s: panel s towards w = 0 while s <= jl, then panel s - jl - 1
+    towards w = 1), as many slots as the case with the most panels needs; a case's unused slots have P = 0, a = b = 1
+    (they add nothing). The caller groups the cases by their panel count, so that few slots are unused [-]."""
     if tier < 2:
         x, w = _gauss(xp, _kernels.N_NODES if tier == 0 else _kernels.N_NODES_MASS)
         return _line_nodes(xp, x, w, 0.0, 1.0, c)
     x, w = _gauss(xp, _kernels.N_NODES)
-    jl = panel_counts(xp, xp.where(c["ratio"] > 0.0, xp.sqrt(xp.abs(c["ratio"])), 0.0))
-    jr = panel_counts(xp, 0.5 * xp.sqrt(c["msq"]))
-    m = c["sm"].size
+    jl, jr = _graded_counts(xp, c)
+    npan = jl + jr + 2
+    his = xp.asarray(_panel_edges())
     rows = []
-    for pidx, start, width in _graded_panels(xp, jl, jr):
-        P = xp.zeros((x.size, m))
-        a = xp.ones((x.size, m))
-        b = xp.ones((x.size, m))
-        P[:, pidx], a[:, pidx], b[:, pidx] = _line_nodes(xp, x, w, start, width, _take(c, pidx))
-        rows.append((P, a, b))
+    for slot in range(int(xp.max(npan))):
+        left = slot <= jl
+        j = xp.minimum(xp.where(left, slot, slot - jl - 1), _kernels.N_PANELS)
+        hi = his[j]
+        last = xp.where(left, j == jl, j == jr)
+        lo = xp.where(last, 0.0, hi * _kernels.GRADING)
+        P, a, b = _line_nodes(xp, x, w, xp.where(left, lo, 1.0 - hi), hi - lo, c)
+        used = slot < npan
+        rows.append((xp.where(used, P, 0.0), xp.where(used, a, 1.0), xp.where(used, b, 1.0)))
     return tuple(xp.concatenate([r[i] for r in rows]) for i in range(3))
 
 
 def _halley(xp, P, d, b, pref, tF, lam, active, tol, max_iter):
     """Halley's method in lambda (Newton's step where Halley's denominator is not > 1/2), as ``_fast._identify_one``:
-    (lambda, iterations) [-]."""
-    iters = xp.zeros(lam.shape, dtype=xp.int16)
-    for _ in range(max_iter):
-        if not bool(xp.any(active)):
+    (lambda, iterations) [-]. Only the ``active`` cases iterate, and each step carries on only the cases not yet
+    converged (their columns gathered: most converge in 3 steps, a few take up to ~16)."""
+    lam_out = lam.copy()
+    iters_out = xp.zeros(lam.shape, dtype=xp.int16)
+    idx = xp.nonzero(active)[0]
+    P, d, b, pref, tF, lam = P[:, idx], d[:, idx], b[:, idx], pref[idx], tF[idx], lam[idx]
+    for step_no in range(1, max_iter + 1):
+        if idx.size == 0:
             break
         h = b + lam * d
         r = 1.0 / xp.sqrt(h)
@@ -504,10 +519,12 @@ def _halley(xp, P, d, b, pref, tF, lam, active, tol, max_iter):
             step = xp.where(denom > 0.5, newton / denom, newton)
             new = xp.minimum(xp.maximum(lam - step, 0.0), 1.0)
             done = xp.abs(new - lam) <= xp.maximum(tol, 8.0 * EPS * pref * t0 / xp.abs(slope))
-        lam = xp.where(active, new, lam)
-        iters = iters + active
-        active = active & ~done
-    return lam, iters
+        lam = new
+        lam_out[idx] = lam
+        iters_out[idx] = step_no
+        go = xp.nonzero(~done)[0]
+        idx, P, d, b, pref, tF, lam = idx[go], P[:, go], d[:, go], b[:, go], pref[go], tF[go], lam[go]
+    return lam_out, iters_out
 
 
 def identify_arrays(xp, alpha0, alpha_final, stop_time, E, k, m2, L1, tol: float = 1e-14, max_iter: int = 40,
@@ -552,11 +569,16 @@ def _identify_chunk(xp, a0, aF, tF, E, k, m2, L1, tol, max_iter, chunk):
     t_hi = xp.empty(n)
     status = xp.zeros(n, dtype=xp.int8)
     iters = xp.zeros(n, dtype=xp.int16)
-    for tr in (0, 1, 2):
-        idx = xp.nonzero(tier == tr)[0]
-        # the graded tier in sub-chunks: at most 2 (N_PANELS + 1) panels of 16 nodes a case
-        step = int(idx.size) if tr < 2 else max(1, chunk // (2 * (_kernels.N_PANELS + 1)))
-        for start in range(0, int(idx.size), max(step, 1)):
+    groups = [(0, xp.nonzero(tier == 0)[0], chunk), (1, xp.nonzero(tier == 1)[0], chunk)]
+    graded = xp.nonzero(tier == 2)[0]
+    if graded.size:  # the graded tier by panel count (few unused slots), in sub-chunks of ~24 chunk node values
+        jl, jr = _graded_counts(xp, _take(c, graded))
+        npan = jl + jr + 2
+        for count in to_host(xp.unique(npan)):
+            groups.append((2, graded[npan == count], max(1, (chunk * _kernels.N_NODES_MASS)
+                                                       // (_kernels.N_NODES * int(count)))))
+    for tr, idx, step in groups:
+        for start in range(0, int(idx.size), step):
             sub_idx = idx[start:start + step]
             sub = _take(c, sub_idx)
             lm, lo, hi, st, it = _identify_tier(xp, sub, tr, tol, max_iter)
