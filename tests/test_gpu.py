@@ -338,6 +338,7 @@ def test_backend_gpu_without_a_device(monkeypatch, tmp_path, command):
 
     real = distributed._installed
     monkeypatch.setattr(distributed, "_installed", lambda name: name == "cupy" or real(name))
+    monkeypatch.setattr(_gpu, "_cupy_installed", lambda: True)
     monkeypatch.setattr(_gpu, "gpu_available", lambda: False)
     r = runner.invoke(app, [*_commands(tmp_path)[command], "--backend", "gpu"])
     _one_line_exit_2(r, "the gpu backend needs a CUDA device")

@@ -67,11 +67,19 @@ def gpu_available() -> bool:
         return False
 
 
+def _cupy_installed() -> bool:
+    """True where CuPy can be found (imported or not); a broken or half-installed one counts as missing."""
+    from importlib.util import find_spec
+
+    try:
+        return find_spec("cupy") is not None
+    except (ImportError, ValueError):
+        return False
+
+
 def require_gpu() -> None:
     """Raise QuickReleaseError (one line) unless :func:`gpu_available`: what is missing and how to install it."""
-    from .distributed import _installed
-
-    if not _installed("cupy"):
+    if not _cupy_installed():
         raise QuickReleaseError(f"the gpu backend needs cupy (not installed): {INSTALL}")
     if not gpu_available():
         raise QuickReleaseError("the gpu backend needs a CUDA device: CuPy is installed but found none "
