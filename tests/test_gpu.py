@@ -173,6 +173,80 @@ def test_release_envelope_as_the_compiled_kernels(sample):
         assert np.max(np.abs(got[name][fin] / ref[fin] - 1.0)) <= RTOL, name
 
 
+# -- only what numpy and CuPy share ----------------------------------------------------------------------------------
+
+class _DeviceArray(np.ndarray):
+    """Stands for a CuPy array: numpy ufuncs work on it (CuPy's ``__array_ufunc__``), any other numpy function called
+    on it (np.where, np.clip, np.argmax, ...: numpy-only code) raises."""
+
+    def __array_function__(self, func, types, args, kwargs):
+        raise TypeError(f"numpy.{func.__name__} called on a device array: use the array module")
+
+
+def _plain(v):
+    return v.view(np.ndarray) if isinstance(v, np.ndarray) else v
+
+
+def _strict_module():
+    """An array module with only functions CuPy has too (each takes and returns device arrays)."""
+    import types
+
+    mod = types.SimpleNamespace(inf=np.inf, nan=np.nan, int8=np.int8, int16=np.int16, int64=np.int64,
+                                float64=np.float64)
+    for name in ("sin", "cos", "sqrt", "hypot", "arctan2", "log", "ceil", "minimum", "maximum", "abs", "isnan",
+                 "isfinite"):
+        setattr(mod, name, getattr(np, name))  # ufuncs: CuPy has each
+    for name in ("where", "asarray", "empty", "zeros", "ones", "full", "arange", "nonzero", "argmax", "unique",
+                 "concatenate", "any", "max"):
+        setattr(mod, name, _on_device(getattr(np, name)))
+    return mod
+
+
+def _to_device(v):
+    return v.view(_DeviceArray) if isinstance(v, np.ndarray) else v
+
+
+def _on_device(func):
+    """``func`` of numpy on the plain arrays behind device arrays, its arrays returned as device arrays."""
+    def call(*args, **kwargs):
+        args = [[_plain(v) for v in a] if isinstance(a, list) else _plain(a) for a in args]
+        out = func(*args, **{k: _plain(v) for k, v in kwargs.items()})
+        return tuple(_to_device(v) for v in out) if isinstance(out, tuple) else _to_device(out)
+    return call
+
+
+def test_the_kernels_use_only_what_numpy_and_cupy_share():
+    """Run on device stand-ins, the kernels call no numpy-only function (and give numpy's bits); the functions of
+    dynamics and _kernels they call are arithmetic and numpy ufuncs only."""
+    import inspect
+    import re
+
+    from quickrelease import dynamics
+
+    for fn in (dynamics.limit_margin_terms, dynamics._limit_dissipation, dynamics.one_minus_sin_terms,
+               dynamics.creeps_terms, dynamics.limit_sweep, dynamics._stop_terms, dynamics.sweep_sides,
+               _kernels.feasible_slack):
+        for name in re.findall(r"\bnp\.(\w+)", inspect.getsource(fn).split('"""')[-1]):
+            assert isinstance(getattr(np, name), np.ufunc), (fn.__name__, name)
+    cases = _cases("wide", 3000)
+    xp = _strict_module()
+    dev = [xp.asarray(v) for v in _args(cases)]
+    with pytest.raises(TypeError, match="numpy.where called on a device array"):
+        np.where(dev[0] > 0, dev[0], 0.0)
+    got = _gpu.stop_arrays(xp, *dev, chunk=1000)
+    want = _gpu.stop_arrays(np, *_args(cases), chunk=1000)
+    assert all(type(g) is _DeviceArray and np.array_equal(_plain(g), w) for g, w in zip(got, want, strict=True))
+    env = _gpu.release_arrays(xp, *dev, chunk=1000)
+    assert all(np.array_equal(_plain(v), w, equal_nan=True)
+               for v, w in zip(env.values(), _gpu.release_arrays(np, *_args(cases), chunk=1000).values(), strict=True))
+    fr = want[2] == 0
+    obs = [cases["alpha0"][fr], want[1][fr], want[0][fr], cases["E_S"][fr], cases["k"][fr], cases["m2"][fr],
+           cases["L1"][fr]]
+    got = _gpu.identify_arrays(xp, *(xp.asarray(v) for v in obs), chunk=1000)
+    want = _gpu.identify_arrays(np, *obs, chunk=1000)
+    assert all(np.array_equal(_plain(got[k]), want[k], equal_nan=True) for k in want)
+
+
 # -- against mpmath ------------------------------------------------------------------------------------------------
 
 def _picks(cases, per_class):
