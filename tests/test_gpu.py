@@ -7,6 +7,8 @@ No GPU here: the very same code runs with ``xp = numpy`` and is checked
   ends, and lambda = F1/F1* to 1e-13 plus its rounding floor ``8 eps t_F / (t_hi - t_lo)`` (an observation whose t_F
   barely changes along the line of Eq. 13 determines lambda no better), on the bench and the wide samples, per tier;
 * its tiers against ``_kernels.Releases.build`` (the numpy kernels) and its panel counts against ``_fast._panel_count``;
+* on device-array stand-ins that refuse any numpy function but the ufuncs (as CuPy arrays take them), through an
+  array module of functions CuPy has: no numpy-only call, and numpy's bits;
 * against mpmath (:mod:`quickrelease.reference`) on cases of every (regime, tier): 18 stop times and 3
   identifications here, 300 and 60 with QUICKRELEASE_SLOW=1;
 * the wiring of ``backend="gpu"`` (batch, uq, sweep) with the array module replaced by numpy.
