@@ -352,36 +352,40 @@ def _accel(xp, alpha, E, s0, c0, A, B, F1, F2, k, m2, L1, which):
 def _refine_peak(xp, lo, hi, args, which, max_iter: int = 200):
     """``_kernels.refine_peak`` vectorised: the maximum of |u_ddot| or |v_ddot| in [lo, hi] at the root of its
     slope (Illinois false position, to a bracket of 4 ulps or a zero slope) where the slope goes from + to -;
-    -1 elsewhere [m/s^2]."""
+    -1 elsewhere [m/s^2]. Each step carries on only the cases not yet converged (their values gathered)."""
     g_lo, p_lo = _accel(xp, lo, *args, which)
     g_hi, p_hi = _accel(xp, hi, *args, which)
     f_lo = xp.where(g_lo >= 0.0, p_lo, -p_lo)
     f_hi = xp.where(g_hi >= 0.0, p_hi, -p_hi)
     valid = (f_lo > 0.0) & (f_hi < 0.0)
     x = 0.5 * (lo + hi)
+    idx = xp.nonzero(valid)[0]
+    lo, hi, f_lo, f_hi = lo[idx], hi[idx], f_lo[idx], f_hi[idx]
+    sub = [a[idx] for a in args]
     side = xp.zeros(lo.shape, dtype=xp.int8)
-    active = valid.copy()
     for _ in range(max_iter):
-        if not bool(xp.any(active)):
+        if idx.size == 0:
             break
         with np.errstate(all="ignore"):
             xn = hi - f_hi * ((hi - lo) / (f_hi - f_lo))
         xn = xp.where((lo < xn) & (xn < hi), xn, 0.5 * (lo + hi))
-        x = xp.where(active, xn, x)
-        g, p = _accel(xp, x, *args, which)
+        x[idx] = xn
+        g, p = _accel(xp, xn, *sub, which)
         f = xp.where(g >= 0.0, p, -p)
-        zero = active & (f == 0.0)
-        pos = active & (f > 0.0)
-        neg = active & ~zero & ~pos  # (a NaN slope counts as negative, as in the scalar loop)
+        zero = f == 0.0
+        pos = f > 0.0
+        neg = ~zero & ~pos  # (a NaN slope counts as negative, as in the scalar loop)
         f_hi = xp.where(pos & (side == 1), 0.5 * f_hi, f_hi)
         f_lo = xp.where(neg & (side == -1), 0.5 * f_lo, f_lo)
-        lo = xp.where(pos, x, lo)
+        lo = xp.where(pos, xn, lo)
         f_lo = xp.where(pos, f, f_lo)
-        hi = xp.where(neg, x, hi)
+        hi = xp.where(neg, xn, hi)
         f_hi = xp.where(neg, f, f_hi)
         side = xp.where(pos, 1, xp.where(neg, -1, side)).astype(xp.int8)
         tight = (hi - lo) <= 8.8e-16 * xp.maximum(xp.abs(lo), xp.abs(hi))
-        active = active & ~zero & ~tight
+        go = xp.nonzero(~zero & ~tight)[0]
+        idx, lo, hi, f_lo, f_hi, side = idx[go], lo[go], hi[go], f_lo[go], f_hi[go], side[go]
+        sub = [a[go] for a in sub]
     return xp.where(valid, xp.abs(_accel(xp, x, *args, which)[0]), -1.0)
 
 
@@ -431,8 +435,8 @@ def release_arrays(xp, E, alpha0, F1, F2, k, m2, L1, chunk: int = CHUNK) -> dict
     names = ("u_final", "v_final", "alpha_dot0", "peak_u_dot", "peak_v_dot", "peak_u_ddot", "peak_v_ddot")
     for name in names:
         out[name] = xp.empty(E.size)
-    # the peak accelerations' Illinois loop holds ~20 arrays of the chunk: a smaller chunk keeps memory bounded
-    step = max(1, chunk // 8)
+    # the peak accelerations hold ~30 arrays of the chunk: a smaller chunk keeps memory bounded
+    step = max(1, chunk // 4)
     with np.errstate(all="ignore"):
         for lo in range(0, E.size, step):
             sl = slice(lo, min(E.size, lo + step))
