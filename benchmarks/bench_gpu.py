@@ -1,12 +1,12 @@
 """The GPU path's kernels (:mod:`quickrelease._gpu`) against the compiled CPU kernels, in the same run.
 
-The xp kernels are written once against an array module. Here they run with ``xp = numpy`` on one core of this
-machine (the GPU code on the CPU: for reference only, it is not how they are meant to run) and, where CuPy sees a
-CUDA device, with ``xp = cupy`` on the GPU; the baseline is the compiled CPU kernels (:func:`quickrelease.batch`
-stop_time and identify, numba) on one core, on the same cases of the bench and the wide samples. Rates are cases per
-second of CPU time (``time.process_time``, best of ``--repeat``) on the CPU, of wall time on the GPU (synchronised);
-beside them the most relative difference from the compiled kernels (t_F; lambda over its tolerance, 1e-13 plus
-``8 eps t_F / (t_hi - t_lo)``).
+The xp kernels (stop time, identification, release envelope) are written once against an array module. Here they
+run with ``xp = numpy`` on one core of this machine (the GPU code on the CPU: for reference only, it is not how they
+are meant to run) and, where CuPy sees a CUDA device, with ``xp = cupy`` on the GPU; the baseline is the compiled
+CPU kernels (:mod:`quickrelease.batch` stop_time, identify and release, numba) on one core, on the same cases of the
+bench and the wide samples. Rates are cases per second of CPU time (``time.process_time``, best of ``--repeat``) on
+the CPU, of wall time on the GPU (synchronised); beside them the most relative difference from the compiled kernels
+(t_F, the peak head acceleration; lambda over its tolerance, 1e-13 plus ``8 eps t_F / (t_hi - t_lo)``).
 
 Run: PYTHONPATH=src python benchmarks/bench_gpu.py [--n 200000] [--repeat 3]
 Prints one JSON object; progress on stderr.
@@ -67,7 +67,9 @@ def measure(n: int, repeat: int, seed: int = 0) -> dict:
         obs_k = [a[fr] for a in args[4:]]
         every = obs + [cases[key][fr] for key in KEYS[4:]]
         cpu_i, _, ident = _best(lambda every=every: batch.identify(*every), repeat)
-        row = {"compiled_one_core": {"stop_time_cases_per_s": n / cpu_s, "identify_cases_per_s": fr.sum() / cpu_i}}
+        cpu_r, _, env = _best(lambda full=full: batch.release(*full), repeat)
+        row = {"compiled_one_core": {"stop_time_cases_per_s": n / cpu_s, "identify_cases_per_s": fr.sum() / cpu_i,
+                                     "release_cases_per_s": n / cpu_r}}
         ok = ident.status == 0
         floor = 8 * np.finfo(float).eps * obs[2][ok] / (ident.stop_time_max[ok] - ident.stop_time_min[ok])
         for target, xp, sync in targets:
@@ -75,15 +77,21 @@ def measure(n: int, repeat: int, seed: int = 0) -> dict:
             dev_obs = [xp.asarray(a) for a in obs + obs_k]
             c_s, w_s, res = _best(lambda xp=xp, dev=dev: _gpu.stop_arrays(xp, *dev), repeat, sync)
             c_i, w_i, idr = _best(lambda xp=xp, d=dev_obs: _gpu.identify_arrays(xp, *d), repeat, sync)
+            c_r, w_r, rel = _best(lambda xp=xp, dev=dev: _gpu.release_arrays(xp, *dev), repeat, sync)
             t = _gpu.to_host(res[0])
+            peak = _gpu.to_host(rel["peak_u_ddot"])
             lam = _gpu.to_host(idr["lam"])
             fin = np.isfinite(st.stop_time)
-            secs_s, secs_i = (c_s, c_i) if target == "numpy" else (w_s, w_i)
+            secs_s, secs_i, secs_r = (c_s, c_i, c_r) if target == "numpy" else (w_s, w_i, w_r)
+            good = np.isfinite(env.peak_u_ddot)
             row[f"xp_{target}"] = {
                 "stop_time_cases_per_s": n / secs_s, "identify_cases_per_s": fr.sum() / secs_i,
                 "stop_time_ratio_to_compiled": (n / secs_s) / row["compiled_one_core"]["stop_time_cases_per_s"],
                 "identify_ratio_to_compiled": (fr.sum() / secs_i) / row["compiled_one_core"]["identify_cases_per_s"],
+                "release_cases_per_s": n / secs_r,
+                "release_ratio_to_compiled": (n / secs_r) / row["compiled_one_core"]["release_cases_per_s"],
                 "stop_time_max_rel_diff": float(np.max(np.abs(t[fin] / st.stop_time[fin] - 1.0))),
+                "peak_u_ddot_max_rel_diff": float(np.max(np.abs(peak[good] / env.peak_u_ddot[good] - 1.0))),
                 "lambda_max_diff_over_tolerance": float(np.max(np.abs(lam[ok] - ident.F1[ok] / ident.F1_max[ok])
                                                                / (1e-13 + floor))),
             }
