@@ -29,6 +29,9 @@ GROUP_KEYS = {"cases", "cases_per_s", "cpu_cases_per_s", "all_cores_cases_per_s"
 def test_json_schema_groups_both_samples(result):
     assert {"bench", "wide", "targets", "threads", "quick", "seed"} <= result.keys()
     assert "uq_dask" not in result  # quick: no Dask run
+    from quickrelease._gpu import gpu_available
+
+    assert "gpu" in result and (result["gpu"] is None) == (not gpu_available())  # the GPU section: null without one
     json.dumps(result, allow_nan=False)  # what --json prints: no NaN, no numpy scalars
     for sample, draw in (("bench", "sampling.random_releases"), ("wide", "sampling.wide_releases")):
         g = result[sample]
