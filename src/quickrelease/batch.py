@@ -147,12 +147,13 @@ NEGLIGIBLE_WORK = 2.0**-64
 
 def _screen(E_S, F1, F2, L1):
     """(F1, F2, E_S, bad) for the kernels: negligible friction set to 0, cases outside the floating-point
-    range marked ``bad`` and replaced by a harmless case (their outputs are then set to NaN)."""
-    with np.errstate(over="ignore", invalid="ignore"):
-        A, B = 2.0 * F1 * L1, 4.0 * F2 * L1
-        bad = ~(np.isfinite(E_S) & (E_S > 0) & np.isfinite(A) & np.isfinite(B))
-        tiny = ~bad & (A + B <= NEGLIGIBLE_WORK * E_S)
-    if not (bad.any() or tiny.any()):
+    range marked ``bad`` and replaced by a harmless case (their outputs are then set to NaN). One compiled pass
+    (:func:`quickrelease._fast.screen_flags`); the inputs themselves come back where no case needs either."""
+    from . import _fast
+
+    bad = np.empty(E_S.shape, dtype=bool)
+    tiny = np.empty(E_S.shape, dtype=bool)
+    if _fast.screen_flags(E_S, F1, F2, L1, NEGLIGIBLE_WORK, bad, tiny) == 0:
         return F1, F2, E_S, bad
     F1, F2, E_S = (np.where(tiny | bad, 0.0, F1), np.where(tiny | bad, 0.0, F2), np.where(bad, 1.0, E_S))
     return F1, F2, E_S, bad
@@ -252,20 +253,16 @@ THREAD_CHUNK = 8192
 
 
 def _stop_chunk(E_S, alpha0, F1, F2, k, m2, L1, t, aF, code):
-    """One chunk of :func:`_stop_arrays`, in place: sin, cos of alpha0 by numpy (as the numpy kernels), the compiled
-    loop, and a friction stop's alpha_F = min(alpha0 + max(atan2(N, D), 0), pi/2) by numpy, as the single-case
-    solver computes it (every step releases the GIL)."""
+    """One chunk of :func:`_stop_arrays`, in place: the compiled loop (sin and cos of alpha0 by libm, which numpy
+    calls too), then a friction stop's alpha_F = min(alpha0 + max(atan2(N, D), 0), pi/2) with numpy's arctan2, as
+    the single-case solver computes it (numpy's vectorised arctan2 and libm's atan2 differ in the last bit of 3% of
+    angles), the rest of that formula compiled (every step releases the GIL)."""
     from . import _fast
 
     N = np.empty(E_S.size)
     D = np.empty(E_S.size)
-    _fast.stop_kernel_sides(E_S, np.sin(alpha0), np.cos(alpha0), alpha0, F1, F2, k, m2, L1, *_fast.rules(),
-                            *_fast.tier_constants(), t, aF, N, D, code)
-    angle = np.arctan2(N, D, out=N)
-    np.maximum(angle, 0.0, out=angle)
-    angle += alpha0
-    np.minimum(angle, HALF_PI, out=angle)
-    np.copyto(aF, angle, where=np.isnan(aF))
+    _fast.stop_kernel_sides(E_S, alpha0, F1, F2, k, m2, L1, *_fast.rules(), *_fast.tier_constants(), t, aF, N, D, code)
+    _fast.friction_angles(np.arctan2(N, D, out=N), alpha0, aF)
 
 
 def _stop_arrays(E_S, alpha0, F1, F2, k, m2, L1, chunk):
