@@ -225,7 +225,7 @@ def test_the_kernels_use_only_what_numpy_and_cupy_share():
 
     from quickrelease import dynamics
 
-    for fn in (dynamics.limit_margin_terms, dynamics._limit_dissipation, dynamics.one_minus_sin_terms,
+    for fn in (dynamics.amplitude_terms, dynamics.limit_margin_terms, dynamics._limit_dissipation, dynamics.one_minus_sin_terms,
                dynamics.creeps_terms, dynamics.limit_sweep, dynamics._stop_terms, dynamics.sweep_sides,
                _kernels.feasible_slack):
         for name in re.findall(r"\bnp\.(\w+)", inspect.getsource(fn).split('"""')[-1]):

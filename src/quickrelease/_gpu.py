@@ -4,12 +4,13 @@ The stop time (Eq. 8-10), the release envelope (Table 4, Eq. 6) and the identifi
 :mod:`quickrelease.batch`, with the formulas, node rules, tier criteria and graded panels of the compiled CPU kernels
 (:mod:`quickrelease._fast`, from :mod:`quickrelease._kernels`), vectorised across cases instead of looped over them:
 
-* Only what numpy and CuPy share: ``xp.sin``, ``cos``, ``sqrt``, ``hypot``, ``arctan2``, ``log``, ``ceil``, ``where``,
+* Only what numpy and CuPy share: ``xp.sin``, ``cos``, ``sqrt``, ``arctan2``, ``log``, ``ceil``, ``where``,
   ``minimum``, ``maximum``, ``abs``, boolean masks and integer gathers, arithmetic. The pure functions of
-  :mod:`quickrelease.dynamics` that the setup calls (``limit_margin_terms``, ``creeps_terms``, ``limit_sweep``,
-  ``_stop_terms``, ``sweep_sides``) and ``_kernels.feasible_slack`` are arithmetic and numpy ufuncs (``np.sqrt``,
-  ``np.maximum``, ``np.cos``), which CuPy arrays take through ``__array_ufunc__``: they are called as they are, one
-  definition of the classifier and of Eq. 8 for every backend. ``np.where``, ``np.clip``, ``np.argmax`` and
+  :mod:`quickrelease.dynamics` that the setup calls (``amplitude_terms``, ``limit_margin_terms``, ``creeps_terms``,
+  ``limit_sweep``, ``_stop_terms``, ``sweep_sides``) and ``_kernels.feasible_slack`` are arithmetic and numpy
+  ufuncs (``np.sqrt``, ``np.maximum``, ``np.abs``, ``np.cos``), which CuPy arrays take through
+  ``__array_ufunc__``: they are called as they are, one definition of the classifier and of Eq. 8 for every backend
+  (a test checks they call nothing else). ``np.where``, ``np.clip``, ``np.argmax`` and
   ``_kernels.tier_of`` are not ufuncs and are not called (the tiers are re-stated below with ``xp.where``).
 * Float64 throughout. No Python loop over cases: loops run over quadrature nodes, graded panels, Halley steps and
   Illinois steps, each a vectorised pass over the cases still concerned.
@@ -171,7 +172,7 @@ def _setup(xp, E, a0, F1, F2, k, m2, L1):
         ca0 = xp.cos(a0)
         A = 2.0 * F1 * L1
         B = 4.0 * F2 * L1
-        R = xp.hypot(A, B)
+        R = dynamics.amplitude_terms(A, B)  # sqrt(A^2 + B^2) scaled by powers of two, as the CPU kernels
         Kl = dynamics.limit_margin_terms(E, A, B, sa0, ca0)
         creep = dynamics.creeps_terms(Kl, E, A, B)
         to_limit = dynamics.limit_sweep(a0)
