@@ -436,7 +436,8 @@ def stop_kernel_sides(E, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, near, hard, 
 
     In blocks of :data:`STOP_BLOCK` cases: the library calls of the setup (:func:`_setup_calls`: sin and cos of
     alpha0, to the bit those of numpy), the rest of the setup vectorised across the block (:func:`_setup_vector`),
-    then each case's node sums (vectorised across its nodes); the rare cases the vectorised setup cannot settle
+    then each case's node sums (vectorised across its nodes), the fixed-rule cases listed by regime and rule first
+    (so that the loop over each list has no branch that depends on the case); the rare cases the vectorised setup cannot settle
     (creeping, a friction stop at pi/2 within rounding) go through :func:`_stop_one` whole. The results are those of
     :func:`_stop_one` case by case, bit for bit (a test checks). One thread, without the GIL: ``batch._stop_arrays``
     runs it on numba's thread count of chunks at once, each with its numpy post-processing
@@ -446,14 +447,22 @@ def stop_kernel_sides(E, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, near, hard, 
     n = E.size
     SB = STOP_BLOCK
     W = np.empty(_ROWS * SB)
+    lists = np.empty(4 * SB, dtype=np.int64)
+    count = np.zeros(4, dtype=np.int64)
     grading = _kernels.GRADING
     panels = _kernels.N_PANELS
     for lo in range(0, n, SB):
         hi = min(n, lo + SB)
         _setup_calls(E, a0, F1, F2, k, m2, L1, lo, hi, W)
         _setup_vector(W, hi - lo)
+        count[:] = 0
         for i in range(lo, hi):
             j = i - lo
+            reg = 1 if W[_REG * SB + j] != 0.0 else 0
+            aF_out[i] = _HALF_PI if reg == 1 else math.nan
+            N_out[i] = W[_N * SB + j]
+            D_out[i] = W[_D * SB + j]
+            code_out[i] = reg
             if W[_SCALAR * SB + j] != 0.0:
                 t, aF, code, _, n_, d_ = _stop_one(E[i], W[_SA0 * SB + j], W[_CA0 * SB + j], a0[i], F1[i], F2[i],
                                                    k[i], m2[i], L1[i], x16, w16, x24, w24, near, hard, mass_sq,
@@ -464,30 +473,28 @@ def stop_kernel_sides(E, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, near, hard, 
                 D_out[i] = d_
                 code_out[i] = code
                 continue
-            reg = 1 if W[_REG * SB + j] != 0.0 else 0
             ratio = W[_RATIO * SB + j]
             msq = W[_MSQ * SB + j]
-            sm = W[_SM * SB + j]
-            sA = W[_SAL * SB + j]
-            cA = W[_CAL * SB + j]
-            cb = W[_CB * SB + j]
-            sn = W[_SN * SB + j]
-            Kl = W[_KL * SB + j]
-            A = W[_A * SB + j]
-            B = W[_B * SB + j]
             tier = _tier(ratio, msq, near, hard, mass_sq, mass_hard_sq)
             if tier == 2:
-                acc = _graded_sum(reg, ratio, msq, x16, w16, grading, GRADED_REACH, panels, sm, sA, cA, cb, sn, Kl,
-                                  A, B, k[i])
-            elif tier == 1:
-                acc = _panel_sum(reg, x24, w24, 0.0, 1.0, sm, sA, cA, cb, sn, Kl, A, B, k[i])
-            else:
-                acc = _panel_sum(reg, x16, w16, 0.0, 1.0, sm, sA, cA, cb, sn, Kl, A, B, k[i])
-            t_out[i] = W[_PREF * SB + j] * acc
-            aF_out[i] = _HALF_PI if reg == 1 else math.nan
-            N_out[i] = W[_N * SB + j]
-            D_out[i] = W[_D * SB + j]
-            code_out[i] = reg
+                t_out[i] = W[_PREF * SB + j] * _graded_sum(
+                    reg, ratio, msq, x16, w16, grading, GRADED_REACH, panels, W[_SM * SB + j], W[_SAL * SB + j],
+                    W[_CAL * SB + j], W[_CB * SB + j], W[_SN * SB + j], W[_KL * SB + j], W[_A * SB + j],
+                    W[_B * SB + j], k[i])
+                continue
+            group = 2 * reg + tier  # the fixed rules, listed by regime and rule without a branch
+            lists[group * SB + count[group]] = j
+            count[group] += 1
+        for group in range(4):  # each list with one regime and one rule: no branch per case
+            reg = group // 2
+            x = x24 if group % 2 else x16
+            w = w24 if group % 2 else w16
+            for c in range(count[group]):
+                j = lists[group * SB + c]
+                acc = _panel_sum(reg, x, w, 0.0, 1.0, W[_SM * SB + j], W[_SAL * SB + j], W[_CAL * SB + j],
+                                 W[_CB * SB + j], W[_SN * SB + j], W[_KL * SB + j], W[_A * SB + j],
+                                 W[_B * SB + j], k[lo + j])
+                t_out[lo + j] = W[_PREF * SB + j] * acc
 
 
 @njit(cache=True, nogil=True, error_model="numpy")

@@ -243,13 +243,14 @@ def stop_time(E_S, alpha0, F1, F2, c=2.0 / 3.0, m1=None, m2=None, L1=None, *, ch
         from . import _gpu
 
         t, aF, code = _on_device(xp, _gpu.stop_arrays, E_S, alpha0, F1, F2, c * m1 / m2, m2, L1)
-    t[bad], aF[bad] = np.nan, np.nan
+    if bad.any():
+        t[bad], aF[bad] = np.nan, np.nan
     return BatchStop(t.reshape(shape), aF.reshape(shape), code.reshape(shape))
 
 
 #: Cases per chunk of the threaded stop-time path (:func:`_stop_arrays`): small enough that the threads, taking
-#: the next chunk as they finish one, end together (a few per thread), large enough that a chunk costs ~1 ms.
-THREAD_CHUNK = 8192
+#: the next chunk as they finish one, end together (a few per thread), large enough that a chunk costs 1-2 ms.
+THREAD_CHUNK = 16384
 
 
 def _stop_chunk(E_S, alpha0, F1, F2, k, m2, L1, t, aF, code):
