@@ -171,6 +171,7 @@ from quickrelease import batch
 from quickrelease.sampling import wide_releases
 
 top = numba.config.NUMBA_NUM_THREADS
+assert hasattr(batch, "THREAD_CHUNK")  # the stop-time pool's chunk, read at each call
 batch.THREAD_CHUNK = int(sys.argv[2])  # small chunks: many of them, on as many pool threads as numba allows
 s = wide_releases(int(sys.argv[1]), seed=21)
 cases = [s[k] for k in ("E_S", "alpha0", "F1", "F2", "c", "m1", "m2", "L1")]
