@@ -200,12 +200,13 @@ def _synthetic_summary(case_conditioning, calls):
     n = 2 * len(WIDE_STRATA)
     stratum = np.repeat(np.arange(len(WIDE_STRATA)), 2)
     err = np.full(n, 2e-16)
-    err[0], err[2], err[3] = 0.0, 3e-10, 1e-9  # typical: exact; limit: 3e-10 and 1e-9 (the worst)
+    err[0], err[1] = 0.0, 5e-11  # typical: exact, and 5e-11 on a well-conditioned case (under the 1e-10 floor)
+    err[2], err[3] = 3e-10, 1e-9  # limit: 3e-10 and 1e-9 (the worst)
     err[5] = np.nan  # no reference for it: left out
-    # per input one-ulp changes: 1e-16 on each of 7 inputs (condition 7e-16), the limit's 1e-10 and 1e-11 on one
+    # per input one-ulp changes: 1e-16 on each of 7 inputs (condition 7e-16); the limit's cases condition 2e-10
     sens = {i: np.full(7, 1e-16) for i in range(n)}
-    sens[2] = np.array([1e-10, 0, 0, 0, 0, 0, 1e-10])  # condition 2e-10: 3e-10 is 1.5 ulps, allowed 8e-10
-    sens[3] = np.array([1e-11, 0, 0, 0, 0, 0, 0])  # condition 1e-11: 1e-9 is 100 ulps, allowed 1e-10
+    sens[2] = np.array([1e-10, 0, 0, 0, 0, 0, 1e-10])  # 3e-10 is 1.5 ulps, allowed 4 x 2e-10
+    sens[3] = np.array([2e-10, 0, 0, 0, 0, 0, 0])  # 1e-9 is 5 ulps, allowed 8e-10: 1.25 times too much
 
     def sensitivities(i):
         calls.append(i)
@@ -217,23 +218,26 @@ def _synthetic_summary(case_conditioning, calls):
 
 
 def test_backward_error_is_the_error_over_the_1ulp_condition_number():
-    """Backward error in ulps = error / (sum over the inputs of the change one ulp of each makes), by hand."""
+    """Backward error in ulps = error / (sum over the inputs of the change one ulp of each makes), and the target's
+    allowance max(1e-10, 4 x that sum), by hand."""
     calls = []
     out = _synthetic_summary(True, calls)
     assert sorted(calls) == [i for i in range(2 * len(WIDE_STRATA)) if i != 5]  # every case with an error
-    assert out["worst_case_sensitivity_1ulp"] == 1e-11 and out["worst_case_condition_1ulp"] == 1e-11
+    assert out["worst_case_sensitivity_1ulp"] == 2e-10 and out["worst_case_condition_1ulp"] == 2e-10
     rows = {row["stratum"]: row for row in out["strata"]}
-    assert rows["limit"]["backward_max_ulps"] == pytest.approx(100.0)
-    assert rows["limit"]["backward_median_ulps"] == pytest.approx(0.5 * (1.5 + 100.0))
-    assert rows["typical"]["backward_median_ulps"] == pytest.approx(0.5 * (0.0 + 2e-16 / 7e-16))
+    assert rows["limit"]["backward_max_ulps"] == pytest.approx(5.0)
+    assert rows["limit"]["backward_median_ulps"] == pytest.approx(0.5 * (1.5 + 5.0))
+    assert rows["typical"]["backward_max_ulps"] == pytest.approx(5e-11 / 7e-16)
+    assert rows["typical"]["backward_median_ulps"] == pytest.approx(0.5 * (0.0 + 5e-11 / 7e-16))
+    assert rows["small mass factor"]["backward_median_ulps"] == pytest.approx(2 / 7)
     assert rows["short of the limit"]["cases"] == 1  # the case without a reference is left out
-    assert rows["limit"]["sensitivity_1ulp"] == 1e-11  # the most over the inputs, at the stratum's worst
-    assert out["backward_max_ulps"] == pytest.approx(100.0)
-    assert out["backward_median_ulps"] == pytest.approx(2e-16 / 7e-16)  # most of the weight: 2e-16 cases
-    # the target allows max(1e-10, 4 x condition): 1e-9 against 1e-10 is 10 times too much; 3e-10 against 8e-10 fine
-    assert out["max_error_over_allowed"] == pytest.approx(10.0)
+    assert rows["limit"]["sensitivity_1ulp"] == 2e-10  # the most over the inputs, at the stratum's worst
+    assert out["backward_max_ulps"] == pytest.approx(5e-11 / 7e-16)
+    assert out["backward_median_ulps"] == pytest.approx(2 / 7)  # most of the weight: the 2e-16 cases
+    # allowed max(1e-10, 4 x condition): 5e-11 of 1e-10, 3e-10 of 8e-10, 1e-9 of 8e-10 (not met)
+    assert out["max_error_over_allowed"] == pytest.approx(1.25)
     assert bench._accuracy_status(out["median_rel_error"], out["max_error_over_allowed"]) == "not met"
-    assert bench._accuracy_status(2e-16, 3e-10 / 8e-10) == "met"
+    assert bench._accuracy_status(2e-16, 0.5) == "met" and bench._accuracy_status(2e-16, 1.0) == "met"
     assert bench._accuracy_status(2e-12, 0.5) == "not met" and bench._accuracy_status(None, 0.5) == "not measured"
 
 
@@ -242,7 +246,7 @@ def test_without_every_condition_number_only_the_worst_and_those_above_1e10():
     out = _synthetic_summary(False, calls)
     assert sorted(calls) == [2, 3]  # the worst (3) and the other case above the 1e-10 floor (2)
     assert out["backward_median_ulps"] is None and out["backward_max_ulps"] is None
-    assert out["max_error_over_allowed"] == pytest.approx(10.0)  # the target is decided all the same
+    assert out["max_error_over_allowed"] == pytest.approx(1.25)  # the target is decided all the same
     assert all(row["backward_max_ulps"] is None for row in out["strata"])
 
 

@@ -17,10 +17,15 @@ over-weighted, in the strata of :data:`sampling.WIDE_STRATA`):
   of t_F; for the identification the error of F1 and F2 relative to their bounds F1*, F2* (the natural scale: F1
   may be near zero). Median and worst; on the wide sample per stratum too (the accuracy set draws the same number
   of cases from each stratum; the sample's median weighs them by the strata's shares), with the worst stratum
-  named and the conditioning of its worst case: the *1-ulp input sensitivity*, how far the exact answer moves
-  when one input moves by one unit in the last place (the most over the inputs, by mpmath). An error below it is
-  as small as the inputs' rounding allows.
-* A status line per target of issue 12 (met, not met, not measured).
+  named.
+* The conditioning of each case of the accuracy set and the error relative to it (the mixed forward/backward
+  measure): s_j, how far the exact answer moves (in the error's measure) when input j moves up by one unit in the
+  last place, by mpmath (:func:`_stop_sensitivities`, :func:`_identify_sensitivities`); the case's *1-ulp
+  condition number* C = sum_j s_j, and its *backward error* err / C in ulps of the inputs, median and worst per
+  sample and stratum (the most s_j at the worst case is the *1-ulp input sensitivity*).
+* A status line per target of issue 12 (met, not met, not measured). The accuracy target, relative to the
+  conditioning: the median error at most 1e-12 and every case's error at most max(1e-10, 4 C), i.e. 1e-10 where
+  the case is well conditioned, else a backward error of at most 4 input ulps.
 * ``uq`` with 1e8 samples on a LocalCluster of two Dask workers: wall time and peak memory of the whole process
   tree (skipped with ``quick``).
 """
