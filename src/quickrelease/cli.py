@@ -1048,7 +1048,8 @@ def _bench_tables(result: dict[str, Any]) -> None:
                      e(b["sensitivity_1ulp"]), ulps(b))
                     for a, b in zip(st["strata"], idn["strata"], strict=True)]
             _table(f"wide sample by stratum: error vs mpmath (worst t_F in '{st['worst_stratum']}', worst F1, F2 in "
-                   f"'{idn['worst_stratum']}')", rows,
+                   f"'{idn['worst_stratum']}'; backward: the error over the case's 1-ulp condition number, median "
+                   "and worst, in input ulps)", rows,
                    ("stratum", "cases", "t_F median", "t_F worst", "1-ulp sens.", "backward [ulps]", "F1,F2 median",
                     "F1,F2 worst", "1-ulp sens.", "backward [ulps]"))
     for t in result["targets"]:
