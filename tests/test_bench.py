@@ -31,6 +31,9 @@ GROUP_KEYS = {"cases", "cases_per_s", "cpu_cases_per_s", "all_cores_cases_per_s"
 def test_json_schema_groups_both_samples(result):
     assert {"bench", "wide", "targets", "threads", "quick", "seed"} <= result.keys()
     assert "uq_dask" not in result  # quick: no Dask run
+    from quickrelease._gpu import gpu_available
+
+    assert "gpu" in result and (result["gpu"] is None) == (not gpu_available())  # the GPU section: null without one
     json.dumps(result, allow_nan=False)  # what --json prints: no NaN, no numpy scalars
     for sample, draw in (("bench", "sampling.random_releases"), ("wide", "sampling.wide_releases")):
         g = result[sample]
@@ -142,6 +145,18 @@ def test_cli_bench_json_and_table(result, monkeypatch):
     assert table_faults(r.stdout) == []
     lines = [line for line in r.stdout.splitlines() if line.strip().startswith(("met:", "not met:", "not measured:"))]
     assert len(lines) == len(result["targets"])
+    if result["gpu"] is None:  # no GPU here: one line says so
+        assert "GPU: none found" in r.stdout
+    row = {"cases": 10, "stop_time_cases_per_s": 6.6e9, "stop_time_end_to_end_cases_per_s": 1e8, "identify_cases": 9,
+           "identify_cases_per_s": 2e9, "identify_end_to_end_cases_per_s": 5e7, "stop_time_max_rel_diff": 4e-16,
+           "alpha_final_max_rel_diff": 0.0, "stopped_by_identical": True, "identify_ends_max_rel_diff": 1e-15,
+           "identify_F1_max_diff_over_tolerance": 0.2, "identify_status_identical": True}
+    gpu = {"device": "NVIDIA H100 80GB HBM3", "cupy": "13.3.0", "bench": row, "wide": row}
+    monkeypatch.setattr(bench, "run_bench", lambda quick, threads, log: {**result, "gpu": gpu})
+    r = runner.invoke(app, ["bench"], env={"COLUMNS": "160"})
+    assert r.exit_code == 0, r.output
+    assert "gpu backend on NVIDIA H100 80GB HBM3" in r.stdout and "6,600,000,000" in r.stdout
+    assert table_faults(r.stdout) == [] and "GPU: none found" not in r.stdout
 
 
 def test_cli_bench_refuses_bad_threads():

@@ -72,8 +72,8 @@ def test_package_exposes_only_dunder_version():
 
 @pytest.mark.parametrize("command, option, choices", [
     ("simulate", "--method", "energy|rk|explicit"),
-    ("uq", "--backend", "numpy|dask"),
-    ("sweep", "--backend", "numpy|dask"),
+    ("uq", "--backend", "numpy|dask|gpu"),
+    ("sweep", "--backend", "numpy|dask|gpu"),
     ("building", "--model", "linear|bilinear|2dof"),
     ("simulate", "--mass-model", "distributed|lumped|C"),
 ])

@@ -1,13 +1,16 @@
 """Compiled (numba) loops of the batch kernels: the formulas of :mod:`quickrelease._kernels`, fused.
 
-numpy evaluates ``_kernels`` one operation at a time, about 17 passes over the (nodes x cases) arrays;
-here each case is one pass: its setup (the classifier and Eq. 8, plain arithmetic, no fastmath) in registers,
-then its node sums, vectorised across the nodes (``fastmath`` reassociation and contraction, numpy's error
-model: AVX-512 square roots and divisions). The formulas, node rules and tier criteria are those of ``_kernels``
-(a test checks the two agree case by case), every tier compiled: the graded one with only the panels a case needs
-(:func:`_graded_sum`). The loops over cases run over numba's threads (``prange`` over blocks of :data:`BLOCK`
-cases: all cores unless ``numba.set_num_threads`` says otherwise); each case is computed alone, so the results
-are bit-identical on any number of threads. Compiled on first use and cached on disk (``cache=True``).
+numpy evaluates ``_kernels`` one operation at a time, about 17 passes over the (nodes x cases) arrays; here the
+stop time goes in blocks of :data:`STOP_BLOCK` cases: the library calls of the setup one case at a time (sin and
+cos of alpha0: libm's, which numpy calls too, so the same bits), the rest of the setup (the classifier and Eq. 8,
+plain IEEE arithmetic, no fastmath) for both regimes at once and selected without a branch, which the compiler
+vectorises across the cases (:func:`_setup_vector`), then each case's node sums, vectorised across its nodes
+(``fastmath`` reassociation only). Every function here has numpy's error model (a division by zero gives inf or
+NaN, as numpy's does, and never raises). The formulas, node rules and tier criteria are those of ``_kernels`` (a
+test checks the two agree case by case), every tier compiled: the graded one with only the panels a case needs
+(:func:`_graded_sum`). The identification runs over numba's threads (``prange`` over blocks of :data:`BLOCK` cases),
+the stop time over a thread pool of chunks (``batch._stop_arrays``); each case is computed alone, so the results are
+bit-identical on any number of threads. Compiled on first use and cached on disk (``cache=True``).
 """
 
 from __future__ import annotations
@@ -18,7 +21,10 @@ import os
 import types
 
 import numpy as np
+from llvmlite import ir as _ir
 from numba import njit, prange
+from numba import types as _nbtypes
+from numba.extending import intrinsic
 
 from . import _kernels, dynamics
 
@@ -80,10 +86,11 @@ def rules() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
 
 
 def _jit(fn, **calls):
-    """``fn`` compiled as written (cached, nogil), the module-level functions it calls bound to compiled ones."""
+    """``fn`` compiled as written (cached, nogil, numpy's error model: a division by zero gives inf or NaN as numpy's
+    does, never an exception), the module-level functions it calls bound to compiled ones."""
     if calls:
         fn = types.FunctionType(fn.__code__, {**fn.__globals__, **calls}, fn.__name__, fn.__defaults__)
-    return njit(cache=True, nogil=True)(fn)
+    return njit(cache=True, nogil=True, error_model="numpy")(fn)
 
 
 #: The classifier of the stop and the cancellation-free sweep of Eq. 8, compiled from the very functions
@@ -95,10 +102,11 @@ _limit_sweep = _jit(dynamics.limit_sweep)
 _creeps = _jit(dynamics.creeps_terms)
 _stop_terms = _jit(dynamics._stop_terms, limit_margin_terms=_limit_margin)
 _sweep_sides = _jit(dynamics.sweep_sides)
-_slack = njit(cache=True, nogil=True)(_kernels.feasible_slack)
+_amplitude = _jit(dynamics.amplitude_terms)
+_slack = njit(cache=True, nogil=True, error_model="numpy")(_kernels.feasible_slack)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _tier(ratio, msq, near, hard, mass_sq, mass_hard_sq):
     """The rule of a case, as ``_kernels.tier_of``: 2 graded (left to numpy), 1 the 24-node rule, 0 16 nodes."""
     if ratio < hard or msq < mass_hard_sq:
@@ -158,7 +166,7 @@ def _limit_nodes(x, w, lo, width, sm, Kl, A, B, kk):
     return acc * width
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _panel_count(distance, grading, reach, panels):
     """Graded panels towards an end whose near-singularity lies ``distance`` from it (in w): the last panel
     [0, r^J / 2] ends ``reach`` grading steps inside that distance, J in [0, panels] [-]."""
@@ -168,14 +176,14 @@ def _panel_count(distance, grading, reach, panels):
     return min(max(j, 0), panels)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _panel_sum(regime, x, w, lo, width, sm, sA, cA, cb, sn, Kl, A, B, kk):
     if regime == 0:
         return _friction_nodes(x, w, lo, width, sm, sA, cA, cb, sn, kk)
     return _limit_nodes(x, w, lo, width, sm, Kl, A, B, kk)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _graded_sum(regime, ratio, msq, x, w, grading, reach, panels, sm, sA, cA, cb, sn, Kl, A, B, kk):
     """The graded rule of ``_kernels.graded_unit`` with only the panels a case needs: towards w = 0 down to
     ``sqrt(ratio)`` (the end's near-singularity), towards w = 1 down to ``sqrt(msq) / 2`` (the mass factor's
@@ -198,7 +206,7 @@ def _graded_sum(regime, ratio, msq, x, w, grading, reach, panels, sm, sA, cA, cb
     return acc
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _stop_one(E, sa0, ca0, a0, F1, F2, kk, m2, L1, x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq,
               grading, reach, panels):
     """(t_F, alpha_F, regime code, tier, N, D) of one release (0 friction, 1 limit, 2 creeps: t_F = inf).
@@ -212,7 +220,7 @@ def _stop_one(E, sa0, ca0, a0, F1, F2, kk, m2, L1, x16, w16, x24, w24, near, har
     ``N sin(alpha0) - D cos(alpha0) ~ sin(delta - (pi/2 - alpha0))`` away from 0, from atan2 itself near 0."""
     A = 2.0 * F1 * L1
     B = 4.0 * F2 * L1
-    R = math.hypot(A, B)
+    R = _amplitude(A, B)
     Kl = _limit_margin(E, A, B, sa0, ca0)
     N = 0.0
     D = 1.0
@@ -264,26 +272,250 @@ def _stop_one(E, sa0, ca0, a0, F1, F2, kk, m2, L1, x16, w16, x24, w24, near, har
     return pref * acc, aF, regime, tier, N, D
 
 
-@njit(cache=True, nogil=True)
-def stop_kernel_sides(E, sa0_in, ca0_in, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, near, hard, mass_sq,
-                      mass_hard_sq, t_out, aF_out, N_out, D_out, code_out):
+@intrinsic
+def _sqrt(typingctx, x):
+    """The square root as LLVM's ``llvm.sqrt`` intrinsic: correctly rounded, as libm's ``sqrt`` (which numba's
+    ``math.sqrt`` calls), but known to the compiler as free of side effects, so that a loop containing it can be
+    vectorised across cases (the call cannot)."""
+    if x is not _nbtypes.float64:
+        return None
+
+    def codegen(context, builder, signature, args):
+        fn = builder.module.declare_intrinsic("llvm.sqrt", [_ir.DoubleType()])
+        return builder.call(fn, args)
+
+    return _nbtypes.float64(_nbtypes.float64), codegen
+
+
+def _libm(name):
+    """libm's ``name`` (a double -> double function) called as an opaque function (``nobuiltin``): never replaced by
+    the compiler, never vectorised. numba's ``math.sin`` is LLVM's ``llvm.sin`` intrinsic, which a vectorised loop turns
+    into the vector library's ``sin`` where numba has one (Intel's SVML), whose last bits differ from libm's; numpy's
+    ``sin`` and ``cos`` are libm's, and the single-case solver takes sin and cos of alpha0 from them."""
+
+    @intrinsic
+    def call(typingctx, x):
+        if x is not _nbtypes.float64:
+            return None
+
+        def codegen(context, builder, signature, args):
+            double = _ir.DoubleType()
+            fn = _cgutils_function(builder.module, _ir.FunctionType(double, [double]), name)
+            fn.attributes.add("nobuiltin")
+            return builder.call(fn, args)
+
+        return _nbtypes.float64(_nbtypes.float64), codegen
+
+    return call
+
+
+def _cgutils_function(module, fnty, name):
+    """The declaration of the external function ``name`` in ``module`` (added once)."""
+    from numba.core import cgutils
+
+    return cgutils.get_or_insert_function(module, fnty, name)
+
+
+_libm_sin = _libm("sin")
+_libm_cos = _libm("cos")
+
+
+def _jit_vector(fn, **calls):
+    """``fn`` compiled as :func:`_jit` does, with numpy's error model (a division by zero gives inf or NaN, not a
+    branch that raises): for the branch-free loops that compute both sides of a choice and select one, which the
+    compiler then vectorises across cases. The arithmetic (IEEE, no fastmath) rounds as ``_jit``'s does."""
+    calls = {"np": _VECTOR_NP, **calls}
+    fn = types.FunctionType(fn.__code__, {**fn.__globals__, **calls}, fn.__name__, fn.__defaults__)
+    return njit(cache=True, nogil=True, error_model="numpy", inline="always")(fn)
+
+
+#: ``np`` as the functions of :mod:`quickrelease.dynamics` compiled by :func:`_jit_vector` see it: numpy, its square
+#: root the vectorisable :func:`_sqrt` (same rounding).
+_VECTOR_NP = types.ModuleType("numpy_vector")
+_VECTOR_NP.sqrt = _sqrt
+_VECTOR_NP.maximum = np.maximum
+_VECTOR_NP.abs = np.abs
+
+_v_one_minus_sin = _jit_vector(dynamics.one_minus_sin_terms)
+_v_limit_margin = _jit_vector(dynamics.limit_margin_terms, _limit_dissipation=_jit_vector(
+    dynamics._limit_dissipation, one_minus_sin_terms=_v_one_minus_sin))
+_v_creeps = _jit_vector(dynamics.creeps_terms)
+_v_stop_terms = _jit_vector(dynamics._stop_terms, limit_margin_terms=_v_limit_margin)
+_v_sweep_sides = _jit_vector(dynamics.sweep_sides)
+_v_amplitude = _jit_vector(dynamics.amplitude_terms)
+
+
+#: Cases per block of the stop-time kernel: its setup scratch (:data:`_ROWS` rows of this many values, one array) stays
+#: in the first-level cache.
+STOP_BLOCK = 128
+#: Rows of the stop-time kernel's scratch: the block's inputs (copied in, with the libm results), then the setup's
+#: outputs. One array, row r at ``r * STOP_BLOCK``: the compiler sees every access at a constant distance from the
+#: others, so it vectorises the setup loop without runtime overlap checks (with one array per quantity it needed more
+#: such checks than it allows, and left the loop scalar).
+(_E, _A, _B, _L1, _KK, _M2, _SA0, _CA0, _KL, _SL, _N, _D, _SM, _SAL, _CAL, _CB, _SN, _PREF, _RATIO, _MSQ, _REG,
+ _SCALAR) = range(22)
+_ROWS = 22
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _setup_calls(E, a0, F1, F2, kk, m2, L1, lo, hi, W):
+    """The library calls of the setup of cases lo..hi-1, one case at a time, into the scratch W: sin and cos of
+    alpha0 (libm's, which numpy calls too: the same bits), the classifier's margin K_lim and, where it is > 0 (the
+    geometric limit), ``sin((pi/2 - alpha0) / 2)``; with the inputs the vectorised part reads."""
+    for i in range(lo, hi):
+        j = i - lo
+        s = _libm_sin(a0[i])
+        c = _libm_cos(a0[i])
+        A = 2.0 * F1[i] * L1[i]
+        B = 4.0 * F2[i] * L1[i]
+        k = _limit_margin(E[i], A, B, s, c)
+        W[_E * STOP_BLOCK + j] = E[i]
+        W[_A * STOP_BLOCK + j] = A
+        W[_B * STOP_BLOCK + j] = B
+        W[_L1 * STOP_BLOCK + j] = L1[i]
+        W[_KK * STOP_BLOCK + j] = kk[i]
+        W[_M2 * STOP_BLOCK + j] = m2[i]
+        W[_SA0 * STOP_BLOCK + j] = s
+        W[_CA0 * STOP_BLOCK + j] = c
+        W[_KL * STOP_BLOCK + j] = k
+        W[_SL * STOP_BLOCK + j] = _libm_sin(0.5 * _limit_sweep(a0[i])) if k > 0.0 else 0.0
+
+
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def _setup_vector(W, m):
+    """The rest of the setup of :func:`_stop_one` for the first m cases of the scratch W, without a branch (both
+    regimes computed, one selected), so that the compiler vectorises it across cases: the same operations on the
+    same values as ``_stop_one``, so the same bits. Row ``_SCALAR`` marks (1.0) the cases left to ``_stop_one``
+    whole: creeping ones and friction stops at pi/2 within rounding (both rare)."""
+    for j in range(m):
+        E = W[_E * STOP_BLOCK + j]
+        A = W[_A * STOP_BLOCK + j]
+        B = W[_B * STOP_BLOCK + j]
+        L1 = W[_L1 * STOP_BLOCK + j]
+        r_ = _v_amplitude(A, B)
+        k_lim = W[_KL * STOP_BLOCK + j]
+        s_a0 = W[_SA0 * STOP_BLOCK + j]
+        c_a0 = W[_CA0 * STOP_BLOCK + j]
+        lim = k_lim > 0.0
+        s0, cv, e, s, c_b = _v_stop_terms(E, A, B, r_, s_a0, c_a0)
+        n_, d_ = _v_sweep_sides(s0, cv, e, s, c_b)
+        g = n_ * s_a0 - d_ * c_a0
+        rr = _sqrt(n_ * n_ + d_ * d_)
+        smf = n_ / _sqrt(2.0 * rr * (rr + d_))
+        smf = smf if n_ > 0.0 else 0.0
+        s_m = W[_SL * STOP_BLOCK + j] if lim else smf
+        qm = _sqrt(1.0 - s_m * s_m)
+        rf = c_b / (c_b * qm + s * s_m)
+        rl = k_lim / (k_lim + 2.0 * A * s_m * s_m + 2.0 * B * s_m * qm)
+        sq_m2 = _sqrt(W[_M2 * STOP_BLOCK + j])
+        pf = 4.0 * L1 * _sqrt(s_m) * sq_m2 / _sqrt(2.0 * r_)
+        pl = 4.0 * s_m * L1 * sq_m2
+        W[_N * STOP_BLOCK + j] = 0.0 if lim else n_
+        W[_D * STOP_BLOCK + j] = 1.0 if lim else d_
+        W[_SM * STOP_BLOCK + j] = s_m
+        W[_SAL * STOP_BLOCK + j] = 1.0 if lim else (B * c_b + A * s) / r_
+        W[_CAL * STOP_BLOCK + j] = 0.0 if lim else (A * c_b - B * s) / r_
+        W[_CB * STOP_BLOCK + j] = 0.0 if lim else c_b
+        W[_SN * STOP_BLOCK + j] = 1.0 if lim else s
+        W[_RATIO * STOP_BLOCK + j] = rl if lim else rf
+        W[_PREF * STOP_BLOCK + j] = pl if lim else pf
+        W[_MSQ * STOP_BLOCK + j] = ((W[_KK * STOP_BLOCK + j] + s_a0 * s_a0) / (4.0 * s_m * s_m) if s_m > 0.0
+                                    else math.inf)
+        W[_REG * STOP_BLOCK + j] = 1.0 if lim else 0.0
+        creep = _v_creeps(k_lim, E, A, B)
+        flat = (not lim) and (abs(g) <= 1e-9 or g > 0.0)
+        W[_SCALAR * STOP_BLOCK + j] = 1.0 if (creep or flat) else 0.0
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def stop_kernel_sides(E, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq,
+                      t_out, aF_out, N_out, D_out, code_out):
     """t_F, alpha_F and the regime code (0 friction, 1 limit, 2 creeps to the limit: t_F = inf) of every case, every
     tier compiled (the graded one with the panels it needs: :func:`_graded_sum`); a friction stop's alpha_F is left
-    NaN and its ``(N, D)`` written out (``delta = atan2(N, D)``; (0, 1) elsewhere) for the caller (sin and cos of
-    alpha0 come in computed by numpy, as the numpy kernels compute them). One thread, without the GIL:
-    ``batch._stop_arrays`` runs it on numba's thread count of chunks at once, each with its numpy pre- and
-    post-processing (:func:`batch._stop_chunk`)."""
+    NaN and its ``(N, D)`` written out (``delta = atan2(N, D)``; (0, 1) elsewhere) for the caller.
+
+    In blocks of :data:`STOP_BLOCK` cases: the library calls of the setup (:func:`_setup_calls`: sin and cos of
+    alpha0, to the bit those of numpy), the rest of the setup vectorised across the block (:func:`_setup_vector`),
+    then each case's node sums (vectorised across its nodes); the rare cases the vectorised setup cannot settle
+    (creeping, a friction stop at pi/2 within rounding) go through :func:`_stop_one` whole. The results are those of
+    :func:`_stop_one` case by case, bit for bit (a test checks). One thread, without the GIL: ``batch._stop_arrays``
+    runs it on numba's thread count of chunks at once, each with its numpy post-processing
+    (:func:`batch._stop_chunk`). numpy's error model: the setup computes both regimes of every case and selects one,
+    so a division by zero in the regime not taken must give inf or NaN, not raise (and with the default model the
+    compiler cannot vectorise the loops it inlines)."""
     n = E.size
-    for b in range((n + BLOCK - 1) // BLOCK):
-        for i in range(b * BLOCK, min(n, (b + 1) * BLOCK)):
-            t, aF, code, _, N, D = _stop_one(E[i], sa0_in[i], ca0_in[i], a0[i], F1[i], F2[i], k[i], m2[i], L1[i],
-                                             x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq, _kernels.GRADING,
-                                             GRADED_REACH, _kernels.N_PANELS)
-            t_out[i] = t
-            aF_out[i] = aF
-            N_out[i] = N
-            D_out[i] = D
-            code_out[i] = code
+    SB = STOP_BLOCK
+    W = np.empty(_ROWS * SB)
+    grading = _kernels.GRADING
+    panels = _kernels.N_PANELS
+    for lo in range(0, n, SB):
+        hi = min(n, lo + SB)
+        _setup_calls(E, a0, F1, F2, k, m2, L1, lo, hi, W)
+        _setup_vector(W, hi - lo)
+        for i in range(lo, hi):
+            j = i - lo
+            if W[_SCALAR * SB + j] != 0.0:
+                t, aF, code, _, n_, d_ = _stop_one(E[i], W[_SA0 * SB + j], W[_CA0 * SB + j], a0[i], F1[i], F2[i],
+                                                   k[i], m2[i], L1[i], x16, w16, x24, w24, near, hard, mass_sq,
+                                                   mass_hard_sq, grading, GRADED_REACH, panels)
+                t_out[i] = t
+                aF_out[i] = aF
+                N_out[i] = n_
+                D_out[i] = d_
+                code_out[i] = code
+                continue
+            reg = 1 if W[_REG * SB + j] != 0.0 else 0
+            ratio = W[_RATIO * SB + j]
+            msq = W[_MSQ * SB + j]
+            sm = W[_SM * SB + j]
+            sA = W[_SAL * SB + j]
+            cA = W[_CAL * SB + j]
+            cb = W[_CB * SB + j]
+            sn = W[_SN * SB + j]
+            Kl = W[_KL * SB + j]
+            A = W[_A * SB + j]
+            B = W[_B * SB + j]
+            tier = _tier(ratio, msq, near, hard, mass_sq, mass_hard_sq)
+            if tier == 2:
+                acc = _graded_sum(reg, ratio, msq, x16, w16, grading, GRADED_REACH, panels, sm, sA, cA, cb, sn, Kl,
+                                  A, B, k[i])
+            elif tier == 1:
+                acc = _panel_sum(reg, x24, w24, 0.0, 1.0, sm, sA, cA, cb, sn, Kl, A, B, k[i])
+            else:
+                acc = _panel_sum(reg, x16, w16, 0.0, 1.0, sm, sA, cA, cb, sn, Kl, A, B, k[i])
+            t_out[i] = W[_PREF * SB + j] * acc
+            aF_out[i] = _HALF_PI if reg == 1 else math.nan
+            N_out[i] = W[_N * SB + j]
+            D_out[i] = W[_D * SB + j]
+            code_out[i] = reg
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def screen_flags(E, F1, F2, L1, negligible, bad, tiny):
+    """The cases batch cannot hand to the kernels as they are, in one pass; returns how many: ``bad`` where E_S is not
+    positive and finite or ``A = 2 F1 L1``, ``B = 4 F2 L1`` overflow, ``tiny`` where the friction work to the flat
+    rhombus, at most ``A + B``, is below ``negligible`` E_S (``batch._screen``: the same products, rounded alike)."""
+    count = 0
+    for i in range(E.size):
+        A = 2.0 * F1[i] * L1[i]
+        B = 4.0 * F2[i] * L1[i]
+        b = not (math.isfinite(E[i]) and E[i] > 0.0 and math.isfinite(A) and math.isfinite(B))
+        t = (not b) and A + B <= negligible * E[i]
+        bad[i] = b
+        tiny[i] = t
+        if b or t:
+            count += 1
+    return count
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def friction_angles(delta, a0, aF):
+    """alpha_F = min(alpha0 + max(delta, 0), pi/2) where the stop-time kernel left alpha_F NaN (friction stops), from
+    the sweep ``delta = atan2(N, D)`` that numpy computed (Eq. 8), in place: the arithmetic of the single-case
+    solver's ``final_angle``, in one pass [rad]."""
+    for i in range(aF.size):
+        if math.isnan(aF[i]):
+            aF[i] = min(a0[i] + max(delta[i], 0.0), _HALF_PI)
 
 
 #: Nodes of the longest rule: the graded one with every panel (:func:`_graded_sum`).
@@ -332,7 +564,7 @@ def _line_sums(P, d, b, n, lam):
     return t0, t1, t2
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _identify_one(a0, aF, tF, E, kk, m2, L1, x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq, tol, max_iter,
                   grading, reach, panels, P, d, b):
     """(lambda, F1*, F2*, t_lo, t_hi, status, iterations) of one observation: Halley's method in lambda = F1/F1* on
@@ -422,7 +654,7 @@ def _identify_one(a0, aF, tF, E, kk, m2, L1, x16, w16, x24, w24, near, hard, mas
     return lam, F1max, F2max, lo, hi, 0, iterations
 
 
-@njit(cache=True, nogil=True, parallel=True)
+@njit(cache=True, nogil=True, parallel=True, error_model="numpy")
 def identify_kernel(a0, aF, tF, E, k, m2, L1, x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq, tol, max_iter,
                     lam_out, F1max_out, F2max_out, tlo_out, thi_out, status_out, iter_out):
     """lambda = F1/F1* of every observation (:func:`_identify_one`; cases with a nonzero status on entry are left
@@ -457,14 +689,14 @@ def identify_kernel(a0, aF, tF, E, k, m2, L1, x16, w16, x24, w24, near, hard, ma
             iter_out[i] = iterations
 
 
-_accel = njit(cache=True, nogil=True)(_kernels.head_hinge_acceleration)
+_accel = njit(cache=True, nogil=True, error_model="numpy")(_kernels.head_hinge_acceleration)
 #: ``_kernels.refine_peak`` compiled as written, its call of ``head_hinge_acceleration`` bound to ``_accel``.
-_refine_peak = njit(cache=True, nogil=True)(types.FunctionType(
+_refine_peak = njit(cache=True, nogil=True, error_model="numpy")(types.FunctionType(
     _kernels.refine_peak.__code__, {**_kernels.refine_peak.__globals__, "head_hinge_acceleration": _accel},
     "refine_peak", _kernels.refine_peak.__defaults__))
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _refined(best, j, n, a0, h, E, s0, c0, A, B, F1, F2, k, m2, L1, which):
     """The best sample j's value, raised to the maximum at a root of the jerk in [a_(j-1), a_j] or
     [a_j, a_(j+1)] when one lies there (``_kernels.refine_peak``)."""
@@ -476,7 +708,7 @@ def _refined(best, j, n, a0, h, E, s0, c0, A, B, F1, F2, k, m2, L1, which):
     return out
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def peak_accel_kernel(E, a0, aE, F1, F2, k, m2, L1, n, pu_out, pv_out):
     """Peaks of |u_ddot| and |v_ddot| over [alpha0, alpha_end] (the numpy ``batch._peak_accelerations``):
     n equally spaced angles (sines and cosines by rotation, no trigonometric call per angle) pick the best
@@ -511,5 +743,6 @@ def peak_accel_kernel(E, a0, aE, F1, F2, k, m2, L1, n, pu_out, pv_out):
 #: Every kernel defined in this file (cached by numba under this file's name): flushed together when the
 #: modules they inline change (the functions compiled from dynamics and _kernels are stamped with their own files).
 KERNELS = (_tier, _friction_nodes, _limit_nodes, _panel_count, _panel_sum, _graded_sum, _stop_one,
-           stop_kernel_sides, _line_nodes, _line_sums, _identify_one, identify_kernel, _refined, peak_accel_kernel)
+           _setup_calls, _setup_vector, stop_kernel_sides, screen_flags, friction_angles, _line_nodes, _line_sums,
+           _identify_one, identify_kernel, _refined, peak_accel_kernel)
 _refresh_stale_cache(KERNELS)

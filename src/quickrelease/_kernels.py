@@ -50,7 +50,15 @@ from functools import lru_cache
 
 import numpy as np
 
-from .dynamics import _limit_dissipation, creeps_terms, limit_margin_terms, limit_sweep, stop_cosine_terms, sweep_terms
+from .dynamics import (
+    _limit_dissipation,
+    amplitude_terms,
+    creeps_terms,
+    limit_margin_terms,
+    limit_sweep,
+    stop_cosine_terms,
+    sweep_terms,
+)
 
 HALF_PI = 0.5 * math.pi
 
@@ -197,7 +205,7 @@ class Releases:
         sa0, ca0 = np.sin(alpha0), np.cos(alpha0)
         A = 2.0 * F1 * L1
         B = 4.0 * F2 * L1
-        R = np.hypot(A, B)
+        R = amplitude_terms(A, B)
         W_limit = _limit_dissipation(A, B, sa0, ca0)
         to_limit = limit_sweep(alpha0)  # pi/2 - alpha0, two-term pi/2
         K_lim = limit_margin_terms(E_S, A, B, sa0, ca0)

@@ -40,10 +40,13 @@ def check_threads(threads, name: str = "threads") -> int | None:
 
 def refuse_with_dask(threads, backend: str, name: str = "threads") -> None:
     """Raise ParameterError (naming ``name``) when ``threads`` is given with the Dask backend (whose tasks run on
-    one thread)."""
+    one thread) or the GPU backend (whose kernels run on the GPU: CPU threads would change nothing)."""
     if threads is not None and backend == "dask":
         raise ParameterError(name, threads, "the numpy backend (a Dask task runs on one thread: more "
                                                  "workers give more parallelism)")
+    if threads is not None and backend == "gpu":
+        raise ParameterError(name, threads, "the numpy backend (the gpu backend runs its kernels on the GPU: "
+                                                 "CPU threads change nothing)")
 
 
 @contextmanager

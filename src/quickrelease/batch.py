@@ -26,6 +26,7 @@ import numpy as np
 
 from . import _kernels, dynamics
 from ._kernels import HALF_PI, gauss_unit, graded_unit
+from .errors import ParameterError
 
 __all__ = [
     "CHUNK", "BatchStop", "BatchRelease", "BatchIdentification", "IDENTIFY_STATUS", "STOPPED_BY",
@@ -146,12 +147,13 @@ NEGLIGIBLE_WORK = 2.0**-64
 
 def _screen(E_S, F1, F2, L1):
     """(F1, F2, E_S, bad) for the kernels: negligible friction set to 0, cases outside the floating-point
-    range marked ``bad`` and replaced by a harmless case (their outputs are then set to NaN)."""
-    with np.errstate(over="ignore", invalid="ignore"):
-        A, B = 2.0 * F1 * L1, 4.0 * F2 * L1
-        bad = ~(np.isfinite(E_S) & (E_S > 0) & np.isfinite(A) & np.isfinite(B))
-        tiny = ~bad & (A + B <= NEGLIGIBLE_WORK * E_S)
-    if not (bad.any() or tiny.any()):
+    range marked ``bad`` and replaced by a harmless case (their outputs are then set to NaN). One compiled pass
+    (:func:`quickrelease._fast.screen_flags`); the inputs themselves come back where no case needs either."""
+    from . import _fast
+
+    bad = np.empty(E_S.shape, dtype=bool)
+    tiny = np.empty(E_S.shape, dtype=bool)
+    if _fast.screen_flags(E_S, F1, F2, L1, NEGLIGIBLE_WORK, bad, tiny) == 0:
         return F1, F2, E_S, bad
     F1, F2, E_S = (np.where(tiny | bad, 0.0, F1), np.where(tiny | bad, 0.0, F2), np.where(bad, 1.0, E_S))
     return F1, F2, E_S, bad
@@ -193,17 +195,54 @@ def _chunks(n: int, chunk: int):
         yield slice(start, min(start + chunk, n))
 
 
-def stop_time(E_S, alpha0, F1, F2, c=2.0 / 3.0, m1=None, m2=None, L1=None, *, chunk: int = CHUNK) -> BatchStop:
+#: The places the kernels run: ``numpy`` (this process's CPU cores: the compiled kernels of :mod:`._fast`) or
+#: ``gpu`` (a CUDA GPU through CuPy: :mod:`._gpu`, ``pip install 'quickrelease[gpu]'``).
+BACKENDS = ("numpy", "gpu")
+
+
+def _array_module(backend: str):
+    """None for the numpy backend, CuPy for ``gpu`` (checked before any work: QuickReleaseError naming the
+    ``[gpu]`` extra when CuPy or a CUDA device is missing); ParameterError for any other name."""
+    if backend == "numpy":
+        return None
+    if backend != "gpu":
+        raise ParameterError("backend", backend, "'numpy' or 'gpu'")
+    from . import _gpu
+
+    _gpu.require_gpu()
+    return _gpu.array_module()
+
+
+def _on_device(xp, kernel, *arrays, **options):
+    """``kernel(xp, *arrays on the device, **options)`` with its results (a tuple or a dict) copied back."""
+    from ._gpu import to_host
+
+    res = kernel(xp, *(xp.asarray(a) for a in arrays), **options)
+    if isinstance(res, dict):
+        return {key: to_host(v) for key, v in res.items()}
+    return tuple(to_host(v) for v in res)
+
+
+def stop_time(E_S, alpha0, F1, F2, c=2.0 / 3.0, m1=None, m2=None, L1=None, *, chunk: int = CHUNK,
+              backend: str = "numpy") -> BatchStop:
     """Stop time t_F and final angle alpha_F of many releases (Eq. 8 and 10).
 
     Parameters broadcast: E_S [J], alpha0 [rad], F1, F2 [N], c [-], m1, m2 [kg], L1 [m] (the paper's
     device where not given). Cases must be valid (E_S > 0, alpha0 in (0, pi/2), F1, F2 >= 0); they are
     not checked one by one here (see :func:`quickrelease.simulate` for checked single releases).
+    ``backend``: ``"numpy"`` (the compiled CPU kernels, all cores) or ``"gpu"`` (CuPy on a CUDA GPU, float64, the
+    same formulas, within 1e-13 relative of the CPU's: ``pip install 'quickrelease[gpu]'``).
     """
+    xp = _array_module(backend)
     m1, m2, L1 = _paper_defaults(m1, m2, L1)
     shape, (E_S, alpha0, F1, F2, c, m1, m2, L1) = _flat(E_S, alpha0, F1, F2, c, m1, m2, L1)
     F1, F2, E_S, bad = _screen(E_S, F1, F2, L1)
-    t, aF, code = _stop_arrays(E_S, alpha0, F1, F2, c * m1 / m2, m2, L1, chunk)
+    if xp is None:
+        t, aF, code = _stop_arrays(E_S, alpha0, F1, F2, c * m1 / m2, m2, L1, chunk)
+    else:
+        from . import _gpu
+
+        t, aF, code = _on_device(xp, _gpu.stop_arrays, E_S, alpha0, F1, F2, c * m1 / m2, m2, L1)
     t[bad], aF[bad] = np.nan, np.nan
     return BatchStop(t.reshape(shape), aF.reshape(shape), code.reshape(shape))
 
@@ -214,20 +253,16 @@ THREAD_CHUNK = 8192
 
 
 def _stop_chunk(E_S, alpha0, F1, F2, k, m2, L1, t, aF, code):
-    """One chunk of :func:`_stop_arrays`, in place: sin, cos of alpha0 by numpy (as the numpy kernels), the compiled
-    loop, and a friction stop's alpha_F = min(alpha0 + max(atan2(N, D), 0), pi/2) by numpy, as the single-case
-    solver computes it (every step releases the GIL)."""
+    """One chunk of :func:`_stop_arrays`, in place: the compiled loop (sin and cos of alpha0 by libm, which numpy
+    calls too), then a friction stop's alpha_F = min(alpha0 + max(atan2(N, D), 0), pi/2) with numpy's arctan2, as
+    the single-case solver computes it (numpy's vectorised arctan2 and libm's atan2 differ in the last bit of 3% of
+    angles), the rest of that formula compiled (every step releases the GIL)."""
     from . import _fast
 
     N = np.empty(E_S.size)
     D = np.empty(E_S.size)
-    _fast.stop_kernel_sides(E_S, np.sin(alpha0), np.cos(alpha0), alpha0, F1, F2, k, m2, L1, *_fast.rules(),
-                            *_fast.tier_constants(), t, aF, N, D, code)
-    angle = np.arctan2(N, D, out=N)
-    np.maximum(angle, 0.0, out=angle)
-    angle += alpha0
-    np.minimum(angle, HALF_PI, out=angle)
-    np.copyto(aF, angle, where=np.isnan(aF))
+    _fast.stop_kernel_sides(E_S, alpha0, F1, F2, k, m2, L1, *_fast.rules(), *_fast.tier_constants(), t, aF, N, D, code)
+    _fast.friction_angles(np.arctan2(N, D, out=N), alpha0, aF)
 
 
 def _stop_arrays(E_S, alpha0, F1, F2, k, m2, L1, chunk):
@@ -334,11 +369,13 @@ def _peak_accelerations(E_S, alpha0, alpha_end, F1, F2, k, m2, L1, n: int = N_PE
     return out
 
 
-def release(E_S, alpha0, F1, F2, c=2.0 / 3.0, m1=None, m2=None, L1=None, *, chunk: int = CHUNK) -> BatchRelease:
+def release(E_S, alpha0, F1, F2, c=2.0 / 3.0, m1=None, m2=None, L1=None, *, chunk: int = CHUNK,
+            backend: str = "numpy") -> BatchRelease:
     """Release envelope of many cases: t_F, alpha_F, u_F, v_F, initial and peak velocities and accelerations.
 
-    Same inputs as :func:`stop_time`.
+    Same inputs (and ``backend``) as :func:`stop_time`.
     """
+    xp = _array_module(backend)
     m1, m2, L1 = _paper_defaults(m1, m2, L1)
     shape, (E_S, alpha0, F1, F2, c, m1, m2, L1) = _flat(E_S, alpha0, F1, F2, c, m1, m2, L1)
     n = E_S.size
@@ -347,6 +384,29 @@ def release(E_S, alpha0, F1, F2, c=2.0 / 3.0, m1=None, m2=None, L1=None, *, chun
     code = np.empty(n, dtype=np.int8)
     k = c * m1 / m2
     F1, F2, E_S, bad = _screen(E_S, F1, F2, L1)
+    if xp is not None:
+        from . import _gpu
+
+        res = _on_device(xp, _gpu.release_arrays, E_S, alpha0, F1, F2, k, m2, L1)
+        code[:] = res.pop("stopped_by")
+        for name, v in res.items():
+            out[name][:] = v
+    else:
+        _release_cpu(E_S, alpha0, F1, F2, k, m2, L1, chunk, out, code)
+    creeps = code == 2  # t_F = inf by the classifier (STOPPED_BY 2): a result, not an overflow
+    for name, v in out.items():  # a result that overflows is flagged too, never left as a silent inf or NaN
+        finite = np.isfinite(v) | (creeps & (v == np.inf)) if name == "stop_time" else np.isfinite(v)
+        bad |= ~finite
+    for v in out.values():
+        v[bad] = np.nan
+    out["status"] = bad.astype(np.int8)
+    res = {key: v.reshape(shape) for key, v in out.items()}
+    return BatchRelease(stopped_by=code.reshape(shape), **res)
+
+
+def _release_cpu(E_S, alpha0, F1, F2, k, m2, L1, chunk, out, code):
+    """The envelope of :func:`release` on the CPU, into ``out`` and ``code`` (flat arrays)."""
+    n = E_S.size
     t, aF_all, code[:] = _stop_arrays(E_S, alpha0, F1, F2, k, m2, L1, chunk)
     out["stop_time"][:] = t
     out["alpha_final"][:] = aF_all
@@ -369,19 +429,10 @@ def release(E_S, alpha0, F1, F2, c=2.0 / 3.0, m1=None, m2=None, L1=None, *, chun
     from . import _fast
 
     _fast.peak_accel_kernel(E_S, alpha0, aF_all, F1, F2, k, m2, L1, N_PEAK, out["peak_u_ddot"], out["peak_v_ddot"])
-    creeps = code == 2  # t_F = inf by the classifier (STOPPED_BY 2): a result, not an overflow
-    for name, v in out.items():  # a result that overflows is flagged too, never left as a silent inf or NaN
-        finite = np.isfinite(v) | (creeps & (v == np.inf)) if name == "stop_time" else np.isfinite(v)
-        bad |= ~finite
-    for v in out.values():
-        v[bad] = np.nan
-    out["status"] = bad.astype(np.int8)
-    res = {key: v.reshape(shape) for key, v in out.items()}
-    return BatchRelease(stopped_by=code.reshape(shape), **res)
 
 
 def identify(alpha0, alpha_final, stop_time, E_S, c=2.0 / 3.0, m1=None, m2=None, L1=None, *,
-             chunk: int = CHUNK, tol: float = 1e-14, max_iter: int = 40) -> BatchIdentification:
+             chunk: int = CHUNK, tol: float = 1e-14, max_iter: int = 40, backend: str = "numpy") -> BatchIdentification:
     """Identify F1, F2 from many stop observations (Eq. 11-13), vectorized.
 
     On the line of Eq. 13 every case stops at alpha_final; with lambda = F1/F1*, the remaining energy
@@ -391,11 +442,15 @@ def identify(alpha0, alpha_final, stop_time, E_S, c=2.0 / 3.0, m1=None, m2=None,
     and convex; Halley's method from lambda = 1 (its first two derivatives from the same sums) converges in 3-4
     steps, Newton's step taken where Halley's denominator is not safely positive.
 
+    ``backend``: as for :func:`stop_time` (on the GPU, lambda within ``1e-13 + 8 eps t_F / (t_hi - t_lo)`` of the
+    CPU's: the rounding floor of an observation whose t_F barely changes along the line).
+
     Returns
     -------
     BatchIdentification
         Infeasible or invalid cases have NaN F1, F2 and a nonzero ``status``.
     """
+    xp = _array_module(backend)
     m1, m2, L1 = _paper_defaults(m1, m2, L1)
     shape, (alpha0, aF, tF, E_S, c, m1, m2, L1) = _flat(alpha0, alpha_final, stop_time, E_S, c, m1, m2, L1)
     n = alpha0.size
@@ -413,10 +468,20 @@ def identify(alpha0, alpha_final, stop_time, E_S, c=2.0 / 3.0, m1=None, m2=None,
     from . import _fast
 
     lam = np.full(n, np.nan)
-    x16, w16, x24, w24 = _fast.rules()
-    _fast.identify_kernel(alpha0, aF, tF, E_S, k, m2, L1, x16, w16, x24, w24, *_fast.tier_constants(), tol,
-                          max_iter, lam, out["F1_max"], out["F2_max"], out["stop_time_min"], out["stop_time_max"],
-                          status, iters)
+    if xp is not None:
+        from . import _gpu
+
+        ok = status == 0
+        res = _on_device(xp, _gpu.identify_arrays, alpha0[ok], aF[ok], tF[ok], E_S[ok], k[ok], m2[ok], L1[ok],
+                         tol=tol, max_iter=max_iter)
+        lam[ok], status[ok], iters[ok] = res["lam"], res["status"], res["iterations"]
+        for name in ("F1_max", "F2_max", "stop_time_min", "stop_time_max"):
+            out[name][ok] = res[name]
+    else:
+        x16, w16, x24, w24 = _fast.rules()
+        _fast.identify_kernel(alpha0, aF, tF, E_S, k, m2, L1, x16, w16, x24, w24, *_fast.tier_constants(), tol,
+                              max_iter, lam, out["F1_max"], out["F2_max"], out["stop_time_min"], out["stop_time_max"],
+                              status, iters)
     out["F1"] = lam * out["F1_max"]
     out["F2"] = (1.0 - lam) * out["F2_max"]
     bad = status != 0

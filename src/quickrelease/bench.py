@@ -28,6 +28,12 @@ over-weighted, in the strata of :data:`sampling.WIDE_STRATA`):
   the case is well conditioned, else a backward error of at most 4 input ulps.
 * ``uq`` with 1e8 samples on a LocalCluster of two Dask workers: wall time and peak memory of the whole process
   tree (skipped with ``quick``).
+* Where a CUDA GPU is available to CuPy (:func:`quickrelease._gpu.gpu_available`), the GPU backend
+  (:mod:`quickrelease._gpu`): throughput of the stop time and of the identification on both samples (on the device,
+  the arrays already there, and end to end from host arrays), the device named, and the most relative difference
+  from the CPU kernels on the same cases (t_F, alpha_F; F1* and the feasible ends; lambda = F1/F1* over its
+  tolerance, 1e-13 plus its rounding floor ``8 eps t_F / (t_hi - t_lo)``). JSON key ``gpu``: None without a GPU
+  (one line says so).
 """
 
 from __future__ import annotations
@@ -546,8 +552,71 @@ def run_bench(quick: bool = False, seed: int = 0, log: Callable[[str], Any] = pr
             g[f"speedup_vs_{base}"] = g["cases_per_s"] / g[f"{base}_cases_per_s"]
         out[sample] = group
     out["targets"] = _targets(out, cores)
+    out["gpu"] = _gpu_section(sizes, seed, log)
     if not quick:
         out["uq_dask"] = _uq_dask_1e8(log)
+    return out
+
+
+#: Cases of each sample on the GPU, per case of the CPU's measurement (a GPU needs millions to be busy).
+GPU_SCALE = 10
+
+
+def _gpu_section(sizes: Sizes, seed: int, log) -> dict[str, Any] | None:
+    """The GPU backend's throughput and agreement with the CPU kernels on both samples; None without a GPU."""
+    from . import _gpu
+
+    if not _gpu.gpu_available():
+        log("no GPU found (CuPy with a CUDA device: pip install 'quickrelease[gpu]'): the gpu backend not measured")
+        return None
+    cupy = _gpu.array_module()
+
+    def synced(func):
+        def run():
+            res = func()
+            _gpu.synchronize(cupy)
+            return res
+        return run
+
+    name, version = _gpu.device_name()
+    out: dict[str, Any] = {"device": name, "cupy": version}
+    for k, sample in enumerate(("bench", "wide")):
+        n = GPU_SCALE * sizes.cases
+        cases = _sample(sample, n, seed + 10 * k)
+        args = [cases[key] for key in ("E_S", "alpha0", "F1", "F2")] + [cases["c"] * cases["m1"] / cases["m2"],
+                                                                         cases["m2"], cases["L1"]]
+        dev = [cupy.asarray(a) for a in args]
+        st_dev, _, res = _timed(synced(lambda dev=dev: _gpu.stop_arrays(cupy, *dev)), n, sizes.repeat)
+        st_e2e, _, st = _timed(lambda c=cases: batch.stop_time(**c, backend="gpu"), n, sizes.repeat)
+        cpu = batch.stop_time(**cases)
+        obs = _observations(cases, cpu)
+        m = len(obs["E_S"])
+        obs_dev = [cupy.asarray(a) for a in (obs["alpha0"], obs["alpha_final"], obs["stop_time"], obs["E_S"],
+                                             obs["c"] * obs["m1"] / obs["m2"], obs["m2"], obs["L1"])]
+        id_dev, _, _ = _timed(synced(lambda d=obs_dev: _gpu.identify_arrays(cupy, *d)), m, sizes.repeat)
+        id_e2e, _, idg = _timed(lambda o=obs: batch.identify(**o, backend="gpu"), m, sizes.repeat)
+        idc = batch.identify(**obs)
+        fin = np.isfinite(cpu.stop_time)
+        ok = idc.status == 0
+        floor = 8.0 * np.finfo(float).eps * obs["stop_time"][ok] / (idc.stop_time_max[ok] - idc.stop_time_min[ok])
+        with np.errstate(invalid="ignore", divide="ignore"):
+            agree = {
+                "stop_time_max_rel_diff": float(np.max(np.abs(st.stop_time[fin] / cpu.stop_time[fin] - 1.0))),
+                "alpha_final_max_rel_diff": float(np.max(np.abs(st.alpha_final / cpu.alpha_final - 1.0))),
+                "stopped_by_identical": bool(np.array_equal(st.stopped_by, cpu.stopped_by)),
+                "identify_ends_max_rel_diff": float(max(np.max(np.abs(getattr(idg, e)[ok] / getattr(idc, e)[ok] - 1))
+                                                        for e in ("stop_time_min", "stop_time_max", "F1_max"))),
+                "identify_F1_max_diff_over_tolerance": float(np.max(np.abs(idg.F1[ok] - idc.F1[ok]) / idc.F1_max[ok]
+                                                                    / (1e-13 + floor))) if ok.any() else None,
+                "identify_status_identical": bool(np.array_equal(idg.status, idc.status)),
+            }
+        out[sample] = {"cases": n, "stop_time_cases_per_s": st_dev, "stop_time_end_to_end_cases_per_s": st_e2e,
+                       "identify_cases": m, "identify_cases_per_s": id_dev, "identify_end_to_end_cases_per_s": id_e2e,
+                       **agree}
+        del res, dev, obs_dev
+        log(f"{sample} sample on the GPU ({name}, {n:,} cases): {st_dev:,.0f} stop times/s and {id_dev:,.0f} "
+            f"identifications/s on the device ({st_e2e:,.0f} and {id_e2e:,.0f} from host arrays); max relative "
+            f"difference from the CPU kernels: t_F {agree['stop_time_max_rel_diff']:.1e}")
     return out
 
 

@@ -454,12 +454,12 @@ def uq(
     samples: Annotated[int, typer.Option("--samples", "-n", help="Monte Carlo samples.")] = 100_000,
     seed: Annotated[int, typer.Option("--seed", help="Seed (results depend on seed and chunk size only).")] = 0,
     chunk: Annotated[int, typer.Option("--chunk", help="Samples per chunk (bounds memory).")] = 1_000_000,
-    backend: Annotated[Literal["numpy", "dask"], typer.Option("--backend", help="Where the samples are computed: this process, or a Dask cluster.")] = "numpy",
+    backend: Annotated[Literal["numpy", "dask", "gpu"], typer.Option("--backend", help="Where the samples are computed: this process, a Dask cluster, or a CUDA GPU (pip install 'quickrelease[gpu]').")] = "numpy",
     scheduler: Annotated[str | None, typer.Option("--scheduler", help="Dask scheduler address; default: a LocalCluster.")] = None,
     workers: Annotated[int, typer.Option("--workers", help="Workers of the LocalCluster.")] = 2,
     out: Annotated[Path | None, typer.Option("--out", "-o", help="Folder for chunks, uq.json and the corner figure.")] = None,
     resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted run in --out (same inputs only).")] = False,
-    threads: Annotated[int | None, typer.Option("--threads", "-t", help="Threads of the compiled kernels, 1 to the cores numba may use (default: all; results do not depend on it); numpy backend only (a Dask task runs on one thread).")] = None,
+    threads: Annotated[int | None, typer.Option("--threads", "-t", help="Threads of the compiled kernels, 1 to the cores numba may use (default: all; results do not depend on it); numpy backend only (a Dask task runs on one thread; the gpu backend needs none).")] = None,
     overwrite: OverwriteOpt = False,
     as_json: JsonOpt = False,
 ) -> None:
@@ -499,12 +499,12 @@ def sweep_command(
     grid: Annotated[list[str], typer.Option("--grid", "-g", help="NAME=start:stop:count (with units), e.g. 'force=500 kN:3000 kN:26'; repeat for more dimensions.")],
     file: Annotated[Path, typer.Option("--file", "-f", help="Output file: .nc (NetCDF) or .zarr (Zarr store); the heat maps beside it.")] = Path("sweep.nc"),
     out_old: Annotated[Path | None, typer.Option("--out", "-o", hidden=True, help="Old name of --file.")] = None,
-    backend: Annotated[Literal["numpy", "dask"], typer.Option("--backend", help="Where the grid is computed: this process, or a Dask cluster (needs --file *.zarr).")] = "numpy",
+    backend: Annotated[Literal["numpy", "dask", "gpu"], typer.Option("--backend", help="Where the grid is computed: this process, a Dask cluster (needs --file *.zarr), or a CUDA GPU (pip install 'quickrelease[gpu]').")] = "numpy",
     scheduler: Annotated[str | None, typer.Option("--scheduler", help="Dask scheduler address; default: a LocalCluster.")] = None,
     workers: Annotated[int, typer.Option("--workers", help="Workers of the LocalCluster.")] = 2,
     resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted dask sweep in --file (same inputs only).")] = False,
     block_rows: Annotated[int | None, typer.Option("--block-rows", help="Rows of the first grid per Dask block (default: about 10^6 points a block).")] = None,
-    threads: Annotated[int | None, typer.Option("--threads", "-t", help="Threads of the compiled kernels, 1 to the cores numba may use (default: all; results do not depend on it); numpy backend only (a Dask task runs on one thread).")] = None,
+    threads: Annotated[int | None, typer.Option("--threads", "-t", help="Threads of the compiled kernels, 1 to the cores numba may use (default: all; results do not depend on it); numpy backend only (a Dask task runs on one thread; the gpu backend needs none).")] = None,
     overwrite: OverwriteOpt = False,
     as_json: JsonOpt = False,
 ) -> None:
@@ -1054,6 +1054,20 @@ def _bench_tables(result: dict[str, Any]) -> None:
                     "F1,F2 worst", "1-ulp sens.", "backward [ulps]"))
     for t in result["targets"]:
         _echo(f"{t['status']:>12}: {t['text']}")
+    gpu = result.get("gpu")
+    if gpu is None:
+        _echo("GPU: none found (CuPy with a CUDA device; pip install 'quickrelease[gpu]'): the gpu backend not measured")
+    else:
+        rows = [(f"{sample}: on the device [cases/s]", f"{gpu[sample]['stop_time_cases_per_s']:,.0f}",
+                 f"{gpu[sample]['identify_cases_per_s']:,.0f}") for sample in ("bench", "wide")]
+        rows += [(f"{sample}: from host arrays [cases/s]", f"{gpu[sample]['stop_time_end_to_end_cases_per_s']:,.0f}",
+                  f"{gpu[sample]['identify_end_to_end_cases_per_s']:,.0f}") for sample in ("bench", "wide")]
+        rows += [(f"{sample}: max rel. difference from the CPU", e(gpu[sample]["stop_time_max_rel_diff"]),
+                  f"ends {e(gpu[sample]['identify_ends_max_rel_diff'])}; F1 "
+                  f"{gpu[sample]['identify_F1_max_diff_over_tolerance']:.2f} of its tolerance")
+                 for sample in ("bench", "wide")]
+        _table(f"gpu backend on {gpu['device']} (CuPy {gpu['cupy']}, float64)", rows,
+               ("", "stop time t_F", "identification F1, F2"))
     if "uq_dask" in result:
         u = result["uq_dask"]
         _echo(u["skipped"] if "skipped" in u else

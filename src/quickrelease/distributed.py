@@ -28,6 +28,7 @@ OPTIONAL: dict[str, tuple[tuple[str, ...], str]] = {
     ".xls": (("xlrd",), "pip install xlrd"),
     ".h5": (("tables",), "pip install tables"),
     ".hdf5": (("tables",), "pip install tables"),
+    "gpu": (("cupy",), "pip install 'quickrelease[gpu]'"),
 }
 
 
@@ -57,6 +58,10 @@ def check_optional(*, backend: str = "numpy", files: Iterable[str | Path] = ()) 
         missing = [p for p in packages if not _installed(p)]
         if missing:
             raise QuickReleaseError(f"{what} needs {', '.join(missing)} (not installed): {install}")
+    if backend == "gpu":  # CuPy installed: a CUDA device too
+        from ._gpu import require_gpu
+
+        require_gpu()
 
 
 def _client(scheduler: str | None, workers: int):

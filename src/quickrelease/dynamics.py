@@ -152,6 +152,31 @@ def limit_sweep(alpha):
     return (PIO2_HI - alpha) + PIO2_LO
 
 
+#: Scaling of :func:`amplitude_terms`: inputs above ``2^500`` (or below ``2^-500``) are scaled by ``2^-600`` (or
+#: ``2^600``), exactly, so that neither square overflows nor loses digits to underflow.
+_AMPLITUDE_EDGE = 2.0**500
+_AMPLITUDE_DOWN = 2.0**-600
+_AMPLITUDE_UP = 2.0**600
+
+
+def amplitude_terms(A, B):
+    """``R = sqrt(A^2 + B^2)``, the amplitude of W_F(alpha) = R (sin(alpha - phi) - sin(alpha0 - phi)) (Eq. 7-8),
+    within an ulp of itself, from ``A = 2 F1 L1`` and ``B = 4 F2 L1`` [J].
+
+    The square root of the sum of squares, each input first scaled by a power of two where it is beyond 2^+-500
+    (exact: ``2^-600`` above, ``2^600`` below, and the result scaled back), so that 1e300 N neither overflows nor 1e-300
+    underflows. Pure arithmetic with no branch and no library call (numpy's ``hypot`` is one): every method computes R
+    with these very operations, and the compiled kernels (:mod:`quickrelease._fast`) vectorise them across cases.
+    """
+    m = np.maximum(np.abs(A), np.abs(B))
+    big = (m > _AMPLITUDE_EDGE) * 1.0
+    small = (m < 1.0 / _AMPLITUDE_EDGE) * 1.0
+    scale = big * _AMPLITUDE_DOWN + small * _AMPLITUDE_UP + (1.0 - big - small)  # one term nonzero: exact
+    a = A * scale
+    b = B * scale
+    return np.sqrt(a * a + b * b) / scale
+
+
 def one_minus_sin_terms(sin_a, cos_a):
     """``1 - sin(a)`` to a few ulps of itself, from sin(a) and cos(a) (a in [0, pi/2]) [-].
 
@@ -324,7 +349,7 @@ def sweep_angle(E_S, alpha0, F1, F2, L1):
     """
     A = 2.0 * F1 * L1
     B = 4.0 * F2 * L1
-    R = np.hypot(A, B)
+    R = amplitude_terms(A, B)
     sa0, ca0 = np.sin(alpha0), np.cos(alpha0)
     margin = limit_margin_terms(E_S, A, B, sa0, ca0)
     limit = (margin > 0.0) | creeps_terms(margin, E_S, A, B)  # the sweep to pi/2: reached, or its limit
