@@ -10,7 +10,8 @@ from quickrelease import bench
 from quickrelease.cli import app
 from quickrelease.sampling import WIDE_STRATA
 
-TINY = bench.Sizes(cases=3000, stop_time=2, identify=1, repeat=1, strata_conditioning=False)
+TINY = bench.Sizes(cases=3000, stop_time=2, identify=1, repeat=1, strata_conditioning=False,
+                   case_conditioning=False)
 
 
 LOG: list[str] = []
@@ -23,7 +24,8 @@ def result():
 
 GROUP_KEYS = {"cases", "cases_per_s", "cpu_cases_per_s", "all_cores_cases_per_s", "all_cores_cpu_cases_per_s",
               "all_cores_ratio", "all_cores_identical", "accuracy_cases", "median_rel_error", "max_rel_error",
-              "worst_case_sensitivity_1ulp"}
+              "worst_case_sensitivity_1ulp", "worst_case_condition_1ulp", "backward_median_ulps", "backward_max_ulps",
+              "max_error_over_allowed"}
 
 
 def test_json_schema_groups_both_samples(result):
@@ -74,8 +76,12 @@ def test_one_status_line_per_target(result):
         assert targets[key]["value"] == value
         assert targets[key]["status"] == ("met" if value >= bound else "not met")
     acc = targets["stop_time_accuracy_wide"]
-    med, worst = result["wide"]["stop_time"]["median_rel_error"], result["wide"]["stop_time"]["max_rel_error"]
-    assert acc["status"] == ("met" if med <= 1e-12 and worst <= 1e-10 else "not met")
+    g = result["wide"]["stop_time"]
+    med, over = g["median_rel_error"], g["max_error_over_allowed"]
+    assert acc["status"] == ("met" if med <= 1e-12 and over <= 1 else "not met")
+    assert acc["value"] == [med, g["max_rel_error"], over]
+    # without the condition number of every case (TINY): no backward error, the target still decided
+    assert g["backward_max_ulps"] is None and 0 <= over <= g["max_rel_error"] / 1e-10
     assert f"in '{result['wide']['stop_time']['worst_stratum']}'" in acc["text"]
     ratio = min(result["bench"]["stop_time"]["all_cores_ratio"], result["bench"]["identify"]["all_cores_ratio"])
     two = targets["two_cores_bench"]
@@ -202,3 +208,92 @@ def test_a_kernel_that_depends_on_the_thread_count_is_caught(monkeypatch):
     assert out["stop_time"]["all_cores_identical"] is False and out["identify"]["all_cores_identical"] is True
     assert out["stop_time"]["all_cores_ratio"] == pytest.approx(out["stop_time"]["all_cores_cases_per_s"]
                                                                 / out["stop_time"]["cases_per_s"])
+
+
+def _synthetic_summary(case_conditioning, calls):
+    """_accuracy_summary on made-up errors and 1-ulp changes: two cases a stratum of the wide sample."""
+    n = 2 * len(WIDE_STRATA)
+    stratum = np.repeat(np.arange(len(WIDE_STRATA)), 2)
+    err = np.full(n, 2e-16)
+    err[0], err[1] = 0.0, 5e-11  # typical: exact, and 5e-11 on a well-conditioned case (under the 1e-10 floor)
+    err[2], err[3] = 3e-10, 1e-9  # limit: 3e-10 and 1e-9 (the worst)
+    err[5] = np.nan  # no reference for it: left out
+    # per input one-ulp changes: 1e-16 on each of 7 inputs (condition 7e-16); the limit's cases condition 2e-10
+    sens = {i: np.full(7, 1e-16) for i in range(n)}
+    sens[2] = np.array([1e-10, 0, 0, 0, 0, 0, 1e-10])  # 3e-10 is 1.5 ulps, allowed 4 x 2e-10
+    sens[3] = np.array([2e-10, 0, 0, 0, 0, 0, 0])  # 1e-9 is 5 ulps, allowed 8e-10: 1.25 times too much
+
+    def sensitivities(i):
+        calls.append(i)
+        return sens[i]
+
+    sizes = bench.Sizes(cases=1, stop_time=2, identify=2, strata_conditioning=False, case_conditioning=case_conditioning)
+    return bench._accuracy_summary("wide", stratum, err, np.full(n, 1e-8), np.full(n, 1e-3), "solve_ivp",
+                                   sensitivities, sizes, lambda line: None)
+
+
+def test_backward_error_is_the_error_over_the_1ulp_condition_number():
+    """Backward error in ulps = error / (sum over the inputs of the change one ulp of each makes), and the target's
+    allowance max(1e-10, 4 x that sum), by hand."""
+    calls = []
+    out = _synthetic_summary(True, calls)
+    assert sorted(calls) == [i for i in range(2 * len(WIDE_STRATA)) if i != 5]  # every case with an error
+    assert out["worst_case_sensitivity_1ulp"] == 2e-10 and out["worst_case_condition_1ulp"] == 2e-10
+    rows = {row["stratum"]: row for row in out["strata"]}
+    assert rows["limit"]["backward_max_ulps"] == pytest.approx(5.0)
+    assert rows["limit"]["backward_median_ulps"] == pytest.approx(0.5 * (1.5 + 5.0))
+    assert rows["typical"]["backward_max_ulps"] == pytest.approx(5e-11 / 7e-16)
+    assert rows["typical"]["backward_median_ulps"] == pytest.approx(0.5 * (0.0 + 5e-11 / 7e-16))
+    assert rows["small mass factor"]["backward_median_ulps"] == pytest.approx(2 / 7)
+    assert rows["short of the limit"]["cases"] == 1  # the case without a reference is left out
+    assert rows["limit"]["sensitivity_1ulp"] == 2e-10  # the most over the inputs, at the stratum's worst
+    assert out["backward_max_ulps"] == pytest.approx(5e-11 / 7e-16)
+    assert out["backward_median_ulps"] == pytest.approx(2 / 7)  # most of the weight: the 2e-16 cases
+    # allowed max(1e-10, 4 x condition): 5e-11 of 1e-10, 3e-10 of 8e-10, 1e-9 of 8e-10 (not met)
+    assert out["max_error_over_allowed"] == pytest.approx(1.25)
+    assert bench._accuracy_status(out["median_rel_error"], out["max_error_over_allowed"]) == "not met"
+    assert bench._accuracy_status(2e-16, 0.5) == "met" and bench._accuracy_status(2e-16, 1.0) == "met"
+    assert bench._accuracy_status(2e-12, 0.5) == "not met" and bench._accuracy_status(None, 0.5) == "not measured"
+
+
+def test_without_every_condition_number_only_the_worst_and_those_above_1e10():
+    calls = []
+    out = _synthetic_summary(False, calls)
+    assert sorted(calls) == [2, 3]  # the worst (3) and the other case above the 1e-10 floor (2)
+    assert out["backward_median_ulps"] is None and out["backward_max_ulps"] is None
+    assert out["max_error_over_allowed"] == pytest.approx(1.25)  # the target is decided all the same
+    assert all(row["backward_max_ulps"] is None for row in out["strata"])
+
+
+def test_stop_sensitivities_one_per_input_and_exact_in_m2():
+    """t_F is proportional to sqrt(m2) (Eq. 10): one ulp of m2 moves it by half of m2's relative ulp, exactly."""
+    args = (2900.0, 0.2, 419.85, 804.57, 2 / 3 * 576.78 / 531.69, 531.69, 2.477)
+    s = bench._stop_sensitivities(args)
+    assert s.shape == (7,) and np.all(s > 0)
+    assert s[5] == pytest.approx(0.5 * (np.nextafter(531.69, np.inf) - 531.69) / 531.69, rel=1e-9, abs=0)
+
+
+def test_identify_sensitivities_agree_with_solving_again():
+    """The first-order change of (F1, F2) per input against mpmath's identification solved again with that input one
+    ulp up: on a typical case (every input; lambda and F1*, F2* move by a few 1e-16 alike) and on a nearly immediate
+    stop (one ulp of alpha_F moves F1 by ~1e-7 of F1*; the three inputs that matter most)."""
+    from quickrelease import batch
+    from quickrelease.reference import identify_lambda_mp
+    from quickrelease.sampling import wide_releases
+
+    draw = wide_releases(400, seed=3, strata=True)
+    st = batch.stop_time(*(draw[k] for k in bench._KEYS))
+    names = [s for s, _, _ in WIDE_STRATA]
+    for stratum, inputs, least in (("typical", range(7), 0.0), ("immediate stop", (1, 2, 3), 1e-9)):
+        i = int(np.flatnonzero((draw["stratum"] == names.index(stratum)) & (st.stopped_by == 0))[0])
+        args = (float(draw["alpha0"][i]), float(st.alpha_final[i]), float(st.stop_time[i]), float(draw["E_S"][i]),
+                bench._k(draw, i), float(draw["m2"][i]), float(draw["L1"][i]))
+        lam, F1s, F2s = identify_lambda_mp(*args)
+        got = bench._identify_sensitivities(args, lam)
+        for j in inputs:
+            moved = list(args)
+            moved[j] = float(np.nextafter(args[j], np.inf))
+            lm, F1m, F2m = identify_lambda_mp(*moved, start=float(lam * F1s))
+            want = max(float(abs(lm * F1m - lam * F1s) / F1s), float(abs((1 - lm) * F2m - (1 - lam) * F2s) / F2s))
+            assert got[j] == pytest.approx(want, rel=1e-3, abs=0), (stratum, j)
+        assert got.max() > least  # the immediate stop ill-conditioned: far above the 1e-16 of a typical case

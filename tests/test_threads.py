@@ -160,3 +160,59 @@ def test_the_kernels_run_on_the_threads_asked_for(uq_case, monkeypatch):
     seen.clear()
     run_uq(uq_case, 1000)  # default: numba's count (all cores unless changed)
     assert set(seen) == {numba.get_num_threads()} == {TOP}
+
+
+#: The race probe (run in a subprocess with NUMBA_NUM_THREADS well above the cores): stop times and identifications
+#: of a wide sample on one thread, then again on many threads, several times; prints the outputs that differ.
+_RACE_PROBE = """
+import json, sys
+import numba, numpy as np
+from quickrelease import batch
+from quickrelease.sampling import wide_releases
+
+top = numba.config.NUMBA_NUM_THREADS
+assert hasattr(batch, "THREAD_CHUNK")  # the stop-time pool's chunk, read at each call
+batch.THREAD_CHUNK = int(sys.argv[2])  # small chunks: many of them, on as many pool threads as numba allows
+s = wide_releases(int(sys.argv[1]), seed=21)
+cases = [s[k] for k in ("E_S", "alpha0", "F1", "F2", "c", "m1", "m2", "L1")]
+numba.set_num_threads(1)
+ref = batch.stop_time(*cases)
+ok = ref.stopped_by == 0
+obs = [s["alpha0"][ok], ref.alpha_final[ok], ref.stop_time[ok], *(s[k][ok] for k in ("E_S", "c", "m1", "m2", "L1"))]
+
+def outputs():
+    st, ident = batch.stop_time(*cases), batch.identify(*obs)
+    return {**{"stop_" + k: v for k, v in st.to_dict().items()}, **{"id_" + k: v for k, v in ident.to_dict().items()}}
+
+one = outputs()
+differ = []
+for run, threads in enumerate([top, 3, top, 2, top, top]):
+    numba.set_num_threads(threads)
+    for key, value in outputs().items():
+        if value.tobytes() != one[key].tobytes():
+            differ.append(f"{key} on {threads} threads (run {run})")
+print(json.dumps({"threads": top, "cases": len(cases[0]), "friction_stops": int(ok.sum()), "differ": differ}))
+"""
+
+
+def test_parallel_kernels_free_of_races_on_oversubscribed_threads():
+    """Threads sharing scratch memory give wrong bits only when one is preempted mid-case, which a quiet machine with
+    as many threads as cores rarely does. Here 16 threads on the machine's cores (the OS preempts them mid-block),
+    chunks of 1024 cases in the stop-time pool (dozens of chunks on 16 pool threads), the identification's prange over
+    ~200 blocks; six runs on 16, 3 and 2 threads, each compared byte for byte with one thread in the same process.
+    Planted races, each caught in 10 runs of this test out of 10 on a 2-core machine: the identification's blocks
+    sharing one scratch row, or every fourth block sharing one; the stop-time chunks sharing one N/D buffer, or one
+    output buffer for the angle's four numpy steps only (a window of ~50 us a chunk, which the in-process 1-vs-2-thread
+    test of test_kernels_wide.py caught 0 times in 5). (``np.empty`` inside the prange body is no race with numba
+    0.68: the parfor pass hoists it into the prologue of each thread's share of the loop, not out of the threads.)"""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "NUMBA_NUM_THREADS": "16"}
+    run = subprocess.run([sys.executable, "-c", _RACE_PROBE, "60000", "1024"], env=env, capture_output=True,
+                         text=True, timeout=600, check=True)
+    report = json.loads(run.stdout.strip().splitlines()[-1])
+    assert report["threads"] == 16 and report["friction_stops"] > 40_000  # > 160 blocks of the identification
+    assert report["differ"] == []

@@ -994,7 +994,7 @@ def bench(
     threads: Annotated[int | None, typer.Option("--threads", "-t", help="Threads of the all-cores measurement, 1 to the cores numba may use (default: all).")] = None,
     as_json: JsonOpt = False,
 ) -> None:
-    """Benchmarks on the bench and the wide sample: kernel throughput on one core and on all, vs scipy (same run), accuracy vs mpmath, the targets of issue 12."""
+    """Benchmarks on the bench and the wide sample: kernel throughput on one core and on all, vs scipy (same run), accuracy vs mpmath (the error, and the backward error in input ulps: the error over the case's 1-ulp condition number), the targets of issue 12 (accuracy: median <= 1e-12, every case <= max(1e-10, 4 x its 1-ulp condition number))."""
     from .bench import run_bench
 
     _check_threads(threads)
@@ -1009,6 +1009,12 @@ def _bench_tables(result: dict[str, Any]) -> None:
 
     def e(x):  # an error to two digits, exponents written one way (7.8e-6)
         return "-" if x is None else f"{x:.1e}".replace("e-0", "e-").replace("e+0", "e").replace("e+", "e")
+
+    def ulps(g):  # the backward error in input ulps: median, worst (two digits)
+        if g["backward_max_ulps"] is None:
+            return "-"
+        return ", ".join(f"{x:.2g}".replace("e-0", "e-").replace("e+0", "e").replace("e+", "e")
+                         for x in (g["backward_median_ulps"], g["backward_max_ulps"]))
 
     n = result["threads"]
     for sample in ("bench", "wide"):
@@ -1028,6 +1034,7 @@ def _bench_tables(result: dict[str, Any]) -> None:
              f"{e(idn['median_rel_error'])}, {e(idn['max_rel_error'])}"),
             ("1-ulp input sensitivity at the worst", e(st["worst_case_sensitivity_1ulp"]),
              e(idn["worst_case_sensitivity_1ulp"])),
+            ("backward error [input ulps]: median, worst", ulps(st), ulps(idn)),
             ("scipy error vs mpmath: median, worst",
              f"{e(st['solve_ivp_median_rel_error'])}, {e(st['solve_ivp_max_rel_error'])}",
              f"{e(idn['quad_brentq_median_rel_error'])}, {e(idn['quad_brentq_max_rel_error'])}"),
@@ -1037,12 +1044,14 @@ def _bench_tables(result: dict[str, Any]) -> None:
         _table(f"{sample} sample ({g['sample']})", rows, ("", "stop time t_F", "identification F1, F2"))
         if sample == "wide":
             rows = [(a["stratum"], f"{a['cases']}, {b['cases']}", e(a["median_rel_error"]), e(a["max_rel_error"]),
-                     e(a["sensitivity_1ulp"]), e(b["median_rel_error"]), e(b["max_rel_error"]), e(b["sensitivity_1ulp"]))
+                     e(a["sensitivity_1ulp"]), ulps(a), e(b["median_rel_error"]), e(b["max_rel_error"]),
+                     e(b["sensitivity_1ulp"]), ulps(b))
                     for a, b in zip(st["strata"], idn["strata"], strict=True)]
             _table(f"wide sample by stratum: error vs mpmath (worst t_F in '{st['worst_stratum']}', worst F1, F2 in "
-                   f"'{idn['worst_stratum']}')", rows,
-                   ("stratum", "cases", "t_F median", "t_F worst", "1-ulp sens.", "F1,F2 median", "F1,F2 worst",
-                    "1-ulp sens."))
+                   f"'{idn['worst_stratum']}'; backward: the error over the case's 1-ulp condition number, median "
+                   "and worst, in input ulps)", rows,
+                   ("stratum", "cases", "t_F median", "t_F worst", "1-ulp sens.", "backward [ulps]", "F1,F2 median",
+                    "F1,F2 worst", "1-ulp sens.", "backward [ulps]"))
     for t in result["targets"]:
         _echo(f"{t['status']:>12}: {t['text']}")
     gpu = result.get("gpu")

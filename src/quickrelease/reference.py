@@ -14,7 +14,7 @@ For tests and the benchmark's accuracy columns.
 
 from __future__ import annotations
 
-__all__ = ["stop_time_mp", "stop_time_mpf", "identify_mp", "identify_lambda_mp"]
+__all__ = ["stop_time_mp", "stop_time_mpf", "identify_mp", "identify_lambda_mp", "line_time_mpf"]
 
 
 def _setup(dps: int):
@@ -97,16 +97,36 @@ def _secant(g, lam0, lam1, tol, steps: int = 30):
     return None
 
 
+def _line(mp, alpha0, alpha_final, E_S, k, m2, L1):
+    """(F1*, F2*) of Eq. 11-12 and t(lambda), the stop time at F1 = lambda F1*, F2 = (1 - lambda) F2* (the line of
+    Eq. 13, on which every lambda stops at alpha_F) [s], the floats taken exactly."""
+    a0, aF, E, k_, m2_, L1_ = (mp.mpf(float(v)) for v in (alpha0, alpha_final, E_S, k, m2, L1))
+    F1s = E / (2 * L1_ * (mp.sin(aF) - mp.sin(a0)))  # Eq. 11
+    F2s = E / (4 * L1_ * (mp.cos(a0) - mp.cos(aF)))  # Eq. 12
+
+    def t(lam):
+        return _time_integral(mp, a0, aF, 2 * lam * F1s * L1_, 4 * (1 - lam) * F2s * L1_, mp.mpf(0), k_, m2_, L1_)
+
+    return F1s, F2s, t
+
+
+def line_time_mpf(lam, alpha0, alpha_final, E_S, k, m2, L1, dps: int = 30):
+    """(t_F, F1*, F2*) as mpmath numbers on the line of Eq. 13 at lambda = F1/F1* (an mpmath number or a float):
+    the stop time [s] of F1 = lambda F1*, F2 = (1 - lambda) F2* (Eq. 10-12), to about ``dps`` digits."""
+    mp = _setup(dps)
+    F1s, F2s, t = _line(mp, alpha0, alpha_final, E_S, k, m2, L1)
+    return t(mp.mpf(lam)), F1s, F2s
+
+
 def identify_lambda_mp(alpha0, alpha_final, stop_time, E_S, k, m2, L1, dps: int = 30, start=None):
     """lambda = F1/F1* on the line of Eq. 13 with the stop time t_F, and (F1*, F2*) (Eq. 11-12), as mpmath numbers
     to about ``dps`` digits: see :func:`identify_mp`."""
     mp = _setup(dps)
-    a0, aF, tF, E, k_, m2_, L1_ = (mp.mpf(float(v)) for v in (alpha0, alpha_final, stop_time, E_S, k, m2, L1))
-    F1s = E / (2 * L1_ * (mp.sin(aF) - mp.sin(a0)))  # Eq. 11
-    F2s = E / (4 * L1_ * (mp.cos(a0) - mp.cos(aF)))  # Eq. 12
+    F1s, F2s, t = _line(mp, alpha0, alpha_final, E_S, k, m2, L1)
+    tF = mp.mpf(float(stop_time))
 
     def g(lam):  # on the line W_F(alpha_F) = E_S for every lambda: a friction stop at alpha_F
-        return _time_integral(mp, a0, aF, 2 * lam * F1s * L1_, 4 * (1 - lam) * F2s * L1_, mp.mpf(0), k_, m2_, L1_) - tF
+        return t(lam) - tF
 
     tol = mp.mpf(10) ** (3 - dps)
     if start is not None and 0 < float(start) < float(F1s):
