@@ -437,10 +437,10 @@ def stop_kernel_sides(E, a0, F1, F2, k, m2, L1, x16, w16, x24, w24, near, hard, 
     In blocks of :data:`STOP_BLOCK` cases: the library calls of the setup (:func:`_setup_calls`: sin and cos of
     alpha0, to the bit those of numpy), the rest of the setup vectorised across the block (:func:`_setup_vector`),
     then each case's node sums (vectorised across its nodes), the fixed-rule cases listed by regime and rule first
-    (so that the loop over each list has no branch that depends on the case); the rare cases the vectorised setup cannot settle
-    (creeping, a friction stop at pi/2 within rounding) go through :func:`_stop_one` whole. The results are those of
-    :func:`_stop_one` case by case, bit for bit (a test checks). One thread, without the GIL: ``batch._stop_arrays``
-    runs it on numba's thread count of chunks at once, each with its numpy post-processing
+    (so that the loop over each list has no branch that depends on the case); the rare cases the vectorised setup
+    cannot settle (creeping, a friction stop at pi/2 within rounding) go through :func:`_stop_one` whole. The
+    results are those of :func:`_stop_one` case by case, bit for bit (a test checks). One thread, without the GIL:
+    ``batch._stop_arrays`` runs it on numba's thread count of chunks at once, each with its numpy post-processing
     (:func:`batch._stop_chunk`). numpy's error model: the setup computes both regimes of every case and selects one,
     so a division by zero in the regime not taken must give inf or NaN, not raise (and with the default model the
     compiler cannot vectorise the loops it inlines)."""
@@ -671,9 +671,10 @@ def identify_kernel(a0, aF, tF, E, k, m2, L1, x16, w16, x24, w24, near, hard, ma
     reach = GRADED_REACH
     panels = _kernels.N_PANELS
     n_blocks = (n_cases + BLOCK - 1) // BLOCK
-    # one scratch row per block, allocated before the parallel loop: an np.empty inside the prange body may be
-    # hoisted out of it by numba's parfor pass and then shared by the threads (a race that changed F1, F2 by up to
-    # 5e-5 in ~10% of the cases on a loaded machine, not on a quiet one)
+    # one scratch row per block, allocated before the parallel loop: each block's rows are its own whatever thread
+    # runs it (tests/test_threads.py's race probe shares rows on purpose and catches it). An np.empty inside the
+    # prange body, the layout before, is hoisted into each thread's share of the loop by numba 0.68 and was found not
+    # to race; the F1, F2 up to 5e-5 apart between loaded processes seen with it then have no cause established.
     P_rows = np.empty((n_blocks, MAX_NODES))  # three 2-D arrays, so that a row is typed C-contiguous (a row of a
     d_rows = np.empty((n_blocks, MAX_NODES))  # 3-D array was not, and the node loops ran 35% slower)
     b_rows = np.empty((n_blocks, MAX_NODES))
