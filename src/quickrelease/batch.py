@@ -236,15 +236,16 @@ def stop_time(E_S, alpha0, F1, F2, c=2.0 / 3.0, m1=None, m2=None, L1=None, *, ch
     xp = _array_module(backend)
     m1, m2, L1 = _paper_defaults(m1, m2, L1)
     shape, (E_S, alpha0, F1, F2, c, m1, m2, L1) = _flat(E_S, alpha0, F1, F2, c, m1, m2, L1)
-    F1, F2, E_S, bad = _screen(E_S, F1, F2, L1)
-    if xp is None:
-        t, aF, code = _stop_arrays(E_S, alpha0, F1, F2, c * m1 / m2, m2, L1, chunk)
+    if xp is None:  # screened chunk by chunk on the threads
+        t, aF, code = _outputs(E_S.size)
+        _on_threads(_screened_chunk, E_S.size, (E_S, alpha0, F1, F2, c, m1, m2, L1), (t, aF, code))
     else:
         from . import _gpu
 
+        F1, F2, E_S, bad = _screen(E_S, F1, F2, L1)
         t, aF, code = _on_device(xp, _gpu.stop_arrays, E_S, alpha0, F1, F2, c * m1 / m2, m2, L1)
-    if bad.any():
-        t[bad], aF[bad] = np.nan, np.nan
+        if bad.any():
+            t[bad], aF[bad] = np.nan, np.nan
     return BatchStop(t.reshape(shape), aF.reshape(shape), code.reshape(shape))
 
 
@@ -266,28 +267,42 @@ def _stop_chunk(E_S, alpha0, F1, F2, k, m2, L1, t, aF, code):
     _fast.friction_angles(np.arctan2(N, D, out=N), alpha0, aF)
 
 
-def _stop_arrays(E_S, alpha0, F1, F2, k, m2, L1, chunk):
-    """Flat arrays in, (t_F, alpha_F, code) out: chunks of :data:`THREAD_CHUNK` cases on numba's current number of
-    threads (``numba.set_num_threads``; :func:`quickrelease.using_threads`), each case computed alone (the results
-    do not depend on the number of threads, bit for bit)."""
+def _screened_chunk(E_S, alpha0, F1, F2, c, m1, m2, L1, t, aF, code):
+    """One chunk of :func:`stop_time` from the raw inputs, in place: :func:`_screen` and ``k = c m1 / m2`` on the
+    chunk (so that they share the threads too), :func:`_stop_chunk`, and NaN where a case is out of range."""
+    F1, F2, E_S, bad = _screen(E_S, F1, F2, L1)
+    _stop_chunk(E_S, alpha0, F1, F2, c * m1 / m2, m2, L1, t, aF, code)
+    if bad.any():
+        t[bad], aF[bad] = np.nan, np.nan
+
+
+def _on_threads(chunk_fn, n: int, inputs, outputs) -> None:
+    """``chunk_fn(*inputs[sl], *outputs[sl])`` for the chunks sl of :data:`THREAD_CHUNK` cases, on numba's current
+    number of threads (``numba.set_num_threads``; :func:`quickrelease.using_threads`), a chunk at a time per thread.
+    Each case is computed alone, so the results do not depend on the number of threads, bit for bit."""
     import numba
 
-    n = E_S.size
-    t = np.empty(n)
-    aF = np.empty(n)
-    code = np.empty(n, dtype=np.int8)
     threads = min(numba.get_num_threads(), -(-n // THREAD_CHUNK))
-    slices = list(_chunks(n, THREAD_CHUNK))
-    args = [(E_S[sl], alpha0[sl], F1[sl], F2[sl], k[sl], m2[sl], L1[sl], t[sl], aF[sl], code[sl]) for sl in slices]
+    args = [tuple(a[sl] for a in inputs) + tuple(o[sl] for o in outputs) for sl in _chunks(n, THREAD_CHUNK)]
     if threads <= 1:
         for a in args:
-            _stop_chunk(*a)
+            chunk_fn(*a)
     else:  # a pool per call (a few threads started for at least two chunks of work; nothing left to a fork)
         from concurrent.futures import ThreadPoolExecutor
 
         with ThreadPoolExecutor(threads, thread_name_prefix="quickrelease-stop") as pool:
-            list(pool.map(lambda a: _stop_chunk(*a), args))
-    return t, aF, code
+            list(pool.map(lambda a: chunk_fn(*a), args))
+
+
+def _outputs(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    return np.empty(n), np.empty(n), np.empty(n, dtype=np.int8)
+
+
+def _stop_arrays(E_S, alpha0, F1, F2, k, m2, L1, chunk):
+    """Flat screened arrays in, (t_F, alpha_F, code) out: :func:`_stop_chunk` on the threads (:func:`_on_threads`)."""
+    out = _outputs(E_S.size)
+    _on_threads(_stop_chunk, E_S.size, (E_S, alpha0, F1, F2, k, m2, L1), out)
+    return out
 
 
 def _peak_head_velocity(E_S, alpha0, alpha_end, A, B, k, m2, n_samples: int = 8, newton: int = 5):
