@@ -43,11 +43,11 @@ def spy(monkeypatch):
 
     real = uq_module.uq_chunk
 
-    def counted(case, seed, index, size, edges):
+    def counted(case, seed, index, size, edges, *more, **options):
         if Spy.kill_after is not None and len(Spy.calls) >= Spy.kill_after:
             raise Killed
         Spy.calls.append(index)
-        return real(case, seed, index, size, edges)
+        return real(case, seed, index, size, edges, *more, **options)
 
     Spy.calls = []
     monkeypatch.setattr(uq_module, "uq_chunk", counted)
