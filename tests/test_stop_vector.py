@@ -94,8 +94,7 @@ def test_libm_sine_and_cosine_are_numpys():
     @njit
     def sincos(x, s, c):
         for i in range(x.size):
-            s[i] = _fast._libm_sin(x[i])
-            c[i] = _fast._libm_cos(x[i])
+            s[i], c[i] = _fast._libm_sincos(x[i])
 
     rng = np.random.default_rng(3)
     x = np.concatenate([rng.uniform(0.0, math.pi / 2, 200_000), np.geomspace(1e-300, 1e-2, 2000),
@@ -103,6 +102,14 @@ def test_libm_sine_and_cosine_are_numpys():
     s, c = np.empty_like(x), np.empty_like(x)
     sincos(x, s, c)
     assert np.array_equal(s, np.sin(x)) and np.array_equal(c, np.cos(x))
+
+    @njit
+    def sine(x, s):
+        for i in range(x.size):
+            s[i] = _fast._libm_sin(x[i])
+
+    sine(x, s)  # the limit's sin((pi/2 - alpha0) / 2) of the setup
+    assert np.array_equal(s, np.sin(x))
 
 
 def test_amplitude_within_an_ulp_of_mpmath_from_subnormal_to_huge():

