@@ -291,13 +291,17 @@ def _screened_chunk(E_S, alpha0, F1, F2, c, m1, m2, L1, t, aF, code):
 
 
 def _on_threads(chunk_fn, n: int, inputs, outputs) -> None:
-    """``chunk_fn(*inputs[sl], *outputs[sl])`` for the chunks sl of :data:`THREAD_CHUNK` cases, on numba's current
-    number of threads (``numba.set_num_threads``; :func:`quickrelease.using_threads`), a chunk at a time per thread.
-    Each case is computed alone, so the results do not depend on the number of threads, bit for bit."""
+    """``chunk_fn(*inputs[sl], *outputs[sl])`` for the chunks sl of at most :data:`THREAD_CHUNK` cases (at least 8 a
+    thread where there are enough cases), on numba's current number of threads (``numba.set_num_threads``;
+    :func:`quickrelease.using_threads`), a chunk at a time per thread. Each case is computed alone, so the results
+    do not depend on the number of threads, bit for bit."""
     import numba
 
-    threads = min(numba.get_num_threads(), -(-n // THREAD_CHUNK))
-    args = [tuple(a[sl] for a in inputs) + tuple(o[sl] for o in outputs) for sl in _chunks(n, THREAD_CHUNK)]
+    threads = numba.get_num_threads()
+    # at least 8 chunks a thread where n allows (chunks of 1024 cases at the least), so that they end together
+    size = min(THREAD_CHUNK, max(1024, -(-n // (8 * threads))))
+    threads = min(threads, -(-n // size))
+    args = [tuple(a[sl] for a in inputs) + tuple(o[sl] for o in outputs) for sl in _chunks(n, size)]
     if threads <= 1:
         for a in args:
             chunk_fn(*a)
