@@ -156,3 +156,20 @@ def test_huge_friction_stops_at_once_as_constant_deceleration(F):
     t = 2.0 * math.sqrt(m2 * L1**2 * (k + math.sin(a0) ** 2)) * math.sqrt(1.0) / G
     st = batch.stop_time(1.0, a0, F, F)
     assert float(st.stop_time) == pytest.approx(t, rel=1e-14) and float(st.alpha_final) == a0
+
+
+def test_cases_out_of_range_come_back_nan_and_leave_the_others_alone():
+    """E_S not positive and finite, or friction whose work overflows (2 F1 L1 = inf), is out of range: t_F and
+    alpha_F NaN, chunk by chunk on the threads (``batch._screened_chunk``), the valid cases beside them as alone."""
+    good = _cases(random_releases(40, seed=8))
+    E, F1 = good["E_S"].copy(), good["F1"].copy()
+    E[[1, 5, 9, 13]] = [0.0, -1.0, np.nan, np.inf]
+    F1[17] = 1e308  # 2 F1 L1 overflows
+    st = batch.stop_time(E, good["alpha0"], F1, good["F2"], 1.0, good["k"], 1.0, good["L1"])
+    out = np.zeros(40, dtype=bool)
+    out[[1, 5, 9, 13, 17]] = True
+    assert np.all(np.isnan(st.stop_time[out])) and np.all(np.isnan(st.alpha_final[out]))
+    alone = batch.stop_time(good["E_S"][~out], good["alpha0"][~out], good["F1"][~out], good["F2"][~out], 1.0,
+                            good["k"][~out], 1.0, good["L1"][~out])
+    assert np.array_equal(st.stop_time[~out], alone.stop_time) and np.array_equal(st.alpha_final[~out],
+                                                                                  alone.alpha_final)
