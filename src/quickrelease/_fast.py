@@ -24,6 +24,7 @@ import numpy as np
 from llvmlite import ir as _ir
 from numba import njit, prange
 from numba import types as _nbtypes
+from numba.core import cgutils
 from numba.extending import intrinsic
 
 from . import _kernels, dynamics
@@ -300,20 +301,13 @@ def _libm(name):
 
         def codegen(context, builder, signature, args):
             double = _ir.DoubleType()
-            fn = _cgutils_function(builder.module, _ir.FunctionType(double, [double]), name)
+            fn = cgutils.get_or_insert_function(builder.module, _ir.FunctionType(double, [double]), name)
             fn.attributes.add("nobuiltin")
             return builder.call(fn, args)
 
         return _nbtypes.float64(_nbtypes.float64), codegen
 
     return call
-
-
-def _cgutils_function(module, fnty, name):
-    """The declaration of the external function ``name`` in ``module`` (added once)."""
-    from numba.core import cgutils
-
-    return cgutils.get_or_insert_function(module, fnty, name)
 
 
 _libm_sin = _libm("sin")
@@ -329,11 +323,9 @@ def _libm_sincos(typingctx, x):
     tuple_type = _nbtypes.UniTuple(_nbtypes.float64, 2)
 
     def codegen(context, builder, signature, args):
-        from numba.core import cgutils
-
         double = _ir.DoubleType()
         fnty = _ir.FunctionType(_ir.VoidType(), [double, double.as_pointer(), double.as_pointer()])
-        fn = _cgutils_function(builder.module, fnty, "sincos")
+        fn = cgutils.get_or_insert_function(builder.module, fnty, "sincos")
         fn.attributes.add("nobuiltin")
         s = cgutils.alloca_once(builder, double)
         c = cgutils.alloca_once(builder, double)
@@ -719,7 +711,7 @@ def identify_kernel(a0, aF, tF, E, k, m2, L1, x16, w16, x24, w24, near, hard, ma
             iter_out[i] = iterations
 
 
-_accel = njit(cache=True, nogil=True, error_model="numpy")(_kernels.head_hinge_acceleration)
+_accel = _jit(_kernels.head_hinge_acceleration, acceleration_terms=_jit(_kernels.acceleration_terms))
 #: ``_kernels.refine_peak`` compiled as written, its call of ``head_hinge_acceleration`` bound to ``_accel``.
 _refine_peak = njit(cache=True, nogil=True, error_model="numpy")(types.FunctionType(
     _kernels.refine_peak.__code__, {**_kernels.refine_peak.__globals__, "head_hinge_acceleration": _accel},

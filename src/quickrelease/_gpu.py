@@ -331,23 +331,11 @@ def _peak_head_velocity(xp, E, a0, aE, A, B, k, m2, n_samples: int = 8, newton: 
 
 def _accel(xp, alpha, E, s0, c0, A, B, F1, F2, k, m2, L1, which):
     """u_ddot (which 0) or v_ddot (which 1) at alpha and its slope in alpha (``_kernels.head_hinge_acceleration``,
-    vectorised: K < 0 taken as 0) [m/s^2], [m/s^2/rad]."""
+    vectorised: K < 0 taken as 0; the formula itself is ``_kernels.acceleration_terms``) [m/s^2], [m/s^2/rad]."""
     s = xp.sin(alpha)
     c = xp.cos(alpha)
     K = xp.maximum(E - A * (s - s0) - B * (c0 - c), 0.0)
-    Kp = -A * c - B * s
-    ml = m2 * L1
-    d = k + s * s
-    dpd = 2.0 * s * c / d
-    r = K / (ml * L1 * d)
-    rp = (Kp / (ml * L1) - r * 2.0 * s * c) / d
-    Q = 2.0 * F2 * s + F1 * c
-    Qp = 2.0 * F2 * c - F1 * s
-    q = -r * s * c / d - Q / (ml * d)
-    qp = -(rp * s * c + r * (c * c - s * s)) / d + (r * s * c / d) * dpd - Qp / (ml * d) + (Q / (ml * d)) * dpd
-    if which == 0:
-        return L1 * (c * r + s * q), L1 * (-s * r + c * rp + c * q + s * qp)
-    return L1 * (-s * r + c * q), L1 * (-c * r - s * rp - s * q + c * qp)
+    return _kernels.acceleration_terms(s, c, K, -A * c - B * s, F1, F2, k, m2, L1, which)
 
 
 def _refine_peak(xp, lo, hi, args, which, max_iter: int = 200):

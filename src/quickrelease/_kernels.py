@@ -429,6 +429,13 @@ def head_hinge_acceleration(alpha, E, s0, c0, A, B, F1, F2, k, m2, L1, which):
     Kp = -A * c - B * s
     if K < 0.0:
         K = 0.0
+    return acceleration_terms(s, c, K, Kp, F1, F2, k, m2, L1, which)
+
+
+def acceleration_terms(s, c, K, Kp, F1, F2, k, m2, L1, which):
+    """:func:`head_hinge_acceleration` from ``s = sin(alpha)``, ``c = cos(alpha)``, the remaining energy K >= 0 and
+    its slope Kp = dK/dalpha: pure arithmetic, so that the compiled kernels and the array-module (GPU) ones share
+    the formula (each computes s, c and K its own way) [m/s^2], [m/s^2/rad]."""
     ml = m2 * L1
     d = k + s * s
     dpd = 2.0 * s * c / d  # d'/d

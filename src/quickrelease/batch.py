@@ -284,7 +284,8 @@ def _screened_chunk(E_S, alpha0, F1, F2, c, m1, m2, L1, t, aF, code):
     """One chunk of :func:`stop_time` from the raw inputs, in place: :func:`_screen` and ``k = c m1 / m2`` on the
     chunk (so that they share the threads too), :func:`_stop_chunk`, and NaN where a case is out of range."""
     F1, F2, E_S, bad = _screen(E_S, F1, F2, L1)
-    k = np.divide(np.multiply(c, m1, out=_scratch(E_S.size)[2]), m2, out=_scratch(E_S.size)[2])  # c * m1 / m2
+    k = _scratch(E_S.size)[2]
+    np.divide(np.multiply(c, m1, out=k), m2, out=k)  # c * m1 / m2, rounded as written
     _stop_chunk(E_S, alpha0, F1, F2, k, m2, L1, t, aF, code)
     if bad.any():
         t[bad], aF[bad] = np.nan, np.nan
