@@ -295,8 +295,8 @@ def _stop_parts(xp, E, alpha0, F1, F2, k, m2, L1, chunk):
 # -- release envelope ----------------------------------------------------------------------------------------------
 
 def _peak_head_velocity(xp, E, a0, aE, A, B, k, m2, n_samples: int = 8, newton: int = 5):
-    """Peak of u_dot = sqrt(sin^2(a) K(a) / (m2 (k + sin^2 a))) over [alpha0, alpha_end] [m/s]: the formulas and
-    steps of ``batch._peak_head_velocity`` (samples, then Newton's method on d ln(g)/d alpha), with xp."""
+    """Peak of u_dot = sqrt(sin^2(a) K(a) / (m2 (k + sin^2 a))) over [alpha0, alpha_end] [m/s]: samples, then
+    Newton's method on d ln(g)/d alpha from the best (``batch._peak_head_velocity`` calls this with numpy)."""
     frac = xp.arange(n_samples) / n_samples
     sa0, ca0 = xp.sin(a0), xp.cos(a0)
 

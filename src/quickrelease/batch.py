@@ -328,44 +328,12 @@ def _peak_head_velocity(E_S, alpha0, alpha_end, A, B, k, m2, n_samples: int = 8,
     """Peak of u_dot = sqrt(sin^2(a) K(a) / (m2 (k + sin^2 a))) over [alpha0, alpha_end] [m/s].
 
     Samples the interval, then Newton's method on d ln(g)/d alpha from the best sample, with
-    g = sin^2(a) K(a) / (k + sin^2 a) and K = E_S - W_F (Eq. 9); the endpoints are kept as candidates.
+    g = sin^2(a) K(a) / (k + sin^2 a) and K = E_S - W_F (Eq. 9); the endpoints are kept as candidates. One
+    implementation for every backend: the array-module one of :mod:`quickrelease._gpu`, here with numpy.
     """
-    frac = np.arange(n_samples) / n_samples  # alpha_end itself has K = 0 at a friction stop
-    a = alpha0[:, None] + (alpha_end - alpha0)[:, None] * frac
+    from . import _gpu
 
-    def g(alpha, s, co):
-        K = E_S[..., None] if np.ndim(alpha) == 2 else E_S
-        sa0, ca0 = np.sin(alpha0), np.cos(alpha0)
-        if np.ndim(alpha) == 2:
-            sa0, ca0 = sa0[:, None], ca0[:, None]
-            AA, BB, kk = A[:, None], B[:, None], k[:, None]
-        else:
-            AA, BB, kk = A, B, k
-        K = K - AA * (s - sa0) - BB * (ca0 - co)
-        return s * s * np.maximum(K, 0.0) / (kk + s * s), K, AA, BB, kk
-
-    s, co = np.sin(a), np.cos(a)
-    vals = g(a, s, co)[0]
-    j = np.argmax(vals, axis=1)
-    rows = np.arange(a.shape[0])
-    best = vals[rows, j]
-    x = a[rows, j]
-    lo, hi = alpha0, alpha_end
-    for _ in range(newton):
-        s, co = np.sin(x), np.cos(x)
-        _, K, AA, BB, kk = g(x, s, co)
-        K = np.maximum(K, 1e-300)
-        d = kk + s * s
-        Kp = -(AA * co + BB * s)
-        Kpp = AA * s - BB * co
-        with np.errstate(divide="ignore", invalid="ignore"):
-            G = 2.0 * kk * co / (s * d) + Kp / K
-            Gp = 2.0 * kk * (-d - 2.0 * s * s * co * co) / (s * s * d * d) + (Kpp / K - (Kp / K) ** 2)
-            step = np.where(Gp < 0, G / Gp, 0.0)
-        x = np.clip(x - np.nan_to_num(step), lo, hi)
-    s, co = np.sin(x), np.cos(x)
-    best = np.maximum(best, g(x, s, co)[0])
-    return np.sqrt(best / m2)
+    return _gpu._peak_head_velocity(np, E_S, alpha0, alpha_end, A, B, k, m2, n_samples, newton)
 
 
 #: Angles sampled for the peak accelerations, to pick the best sample; the maximum is then the root of the
