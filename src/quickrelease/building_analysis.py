@@ -73,7 +73,9 @@ class BuildingResult(Summarised):
         out: dict[str, Any] = {"model": self.model, "source": self.source}
         out.update(physical_estimates(self.fit))
         out.update({"aic": self.fit.aic, "bic": self.fit.bic, "residual_rms": dict(self.fit.residual_rms),
-                    "converged": self.fit.converged, "release_time_s": self.fit.release_time,
+                    "converged": self.fit.converged, "global_minimum_confirmed": self.fit.global_minimum_confirmed,
+                    "search": None if self.fit.search is None else jsonable(self.fit.search.summary()),
+                    "release_time_s": self.fit.release_time,
                     "d0_m": self.fit.parameters.get("d0"), "warnings": list(self.warnings),
                     "notes": list(self.notes), "comparison": [jsonable(r) for r in self.comparison],
                     "decay_check": jsonable({k: v for k, v in self.decay_check.items() if k != "analysis"}),

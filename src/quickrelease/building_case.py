@@ -66,6 +66,7 @@ def spec_isolation(spec: BuildingSpec) -> Isolation:
     Planning's model (:func:`quickrelease.planning.building_isolation`); the 2dof building itself is
     :func:`spec_building`'s.
     """
+    spec.require_design("the building's model")
     friction = spec.friction_force
     mass = spec.mass
     if mass is None:
@@ -86,6 +87,7 @@ def spec_building(spec: BuildingSpec) -> Isolation | TwoDOF:
     :func:`spec_isolation` (the 2dof building rigid on its isolation layer)."""
     if spec.model != "2dof":
         return spec_isolation(spec)
+    spec.require_design("the building's model")
     if spec.mass is None:
         raise ParameterError("[building] mass", None, "given for model = '2dof' (its stiffnesses act on the mass)",
                              "kg")
@@ -129,9 +131,12 @@ class BuildingData:
 def _start(spec: BuildingSpec) -> dict[str, float]:
     start: dict[str, float] = {}
     if spec.model == "bilinear":
-        start["period"] = 2.0 * math.pi * math.sqrt(spec.mass / spec.k1)
-        start["stiffness_ratio"] = spec.k2 / spec.k1
-        start["yield_force"] = spec.yield_force
+        if spec.k1 is not None:
+            start["period"] = 2.0 * math.pi * math.sqrt(spec.mass / spec.k1)
+            if spec.k2 is not None:
+                start["stiffness_ratio"] = spec.k2 / spec.k1
+        if spec.yield_force is not None:
+            start["yield_force"] = spec.yield_force
     elif spec.period is not None:
         start["period"] = spec.period
     if spec.damping_ratio > 0.0:
@@ -141,8 +146,10 @@ def _start(spec: BuildingSpec) -> dict[str, float]:
     if spec.displacement is not None:
         start["d0"] = spec.displacement
     if spec.model == "2dof":
-        start["superstructure_period"] = spec.superstructure_period
-        start["superstructure_damping_ratio"] = spec.superstructure_damping_ratio
+        if spec.superstructure_period is not None:
+            start["superstructure_period"] = spec.superstructure_period
+        if spec.superstructure_damping_ratio:
+            start["superstructure_damping_ratio"] = spec.superstructure_damping_ratio
     return start
 
 
@@ -168,7 +175,7 @@ def load_building(case: Case) -> BuildingData:
     if spec.mass is None:
         raise CaseFileError(f"{case.source}: missing key [building] mass (or weight): the building's record "
                             "fixes its parameters per unit mass only, e.g. mass = '650 t'")
-    isolation = spec_building(spec)
+    isolation = spec_building(spec) if not spec.missing_design() else None
     channels: list[BuildingChannel] = []
     notes: list[str] = []
     release_time = None
@@ -185,6 +192,14 @@ def load_building(case: Case) -> BuildingData:
                                                 noise=ch.spec.noise, offset=ch.spec.offset))
             except QuickReleaseError as exc:
                 raise RecordError(f"{where}: {exc}") from None
-    return BuildingData(model=spec.model, mass=float(spec.mass), isolation=isolation, start=_start(spec),
+    start = _start(spec)
+    if ("d0" not in start and channels and not any(c.kind in ("x", "x_roof") for c in channels)
+            and case.has_test and case.push_force is not None and not spec.missing_design()):
+        # no displacement in the record: d0 from the push force and the design values, one start among the
+        # fit's (which searches d0 too)
+        from .planning import pushed_displacement
+
+        start["d0"] = pushed_displacement(case.push_force, spec)
+    return BuildingData(model=spec.model, mass=float(spec.mass), isolation=isolation, start=start,
                         d0=spec.displacement, channels=channels, release_time=release_time, notes=notes,
                         source=case.source, superstructure_mass=spec.superstructure_mass, spec=spec)

@@ -158,11 +158,31 @@ class BuildingSpec:
         return 0.0
 
     @property
-    def initial_period(self) -> float:
-        """Period of the isolation layer's (initial) stiffness [s]: T, or 2 pi sqrt(mass / k1) (bilinear)."""
+    def initial_period(self) -> float | None:
+        """Period of the isolation layer's (initial) stiffness [s]: T, or 2 pi sqrt(mass / k1) (bilinear);
+        None where the design values do not give it."""
         if self.period is not None:
             return self.period
+        if self.k1 is None or self.mass is None:
+            return None
         return 2.0 * math.pi * math.sqrt(self.mass / self.k1)
+
+    def missing_design(self) -> list[str]:
+        """The design values of the model that are not given (``[building]`` keys): a fit of the record needs
+        none of them, ``synth``, planning and the clearance check need all."""
+        keys = {"linear": ("period",), "bilinear": ("k1", "k2", "yield_force"),
+                "2dof": ("period", "superstructure_period")}[self.model]
+        return [k for k in keys if getattr(self, k) is None]
+
+    def require_design(self, purpose: str) -> None:
+        """Raise :class:`CaseFileError` naming the first design value missing for ``purpose`` (e.g.
+        ``"synth"``)."""
+        missing = self.missing_design()
+        if missing:
+            key = missing[0]
+            raise CaseFileError(f"missing key [building] {key} for model = {self.model!r}: {purpose} needs the "
+                                f"design values ({CASE_SCHEMA['building'][key][1]}); a fit of the record needs "
+                                "the mass only")
 
 
 @dataclass(frozen=True)
@@ -675,10 +695,12 @@ def _building(values: dict[str, Any], table: Any, source: str, base: Path) -> Bu
         raise CaseFileError(f"{source}: [building] {key} = {table[key]!r} with model = {model!r}: {key} belongs "
                             f"to model = {users!r} (the {model} model takes "
                             f"{', '.join(_MODEL_KEYS[model])})")
-    for key in _MODEL_KEYS[model]:
-        if key not in given and not (model == "2dof" and key == "superstructure_damping_ratio"):
-            raise CaseFileError(f"{source}: missing key [building] {key} for model = {model!r} "
-                                f"({CASE_SCHEMA['building'][key][1]})")
+    # the design values (period, k1, k2, yield_force, superstructure_period, ...) are optional: a fit of the
+    # record needs the mass only (and the 2dof model the superstructure's share of it); what needs them
+    # (synth, planning, the clearance check) says which is missing (BuildingSpec.require_design)
+    if model == "2dof" and "superstructure_mass" not in given:
+        raise CaseFileError(f"{source}: missing key [building] superstructure_mass for model = '2dof' "
+                            f"({CASE_SCHEMA['building']['superstructure_mass'][1]})")
     mass = values.get("building.mass")
     if "building.weight" in values:
         if mass is not None:
@@ -694,7 +716,7 @@ def _building(values: dict[str, Any], table: Any, source: str, base: Path) -> Bu
     if "building.displacement" not in values and mass is None:
         raise CaseFileError(f"{source}: [building] needs displacement (d0) or the mass or weight (d0 = P / k)")
     k1, k2 = values.get("building.k1"), values.get("building.k2")
-    if k1 is not None and not k2 < k1:
+    if k1 is not None and k2 is not None and not k2 < k1:
         raise _fail(source, "[building] k2", table["k2"], f"a post-yield stiffness in (0, k1) = (0, {k1:.6g}) N/m")
     m_s = values.get("building.superstructure_mass")
     if m_s is not None and not m_s < mass:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import math
 import sys
 from collections.abc import Callable, Iterator
 from functools import wraps
@@ -802,6 +803,13 @@ def _building_tables(result, summary: dict[str, Any], title: str) -> None:
             human, value, _, interval = estimate_row(name, summary[key], None, summary.get(f"{key}_ci95"), unit)
             rows.append((human, value, "not identified" if key in summary.get("not_identified", ()) else interval))
     state = "converged" if fit.converged else "NOT converged"
+    cert = fit.search
+    if cert is not None:
+        found = (f"global minimum {'confirmed' if cert.global_minimum_confirmed else 'NOT confirmed'} "
+                 f"({cert.reached_best} of {cert.starts} starts reached it; next minimum "
+                 + (f"delta chi-square {cert.next_best_delta_chi2:.3g})" if math.isfinite(cert.next_best_delta_chi2)
+                    else "none found)"))
+        state = f"{state}, {found}"
     _table(f"{title}: {fit.model} isolation model, {state}, reduced chi-square {fit.chi2_reduced:.4g}, "
            f"AIC {fit.aic:.6g}, BIC {fit.bic:.6g}", rows, ("parameter", "estimate", "95% interval"))
     unit = {c.name: RECORD_CHANNELS[c.name][1] if c.name in RECORD_CHANNELS else "" for c in fit.channels}

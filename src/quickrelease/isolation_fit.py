@@ -46,6 +46,18 @@ from scipy.optimize import brentq, least_squares
 from ._lsq import identified_covariance, jacobian_covariance
 from .building import RECORD_CHANNELS, Isolation, TwoDOF, free_vibration
 from .errors import ParameterError, QuickReleaseError
+from .isolation_search import (
+    COMPETING_DELTA_CHI2,
+    SEARCH_EVALUATIONS,
+    SEARCH_RUNS,
+    SearchCertificate,
+    certificate,
+    global_candidates,
+    record_period,
+    same_basin,
+    search_box,
+    thin_channels,
+)
 
 __all__ = ["BuildingChannel", "IsolationFit", "fit_isolation", "compare_models", "decay_check", "ljung_box",
            "CHANNEL_KINDS", "IsolationPrecision", "predicted_isolation_errors"]
@@ -130,6 +142,15 @@ class IsolationFit:
     """The superstructure (roof) mass m_s [kg] given to the 2-DOF fit; None for the rigid models."""
     fixed: dict[str, float] = field(default_factory=dict)
     """Parameters held fixed in the fit (not in ``estimates``), by name."""
+    search: SearchCertificate | None = field(default=None, repr=False)
+    """The multi-start's certificate (:class:`quickrelease.isolation_search.SearchCertificate`): the starts,
+    how many reached the best minimum, the distinct minima and the next-best's delta chi-square."""
+
+    @property
+    def global_minimum_confirmed(self) -> bool:
+        """At least two independent starts reached the best minimum and no other lies within delta chi-square
+        ``COMPETING_DELTA_CHI2`` of it (``converged`` says only that the optimiser stopped)."""
+        return bool(self.search is not None and self.search.global_minimum_confirmed)
 
     @property
     def parameters(self) -> dict[str, float]:
@@ -167,6 +188,8 @@ class IsolationFit:
                 "chi2": self.chi2, "dof": self.dof, "chi2_reduced": self.chi2_reduced,
                 "absolute_sigma": self.absolute_sigma, "aic": self.aic, "bic": self.bic,
                 "whiteness_p": self.whiteness_p, "converged": self.converged, "nfev": self.nfev,
+                "global_minimum_confirmed": self.global_minimum_confirmed,
+                "search": self.search.summary() if self.search is not None else None,
                 "warnings": list(self.warnings)}
 
 
@@ -521,8 +544,66 @@ def _noise_levels(channels, t_r0: float) -> tuple[dict[str, float], dict[str, st
     return noise, source, absolute
 
 
+#: A record whose swing grows past this factor of its first (plus 8 noise levels) is no free decay.
+GROWTH_LIMIT = 1.25
+
+
+def _check_decays(channels) -> None:
+    """Refuse a record whose oscillation grows: after a push and release from rest the layer's energy only
+    falls, so each swing of the displacement (and, for a rigid superstructure, of the velocity and the
+    acceleration) about the final level is at most the first. The record of each layer channel is cut in
+    eight equal windows; the largest deviation from the level of the last tenth in any later window must not
+    exceed ``GROWTH_LIMIT`` times that of the first two windows (the push and the first swings) plus 8 noise
+    levels (the noise from the samples' second differences, 1.4826 MAD / sqrt(6), which holds whatever the
+    release: a record that never settles has no quiet segment). Raises QuickReleaseError naming the channel
+    and the two swings."""
+    for ch in channels:
+        if ch.kind not in ("x", "v", "a") or ch.values.size < 80:
+            continue
+        level = float(np.median(ch.values[-max(ch.values.size // 10, 5):]))
+        dev = np.abs(ch.values - level)
+        windows = np.array_split(dev, 8)
+        first = max(float(np.max(windows[0])), float(np.max(windows[1])))
+        later = max(float(np.max(w)) for w in windows[2:])
+        d2 = np.diff(ch.values, 2)
+        sigma = 1.4826 * float(np.median(np.abs(d2 - np.median(d2)))) / math.sqrt(6.0)
+        if later > GROWTH_LIMIT * first + 8.0 * sigma:
+            unit = CHANNEL_KINDS[ch.kind]
+            raise QuickReleaseError(
+                f"channel {ch.name}: the oscillation grows (a swing of {later:.3g} {unit} after a first of "
+                f"{first:.3g} {unit}): a free vibration from a push and release only decays, so no isolation "
+                "model describes this record (a forced or self-excited motion, a wrong time column, or records "
+                "joined end to end?)")
+
+
+def _d0_from_motion(channels, t_r: float, mass: float) -> float:
+    """The pushed displacement of a record without a displacement channel, roughly (a start for the search,
+    which scales it by up to 3 either way): the record's apparent period T and the first swing's peak
+    acceleration or velocity after the release (A_a = w^2 d0, A_v = w d0 for the elastic layer, w = 2 pi
+    / T), the sign opposite to the first motion [m]; nan where the record shows neither."""
+    from .isolation_search import record_period
+
+    period = record_period(channels, t_r)
+    if period is None:
+        return math.nan
+    w = 2.0 * math.pi / period
+    for kind, power in (("a", 2), ("v", 1), ("a_roof", 2), ("v_roof", 1)):
+        ch = next((c for c in channels if c.kind == kind), None)
+        if ch is None:
+            continue
+        pre = ch.values[ch.t < t_r]
+        zero = float(np.median(pre)) if pre.size >= 3 else 0.0
+        first = (ch.t > t_r) & (ch.t < t_r + 0.5 * period)
+        if np.count_nonzero(first) < 3:
+            continue
+        y = ch.values[first] - zero
+        i = int(np.argmax(np.abs(y)))
+        return -math.copysign(abs(float(y[i])) / w**power, float(y[i]))
+    return math.nan
+
+
 def _initial_values(model: str, mass: float, channels, t_r0: float, fixed: dict[str, float],
-                    noise: dict[str, float], superstructure_mass: float | None):
+                    noise: dict[str, float], superstructure_mass: float | None, d0_start: float | None = None):
     """The start of the fit from the record: the pushed displacement d0 (the displacement channel's median
     before the release, or the fixed one), each channel's offset (its median before the release; 0 for a
     displacement), the model's parameters from the decay analysis or the hysteresis loop (:func:`_start`),
@@ -542,9 +623,13 @@ def _initial_values(model: str, mass: float, channels, t_r0: float, fixed: dict[
         d0 = float(np.median(pre)) if pre.size >= 3 else float(xch.values[0])
     if "d0" in fixed:
         d0 = float(fixed["d0"])
-    if d0 == 0.0:
-        raise ParameterError("d0", d0, "a non-zero pushed displacement (give a displacement channel or fixed d0)",
-                             "m")
+    elif xch is None and d0_start is not None:
+        d0 = float(d0_start)
+    elif xch is None:
+        d0 = _d0_from_motion(channels, t_r0, mass)
+    if not (math.isfinite(d0) and d0 != 0.0):
+        raise ParameterError("d0", d0, "a non-zero pushed displacement (give a displacement channel, "
+                             "[building] displacement or fixed d0)", "m")
     p0 = _start(model, mass, channels, t_r0, d0, noise, superstructure_mass)
     rest = p0.pop("rest", None)
     friction_se = p0.pop("friction_se", None)  # of the bilinear loop's F_s: the spread of its multi-start
@@ -610,6 +695,90 @@ def _start_points(model: str, mass: float, names: list[str], values: dict[str, f
     return starts
 
 
+#: Each start's local solve on the thinned record: its tolerance, and its evaluations per free parameter.
+THIN_TOLERANCE, THIN_EVALUATIONS = 1e-6, 40
+#: Distinct minima solved again on the whole record at most (the lowest first), and how far above the best
+#: (delta chi-square over the reduced chi-square, estimated on the thinned record) one may lie to be solved.
+FULL_SOLVES, FULL_SOLVE_DELTA = 3, 100.0
+
+
+def _compared(names: list[str], model: str) -> list[str]:
+    """The parameters by which two minima are told apart: the physical ones and d0, where free."""
+    return [n for n in names if n in _physical_names(model) or n == "d0"]
+
+
+def _basin_errors(J, names: list[str], compare: list[str], chi2: float, dof: int) -> dict[str, float]:
+    """Standard errors of the compared parameters from a Jacobian, scaled by the reduced chi-square where it
+    exceeds 1 (a misfit above the noise widens the basins alike)."""
+    try:
+        cov, blind = identified_covariance(np.asarray(J, dtype=float))
+    except np.linalg.LinAlgError:
+        return dict.fromkeys(compare, math.nan)
+    scale = max(chi2 / max(dof, 1), 1.0)
+    se = np.sqrt(np.clip(np.diag(cov) * scale, 0.0, None))
+    return {n: (math.nan if blind[i] else float(se[i])) for i, n in enumerate(names) if n in compare}
+
+
+def _multistart(named, names: list[str], values: dict[str, float], solve, thin_misfit, model: str, factor: float):
+    """Every start polished on the thinned record (``THIN_TOLERANCE``), the results grouped into basins
+    (:func:`quickrelease.isolation_search.same_basin`, on the standard errors of the thinned record's best
+    fit), and the lowest ``FULL_SOLVES`` basins solved on the whole record. Returns the best whole-record
+    least-squares result and the groups (``{"chi2", "parameters", "x", "starts", "res"}``; chi2 on the whole
+    record where solved there, else the thinned one times ``factor``), lowest first."""
+    polished = []
+    for origin, trial in named:
+        if not all(n in trial and math.isfinite(trial[n]) for n in names):
+            continue
+        r = solve(names, values, [trial[n] for n in names], tol=THIN_TOLERANCE, on=thin_misfit,
+                  max_nfev=THIN_EVALUATIONS * len(names))
+        polished.append({"origin": origin, "chi2": 2.0 * float(r.cost) * factor, "x": np.asarray(r.x), "jac": r.jac})
+    polished.sort(key=lambda d: d["chi2"])
+    compare = _compared(names, model)
+    dof_thin = thin_misfit.data.size - len(names)
+    se = _basin_errors(polished[0]["jac"], names, compare, polished[0]["chi2"] / factor, dof_thin)
+    groups: list[dict[str, Any]] = []
+    for item in polished:
+        p = _unpack(item["x"], names, values)
+        for g in groups:
+            if same_basin(p, g["parameters"], se):
+                g["starts"].append(item["origin"])
+                break
+        else:
+            groups.append({"chi2": item["chi2"], "parameters": p, "x": item["x"], "starts": [item["origin"]],
+                           "res": None})
+    red = max(groups[0]["chi2"] / factor / max(dof_thin, 1), 1.0)
+    for g in groups[:FULL_SOLVES]:
+        if g is not groups[0] and (g["chi2"] - groups[0]["chi2"]) / red > FULL_SOLVE_DELTA:
+            break
+        g["res"] = solve(names, values, g["x"])
+        g["chi2"], g["x"] = 2.0 * float(g["res"].cost), np.asarray(g["res"].x)
+        g["parameters"] = _unpack(g["x"], names, values)
+    solved = [g for g in groups if g["res"] is not None]
+    best = min(solved, key=lambda g: g["chi2"])
+    return best["res"], sorted(groups, key=lambda g: g["chi2"])
+
+
+def _final_groups(groups, res, names: list[str], values: dict[str, float], misfit, model: str,
+                  cov_se: dict[str, float]) -> list[dict[str, Any]]:
+    """The multi-start's basins after the fit's last steps: the final fit heads the group it lies in; every
+    basin solved on the whole record gets its chi-square with the final weights; basins that the whole-record
+    solves put in one basin (within ``SAME_BASIN_SE`` final standard errors) merge."""
+    best = {"chi2": 2.0 * float(res.cost), "parameters": _unpack(res.x, names, values), "starts": []}
+    se = {n: cov_se[n] for n in _compared(names, model) if n in cov_se}
+    out = [best]
+    for g in groups:
+        if g["res"] is not None:
+            r = misfit.residuals(g["x"], names, values)
+            g = {**g, "chi2": float(r @ r)}
+        for h in out:
+            if same_basin(g["parameters"], h["parameters"], se) or (h is best and g is groups[0]):
+                h["starts"] += g["starts"]
+                break
+        else:
+            out.append({"chi2": g["chi2"], "parameters": g["parameters"], "starts": list(g["starts"])})
+    return out
+
+
 def _profile_step(names: list[str], physical: list[str], unseen: set[str], est: dict[str, float],
                   std_errors: dict[str, float], lower: dict[str, float], upper: dict[str, float],
                   profile: bool | None, chi2: float, tq: float, scale: float, solve,
@@ -639,7 +808,8 @@ def _profile_step(names: list[str], physical: list[str], unseen: set[str], est: 
 def fit_isolation(channels, mass: float, model: str = "linear", *, release_time: float | None = None,
                   fit_release_time: bool = True, start: dict[str, float] | None = None,
                   fixed: dict[str, float] | None = None, profile: bool | None = None,
-                  superstructure_mass: float | None = None, tolerance: float = 1e-12) -> IsolationFit:
+                  superstructure_mass: float | None = None, tolerance: float = 1e-12, global_search: bool = True,
+                  seed: int = 0) -> IsolationFit:
     """Fit the isolation system (:mod:`quickrelease.building`) to records of the isolation layer.
 
     Parameters
@@ -711,7 +881,10 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
     if not fit_release_time:
         fixed["release_time"] = t_r0
     noise, source, absolute = _noise_levels(channels, t_r0)
-    p0, xch, d0, friction_se = _initial_values(model, mass, channels, t_r0, fixed, noise, superstructure_mass)
+    if model != "2dof":
+        _check_decays(channels)
+    p0, xch, d0, friction_se = _initial_values(model, mass, channels, t_r0, fixed, noise, superstructure_mass,
+                                               (start or {}).get("d0"))
     from_decay = dict(p0)  # the start of the model-free decay analysis, before the caller's start values
     p0.update(start or {})
     physical = _physical_names(model)
@@ -734,24 +907,34 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
     def jacobian(theta, free=names, base=values):
         return misfit.jacobian(theta, free, base)
 
-    def solve(free, base, x0, tol=tolerance):
+    def solve(free, base, x0, tol=tolerance, on=misfit, max_nfev=None):
         lo = np.array([lower.get(n, -math.inf) for n in free])
         hi = np.array([upper.get(n, math.inf) for n in free])
         x0 = np.clip(np.asarray(x0, dtype=float), lo, hi)
         # central differences over a relative step of 1e-4: the misfit jumps where a piece boundary (a
         # stick, a yield) passes a sample, so a step near the rounding level would see those jumps
-        return least_squares(residuals, x0, bounds=(lo, hi), args=(free, base), x_scale="jac", jac=jacobian,
-                             diff_step=1e-4, xtol=tol, ftol=tol, gtol=tol, max_nfev=400 * max(len(free), 1))
+        return least_squares(on.residuals, x0, bounds=(lo, hi), args=(free, base), x_scale="jac", jac=on.jacobian,
+                             diff_step=1e-4, xtol=tol, ftol=tol, gtol=tol,
+                             max_nfev=max_nfev or 400 * max(len(free), 1))
 
-    starts = _start_points(model, mass, names, values, fixed, start, from_decay, friction_se, xch, d0, misfit)
-    res = None
-    for trial in starts:
-        r_try = solve(names, values, [trial[n] for n in names])
-        if res is None or r_try.cost < res.cost:
-            res = r_try
-        if model in ("linear", "2dof") and absolute and 2.0 * res.cost <= 1.3 * max(data.size - len(names), 1):
-            break  # misfit at the noise level: the other basins lie far above it (2dof: every start of the
-            # rigid and flexible test records reached the same minimum, at 5x the cost)
+    # the starts: the record's own (decay analysis or hysteresis loop, and splits of the dissipation), the
+    # design values where given (one start among several, never a restriction), and the global search's
+    record_values = {**from_decay, **fixed}
+    named = [(f"record {i + 1}", trial) for i, trial in enumerate(
+        _start_points(model, mass, names, record_values, fixed, None, from_decay, friction_se, xch, d0, misfit))]
+    if start:
+        named.append(("design values", values))
+    thin, factor = thin_channels(channels)
+    thin_misfit = _Misfit(thin, noise, mass, model, superstructure_mass, lower, upper)
+    evaluations = 0
+    if global_search:
+        search_d0 = xch is None and "d0" not in fixed
+        box = search_box(model, record_period(channels, t_r0), search_d0)
+        found, evaluations = global_candidates(model, mass, thin_misfit, box, record_values, record_values["d0"],
+                                               runs=SEARCH_RUNS[model], evaluations=SEARCH_EVALUATIONS[model],
+                                               seed=seed, fixed=fixed)
+        named += [(c["origin"], c["parameters"]) for c in found]
+    res, groups = _multistart(named, names, values, solve, thin_misfit, model, factor)
     res = _requiet(res, channels, noise, source, sig, names, values, solve, t_r0)
     if model in ("linear", "bilinear"):
         res = _polish(res, names, values, solve, misfit.residuals, lower, upper, misfit.dt)
@@ -808,6 +991,16 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
             warnings.append(f"{n} not identified by this record (standard error inf, no interval)")
     warnings += _profile_step(names, physical, unseen, est, std_errors, lower, upper, profile, chi2, tq, scale,
                               solve, ci, method)
+    final = _final_groups(groups, res, names, values, misfit, model, std_errors)
+    cert = certificate(final, len([o for o, _ in named]), chi2_red, evaluations)
+    warnings += list(cert.warnings)
+    for m in cert.minima[1:]:
+        if m.delta_chi2 < COMPETING_DELTA_CHI2:  # a second basin as good as the best: the intervals cover it
+            for n in names:
+                if n in physical and n not in unseen and math.isfinite(m.parameters.get(n, math.nan)):
+                    lo_, hi_ = ci[n]
+                    ci[n] = (min(lo_, m.parameters[n]), max(hi_, m.parameters[n]))
+                    method[n] = "covers two minima"
     if "superstructure_period" in names and "superstructure_period" not in unseen and \
             est["superstructure_period"] - lower["superstructure_period"] <= 2.0 * std_errors["superstructure_period"]:
         warnings.append(f"superstructure_period at its lower bound ({SUPERSTRUCTURE_PERIOD_MIN:g} s): the record "
@@ -835,17 +1028,13 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
     if absolute and math.isfinite(chi2_red) and chi2_red > 1.3:
         warnings.append(f"the misfit is {math.sqrt(chi2_red):.2g} times the noise: the record does not support the "
                         f"{model} model, or the fit sits in a local minimum (give start values)")
-    if model == "bilinear" and not start and friction_se is None:
-        warnings.append("bilinear fit started from the decay's secant periods (no hysteresis loop: no acceleration "
-                        "channel, or too few yielded half-cycles); its misfit has local minima: give the bearings' "
-                        "design values as start values and compare")
     return IsolationFit(model=model, mass=mass, names=tuple(names), estimates=estimates, std_errors=std_errors,
                         ci95=ci, interval_method=method, correlation=corr, condition_number=cond, noise=noise,
                         noise_source=source, residual_rms=rms, samples=samples, chi2=chi2, dof=dof,
                         chi2_reduced=chi2_red, absolute_sigma=absolute, aic=aic, bic=bic, whiteness_p=white,
                         converged=bool(res.success), nfev=int(res.nfev), warnings=tuple(warnings),
                         channels=tuple(channels), superstructure_mass=superstructure_mass,
-                        fixed={n: float(values[n]) for n in fixed})
+                        fixed={n: float(values[n]) for n in fixed}, search=cert)
 
 
 #: The chi-square drop a polish restart must reach to replace the fit (:func:`_polish`).
@@ -968,7 +1157,11 @@ def _profile_interval(name, names, est, lo_b, hi_b, se, target, solve) -> tuple[
             inner, step = outer, 2.0 * step
         else:
             return bound
-        return brentq(lambda v: profile_chi2(v) - target, *sorted((inner, outer)), xtol=1e-3 * max(se, 1e-12))
+        lo_v, hi_v = sorted((inner, outer))
+        f_lo, f_hi = profile_chi2(lo_v) - target, profile_chi2(hi_v) - target
+        if f_lo * f_hi > 0:  # the piecewise profile stepped over the target between two refits: the outer one
+            return outer
+        return brentq(lambda v: profile_chi2(v) - target, lo_v, hi_v, xtol=1e-3 * max(se, 1e-12))
 
     return edge(-1), edge(+1)
 

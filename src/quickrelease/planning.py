@@ -479,6 +479,7 @@ def pushed_displacement(push_force: float, building: BuildingSpec) -> float:
     yield force, ``d_y + (P - F_f - F_y) / k2`` beyond it (``d_y = F_y / k1``)."""
     if building.displacement is not None:
         return building.displacement
+    building.require_design("d0 from the push force (without [building] displacement)")
     held = max(push_force - building.friction_force, 0.0)
     if building.model == "bilinear":
         k1, k2, F_y = building.k1, building.k2, building.yield_force
