@@ -555,18 +555,24 @@ def _check_decays(channels) -> None:
     eight equal windows; the largest deviation from the level of the last tenth in any later window must not
     exceed ``GROWTH_LIMIT`` times that of the first two windows (the push and the first swings) plus 8 noise
     levels (the noise from the samples' second differences, 1.4826 MAD / sqrt(6), which holds whatever the
-    release: a record that never settles has no quiet segment). Raises QuickReleaseError naming the channel
-    and the two swings."""
+    release: a record that never settles has no quiet segment); a velocity or acceleration from its first
+    departure from its initial level. Raises QuickReleaseError naming the channel and the two swings."""
     for ch in channels:
         if ch.kind not in ("x", "v", "a") or ch.values.size < 80:
             continue
         level = float(np.median(ch.values[-max(ch.values.size // 10, 5):]))
         dev = np.abs(ch.values - level)
+        d2 = np.diff(ch.values, 2)
+        sigma = 1.4826 * float(np.median(np.abs(d2 - np.median(d2)))) / math.sqrt(6.0)
+        if ch.kind != "x":  # a velocity or an acceleration rests at 0 before the release: from its first motion
+            pre = ch.values[: max(ch.values.size // 20, 3)]
+            moved = np.nonzero(np.abs(ch.values - np.median(pre)) > 8.0 * sigma)[0]
+            if moved.size == 0 or ch.values.size - moved[0] < 80:
+                continue
+            dev = dev[moved[0]:]
         windows = np.array_split(dev, 8)
         first = max(float(np.max(windows[0])), float(np.max(windows[1])))
         later = max(float(np.max(w)) for w in windows[2:])
-        d2 = np.diff(ch.values, 2)
-        sigma = 1.4826 * float(np.median(np.abs(d2 - np.median(d2)))) / math.sqrt(6.0)
         if later > GROWTH_LIMIT * first + 8.0 * sigma:
             unit = CHANNEL_KINDS[ch.kind]
             raise QuickReleaseError(
@@ -848,6 +854,14 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
     superstructure_mass : float, optional
         The roof mass m_s [kg] of the 2-DOF model, in (0, mass) (given, not fitted: the record fixes the
         parameters per unit mass only).
+    global_search : bool
+        The global stage (default True, :mod:`quickrelease.isolation_search`): independent CMA-ES runs over
+        the model's bounded space on the thinned record, whose best points are polished beside the record's
+        own starts and the design values; the result's ``search`` certificate counts the starts that reached
+        the best minimum and gives the next distinct minimum's delta chi-square. False: the record's starts
+        and the design values only (faster; no certificate that the minimum is global).
+    seed : int
+        Seed of the global search's runs (the fit is deterministic for a given seed).
     tolerance : float
         Relative tolerance of the least-squares solves (scipy's ``ftol``, ``xtol``, ``gtol``). The default, 1e-12,
         settles the estimates to far below their standard errors; a model fitted only to be ranked by AIC/BIC
@@ -857,6 +871,16 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
     -------
     IsolationFit
     """
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(1, user_api="blas"):  # thin Jacobians: BLAS threads cost more than they give
+        return _fit_isolation(channels, mass, model, release_time=release_time, fit_release_time=fit_release_time,
+                              start=start, fixed=fixed, profile=profile, superstructure_mass=superstructure_mass,
+                              tolerance=tolerance, global_search=global_search, seed=seed)
+
+
+def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_release_time, start, fixed, profile,
+                   superstructure_mass, tolerance, global_search, seed) -> IsolationFit:
     channels = list(channels)
     if not channels:
         raise ParameterError("channels", "none", "at least one channel of the isolation layer")
@@ -894,7 +918,9 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
         raise ParameterError("fixed", unknown[0], ", ".join(all_names))
     names = [n for n in all_names if n not in fixed]
     values = {**p0, **fixed}
-    lower, upper = _bounds(channels, t_r0, values["period"])
+    hint = record_period(channels, t_r0)
+    # the release's search reaches back a quarter of the record's apparent period (else the start's)
+    lower, upper = _bounds(channels, t_r0, hint if hint is not None else values["period"])
     misfit = _Misfit(channels, noise, mass, model, superstructure_mass, lower, upper)
     sig, data = misfit.sig, misfit.data
 
@@ -924,12 +950,15 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
         _start_points(model, mass, names, record_values, fixed, None, from_decay, friction_se, xch, d0, misfit))]
     if start:
         named.append(("design values", values))
-    thin, factor = thin_channels(channels)
+    thin, factor = thin_channels(channels, t_r0)
     thin_misfit = _Misfit(thin, noise, mass, model, superstructure_mass, lower, upper)
     evaluations = 0
     if global_search:
         search_d0 = xch is None and "d0" not in fixed
-        box = search_box(model, record_period(channels, t_r0), search_d0)
+        release = None
+        if "release_time" in names:  # from the fit's lower bound to two sampling intervals after the detection
+            release = (lower["release_time"], min(upper["release_time"], t_r0 + 2.0 * misfit.dt))
+        box = search_box(model, hint, search_d0, release)
         found, evaluations = global_candidates(model, mass, thin_misfit, box, record_values, record_values["d0"],
                                                runs=SEARCH_RUNS[model], evaluations=SEARCH_EVALUATIONS[model],
                                                seed=seed, fixed=fixed)

@@ -56,8 +56,8 @@ class SearchBox:
     lower: tuple[float, ...]
     upper: tuple[float, ...]
     scale: tuple[str, ...]
-    """``"log"`` (the coordinate is the logarithm's share of its range) or ``"sqrt"`` (the square root's:
-    finer near the lower bound 0, where damping ratios and friction shares usually lie)."""
+    """``"log"`` (the coordinate is the logarithm's share of its range), ``"sqrt"`` (the square root's: finer
+    near the lower bound 0, where damping ratios and friction shares usually lie) or ``"linear"``."""
 
     def to_values(self, u) -> dict[str, float]:
         """Box coordinates -> the searched quantities (shares and SI values)."""
@@ -66,6 +66,8 @@ class SearchBox:
         for n, lo, hi, sc, x in zip(self.names, self.lower, self.upper, self.scale, u, strict=True):
             if sc == "log":
                 out[n] = float(math.exp(math.log(lo) + x * (math.log(hi) - math.log(lo))))
+            elif sc == "linear":
+                out[n] = float(lo + x * (hi - lo))
             else:
                 out[n] = float((math.sqrt(lo) + x * (math.sqrt(hi) - math.sqrt(lo))) ** 2)
         return out
@@ -77,6 +79,8 @@ class SearchBox:
             v = values[n]
             if sc == "log":
                 x = (math.log(max(v, lo)) - math.log(lo)) / (math.log(hi) - math.log(lo))
+            elif sc == "linear":
+                x = (v - lo) / (hi - lo)
             else:
                 x = (math.sqrt(max(v, lo)) - math.sqrt(lo)) / (math.sqrt(hi) - math.sqrt(lo))
             out.append(min(max(x, 0.0), 1.0))
@@ -92,11 +96,13 @@ def _noise_scatter(y: np.ndarray) -> float:
 def record_period(channels, t_r: float) -> float | None:
     """The record's apparent period [s], a hint for the search's box.
 
-    Twice the median time between successive crossings (up, then down) of a band about the final level (a
-    Schmitt trigger: +-5% of the first swing, at least 5 noise levels, so that the noise near a crossing
-    does not count), on the first channel (x, v, a, then the roof's) with at least two such crossings after
-    the release ``t_r``. A displacement that crosses once only (sliders that stick after a swing or two) gives
-    twice the time from the release to its first turning point (a half-period after a release from rest)."""
+    The median time between crossings of the final level in the same direction (twice the time between two
+    where there are only two), each the last sign change before
+    the record crosses a band about the level (a Schmitt trigger: +-5% of the first swing, at least 5 noise
+    levels, so that the noise near a crossing does not count), on the first channel (x, v, a, then the roof's) with at least two such crossings after
+    the release ``t_r``. A displacement that crosses once or never (sliders that stick after a swing or two)
+    gives twice the time from the release to its first turning point (a half-period after a release from
+    rest)."""
     for kind in ("x", "v", "a", "x_roof", "v_roof", "a_roof"):
         for ch in channels:
             if ch.kind != kind:
@@ -112,17 +118,27 @@ def record_period(channels, t_r: float) -> float | None:
                 continue
             state, crossings = 0, []
             above, below = y > h, y < -h
+            sign = np.signbit(y)
+            zeros = np.nonzero(sign[1:] != sign[:-1])[0]  # y changes sign between zeros[k] and zeros[k] + 1
             for i in np.nonzero(above | below)[0]:
-                if above[i] and state <= 0:
-                    if state < 0:
-                        crossings.append(t[i])
+                if (above[i] and state < 0) or (below[i] and state > 0):
+                    # the band is crossed: the level's last crossing before it, interpolated
+                    j = zeros[np.searchsorted(zeros, i) - 1]
+                    crossings.append(float(t[j] - y[j] * (t[j + 1] - t[j]) / (y[j + 1] - y[j])))
+                if above[i]:
                     state = 1
-                elif below[i] and state >= 0:
-                    if state > 0:
-                        crossings.append(t[i])
+                elif below[i]:
                     state = -1
-            if len(crossings) >= 2:  # twice the median half-period between crossings of opposite directions
-                return float(2.0 * np.median(np.diff(crossings)))
+            if len(crossings) >= 3:  # the median time between crossings of the same direction: a level a
+                c = np.array(crossings)  # little off the axis moves up- and down-crossings alike
+                return float(np.median(c[2:] - c[:-2]))
+            if len(crossings) == 2:
+                return float(2.0 * (crossings[1] - crossings[0]))
+            if kind in ("x", "x_roof") and not crossings:  # stuck at its first turning point: the final level
+                z = y * math.copysign(1.0, float(y[0]))
+                near = np.nonzero(z <= 3.0 * sigma + 1e-3 * h)[0]
+                if near.size and t[near[0]] > t[0]:
+                    return float(2.0 * (t[near[0]] - t_r))
             if kind in ("x", "x_roof") and len(crossings) == 1:
                 z = y * math.copysign(1.0, float(y[0]))  # from the pushed side (+) through the level
                 c = int(np.searchsorted(t, crossings[0]))
@@ -135,15 +151,19 @@ def record_period(channels, t_r: float) -> float | None:
     return None
 
 
-def search_box(model: str, period_hint: float | None, search_d0: bool) -> SearchBox:
+def search_box(model: str, period_hint: float | None, search_d0: bool,
+               release: tuple[float, float] | None = None) -> SearchBox:
     """The global stage's box for ``model``: period (log) within a factor around ``period_hint`` (the
     record's apparent period; 0.2-20 s without one; bilinear: the initial period T1 from a quarter to 1.5
     times it, since the soft branch lengthens the apparent period), damping ratio [0, 0.4], the sliders'
     force as a share ``friction_share`` of the push force in [0, 0.9] (above 1 the building never moves),
     these two on a square-root scale; bilinear also k2/k1 (log, 0.01-0.6) and the yield displacement over
     d0 ``yield_share`` (log, 0.01-1.5);
-    2dof the superstructure's period (log, 0.02 s up to 0.6 T) and damping ratio [0, 0.2]; and where no
-    displacement gives d0 (``search_d0``), a factor on d0's estimate (log, 1/3-3)."""
+    2dof the superstructure's period (log, 0.02 s up to 0.6 T) and damping ratio [0, 0.2]; a factor on d0's
+    estimate (0.85-1.15 where the displacement's level before the release gives it, the sensor's zero
+    unknown; log 1/3-3 where no displacement gives d0, ``search_d0``); and the release instant
+    within ``release`` (the record's first departure lags it; where a jump of the acceleration at the
+    release falls between other samples than the data's, one sample's misfit outweighs the rest)."""
     if period_hint is not None and math.isfinite(period_hint) and period_hint > 0:
         if model == "bilinear":
             t_lo, t_hi = 0.25 * period_hint, 1.5 * period_hint
@@ -165,11 +185,15 @@ def search_box(model: str, period_hint: float | None, search_d0: bool) -> Search
         lower += [0.02, 0.0]
         upper += [max(0.6 * t_hi, 0.05), 0.2]
         scale += ["log", "sqrt"]
-    if search_d0:
-        names.append("d0_factor")
-        lower.append(1.0 / 3.0)
-        upper.append(3.0)
-        scale.append("log")
+    names.append("d0_factor")  # from the record's own level: its sensor zero is not known yet
+    lower.append(1.0 / 3.0 if search_d0 else 0.85)
+    upper.append(3.0 if search_d0 else 1.15)
+    scale.append("log" if search_d0 else "linear")
+    if release is not None:
+        names.append("release_time")
+        lower.append(release[0])
+        upper.append(release[1])
+        scale.append("linear")
     return SearchBox(tuple(names), tuple(lower), tuple(upper), tuple(scale))
 
 
@@ -195,10 +219,10 @@ def box_parameters(model: str, mass: float, box_values: dict[str, float], d0: fl
 def box_values(model: str, mass: float, params: dict[str, float], d0_estimate: float, search_d0: bool) \
         -> dict[str, float]:
     """The inverse of :func:`box_parameters` (a start's parameters as the box's quantities)."""
-    d0 = params.get("d0", d0_estimate) if search_d0 else d0_estimate
+    d0 = params.get("d0", d0_estimate)
     k = mass * (2.0 * math.pi / params["period"]) ** 2
     out = {n: params[n] for n in ("period", "damping_ratio", "stiffness_ratio", "superstructure_period",
-                                  "superstructure_damping_ratio") if n in params}
+                                  "superstructure_damping_ratio", "release_time") if n in params}
     if model == "bilinear":
         r, fy = params["stiffness_ratio"], params["yield_force"]
         out["yield_share"] = fy / (k * abs(d0))
@@ -206,20 +230,45 @@ def box_values(model: str, mass: float, params: dict[str, float], d0_estimate: f
     else:
         push = k * abs(d0)
     out["friction_share"] = params.get("friction", 0.0) / push
-    if search_d0:
-        out["d0_factor"] = d0 / d0_estimate
+    out["d0_factor"] = d0 / d0_estimate
     return out
 
 
-def thin_channels(channels, samples: int = SEARCH_SAMPLES):
-    """Each channel thinned by an integer step to at most ``samples`` samples (the first kept), and the
-    factor by which the sample count fell (full over thinned)."""
+def thin_channels(channels, t_r: float | None = None, samples: int = SEARCH_SAMPLES, quiet: int = 100):
+    """The channels thinned for the global stage, and the factor by which the sample count fell (full over
+    thinned). The motion keeps up to ``samples`` samples a channel (an integer step), the quiet parts (before
+    the release ``t_r``, and after the last sample of any channel more than 8 noise levels off its final
+    level) up to ``quiet`` each: a record whose sliders stick after two seconds of sixty would otherwise
+    leave a few thinned samples on the motion and the rest weighing the search towards any model that stops
+    at the right level."""
     from .isolation_fit import BuildingChannel
 
+    moving_end = -math.inf
+    if t_r is not None:
+        for ch in channels:
+            level = float(np.median(ch.values[-max(ch.values.size // 10, 5):]))
+            off = np.nonzero(np.abs(ch.values - level) > 8.0 * _noise_scatter(ch.values))[0]
+            if off.size:
+                moving_end = max(moving_end, float(ch.t[off[-1]]))
     out, n_full, n_thin = [], 0, 0
     for ch in channels:
-        step = max(1, math.ceil(ch.t.size / samples))
-        out.append(BuildingChannel(ch.name, ch.kind, ch.t[::step], ch.values[::step], ch.noise, ch.offset))
+        if t_r is None or not math.isfinite(moving_end):
+            parts = [np.arange(ch.t.size)]
+        else:
+            idx = np.arange(ch.t.size)
+            before, after = idx[ch.t < t_r], idx[ch.t > moving_end]
+            during = idx[(ch.t >= t_r) & (ch.t <= moving_end)]
+            parts = [before, during, after]
+        keep = []
+        for k, part in enumerate(parts):
+            if part.size == 0:
+                continue
+            cap = samples if (len(parts) == 1 or k == 1) else quiet
+            keep.append(part[:: max(1, math.ceil(part.size / cap))])
+        keep = np.concatenate(keep)
+        if keep.size < 10:
+            keep = np.arange(ch.t.size)[:: max(1, ch.t.size // 10)]
+        out.append(BuildingChannel(ch.name, ch.kind, ch.t[keep], ch.values[keep], ch.noise, ch.offset))
         n_full += ch.t.size
         n_thin += out[-1].t.size
     return out, n_full / n_thin
@@ -427,12 +476,12 @@ class SearchCertificate:
 
 def same_basin(a: dict[str, float], b: dict[str, float], se: dict[str, float]) -> bool:
     """Whether two fits lie in one basin: every parameter of ``se`` within ``SAME_BASIN_SE`` standard errors
-    (a parameter with no finite, positive standard error compares on 1e-6 of its scale)."""
+    (a parameter without a finite, positive standard error is not identified by the record and does not
+    tell basins apart)."""
     for n, s in se.items():
-        if n not in a or n not in b:
+        if n not in a or n not in b or not (math.isfinite(s) and s > 0):
             continue
-        tol = SAME_BASIN_SE * s if (math.isfinite(s) and s > 0) else 1e-6 * max(abs(a[n]), abs(b[n]), 1e-300)
-        if abs(a[n] - b[n]) > tol:
+        if abs(a[n] - b[n]) > SAME_BASIN_SE * s:
             return False
     return True
 
