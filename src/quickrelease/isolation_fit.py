@@ -960,7 +960,8 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
             release = (lower["release_time"], min(upper["release_time"], t_r0 + 2.0 * misfit.dt))
         box = search_box(model, hint, search_d0, release)
         found, evaluations = global_candidates(model, mass, thin_misfit, box, record_values, record_values["d0"],
-                                               runs=SEARCH_RUNS[model], evaluations=SEARCH_EVALUATIONS[model],
+                                               runs=SEARCH_RUNS[model] + search_d0,
+                                               evaluations=SEARCH_EVALUATIONS[model] * (1 + search_d0),
                                                seed=seed, fixed=fixed)
         named += [(c["origin"], c["parameters"]) for c in found]
     res, groups = _multistart(named, names, values, solve, thin_misfit, model, factor)

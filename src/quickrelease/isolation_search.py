@@ -97,9 +97,9 @@ def record_period(channels, t_r: float) -> float | None:
     """The record's apparent period [s], a hint for the search's box.
 
     The median time between crossings of the final level in the same direction (twice the time between two
-    where there are only two), each the last sign change before
-    the record crosses a band about the level (a Schmitt trigger: +-5% of the first swing, at least 5 noise
-    levels, so that the noise near a crossing does not count), on the first channel (x, v, a, then the roof's) with at least two such crossings after
+    where there are only two), each the last sign change before the record crosses a band about the level
+    (a Schmitt trigger: +-5% of the first swing, at least 5 noise levels, so that the noise near a crossing
+    does not count), on the first channel (x, v, a, then the roof's) with at least two such crossings after
     the release ``t_r``. A displacement that crosses once or never (sliders that stick after a swing or two)
     gives twice the time from the release to its first turning point (a half-period after a release from
     rest)."""
@@ -161,7 +161,7 @@ def search_box(model: str, period_hint: float | None, search_d0: bool,
     d0 ``yield_share`` (log, 0.01-1.5);
     2dof the superstructure's period (log, 0.02 s up to 0.6 T) and damping ratio [0, 0.2]; a factor on d0's
     estimate (0.85-1.15 where the displacement's level before the release gives it, the sensor's zero
-    unknown; log 1/3-3 where no displacement gives d0, ``search_d0``); and the release instant
+    unknown; log 0.5-2 where no displacement gives d0, ``search_d0``); and the release instant
     within ``release`` (the record's first departure lags it; where a jump of the acceleration at the
     release falls between other samples than the data's, one sample's misfit outweighs the rest)."""
     if period_hint is not None and math.isfinite(period_hint) and period_hint > 0:
@@ -186,8 +186,8 @@ def search_box(model: str, period_hint: float | None, search_d0: bool,
         upper += [max(0.6 * t_hi, 0.05), 0.2]
         scale += ["log", "sqrt"]
     names.append("d0_factor")  # from the record's own level: its sensor zero is not known yet
-    lower.append(1.0 / 3.0 if search_d0 else 0.85)
-    upper.append(3.0 if search_d0 else 1.15)
+    lower.append(0.5 if search_d0 else 0.85)
+    upper.append(2.0 if search_d0 else 1.15)
     scale.append("log" if search_d0 else "linear")
     if release is not None:
         names.append("release_time")
