@@ -62,6 +62,7 @@ estimates of each release that fits well, and the better fit kept (``restarted_f
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -273,6 +274,33 @@ def _misfit(fit: IsolationFit) -> bool:
     return fit.absolute_sigma and math.isfinite(fit.chi2_reduced) and fit.chi2_reduced > MISFIT_RESTART
 
 
+#: Releases of a campaign fitted in parallel processes at most (one per core; 1: one after the other).
+CAMPAIGN_WORKERS = max(1, min(os.cpu_count() or 1, 8))
+
+
+def _fit_one(r, mass: float, model: str, start, superstructure_mass):
+    try:
+        return fit_isolation(r.channels, mass, model, release_time=r.release_time, start=start, fixed=_fixed(r),
+                             superstructure_mass=superstructure_mass)
+    except QuickReleaseError as exc:
+        raise type(exc)(f"release {r.name}: {exc}") from None
+
+
+def _fit_releases(releases, mass: float, model: str, start, superstructure_mass) -> list[IsolationFit]:
+    """Each release's fit, in parallel processes (``CAMPAIGN_WORKERS``, spawned: each fit is Python-bound, so
+    threads would share one core) where there are at least three releases and two cores; the fits are the
+    same as one after the other (each fit is deterministic for its seed)."""
+    workers = min(CAMPAIGN_WORKERS, len(releases))
+    if workers < 2 or len(releases) < 3:
+        return [_fit_one(r, mass, model, start, superstructure_mass) for r in releases]
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+        jobs = [pool.submit(_fit_one, r, mass, model, start, superstructure_mass) for r in releases]
+        return [job.result() for job in jobs]
+
+
 def _restart_misfits(releases, fits: list[IsolationFit], mass: float, model: str,
                      superstructure_mass: float | None = None) -> dict[str, str]:
     """Refit each release whose misfit exceeds its noise from the estimates of every release that fits
@@ -415,13 +443,7 @@ def fit_building_campaign(releases, mass: float, model: str = "linear", *, varia
             and len({abs(r.d0) for r in releases}) == 1:
         raise QuickReleaseError("every release has the same pushed displacement d0: no law in the amplitude can be "
                                 "fitted")
-    fits = []
-    for r in releases:
-        try:
-            fits.append(fit_isolation(r.channels, mass, model, release_time=r.release_time, start=start,
-                                      fixed=_fixed(r), superstructure_mass=superstructure_mass))
-        except QuickReleaseError as exc:
-            raise type(exc)(f"release {r.name}: {exc}") from None
+    fits = _fit_releases(releases, mass, model, start, superstructure_mass)
     restarts = _restart_misfits(releases, fits, mass, model, superstructure_mass)
     reported = tuple(q for q in REPORTED.get(model, ()) if q not in quantities)
     estimates = [_estimates(r, fit, quantities + reported, restarts.get(r.name))

@@ -956,8 +956,11 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
     if global_search:
         search_d0 = xch is None and "d0" not in fixed
         release = None
-        if "release_time" in names:  # from the fit's lower bound to two sampling intervals after the detection
-            release = (lower["release_time"], min(upper["release_time"], t_r0 + 2.0 * misfit.dt))
+        if "release_time" in names:  # from 6% of the apparent period (20 samples at least) before the detected
+            # release to two samples after it: the detection lags by tens of ms, and a wider range holds the
+            # search in the phases of other releases (the polish reaches the fit's whole range)
+            reach = max(20.0 * misfit.dt, 0.06 * (hint if hint is not None else values["period"]))
+            release = (max(lower["release_time"], t_r0 - reach), min(upper["release_time"], t_r0 + 2.0 * misfit.dt))
         box = search_box(model, hint, search_d0, release)
         found, evaluations = global_candidates(model, mass, thin_misfit, box, record_values, record_values["d0"],
                                                runs=SEARCH_RUNS[model] + search_d0,

@@ -37,7 +37,7 @@ SEARCH_SAMPLES = 1200
 #: Independent CMA-ES runs of the global stage, per model.
 SEARCH_RUNS = {"linear": 3, "bilinear": 4, "2dof": 3}
 #: Objective evaluations per CMA-ES run at most, per model.
-SEARCH_EVALUATIONS = {"linear": 300, "bilinear": 600, "2dof": 450}
+SEARCH_EVALUATIONS = {"linear": 500, "bilinear": 700, "2dof": 500}
 #: The global search's optimiser: "cma-es" (:func:`cma_es`), "de" (scipy's differential evolution) or "cma"
 #: (the cma package's CMA-ES; its import loads matplotlib.pyplot).
 SEARCH_METHOD = "cma-es"
@@ -346,7 +346,7 @@ def _cma(objective, dim: int, evaluations: int, seed: int):
 
 
 def cma_es(objective, x0, sigma0: float, evaluations: int, seed: int, *, tolfun: float = 1e-2,
-           tolx: float = 1e-4) -> tuple[np.ndarray, float, int]:
+           tolx: float = 1e-4, popsize: int | None = None) -> tuple[np.ndarray, float, int]:
     """Minimise ``objective`` over the unit cube by CMA-ES (Hansen 2016, "The CMA Evolution Strategy: a
     tutorial", arXiv:1604.00772: the (mu/mu_w, lambda) strategy with cumulative step-size adaptation and the
     rank-one and rank-mu covariance updates, default parameters of its Table 1). Samples outside [0, 1] are
@@ -357,7 +357,7 @@ def cma_es(objective, x0, sigma0: float, evaluations: int, seed: int, *, tolfun:
     its value and the evaluations spent."""
     rng = np.random.default_rng(seed)
     n = len(x0)
-    lam = 4 + int(3 * math.log(n))
+    lam = popsize or 4 + int(3 * math.log(n))
     mu = lam // 2
     w = math.log(mu + 0.5) - np.log(np.arange(1, mu + 1))
     w /= w.sum()
