@@ -17,7 +17,7 @@ from building_reference import reference
 
 from quickrelease.errors import QuickReleaseError
 from quickrelease.isolation_fit import BuildingChannel, fit_isolation
-from quickrelease.isolation_search import SearchBox, cma_es, record_period
+from quickrelease.isolation_search import SearchBox, cma_es, record_period, same_basin
 
 SLOW = bool(os.environ.get("QUICKRELEASE_SLOW"))
 M = 8.0e5
@@ -226,3 +226,12 @@ def test_search_box_round_trip():
     # hand: log(2/0.5)/log(4/0.5) = 2/3; sqrt(0.05)/sqrt(0.4); 0.25
     assert u == pytest.approx([2 / 3, math.sqrt(0.05 / 0.4), 0.25])
     assert box.to_values(u) == pytest.approx(values)
+
+
+def test_same_basin_counts_standard_errors():
+    """Two fits are one basin when every parameter lies within 3 standard errors (hand values), and a
+    parameter without a finite standard error (not identified) does not tell them apart."""
+    se = {"period": 0.1, "friction": math.inf}
+    assert same_basin({"period": 1.0, "friction": 5.0}, {"period": 1.25, "friction": 500.0}, se)  # 2.5 SE
+    assert not same_basin({"period": 1.0, "friction": 5.0}, {"period": 1.35, "friction": 5.0}, se)  # 3.5 SE
+    assert not same_basin({"period": 1.0}, {"period": 0.65}, {"period": 0.1})
