@@ -98,8 +98,6 @@ BAD_BUILDING = [
     (LINEAR + 'k1 = "40 MN/m"\n', r"\[building\] k1 = '40 MN/m' with model = 'linear': k1 belongs to model = "
                                   r"'bilinear'"),
     (LINEAR + "superstructure_damping_ratio = 0.02\n", r"superstructure_damping_ratio = 0.02 with model = 'linear'"),
-    (LINEAR.replace('period = "2.0 s"\n', ""), r"missing key \[building\] period for model = 'linear'"),
-    (BILINEAR.replace('k2 = "4 MN/m"\n', ""), r"missing key \[building\] k2 for model = 'bilinear'"),
     (BILINEAR + 'period = "2 s"\n', r"\[building\] period = '2 s' with model = 'bilinear'"),
     (BILINEAR.replace('k2 = "4 MN/m"', 'k2 = "40 MN/m"'), r"\[building\] k2 = '40 MN/m': expected a post-yield "
                                                           r"stiffness in \(0, k1\) = \(0, 4e\+07\) N/m"),
@@ -109,7 +107,6 @@ BAD_BUILDING = [
                                                          r"stiffness"),
     (TWO_DOF.replace('"500 t"', '"700 t"'), r"superstructure_mass = '700 t': expected a mass in \(0, \[building\] "
                                            r"mass\)"),
-    (TWO_DOF.replace('superstructure_period = "0.5 s"\n', ""), r"missing key \[building\] superstructure_period"),
     (LINEAR.replace('model', 'x') + 'model = "trilinear"\n', r"\[building\] model = 'trilinear': expected 'linear', "
                                                              r"'bilinear' or '2dof'"),
     (LINEAR + "[building.record]\nfile = 'r.csv'\ntime = 't'\n[building.record.channels]\nu = 'u_m'\n",
@@ -122,6 +119,25 @@ BAD_BUILDING = [
     (LINEAR + "[building.record]\nfile = 'r.csv'\ntime = 't'\nrate = 5\n[building.record.channels]\nx = 'x'\n",
      r"\[building.record\]: unknown key 'rate'"),
 ]
+
+
+#: Design values left out: the case parses (a fit needs the mass only), and what needs them names the key.
+NO_DESIGN = [
+    (LINEAR.replace('period = "2.0 s"\n', ""), ["period"], r"missing key \[building\] period for model = 'linear'"),
+    (BILINEAR.replace('k2 = "4 MN/m"\n', ""), ["k2"], r"missing key \[building\] k2 for model = 'bilinear'"),
+    (TWO_DOF.replace('superstructure_period = "0.5 s"\n', ""), ["superstructure_period"],
+     r"missing key \[building\] superstructure_period for model = '2dof'"),
+]
+
+
+@pytest.mark.parametrize("text, missing, message", NO_DESIGN)
+def test_design_values_are_optional_until_needed(tmp_path, text, missing, message):
+    from quickrelease.building_case import spec_building
+
+    spec = _case(tmp_path, text).building
+    assert spec.missing_design() == missing
+    with pytest.raises(CaseFileError, match=message + r": the building's model needs the design values"):
+        spec_building(spec)
 
 
 @pytest.mark.parametrize("text, message", BAD_BUILDING)

@@ -76,7 +76,9 @@ def test_rigid_building_prefers_the_linear_model_and_the_2dof_fit_says_why(monke
 
     monkeypatch.setattr(isolation_fit, "free_vibration", counted)
     flexible = fit_isolation(channels, M, "2dof", superstructure_mass=RATIO * M, profile=False)
-    assert evaluations[0] <= 600, evaluations  # one start: 331 (five: 1540)
+    # the record's starts stop at the first misfit at the noise level (331 evaluations; five starts took 1540),
+    # and the global stage's three CMA-ES runs of 500 evaluations on the thinned record come on top
+    assert evaluations[0] <= 4000, evaluations
     assert linear.chi2_reduced < 1.25 and not linear.warnings
     for name, truth in (("period", T), ("damping_ratio", zeta), ("friction", Fs)):
         assert abs(linear.estimates[name] - truth) < 4 * linear.std_errors[name], name
