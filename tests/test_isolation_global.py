@@ -235,3 +235,16 @@ def test_same_basin_counts_standard_errors():
     assert same_basin({"period": 1.0, "friction": 5.0}, {"period": 1.25, "friction": 500.0}, se)  # 2.5 SE
     assert not same_basin({"period": 1.0, "friction": 5.0}, {"period": 1.35, "friction": 5.0}, se)  # 3.5 SE
     assert not same_basin({"period": 1.0}, {"period": 0.65}, {"period": 0.1})
+
+
+def test_a_record_that_never_stops_gets_a_clear_answer():
+    """An undamped, frictionless layer (the analytic cosine) over the whole record: the fit says so (damping
+    and friction at their lower bound 0, their profile intervals from 0) instead of raising from a root
+    bracket of the profile likelihood ("f(a) and f(b) must have different signs", issue 22 item 8)."""
+    t = np.arange(0, 30, 0.01)
+    tau = np.clip(t - 2.0137, 0, None)
+    x = 0.1 * np.cos(2 * math.pi / 2.5 * tau) + np.random.default_rng(1).normal(0, 2e-4, t.size)
+    fit = fit_isolation([BuildingChannel("x", "x", t, x)], M, "linear")
+    assert fit.estimates["period"] == pytest.approx(2.5, rel=1e-4)
+    assert fit.ci95["damping_ratio"][0] == 0.0 and fit.ci95["damping_ratio"][1] < 1e-3
+    assert fit.ci95["friction"][0] == 0.0 and fit.interval_method["friction"] == "profile"
