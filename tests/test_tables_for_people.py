@@ -64,6 +64,6 @@ def test_the_display_helpers_round_as_results_are_quoted():
     assert estimate_row("F1", 420.023, 0.398, (419.243, 420.803)) == (
         "hinge friction F1", "420.02 N", "0.40 N", "[419.24, 420.80] N")
     assert estimate_row("k1", 1.2345678e7, 2.3e5, (1.2e7, 1.3e7)) == (
-        "initial stiffness k1", "12.346 MN/m", "0.23 MN/m", "[12.000, 13.000] MN/m")
+        "initial stiffness k1", "12.35 MN/m", "0.23 MN/m", "[12.00, 13.00] MN/m")  # to the SE's 2 digits
     assert estimate_row("offset_a", 0.0012, 3e-5, None, "m/s^2")[0::3] == ("offset of a", "-")
     assert key_for("damping_ratio") == ("damping ratio zeta", "")

@@ -19,7 +19,7 @@ from .isolation_fit import CHANNEL_KINDS
 from .plots import _COLORS, _figure, _joint_legend, user_label
 
 __all__ = ["BUILDING_FIGURES", "building_figures", "fit_figure", "decay_figure", "amplitude_figure",
-           "hysteresis_figure", "decay_envelope_data", "model_decay"]
+           "hysteresis_figure", "decay_envelope_data", "model_decay", "off_scale"]
 
 #: Figure stems of the building and what they show.
 BUILDING_FIGURES = {
@@ -182,8 +182,19 @@ def amplitude_figure(result, model=False, fig=None):
         left.plot(1e3 * model.amplitude, model.equivalent_period, "x-", ms=4, lw=0.8, color=_COLORS["a"], label=label)
         right.plot(1e3 * model.damping_amplitude, model.equivalent_damping, "x-", ms=4, lw=0.8, color=_COLORS["a"],
                    label=label)
+    off = off_scale(a.equivalent_period, None if model is None else model.equivalent_period)
+    if np.any(off):  # a period far off the others (a last half-cycle ending in the stop) would squash the axis
+        shown = np.concatenate([np.asarray(a.equivalent_period)[~off],
+                                [] if model is None else np.asarray(model.equivalent_period, dtype=float)])
+        shown = shown[np.isfinite(shown)]
+        lo, hi = float(np.min(shown)), float(np.max(shown))
+        pad = 0.15 * max(hi - lo, 0.05 * hi)
+        left.set_ylim(lo - pad, hi + pad)
+        values = ", ".join(f"{v:.3g} s" for v in np.asarray(a.equivalent_period)[off])
+        left.plot(1e3 * np.asarray(a.amplitude)[off], np.full(int(np.sum(off)), hi + 0.8 * pad), "^", ms=5,
+                  mfc="none", color=_COLORS["d"], label=f"record off the axis: {values}")
     left.set_xlabel("amplitude [mm]")
-    left.set_ylabel("equivalent period 2 (t_n+1 - t_n) [s]")
+    left.set_ylabel(r"equivalent period $2\,(t_{n+1} - t_n)$ [s]")
     right.set_xlabel("amplitude [mm]")
     right.set_ylabel("equivalent damping ratio [-]")
     left.set_title("Period against amplitude")
@@ -191,6 +202,22 @@ def amplitude_figure(result, model=False, fig=None):
     for ax in (left, right):
         ax.legend(loc="best")
     return fig
+
+
+def off_scale(periods, model_periods=None, factor: float = 2.0) -> np.ndarray:
+    """Which equivalent periods lie off the scale of the others (a half-cycle that ends where the building
+    sticks lasts far longer than a swing): more than ``factor`` times above, or below 1/``factor`` of, the
+    model's range (the record's median without a model). Boolean array like ``periods``."""
+    p = np.asarray(periods, dtype=float)
+    ref = np.asarray([] if model_periods is None else model_periods, dtype=float)
+    ref = ref[np.isfinite(ref)]
+    if ref.size == 0:
+        finite = p[np.isfinite(p)]
+        if finite.size < 3:
+            return np.zeros(p.shape, dtype=bool)
+        ref = np.array([np.median(finite)])
+    with np.errstate(invalid="ignore"):
+        return np.isfinite(p) & ((p > factor * ref.max()) | (p < ref.min() / factor))
 
 
 @styled

@@ -817,9 +817,10 @@ def _building_tables(result, summary: dict[str, Any], title: str) -> None:
     rows = result.decay_check.get("rows", [])
     if rows:
         _table("Decay cross-check (model-free, combined decrement law)", [
-            (key_for(r["parameter"])[0], quantity(r["fit"], key_for(r["parameter"])[1]),
-             quantity(r["decay"], key_for(r["parameter"])[1]), f"{r['difference_in_se']:+.3g}") for r in rows],
-            ("parameter", "fit", "decay", "difference [SE]"))
+            (key_for(r["parameter"])[0], *estimate_row(r["parameter"], r["fit"], r["decay_se"])[1:2],
+             *estimate_row(r["parameter"], r["decay"], r["decay_se"])[1:3], f"{r['difference_in_se']:+.3g}")
+            for r in rows],
+            ("parameter", "fit", "decay", "decay SE", "difference [SE]"))
     for text in result.notes:
         _echo(f"note: {text}")
     for text in result.warnings:

@@ -76,7 +76,15 @@ def fig13(response: Response, fig=None):
         ax.set_xlabel("time $t$ [s]")
     for ax in axes.flat:
         _mark_stop(ax, r)
-        ax.legend(loc="best")
+        if ax is not d:
+            ax.legend(loc="best")
+    # (d): every curve lies between 0 and E_S and crosses the panel; the legend goes in room made above E_S
+    # (two columns, the stop line named in the other panels), where it covers no curve
+    handles, labels = d.get_legend_handles_labels()
+    keep = [k for k, text in enumerate(labels) if not text.startswith("stop")]
+    top = max(float(np.max(r.kinetic_energy + r.dissipated_energy)), r.stored_energy) / 1e3
+    d.set_ylim(-0.05 * top, 1.75 * top)
+    d.legend([handles[k] for k in keep], [labels[k] for k in keep], loc="upper left", ncol=2)
     fig.suptitle(f"Release response ({r.method}, c = {r.mass_factor:.4g}): "
                  f"$t_F$ = {r.stop_time:.4f} s, $\\alpha_F$ = {r.alpha_final:.4f} rad")
     return fig
