@@ -13,10 +13,10 @@ from typing import Any
 import numpy as np
 
 from ._style import STYLE as _STYLE
-from ._style import styled, unit_text
+from ._style import panels, styled, unit_text
 from .decay import analyse_decay
 from .isolation_fit import CHANNEL_KINDS
-from .plots import _COLORS, _figure, _joint_legend, user_label
+from .plots import _COLORS, _channel_axes, _joint_legend, user_label
 
 __all__ = ["BUILDING_FIGURES", "building_figures", "fit_figure", "decay_figure", "amplitude_figure",
            "hysteresis_figure", "decay_envelope_data", "model_decay", "off_scale"]
@@ -52,21 +52,27 @@ def _unit(kind: str) -> str:
 
 
 @styled
-def fit_figure(result, fig=None):
-    """Each channel measured (points) and the fitted model (line), with the residuals below."""
+def fit_figure(result, fig=None, ax=None):
+    """Each channel measured (points) and the fitted model (line), with the residuals below. ``ax``: two Axes
+    per channel to draw into (the channel, then its residuals). Returns the figure."""
     fit = result.fit
     channels = list(fit.channels)
     n = len(channels)
     height = 1.0 + 2.4 * n
-    fig = _figure(7.0, height, fig=fig, left=0.12, right=0.98, bottom=0.5 / height, top=1.0 - 0.55 / height)
-    grid = fig.add_gridspec(3 * n - 1, 1, height_ratios=([3, 1.2, 0.5] * n)[:-1], hspace=0.1)
+    fig, given = _channel_axes(7.0, height, n, fig, ax, left=0.12, right=0.98, bottom=0.5 / height,
+                               top=1.0 - 0.55 / height)
+    grid = None if given is not None else \
+        fig.add_gridspec(3 * n - 1, 1, height_ratios=([3, 1.2, 0.5] * n)[:-1], hspace=0.1)
     share = None
     bottom = None
     for k, ch in enumerate(channels):
         unit = _unit(ch.kind)
-        top = fig.add_subplot(grid[3 * k], sharex=share)
-        share = share or top
-        bottom = fig.add_subplot(grid[3 * k + 1], sharex=share)
+        if given is not None:
+            top, bottom = given[2 * k], given[2 * k + 1]
+        else:
+            top = fig.add_subplot(grid[3 * k], sharex=share)
+            share = share or top
+            bottom = fig.add_subplot(grid[3 * k + 1], sharex=share)
         raster = ch.t.size > _RASTER
         top.plot(ch.t, ch.values, ".", ms=1.5, color=_COLORS["d"], alpha=0.6, label="record", rasterized=raster)
         t_fine = np.linspace(float(ch.t[0]), float(ch.t[-1]), 4000)
@@ -86,8 +92,9 @@ def fit_figure(result, fig=None):
                                      f"{sigma:.3g} {unit} ({fit.noise_source[ch.name]})",
                fontsize=_STYLE["legend.fontsize"])
     bottom.set_xlabel("record time [s]")
-    fig.suptitle(f"Building: {fit.model} isolation model fitted to the record "
-                 f"({'converged' if fit.converged else 'NOT converged'})")
+    if ax is None:
+        fig.suptitle(f"Building: {fit.model} isolation model fitted to the record "
+                     f"({'converged' if fit.converged else 'NOT converged'})")
     return fig
 
 
@@ -137,11 +144,11 @@ def decay_envelope_data(result) -> dict[str, np.ndarray]:
 
 
 @styled
-def decay_figure(result, model=False, fig=None):
-    """Half-cycle amplitudes of the record with the two pure decay laws, the combined law and the model."""
+def decay_figure(result, model=False, fig=None, ax=None):
+    """Half-cycle amplitudes of the record with the two pure decay laws, the combined law and the model.
+    ``ax``: an Axes to draw into. Returns the figure."""
     data = decay_envelope_data(result)
-    fig = _figure(5.6, 3.6, fig=fig, left=0.14, bottom=0.14, top=0.88)
-    ax = fig.subplots()
+    fig, ax = panels(5.6, 3.6, fig=fig, ax=ax, left=0.14, bottom=0.14, top=0.88)
     ax.plot(data["n"], 1e3 * data["amplitude"], "o", ms=4, color=_COLORS["d"], label="record (half swing)")
     styles = {"coulomb": ("Coulomb: linear decay", _COLORS["b"], "--"),
               "viscous": ("viscous: geometric decay", _COLORS["c"], ":"),
@@ -169,11 +176,13 @@ def decay_figure(result, model=False, fig=None):
 
 
 @styled
-def amplitude_figure(result, model=False, fig=None):
-    """Equivalent period and equivalent damping ratio against the amplitude, record and fitted model."""
+def amplitude_figure(result, model=False, fig=None, ax=None):
+    """Equivalent period and equivalent damping ratio against the amplitude, record and fitted model (a period
+    far off the others, :func:`off_scale`, marked at the axis' edge and named in the legend). ``ax``: two Axes
+    to draw into. Returns the figure."""
     a = result.decay
-    fig = _figure(7.0, 3.0, fig=fig, left=0.09, right=0.98, bottom=0.16, top=0.86, wspace=0.3)
-    left, right = fig.subplots(1, 2)
+    fig, (left, right) = panels(7.0, 3.0, (1, 2), fig=fig, ax=ax, left=0.09, right=0.98, bottom=0.16, top=0.86,
+                                wspace=0.3)
     left.plot(1e3 * a.amplitude, a.equivalent_period, "o", ms=4, color=_COLORS["d"], label="record")
     right.plot(1e3 * a.damping_amplitude, a.equivalent_damping, "o", ms=4, color=_COLORS["d"], label="record")
     model = model_decay(result) if model is False else model
@@ -221,11 +230,11 @@ def off_scale(periods, model_periods=None, factor: float = 2.0) -> np.ndarray:
 
 
 @styled
-def hysteresis_figure(result, fig=None):
-    """The isolators' force -m a against the displacement after the release: record and fitted model."""
+def hysteresis_figure(result, fig=None, ax=None):
+    """The isolators' force -m a against the displacement after the release: record and fitted model. ``ax``:
+    an Axes to draw into. Returns the figure."""
     loop = result.loop
-    fig = _figure(4.8, 3.8, fig=fig, left=0.16, bottom=0.13, top=0.9)
-    ax = fig.subplots()
+    fig, ax = panels(4.8, 3.8, fig=fig, ax=ax, left=0.16, bottom=0.13, top=0.9)
     ax.plot(1e3 * loop["x"], loop["force"] / 1e3, ".", ms=1.5, color=_COLORS["d"], alpha=0.6, label="record",
             rasterized=loop["x"].size > _RASTER)
     ax.plot(1e3 * loop["model_x"], loop["model_force"] / 1e3, color=_COLORS["a"], lw=1.0,

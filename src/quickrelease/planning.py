@@ -785,19 +785,19 @@ def plan_case(case: Case, *, clearance_samples: int = 200, threads: int | None =
 # -- figures --------------------------------------------------------------------------------------------------
 
 @styled
-def choices_figure(table: FuseTable, fig=None):
+def choices_figure(table: FuseTable, fig=None, ax=None):
     """The (diameter, angle) choices: push force at rupture (kN, +- one standard deviation) on a grid, the
-    choices inside the target range outlined, the most likely one in bold."""
+    choices inside the target range outlined, the most likely one in bold. ``ax``: an Axes to draw into.
+    Returns the figure."""
     from matplotlib.patches import Rectangle
 
-    from .plots import _figure
+    from ._style import panels
 
     P = table.grid("push_force") / 1e3
     std = table.grid("push_force_std") / 1e3
     within = table.grid("within")
     nd, na = P.shape
-    fig = _figure(1.6 + 1.05 * na, 1.5 + 0.55 * nd, fig=fig, left=0.16, right=0.97, bottom=0.2, top=0.8)
-    ax = fig.subplots()
+    fig, ax = panels(1.6 + 1.05 * na, 1.5 + 0.55 * nd, fig=fig, ax=ax, left=0.16, right=0.97, bottom=0.2, top=0.8)
     centre = 0.5 * sum(table.target) / 1e3
     dev = np.clip(P / centre - 1.0, -0.5, 0.5)
     ax.imshow(dev, cmap="RdBu_r", vmin=-0.5, vmax=0.5, aspect="auto")
@@ -822,10 +822,12 @@ def choices_figure(table: FuseTable, fig=None):
 
 
 @styled
-def utilisation_figure(members: MemberChecks, fig=None):
+def utilisation_figure(members: MemberChecks, fig=None, ax=None):
     """Utilisation of the member checks made (a check without its capacity in the device file has no bar;
-    the title counts them), with the limit 1 named under the axis, where it covers no bar or value."""
-    from .plots import _COLORS, _figure
+    the title counts them), with the limit 1 named under the axis, where it covers no bar or value. ``ax``: an
+    Axes to draw into. Returns the figure."""
+    from ._style import panels
+    from .plots import _COLORS
 
     checks = [c for c in members.checks if c.utilisation is not None]
     if not checks:
@@ -833,9 +835,8 @@ def utilisation_figure(members: MemberChecks, fig=None):
                                 "there is no utilisation to draw")
     skipped = len(members.checks) - len(checks)
     height = 1.45 + 0.42 * len(checks) + (0.15 if skipped else 0.0)
-    fig = _figure(6.4, height, fig=fig, left=0.46, right=0.95, bottom=0.9 / height,
-                  top=1.0 - (0.65 if skipped else 0.5) / height)
-    ax = fig.subplots()
+    fig, ax = panels(6.4, height, fig=fig, ax=ax, left=0.46, right=0.95, bottom=0.9 / height,
+                     top=1.0 - (0.65 if skipped else 0.5) / height)
     labels = [f"{c.member}: {c.check}" for c in checks]
     values = [c.utilisation for c in checks]
     colors = [_COLORS["d"] if c.member == "E4" else (_COLORS["b"] if c.utilisation > 1 else _COLORS["a"])
@@ -848,7 +849,7 @@ def utilisation_figure(members: MemberChecks, fig=None):
     ax.invert_yaxis()
     ax.set_xlim(0, max(1.2, max(values) * 1.25))
     ax.set_xlabel("utilisation, demand / capacity [-]")
-    axes_height = height * (fig.subplotpars.top - fig.subplotpars.bottom)  # inches
+    axes_height = ax.get_position().height * fig.get_figheight() if hasattr(fig, "get_figheight") else height
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.55 / axes_height), frameon=False)
     f = members.forces
     note = "" if not skipped else f"\n{skipped} check(s) skipped: no capacity in the device file"
@@ -858,37 +859,41 @@ def utilisation_figure(members: MemberChecks, fig=None):
 
 
 @styled
-def envelope_figure(envelope: Envelope, fig=None):
+def envelope_figure(envelope: Envelope, fig=None, ax=None):
     """Distributions over the friction estimate of the stroke, the opening, the time to stop and the peak head
-    velocity, with the nominal value and the 5-95% range (an envelope of two samples or more)."""
-    from .plots import _COLORS, _figure
+    velocity, with the nominal value and the 5-95% range (an envelope of two samples or more). ``ax``: four
+    Axes to draw into. Returns the figure."""
+    from ._style import panels
+    from .plots import _COLORS
 
     if envelope.samples < 2:
         raise QuickReleaseError(f"the envelope has {envelope.samples} friction sample(s): "
                                 "a histogram needs two or more")
 
-    fig = _figure(7.0, 4.6, fig=fig, left=0.08, right=0.98, bottom=0.11, top=0.88, wspace=0.25, hspace=0.45)
-    axes = fig.subplots(2, 2)
-    for ax, key in zip(axes.flat, ("u_final", "v_final", "stop_time", "peak_u_dot"), strict=True):
+    fig, axes = panels(7.0, 4.6, (2, 2), fig=fig, ax=ax, left=0.08, right=0.98, bottom=0.11, top=0.88,
+                       wspace=0.25, hspace=0.45)
+    for panel, key in zip(axes.flat, ("u_final", "v_final", "stop_time", "peak_u_dot"), strict=True):
         unit, label = ENVELOPE_QUANTITIES[key]
-        ax.hist(envelope.values[key], bins=60, color=_COLORS["a"], alpha=0.75)
+        panel.hist(envelope.values[key], bins=60, color=_COLORS["a"], alpha=0.75)
         r = envelope.ranges[key]
         for q in ("p5", "p95"):
-            ax.axvline(r[q], color=_COLORS["d"], ls="--", lw=0.9)
-        ax.axvline(envelope.nominal[key], color=_COLORS["b"], lw=1.4)
-        ax.set_yticks([])
-        ax.set_xlabel(f"{label} [{unit_text(unit)}]")
-    fig.suptitle(f"Release envelope over {envelope.samples:,} friction samples (red: nominal, dashed: 5-95%)")
+            panel.axvline(r[q], color=_COLORS["d"], ls="--", lw=0.9)
+        panel.axvline(envelope.nominal[key], color=_COLORS["b"], lw=1.4)
+        panel.set_yticks([])
+        panel.set_xlabel(f"{label} [{unit_text(unit)}]")
+    if ax is None:
+        fig.suptitle(f"Release envelope over {envelope.samples:,} friction samples (red: nominal, dashed: 5-95%)")
     return fig
 
 
 @styled
-def gap_figure(clear: Clearance, fig=None):
-    """The head's retraction, the building's approach and the gap between them after release."""
-    from .plots import _COLORS, _figure
+def gap_figure(clear: Clearance, fig=None, ax=None):
+    """The head's retraction, the building's approach and the gap between them after release. ``ax``: an Axes
+    to draw into. Returns the figure."""
+    from ._style import panels
+    from .plots import _COLORS
 
-    fig = _figure(6.4, 3.4, fig=fig, left=0.11, right=0.97, bottom=0.14, top=0.86)
-    ax = fig.subplots()
+    fig, ax = panels(6.4, 3.4, fig=fig, ax=ax, left=0.11, right=0.97, bottom=0.14, top=0.86)
     mm = 1e3  # plotted in mm
     ax.plot(clear.t, mm * clear.head, color=_COLORS["a"], label="head retraction u(t)")
     ax.plot(clear.t, mm * clear.approach, color=_COLORS["c"], label="building approach d0 - x(t)")

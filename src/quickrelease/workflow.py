@@ -368,11 +368,14 @@ def write_building_results(result, data, out: str | Path, *, model: str | None =
                            title: str = "Building free-vibration test", overwrite: bool = False,
                            origin: Any = None) -> dict[str, Path]:
     """Write ``quickrelease building``'s results into ``out``: ``summary.json`` (the ``--json`` keys), the
-    building figures (``figures/<stem>.png``/``.svg``), ``report.html`` and ``manifest.json``, staged and
-    moved into place as :func:`write_results` does; returns the paths by name. ``origin`` (the case) is what
-    the files' provenance names (:func:`~quickrelease.runfolder.provenance`; by default the record)."""
+    record, the fitted model and the residuals as a time series (``timeseries.csv``, ``timeseries.nc`` on the
+    time coordinate ``t``: :func:`quickrelease.frames.fit_columns`), the building figures
+    (``figures/<stem>.png``/``.svg``), ``report.html`` and ``manifest.json``, staged and moved into place as
+    :func:`write_results` does; returns the paths by name. ``origin`` (the case) is what the files' provenance
+    names (:func:`~quickrelease.runfolder.provenance`; by default the record)."""
     from .building_plots import building_figures
-    from .export import write_json, write_text
+    from .export import write_columns, write_dataset, write_json, write_text
+    from .frames import fit_columns, fit_dataset
     from .plots import save_figure
     from .report import render_building_report
     from .runfolder import provenance
@@ -380,7 +383,9 @@ def write_building_results(result, data, out: str | Path, *, model: str | None =
     prov = provenance(origin if origin is not None else result.source)
     folder = building_folder(data, out, model=model, compare=compare, overwrite=overwrite)
     with folder.staged() as work:
-        paths = {"summary": write_json(result.summary(), work / "summary.json", prov)}
+        paths = {"summary": write_json(result.summary(), work / "summary.json", prov),
+                 "timeseries_csv": write_columns(fit_columns(result.fit), work / "timeseries.csv"),
+                 "timeseries_nc": write_dataset(fit_dataset(result.fit), work / "timeseries.nc", prov)}
         svgs = {}
         for stem, fig in building_figures(result).items():
             for fmt, path in save_figure(fig, work / "figures", stem).items():
