@@ -59,6 +59,16 @@ def test_device_figures_draw_into_the_users_axes(response):
         assert mine._suptitle is None  # the user's figure keeps its own title
 
 
+def test_own_figures_keep_their_titles(response, building_run):
+    """Without ``ax`` each figure keeps the title it draws over its panels (a loop reusing the name ``ax``
+    once dropped them)."""
+    from quickrelease import building_plots, plots
+
+    _, _, result = building_run
+    assert plots.fig13(response)._suptitle.get_text().startswith("Release response (energy, c = 0.6667)")
+    assert building_plots.fit_figure(result)._suptitle.get_text().startswith("Building: linear isolation model")
+
+
 def test_response_plot(response):
     assert len(response.plot().axes) == 4
     mine, axes = _axes(2)

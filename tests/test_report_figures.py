@@ -77,6 +77,17 @@ def test_fig13_legends_cover_no_curve():
                                                                   "$E_K + W_F$", "$E_S$"]
 
 
+def test_the_whole_tests_figures_have_no_legend_over_a_curve(whole_test):
+    from quickrelease.building_plots import building_figures
+    from quickrelease.plots import fig14, fig15
+
+    result, _, _ = whole_test
+    for name, fig in building_figures(result.building).items():
+        assert overlap_faults(fig) == [], name
+    for func in (fig14, fig15):
+        assert overlap_faults(func(result.response)) == [], func.__name__
+
+
 def test_period_axis_is_not_squashed_by_one_point_and_its_label_is_mathtext(whole_test):
     from quickrelease.building_plots import amplitude_figure, off_scale
 

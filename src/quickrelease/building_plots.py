@@ -16,7 +16,7 @@ from ._style import STYLE as _STYLE
 from ._style import panels, styled, unit_text
 from .decay import analyse_decay
 from .isolation_fit import CHANNEL_KINDS
-from .plots import _COLORS, _channel_axes, _joint_legend, user_label
+from .plots import _COLORS, _channel_axes, _joint_legend, headroom, user_label
 
 __all__ = ["BUILDING_FIGURES", "building_figures", "fit_figure", "decay_figure", "amplitude_figure",
            "hysteresis_figure", "decay_envelope_data", "model_decay", "off_scale"]
@@ -61,6 +61,7 @@ def fit_figure(result, fig=None, ax=None):
     height = 1.0 + 2.4 * n
     fig, given = _channel_axes(7.0, height, n, fig, ax, left=0.12, right=0.98, bottom=0.5 / height,
                                top=1.0 - 0.55 / height)
+    titled = given is None
     grid = None if given is not None else \
         fig.add_gridspec(3 * n - 1, 1, height_ratios=([3, 1.2, 0.5] * n)[:-1], hspace=0.1)
     share = None
@@ -87,12 +88,13 @@ def fit_figure(result, fig=None, ax=None):
             ax.axvline(fit.release_time, color=_COLORS["d"], lw=0.8, ls=":", label="release" if ax is top else None)
             if ax is not bottom or k < n - 1:
                 ax.tick_params(labelbottom=False)
-        _joint_legend(top, bottom, loc="upper right")
+        headroom(top)
+        _joint_legend(top, bottom, loc="upper right", ncol=3)
         user_label(top, "set_title", f"{ch.name}: rms residual {fit.residual_rms[ch.name]:.3g} {unit}, noise "
                                      f"{sigma:.3g} {unit} ({fit.noise_source[ch.name]})",
                fontsize=_STYLE["legend.fontsize"])
     bottom.set_xlabel("record time [s]")
-    if ax is None:
+    if titled:
         fig.suptitle(f"Building: {fit.model} isolation model fitted to the record "
                      f"({'converged' if fit.converged else 'NOT converged'})")
     return fig

@@ -57,6 +57,7 @@ def fig13(response: Response, fig=None, ax=None):
     reading order; no title over them). Returns the figure."""
     fig, axes = panels(7.0, 5.0, (2, 2), fig=fig, ax=ax, subplots={"sharex": True}, left=0.09, right=0.98,
                        bottom=0.09, top=0.88, wspace=0.28, hspace=0.28)
+    titled = ax is None  # the user's axes get no title over them (``ax`` is reused below)
     r = response
     (a, b), (c, d) = axes
     a.plot(r.t, r.alpha, color=_COLORS["a"])
@@ -85,10 +86,9 @@ def fig13(response: Response, fig=None, ax=None):
     # (two columns, the stop line named in the other panels), where it covers no curve
     handles, labels = d.get_legend_handles_labels()
     keep = [k for k, text in enumerate(labels) if not text.startswith("stop")]
-    top = max(float(np.max(r.kinetic_energy + r.dissipated_energy)), r.stored_energy) / 1e3
-    d.set_ylim(-0.05 * top, 1.75 * top)
+    headroom(d)
     d.legend([handles[k] for k in keep], [labels[k] for k in keep], loc="upper left", ncol=2)
-    if ax is None:
+    if titled:
         fig.suptitle(f"Release response ({r.method}, c = {r.mass_factor:.4g}): "
                      f"$t_F$ = {r.stop_time:.4f} s, $\\alpha_F$ = {r.alpha_final:.4f} rad")
     return fig
@@ -112,7 +112,8 @@ def fig14(response: Response, fig=None, ax=None):
     for ax in (a, b):
         ax.set_xlabel("time $t$ [s]")
         _mark_stop(ax, r)
-        ax.legend()
+        headroom(ax, 0.38)
+        ax.legend(loc="upper left")
     return fig
 
 
@@ -246,6 +247,7 @@ def fit_figure(result, fig=None, ax=None):
     height = 1.0 + 2.6 * n
     fig, given = _channel_axes(7.0, height, n, fig, ax, left=0.11, right=0.98, bottom=0.5 / height,
                                top=1.0 - 0.55 / height)
+    titled = given is None
     grid = None if given is not None else \
         fig.add_gridspec(3 * n - 1, 1, height_ratios=([3, 1.2, 0.5] * n)[:-1], hspace=0.1)
     t_fine, curves = result.model_curves()
@@ -274,11 +276,12 @@ def fit_figure(result, fig=None, ax=None):
                        label="stop $t_F$" if ax is top else None)
             if ax is not bottom or k < n - 1:
                 ax.tick_params(labelbottom=False)
-        _joint_legend(top, bottom, loc="best")
+        headroom(top)
+        _joint_legend(top, bottom, loc="upper right", ncol=3)
         top.set_title(f"{name}: rms residual {result.residual_rms[name]:.3g} {unit}, noise {sigma:.3g} {unit} "
                       f"({result.noise_source[name]})", fontsize=_STYLE["legend.fontsize"])
     bottom.set_xlabel("record time [s]")
-    if ax is None:
+    if titled:
         fig.suptitle(f"Fit to the record: $F_1$ = {result.F1:.1f} ± {result.std_errors['F1']:.2g} N, "
                      f"$F_2$ = {result.F2:.1f} ± {result.std_errors['F2']:.2g} N")
     return fig
@@ -290,6 +293,23 @@ def _channel_axes(width: float, height: float, n: int, fig, ax, **margins):
         return _figure(width, height, fig=fig, **margins), None
     fig, axes = panels(width, height, (2 * n, 1), fig=fig, ax=ax)
     return fig, list(np.ravel(axes))
+
+
+def headroom(ax, share: float = 0.42) -> None:
+    """Make room for a legend above the curves of ``ax``: the y axis extended so that its top ``share`` holds
+    no data (the curves span the rest), for a legend placed ``upper ...`` that covers no curve."""
+    import numpy as np
+
+    ys = [np.asarray(line.get_ydata(), dtype=float) for line in ax.lines
+          if line.get_transform() == ax.transData and np.size(line.get_ydata()) > 2]
+    ys = [y[np.isfinite(y)] for y in ys]
+    ys = [y for y in ys if y.size]
+    if not ys:
+        return
+    lo, hi = min(float(y.min()) for y in ys), max(float(y.max()) for y in ys)
+    span = (hi - lo) or abs(hi) or 1.0
+    lo -= 0.05 * span
+    ax.set_ylim(lo, lo + (hi + 0.02 * span - lo) / (1.0 - share))
 
 
 def _joint_legend(top, bottom, **kwargs) -> None:
