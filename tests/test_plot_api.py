@@ -190,3 +190,33 @@ def test_free_vibration_as_tables():
     assert np.allclose(df["a_m_s2"], -0.1 * w**2 * np.cos(w * t), atol=1e-10)
     ds = free_vibration_dataset(motion, t)
     assert {k: v.attrs["units"] for k, v in ds.data_vars.items()} == {"x": "m", "v": "m/s", "a": "m/s^2"}
+
+
+def test_study_figures_draw_into_the_users_axes():
+    from quickrelease.case import load_case
+    from quickrelease.sweep import heatmap_figure, sweep
+    from quickrelease.uq import corner_figure, run_uq
+
+    ds = sweep(load_case(EXAMPLES / "larger_push.toml"), {"alpha0": np.linspace(0.1, 0.5, 3),
+                                                          "F1": np.linspace(100.0, 400.0, 3)})
+    mine = Figure()
+    axes = mine.subplots(2, 3)
+    assert heatmap_figure(ds, ax=axes) is mine and len(mine.axes) == 6 + 6  # and one colour bar a panel
+    u = run_uq(load_case(EXAMPLES / "uq_paper.toml"), 2000, seed=1, chunk=2000)
+    mine = Figure()
+    assert corner_figure(u, ax=mine.subplots(2, 2)) is mine and len(mine.axes) == 4
+
+
+def test_campaign_figures_draw_into_the_users_axes():
+    from quickrelease.building_campaign import building_campaign_figure
+    from quickrelease.campaign import campaign_figure, run_campaign
+
+    result = run_campaign(EXAMPLES / "campaign.toml")
+    mine = Figure()
+    assert campaign_figure(result, ax=mine.subplots(2, len(result.variables))) is mine
+    assert len(mine.axes) == 2 * len(result.variables)
+    result = run_campaign(EXAMPLES / "building_campaign.toml")
+    mine = Figure()
+    axes = mine.subplots(len(result.variables), len(result.quantities))
+    assert building_campaign_figure(result, ax=axes) is mine
+    assert len(mine.axes) == len(result.variables) * len(result.quantities)

@@ -38,6 +38,8 @@ def test_one_friction_value_draws_no_histogram_and_no_unchecked_member_chart(who
     page = (out / "report.html").read_text(encoding="utf-8")
     assert "Release envelope over 1 friction samples" not in page and "skipped (no capacity given)" not in page
     assert "No member was checked: the device file gives no capacity" in page
+    assert page.count("skipped: fy3 not in the device file") == 1  # in the table's note column, not again below
+    assert "Building (linear): T = 2.00008 s," in page  # the identified period, not 2.0001
     assert "<th>5%</th>" not in page.split("<h3>Release envelope</h3>", 1)[1].split("<h3>", 1)[0]
 
 

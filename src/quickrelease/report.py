@@ -492,7 +492,7 @@ def _plan_section(plan, svgs: dict[str, str]) -> str:
         verdict = ("<span class=\"flag\">CONTACT: the building reaches the front head "
                    f"(first at {_num(c.first_contact_time, '.3g')} s); {_num(1e3 * c.margin_needed)} mm more "
                    "room is needed</span>" if c.contact else "no contact: the head stays clear of the building")
-        parts.append(f"<p>Building ({_e(b.model)}): T = {_num(b.initial_period)} s, "
+        parts.append(f"<p>Building ({_e(b.model)}): T = {_e(number(b.initial_period, 6))} s, "
                      f"ζ = {_num(b.damping_ratio, '.3g')}, isolator "
                      f"friction {_num(b.friction_force / 1e3)} kN; pushed displacement d0 = "
                      f"{_num(1e3 * c.d0)} mm; {_e(c.describe_minimum())}; "
@@ -505,7 +505,8 @@ def _plan_section(plan, svgs: dict[str, str]) -> str:
                          f"{_num(100 * sp['contact_share'], '.3g')}% of them.</p>")
         parts.append(_figure(svgs, "plan_gap"))
     for text in plan.notes:
-        parts.append(f"<p class=\"meta\">{_e(text)}</p>")
+        if text not in plan.members.notes:  # those are in the member table's note column
+            parts.append(f"<p class=\"meta\">{_e(text)}</p>")
     return "\n".join(parts)
 
 
