@@ -81,18 +81,18 @@ def panels(width: float, height: float, shape: tuple[int, int] = (1, 1), *, fig:
     """
     import numpy as np
 
-    from .errors import ParameterError
+    from .errors import QuickReleaseError
 
     count = shape[0] * shape[1]
     if ax is None:
         fig = figure(width, height, fig, **margins)
         return fig, fig.subplots(*shape, **(subplots or {}))
     if fig is not None:
-        raise ParameterError("fig", "given with ax", "one of fig (a Figure to fill) or ax (axes to draw into)")
+        raise QuickReleaseError("give fig (a Figure to fill) or ax (axes to draw into), not both")
     given = [ax] if hasattr(ax, "plot") else list(np.ravel(np.asarray(ax, dtype=object)))
     if len(given) != count or not all(hasattr(a, "plot") for a in given):
-        raise ParameterError("ax", f"{len(given)} object(s)",
-                             f"{count} matplotlib Axes (this figure draws {count} panel(s))")
+        raise QuickReleaseError(f"ax: {len(given)} object(s) given; this figure draws {count} panel(s): give "
+                                f"{count} matplotlib Axes")
     if count == 1:
         return given[0].figure, given[0]
     axes = np.empty(count, dtype=object)
