@@ -176,10 +176,45 @@ def table_faults(text: str, digits: int = 8) -> list[str]:
     return faults
 
 
-def report_number_faults(page: str, digits: int = 5) -> list[str]:
+def report_number_faults(page: str, digits: int = 8) -> list[str]:
     """:func:`table_faults` over the numeric cells (``<td class="num">``) of an HTML report: one number format
-    in every table (5 significant digits at most, no raw exponents, no None)."""
+    in every table (8 significant digits at most, as the command line's tables: an estimate shows the digits
+    its uncertainty supports, 2.000080 s for an interval half-width of 5.7e-5 s; no raw exponents, no None)."""
     cells = re.findall(r'<td class="num"[^>]*>(.*?)</td>', page, re.S)
     if not cells:
         return ["no numeric cells"]
     return table_faults("\n".join(cells), digits=digits)
+
+
+def overlap_faults(fig, samples: int = 40) -> list[str]:
+    """Legends that cover something a reader needs (an empty list when none): a legend's box, once drawn,
+    overlapping another text of its axes (a value beside a bar, a note) or holding a point of a curve of its
+    axes (each line's segments sampled ``samples`` times in display coordinates; markers-only lines at their
+    points). Horizontal/vertical reference lines count like curves."""
+    import numpy as np
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    if not isinstance(fig.canvas, FigureCanvasAgg):
+        FigureCanvasAgg(fig)
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    faults = []
+    for k, ax in enumerate(fig.axes):
+        legend = ax.get_legend()
+        if legend is None or not legend.get_visible():
+            continue
+        box = legend.get_window_extent(renderer)
+        where = f"axes {k} ({ax.get_title()[:40]!r})"
+        for text in ax.texts:
+            if text.get_text().strip() and text.get_window_extent(renderer).overlaps(box):
+                faults.append(f"{where}: legend covers the text {text.get_text()[:40]!r}")
+        for line in ax.lines:
+            xy = line.get_transform().transform(np.asarray(line.get_xydata(), dtype=float))
+            xy = xy[np.all(np.isfinite(xy), axis=1)]
+            if line.get_linestyle() not in ("None", "", " ") and len(xy) > 1:
+                s = np.linspace(0.0, 1.0, samples, endpoint=False)
+                xy = np.concatenate([a + s[:, None] * (b - a) for a, b in zip(xy[:-1], xy[1:], strict=True)] + [xy[-1:]])
+            inside = (xy[:, 0] > box.x0) & (xy[:, 0] < box.x1) & (xy[:, 1] > box.y0) & (xy[:, 1] < box.y1)
+            if np.any(inside):
+                faults.append(f"{where}: legend covers {int(inside.sum())} point(s) of {line.get_label()!r}")
+    return faults

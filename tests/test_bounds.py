@@ -202,7 +202,7 @@ def test_synth_cli_writes_nothing_on_bad_noise(tmp_path):
 
     shutil.copy(PAPER, tmp_path / "case.toml")
     r = CliRunner().invoke(app, ["synth", str(tmp_path / "case.toml"), "--noise", "u=0", "-c", "u",
-                                 "--file", str(tmp_path / "r.csv"), "--case-out", str(tmp_path / "fit.toml")])
+                                 "--out", str(tmp_path / "r.csv"), "--case-out", str(tmp_path / "fit.toml")])
     assert r.exit_code == 2 and r.stderr.count("\n") == 1, r.output
     assert sorted(p.name for p in tmp_path.iterdir()) == ["case.toml"]
 

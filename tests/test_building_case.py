@@ -247,7 +247,7 @@ def test_synth_cli_round_trip_and_bad_input(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     (tmp_path / "b.toml").write_text(BILINEAR)
     r = runner.invoke(app, ["synth", "b.toml", "--channels", "x,a", "--rate", "100 Hz", "--duration", "6 s",
-                            "--offset", "x=1 mm", "--noise", "a=0.002 g0", "--file", "r.csv", "--case-out", "c.toml",
+                            "--offset", "x=1 mm", "--noise", "a=0.002 g0", "--out", "r.csv", "--case-out", "c.toml",
                             "--json"])
     assert r.exit_code == 0, r.output
     case = load_case(tmp_path / "c.toml", require_test=False)  # the written case parses, with the truth
@@ -263,7 +263,7 @@ def test_synth_cli_round_trip_and_bad_input(tmp_path, monkeypatch):
     for args, message in [(["--channels", "x,u"], "unknown channel 'u'"),
                           (["--rate", "1 Hz"], "rate = 1 Hz is outside"),
                           (["--noise", "x=1 g0"], "--noise x = '1 g0' has dimension")]:
-        r = runner.invoke(app, ["synth", "b.toml", "--file", "new.csv", "--case-out", "new.toml", *args])
+        r = runner.invoke(app, ["synth", "b.toml", "--out", "new.csv", "--case-out", "new.toml", *args])
         assert r.exit_code == 2 and message in r.stderr and r.stderr.count("\n") == 1, (args, r.stderr)
         assert not (tmp_path / "new.csv").exists() and not (tmp_path / "new.toml").exists()
 
@@ -399,7 +399,7 @@ def test_synth_cli_writes_a_2dof_record_and_its_case(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     (tmp_path / "two.toml").write_text(TWO_DOF_FRICTION)
     r = runner.invoke(app, ["synth", "two.toml", "--building", "--channels", "x,a_roof", "--rate", "100 Hz",
-                            "--duration", "5 s", "--file", "r.csv", "--case-out", "c.toml"])
+                            "--duration", "5 s", "--out", "r.csv", "--case-out", "c.toml"])
     assert r.exit_code == 0, r.output
     header = (tmp_path / "r.csv").read_text().splitlines()[0]
     assert header == "t_s,x_m,a_roof_m_s2"
@@ -407,7 +407,7 @@ def test_synth_cli_writes_a_2dof_record_and_its_case(tmp_path, monkeypatch):
     data = load_building(case)
     assert data.isolation == load_building(_case(tmp_path, TWO_DOF_FRICTION, "two2.toml")).isolation
     assert [ch.name for ch in data.channels] == ["x", "a_roof"]
-    r = runner.invoke(app, ["synth", "two.toml", "--channels", "x,a_roof", "--rate", "10 Hz", "--file", "new.csv",
+    r = runner.invoke(app, ["synth", "two.toml", "--channels", "x,a_roof", "--rate", "10 Hz", "--out", "new.csv",
                             "--case-out", "new.toml"])
     assert r.exit_code == 2 and "rate = 10 Hz is outside" in r.stderr and "higher mode T_2" in r.stderr, r.stderr
     assert r.stderr.count("\n") == 1

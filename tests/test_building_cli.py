@@ -125,7 +125,7 @@ def test_building_command_json_folder_and_refusals(tmp_path):
     # the folder: exactly what the command wrote
     files = sorted(str(p.relative_to(out)) for p in out.rglob("*") if p.is_file())
     stems = ("building_fit", "building_decay", "building_amplitude", "building_hysteresis")
-    assert files == sorted(["manifest.json", "report.html", "summary.json"]
+    assert files == sorted(["manifest.json", "report.html", "summary.json", "timeseries.csv", "timeseries.nc"]
                            + [f"figures/{s}.{e}" for s in stems for e in ("png", "svg")])
     written = json.loads((out / "summary.json").read_text())
     prov = written.pop("provenance")  # what made the file: the version and the case file as read

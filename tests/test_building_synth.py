@@ -199,7 +199,7 @@ def test_synth_cli_prints_and_writes_the_prediction(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     (tmp_path / "b.toml").write_text(BILINEAR)
     r = runner.invoke(app, ["synth", "b.toml", "--channels", "x,a", "--rate", "100 Hz", "--release-time", "1.0037 s",
-                            "--duration", "4 s", "--file", "r.csv", "--json"])
+                            "--duration", "4 s", "--out", "r.csv", "--json"])
     assert r.exit_code == 0, r.output
     pred = json.loads(r.stdout)["predicted"]
     assert list(pred["parameters"]) == ["k1_N_m", "k2_N_m", "Fy_N", "damping_ratio", "friction_N", "d0_m",
@@ -216,7 +216,7 @@ def test_synth_cli_prints_and_writes_the_prediction(tmp_path, monkeypatch):
     for key, row in lib["parameters"].items():
         assert pred["parameters"][key]["se"] == pytest.approx(row["se"], rel=1e-12), key
     r = runner.invoke(app, ["synth", "b.toml", "--channels", "x,a", "--rate", "100 Hz", "--duration", "4 s",
-                            "--file", "r2.csv"])
+                            "--out", "r2.csv"])
     assert r.exit_code == 0, r.output
     assert "Precision of a bilinear fit to it (Cramer-Rao bound)" in r.stdout
     for label in ("initial stiffness k1", "post-yield stiffness k2", "yield force F_y", "damping ratio zeta",

@@ -149,7 +149,7 @@ def test_run_and_report_commands(tmp_path):
     r = run("run", str(EXAMPLES / "paper.toml"), "--out", str(tmp_path / "o"))
     assert r.exit_code == 0, r.output
     assert (tmp_path / "o" / "report.html").exists() and (tmp_path / "o" / "figures" / "fig13_response.png").exists()
-    assert "Wrote 15 files" in r.stdout
+    assert "Wrote 16 files" in r.stdout  # 15 results and the manifest (issue 22, item 26)
     from quality import table_faults
 
     assert table_faults(r.stdout) == []

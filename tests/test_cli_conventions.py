@@ -107,7 +107,7 @@ def test_zarr_output_without_zarr_fails_before_the_work(tmp_path, monkeypatch):
     monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "zarr" else real(name, *a))
     monkeypatch.setattr(sweep_module, "_base", lambda case: pytest.fail("the sweep started before the check"))
     out = tmp_path / "s.zarr"
-    r = runner.invoke(app, ["sweep", "examples/paper.toml", "--grid", "alpha0=0.1:0.3:3", "--file", str(out)])
+    r = runner.invoke(app, ["sweep", "examples/paper.toml", "--grid", "alpha0=0.1:0.3:3", "--out", str(out)])
     assert r.exit_code == 2, r.output
     assert r.stderr.strip().count("\n") == 0 and "zarr" in r.stderr and "pip install" in r.stderr
     assert list(tmp_path.iterdir()) == []
@@ -134,16 +134,19 @@ def test_tables_follow_the_terminal_width():
     assert max(len(line) for line in r.stdout.splitlines()) <= 60
 
 
-def test_file_outputs_are_named_file(tmp_path):
-    """--out is a folder in every command; sweep and synth write a file, named by --file (-f); --out still
-    works there, with a note."""
-    for name in ("sweep", "synth"):
+def test_every_command_writes_with_out(tmp_path):
+    """One output vocabulary (issue 22, item 26): --out on every command that writes, a folder or, where the
+    command writes one file (sweep, synth, simulate, identify, bench), that file; sweep's and synth's former
+    --file (-f) still works, with a note."""
+    for name in ("run", "report", "demo", "uq", "sweep", "synth", "fit", "building", "campaign", "plan", "simulate",
+                 "identify", "bench"):
         r = runner.invoke(app, [name, "--help"], env=WIDE)
-        assert "--file" in r.output and "--out" not in r.output
-    r = runner.invoke(app, ["synth", "examples/paper.toml", "-c", "u", "--rate", "100 Hz", "-f", str(tmp_path / "a.csv")])
+        assert "--out" in r.output, name
+        assert "--file" not in r.output, name
+    r = runner.invoke(app, ["synth", "examples/paper.toml", "-c", "u", "--rate", "100 Hz", "-o", str(tmp_path / "a.csv")])
     assert r.exit_code == 0 and (tmp_path / "a.csv").is_file() and "note" not in r.stderr
-    r = runner.invoke(app, ["synth", "examples/paper.toml", "-c", "u", "--rate", "100 Hz", "--out", str(tmp_path / "b.csv")])
-    assert r.exit_code == 0 and (tmp_path / "b.csv").is_file() and "now --file" in r.stderr
+    r = runner.invoke(app, ["synth", "examples/paper.toml", "-c", "u", "--rate", "100 Hz", "--file", str(tmp_path / "b.csv")])
+    assert r.exit_code == 0 and (tmp_path / "b.csv").is_file() and "--file is now --out" in r.stderr
 
 
 def test_long_commands_show_a_spinner_on_a_terminal_only(tmp_path):
@@ -154,7 +157,7 @@ def test_long_commands_show_a_spinner_on_a_terminal_only(tmp_path):
     master, slave = pty.openpty()
     try:
         r = subprocess.run([sys.executable, "-m", "quickrelease", "sweep", "examples/paper.toml", "--grid",
-                            "alpha0=0.1:0.3:3", "--file", str(tmp_path / "s.nc"), "--json"],
+                            "alpha0=0.1:0.3:3", "--out", str(tmp_path / "s.nc"), "--json"],
                            stdout=subprocess.PIPE, stderr=slave, timeout=600, env={**os.environ, "COLUMNS": "100"})
         os.close(slave)
         seen = b""

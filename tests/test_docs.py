@@ -110,8 +110,8 @@ def test_the_option_checks_catch_a_wrong_option():
     assert unknown_options("quickrelease simulat --force 1") == ["simulat"]
     assert parse_faults("quickrelease simulate --energy 3kJ --alpha0 0.2 --method euler")  # not a choice
     assert parse_faults("quickrelease uq c.toml --samples many")  # not an integer
-    assert parse_faults("quickrelease sweep c.toml --grid alpha0=0.1:0.3:3 --out s.nc") == [
-        "--out is an old option name"]
+    assert parse_faults("quickrelease sweep c.toml --grid alpha0=0.1:0.3:3 --file s.nc") == [
+        "--file is an old option name"]
     assert parse_faults("quickrelease simulate --energy 3kJ --alpha0 0.2 --method rk") == []
 
 

@@ -133,7 +133,7 @@ def test_killed_numpy_sweep_leaves_nothing_or_a_complete_file(tmp_path, suffix):
         return any(p.name.startswith(f".{out.name}.") for p in tmp_path.iterdir())
 
     rc = _kill(_cmd("sweep", EXAMPLES / "larger_push.toml", "--grid", "F1=100:900:120", "--grid", "F2=300:1200:50",
-                    "--file", out, "--overwrite"), RNG.uniform(0.0, 0.2), writing)
+                    "--out", out, "--overwrite"), RNG.uniform(0.0, 0.2), writing)
     with opener(out) as ds:  # either the previous sweep or the new one, whole: never a mixture
         _same_dataset(ds.load(), ref if ds.sizes["F1"] == 120 else previous)
         assert rc != 0 or ds.sizes["F1"] == 120
@@ -149,7 +149,7 @@ def test_killed_dask_sweep_resumes_to_the_identical_store(tmp_path):
     out = tmp_path / "s.zarr"
     staging = tmp_path / ".s.zarr.partial"
     grid = ["--grid", "F1=100:900:40", "--grid", "F2=300:1200:20"]
-    base = _cmd("sweep", EXAMPLES / "larger_push.toml", *grid, "--file", out, "--backend", "dask", "--workers", 1,
+    base = _cmd("sweep", EXAMPLES / "larger_push.toml", *grid, "--out", out, "--backend", "dask", "--workers", 1,
                 "--block-rows", 4)
 
     def some_blocks_done():

@@ -439,7 +439,7 @@ def test_synth_then_fit_on_the_command_line(tmp_path):
     rec, case = tmp_path / "rec.csv", tmp_path / "fit_case.toml"
     result = runner.invoke(app, ["synth", str(EXAMPLES / "paper.toml"), "--channels", "u,v", "--rate", "200 Hz",
                                  "--noise", "u=1 mm,v=1 mm", "--offset", "u=2 mm", "--release-time", "0.3 s",
-                                 "--file", str(rec), "--case-out", str(case), "--json"])
+                                 "--out", str(rec), "--case-out", str(case), "--json"])
     assert result.exit_code == 0, result.output
     data = json.loads(result.stdout)
     assert data["noise"] == {"u": 1e-3, "v": 1e-3} and data["offsets"]["u"] == 2e-3

@@ -37,7 +37,7 @@ def test_forces_beyond_the_range_are_flagged_not_silent():
 def test_sweep_netcdf_flags_and_counts_them(tmp_path):
     out = tmp_path / "s.nc"
     r = CliRunner().invoke(app, ["sweep", str(EXAMPLES / "paper.toml"), "--grid", "F1=0,5e-324,1e-308,400,1e308 N",
-                                 "--file", str(out), "--json"])
+                                 "--out", str(out), "--json"])
     assert r.exit_code == 0, r.output
     summary = json.loads(r.stdout)
     assert summary["flagged"] == 1

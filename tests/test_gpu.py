@@ -397,7 +397,7 @@ def _one_line_exit_2(r, *words):
 
 def _commands(tmp_path):
     return {"uq": ["uq", str(EXAMPLES / "uq_paper.toml"), "--out", str(tmp_path / "o")],
-            "sweep": ["sweep", str(EXAMPLES / "larger_push.toml"), "--grid", "alpha0=0.1:0.5:3", "--file",
+            "sweep": ["sweep", str(EXAMPLES / "larger_push.toml"), "--grid", "alpha0=0.1:0.5:3", "--out",
                       str(tmp_path / "s.nc")]}
 
 

@@ -1,7 +1,7 @@
 """Optional dependencies are checked once, before any work (issue 11): a command that needs zarr, dask or
 pyarrow and lacks it prints one line naming the package and how to install it, exits 2, and writes nothing.
 
-``sweep --file x.zarr`` without zarr: tests/test_cli_conventions.py. A package is hidden the way Python sees
+``sweep --out x.zarr`` without zarr: tests/test_cli_conventions.py. A package is hidden the way Python sees
 a missing one: ``sys.modules[name] = None`` makes ``find_spec`` and
 ``import`` both fail."""
 
@@ -35,7 +35,7 @@ def one_line_exit_2(r, *words):
 def test_dask_backend_without_dask(monkeypatch, tmp_path, command):
     hide(monkeypatch, "distributed")
     args = (["uq", str(EXAMPLES / "uq_paper.toml"), "--out", str(tmp_path / "o")] if command == "uq" else
-            ["sweep", str(EXAMPLES / "larger_push.toml"), "--grid", "alpha0=0.1:0.5:3", "--file",
+            ["sweep", str(EXAMPLES / "larger_push.toml"), "--grid", "alpha0=0.1:0.5:3", "--out",
              str(tmp_path / "s.zarr")])
     r = runner.invoke(app, [*args, "--backend", "dask"])
     one_line_exit_2(r, "the dask backend needs ", "distributed", "pip install 'quickrelease[dask]'")  # and dask, if

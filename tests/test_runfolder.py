@@ -264,8 +264,8 @@ def test_bad_out_is_one_line_and_nothing_is_written(tmp_path, case_path, where, 
         out = _unwritable(tmp_path) / f"out{suffix}"
     args = {"run": ["run", EXAMPLES / "paper.toml", "--out", out],
             "uq": _uq_args(case_path, out),
-            "sweep-zarr": ["sweep", EXAMPLES / "larger_push.toml", "--grid", "F1=100:200:3", "--file", out],
-            "sweep-nc": ["sweep", EXAMPLES / "larger_push.toml", "--grid", "F1=100:200:3", "--file", out]}[command]
+            "sweep-zarr": ["sweep", EXAMPLES / "larger_push.toml", "--grid", "F1=100:200:3", "--out", out],
+            "sweep-nc": ["sweep", EXAMPLES / "larger_push.toml", "--grid", "F1=100:200:3", "--out", out]}[command]
     from quickrelease import workflow
 
     work = []
@@ -311,6 +311,6 @@ def test_full_disk_through_the_cli_is_one_line(tmp_path, monkeypatch):
     monkeypatch.setattr(xr.Dataset, "to_netcdf", full)
     out = tmp_path / "out.nc"
     line = _one_line_error(*_cli(["sweep", EXAMPLES / "larger_push.toml", "--grid", "F1=100:200:3",
-                                  "--file", out])[::2])
+                                  "--out", out])[::2])
     assert "no space left" in line
     assert sorted(p.name for p in tmp_path.iterdir()) == []

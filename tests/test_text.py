@@ -117,7 +117,7 @@ def test_synth_case_out_is_valid_toml_for_any_file_name(tmp_path):
     folder.mkdir()
     record = folder / 'rec $1 "試験" \\ \x1b[31m.csv'
     case_out = folder / "case.toml"
-    cli("synth", EXAMPLES / "paper.toml", "--rate", "200 Hz", "--file", record, "--case-out", case_out)
+    cli("synth", EXAMPLES / "paper.toml", "--rate", "200 Hz", "--out", record, "--case-out", case_out)
     case = tomllib.loads(case_out.read_text(encoding="utf-8"))
     assert case["title"] == f"Fit to {record.name}"
     assert (case_out.parent / case["record"]["file"]).resolve() == record.resolve()

@@ -121,7 +121,7 @@ def test_a_dask_task_runs_on_one_thread():
 @pytest.mark.parametrize("args", [
     ["uq", str(EXAMPLES / "uq_paper.toml"), "--backend", "dask", "--threads", "2", "-n", "10"],
     ["uq", str(EXAMPLES / "uq_paper.toml"), "--threads", "0", "-n", "10"],
-    ["sweep", str(EXAMPLES / "larger_push.toml"), "-g", "alpha0=0.1:0.2:2", "--backend", "dask", "-f", "s.zarr",
+    ["sweep", str(EXAMPLES / "larger_push.toml"), "-g", "alpha0=0.1:0.2:2", "--backend", "dask", "-o", "s.zarr",
      "--threads", "1"],
     ["plan", str(EXAMPLES / "plan.toml"), "--threads", str(TOP + 1)],
 ])

@@ -67,3 +67,35 @@ def figure(width: float, height: float, fig: Any = None, **margins: float):
         fig = Figure(figsize=(width, height))
     fig.subplots_adjust(**{"left": 0.12, "right": 0.97, "bottom": 0.14, "top": 0.9, **margins})
     return fig
+
+
+def panels(width: float, height: float, shape: tuple[int, int] = (1, 1), *, fig: Any = None, ax: Any = None,
+           subplots: dict[str, Any] | None = None, **margins: float):
+    """A figure function's figure and panels: ``(figure, axes)``.
+
+    Without ``ax``: :func:`figure` (a new Figure of ``width`` x ``height`` inches, or the user's ``fig``) and
+    ``fig.subplots(*shape, **subplots)``. With ``ax``, the user's own axes, drawn into as they are (no size, no
+    margins, no sharing set): one Axes for a one-panel figure, else a sequence (or array) of
+    ``shape[0] * shape[1]`` Axes in reading order; the figure returned is the one holding them. ``axes`` comes
+    back shaped as ``subplots`` would give it: an Axes for (1, 1), a 1-D array for one row or column, else 2-D.
+    """
+    import numpy as np
+
+    from .errors import QuickReleaseError
+
+    count = shape[0] * shape[1]
+    if ax is None:
+        fig = figure(width, height, fig, **margins)
+        return fig, fig.subplots(*shape, **(subplots or {}))
+    if fig is not None:
+        raise QuickReleaseError("give fig (a Figure to fill) or ax (axes to draw into), not both")
+    given = [ax] if hasattr(ax, "plot") else list(np.ravel(np.asarray(ax, dtype=object)))
+    if len(given) != count or not all(hasattr(a, "plot") for a in given):
+        raise QuickReleaseError(f"ax: {len(given)} object(s) given; this figure draws {count} panel(s): give "
+                                f"{count} matplotlib Axes")
+    if count == 1:
+        return given[0].figure, given[0]
+    axes = np.empty(count, dtype=object)
+    axes[:] = given
+    return given[0].figure, axes if 1 in shape else axes.reshape(shape)
+

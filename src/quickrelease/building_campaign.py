@@ -463,16 +463,17 @@ def fit_building_campaign(releases, mass: float, model: str = "linear", *, varia
 
 
 @styled
-def building_campaign_figure(result: BuildingCampaignResult, fig=None):
-    """Each quantity against each variable: the releases with their 95% intervals, the law and its band."""
-    from ._style import per
-    from .plots import _figure, user_label
+def building_campaign_figure(result: BuildingCampaignResult, fig=None, ax=None):
+    """Each quantity against each variable: the releases with their 95% intervals, the law and its band. ``ax``:
+    (variables) x (quantities) Axes to draw into, a row per variable. Returns the figure."""
+    from ._style import panels, per
+    from .plots import user_label
 
     nq, nv = len(result.quantities), len(result.variables)
     height = 2.9 * nv + 0.9  # [in]: 0.85 in for the titles above, 0.5 in for the labels below
-    fig = _figure(3.2 * nq + 0.6, height, fig=fig, left=0.06, right=0.98, bottom=0.5 / height, top=1 - 0.85 / height,
-                  wspace=0.35, hspace=0.6)
-    axes = np.atleast_2d(fig.subplots(nv, nq, squeeze=False))
+    fig, axes = panels(3.2 * nq + 0.6, height, (nv, nq), fig=fig, ax=ax, subplots={"squeeze": False}, left=0.06,
+                       right=0.98, bottom=0.5 / height, top=1 - 0.85 / height, wspace=0.35, hspace=0.6)
+    axes = np.asarray(axes, dtype=object).reshape(nv, nq)
     for row, v in enumerate(result.variables):
         x_label, _, x_scale, x_unit = BUILDING_VARIABLES[v]
         x = [r.value(v) for r in result.releases]
@@ -481,17 +482,18 @@ def building_campaign_figure(result: BuildingCampaignResult, fig=None):
             y = np.array([r.values[q] for r in result.releases])
             lo = np.array([r.ci95[q][0] for r in result.releases])
             hi = np.array([r.ci95[q][1] for r in result.releases])
-            ax = axes[row, col]
+            panel = axes[row, col]
             slope_unit = per(y_unit, x_unit)
-            law_panel(ax, result.laws[(q, v)], x, y, np.vstack([y - lo, hi - y]).clip(min=0.0),
+            law_panel(panel, result.laws[(q, v)], x, y, np.vstack([y - lo, hi - y]).clip(min=0.0),
                       [r.name for r in result.releases], x_scale=x_scale, y_scale=y_scale,
                       x_label=f"{x_label} [{x_unit}]", y_label=f"{y_label} [{y_unit}]", slope_unit=slope_unit,
                       name=symbol)
-            ax.ticklabel_format(axis="y", useOffset=False)
+            panel.ticklabel_format(axis="y", useOffset=False)
             if row == 0 and col == 0:
-                ax.legend(loc="best")
-    user_label(fig, "suptitle", f"{result.title}: the isolation system against the release amplitude "
-                                f"({result.model} model)")
+                panel.legend(loc="best")
+    if ax is None:
+        user_label(fig, "suptitle", f"{result.title}: the isolation system against the release amplitude "
+                                    f"({result.model} model)")
     return fig
 
 

@@ -13,13 +13,13 @@ from typing import Any
 import numpy as np
 
 from ._style import STYLE as _STYLE
-from ._style import styled, unit_text
+from ._style import panels, styled, unit_text
 from .decay import analyse_decay
 from .isolation_fit import CHANNEL_KINDS
-from .plots import _COLORS, _figure, _joint_legend, user_label
+from .plots import _COLORS, _channel_axes, _joint_legend, headroom, user_label
 
 __all__ = ["BUILDING_FIGURES", "building_figures", "fit_figure", "decay_figure", "amplitude_figure",
-           "hysteresis_figure", "decay_envelope_data", "model_decay"]
+           "hysteresis_figure", "decay_envelope_data", "model_decay", "off_scale"]
 
 #: Figure stems of the building and what they show.
 BUILDING_FIGURES = {
@@ -52,21 +52,28 @@ def _unit(kind: str) -> str:
 
 
 @styled
-def fit_figure(result, fig=None):
-    """Each channel measured (points) and the fitted model (line), with the residuals below."""
+def fit_figure(result, fig=None, ax=None):
+    """Each channel measured (points) and the fitted model (line), with the residuals below. ``ax``: two Axes
+    per channel to draw into (the channel, then its residuals). Returns the figure."""
     fit = result.fit
     channels = list(fit.channels)
     n = len(channels)
     height = 1.0 + 2.4 * n
-    fig = _figure(7.0, height, fig=fig, left=0.12, right=0.98, bottom=0.5 / height, top=1.0 - 0.55 / height)
-    grid = fig.add_gridspec(3 * n - 1, 1, height_ratios=([3, 1.2, 0.5] * n)[:-1], hspace=0.1)
+    fig, given = _channel_axes(7.0, height, n, fig, ax, left=0.12, right=0.98, bottom=0.5 / height,
+                               top=1.0 - 0.55 / height)
+    titled = given is None
+    grid = None if given is not None else \
+        fig.add_gridspec(3 * n - 1, 1, height_ratios=([3, 1.2, 0.5] * n)[:-1], hspace=0.1)
     share = None
     bottom = None
     for k, ch in enumerate(channels):
         unit = _unit(ch.kind)
-        top = fig.add_subplot(grid[3 * k], sharex=share)
-        share = share or top
-        bottom = fig.add_subplot(grid[3 * k + 1], sharex=share)
+        if given is not None:
+            top, bottom = given[2 * k], given[2 * k + 1]
+        else:
+            top = fig.add_subplot(grid[3 * k], sharex=share)
+            share = share or top
+            bottom = fig.add_subplot(grid[3 * k + 1], sharex=share)
         raster = ch.t.size > _RASTER
         top.plot(ch.t, ch.values, ".", ms=1.5, color=_COLORS["d"], alpha=0.6, label="record", rasterized=raster)
         t_fine = np.linspace(float(ch.t[0]), float(ch.t[-1]), 4000)
@@ -81,13 +88,15 @@ def fit_figure(result, fig=None):
             ax.axvline(fit.release_time, color=_COLORS["d"], lw=0.8, ls=":", label="release" if ax is top else None)
             if ax is not bottom or k < n - 1:
                 ax.tick_params(labelbottom=False)
-        _joint_legend(top, bottom, loc="upper right")
+        headroom(top)
+        _joint_legend(top, bottom, loc="upper right", ncol=3)
         user_label(top, "set_title", f"{ch.name}: rms residual {fit.residual_rms[ch.name]:.3g} {unit}, noise "
                                      f"{sigma:.3g} {unit} ({fit.noise_source[ch.name]})",
                fontsize=_STYLE["legend.fontsize"])
     bottom.set_xlabel("record time [s]")
-    fig.suptitle(f"Building: {fit.model} isolation model fitted to the record "
-                 f"({'converged' if fit.converged else 'NOT converged'})")
+    if titled:
+        fig.suptitle(f"Building: {fit.model} isolation model fitted to the record "
+                     f"({'converged' if fit.converged else 'NOT converged'})")
     return fig
 
 
@@ -137,11 +146,11 @@ def decay_envelope_data(result) -> dict[str, np.ndarray]:
 
 
 @styled
-def decay_figure(result, model=False, fig=None):
-    """Half-cycle amplitudes of the record with the two pure decay laws, the combined law and the model."""
+def decay_figure(result, model=False, fig=None, ax=None):
+    """Half-cycle amplitudes of the record with the two pure decay laws, the combined law and the model.
+    ``ax``: an Axes to draw into. Returns the figure."""
     data = decay_envelope_data(result)
-    fig = _figure(5.6, 3.6, fig=fig, left=0.14, bottom=0.14, top=0.88)
-    ax = fig.subplots()
+    fig, ax = panels(5.6, 3.6, fig=fig, ax=ax, left=0.14, bottom=0.14, top=0.88)
     ax.plot(data["n"], 1e3 * data["amplitude"], "o", ms=4, color=_COLORS["d"], label="record (half swing)")
     styles = {"coulomb": ("Coulomb: linear decay", _COLORS["b"], "--"),
               "viscous": ("viscous: geometric decay", _COLORS["c"], ":"),
@@ -169,11 +178,13 @@ def decay_figure(result, model=False, fig=None):
 
 
 @styled
-def amplitude_figure(result, model=False, fig=None):
-    """Equivalent period and equivalent damping ratio against the amplitude, record and fitted model."""
+def amplitude_figure(result, model=False, fig=None, ax=None):
+    """Equivalent period and equivalent damping ratio against the amplitude, record and fitted model (a period
+    far off the others, :func:`off_scale`, marked at the axis' edge and named in the legend). ``ax``: two Axes
+    to draw into. Returns the figure."""
     a = result.decay
-    fig = _figure(7.0, 3.0, fig=fig, left=0.09, right=0.98, bottom=0.16, top=0.86, wspace=0.3)
-    left, right = fig.subplots(1, 2)
+    fig, (left, right) = panels(7.0, 3.0, (1, 2), fig=fig, ax=ax, left=0.09, right=0.98, bottom=0.16, top=0.86,
+                                wspace=0.3)
     left.plot(1e3 * a.amplitude, a.equivalent_period, "o", ms=4, color=_COLORS["d"], label="record")
     right.plot(1e3 * a.damping_amplitude, a.equivalent_damping, "o", ms=4, color=_COLORS["d"], label="record")
     model = model_decay(result) if model is False else model
@@ -182,8 +193,19 @@ def amplitude_figure(result, model=False, fig=None):
         left.plot(1e3 * model.amplitude, model.equivalent_period, "x-", ms=4, lw=0.8, color=_COLORS["a"], label=label)
         right.plot(1e3 * model.damping_amplitude, model.equivalent_damping, "x-", ms=4, lw=0.8, color=_COLORS["a"],
                    label=label)
+    off = off_scale(a.equivalent_period, None if model is None else model.equivalent_period)
+    if np.any(off):  # a period far off the others (a last half-cycle ending in the stop) would squash the axis
+        shown = np.concatenate([np.asarray(a.equivalent_period)[~off],
+                                [] if model is None else np.asarray(model.equivalent_period, dtype=float)])
+        shown = shown[np.isfinite(shown)]
+        lo, hi = float(np.min(shown)), float(np.max(shown))
+        pad = 0.15 * max(hi - lo, 0.05 * hi)
+        left.set_ylim(lo - pad, hi + pad)
+        values = ", ".join(f"{v:.3g} s" for v in np.asarray(a.equivalent_period)[off])
+        left.plot(1e3 * np.asarray(a.amplitude)[off], np.full(int(np.sum(off)), hi + 0.8 * pad), "^", ms=5,
+                  mfc="none", color=_COLORS["d"], label=f"record off the axis: {values}")
     left.set_xlabel("amplitude [mm]")
-    left.set_ylabel("equivalent period 2 (t_n+1 - t_n) [s]")
+    left.set_ylabel(r"equivalent period $2\,(t_{n+1} - t_n)$ [s]")
     right.set_xlabel("amplitude [mm]")
     right.set_ylabel("equivalent damping ratio [-]")
     left.set_title("Period against amplitude")
@@ -193,12 +215,28 @@ def amplitude_figure(result, model=False, fig=None):
     return fig
 
 
+def off_scale(periods, model_periods=None, factor: float = 2.0) -> np.ndarray:
+    """Which equivalent periods lie off the scale of the others (a half-cycle that ends where the building
+    sticks lasts far longer than a swing): more than ``factor`` times above, or below 1/``factor`` of, the
+    model's range (the record's median without a model). Boolean array like ``periods``."""
+    p = np.asarray(periods, dtype=float)
+    ref = np.asarray([] if model_periods is None else model_periods, dtype=float)
+    ref = ref[np.isfinite(ref)]
+    if ref.size == 0:
+        finite = p[np.isfinite(p)]
+        if finite.size < 3:
+            return np.zeros(p.shape, dtype=bool)
+        ref = np.array([np.median(finite)])
+    with np.errstate(invalid="ignore"):
+        return np.isfinite(p) & ((p > factor * ref.max()) | (p < ref.min() / factor))
+
+
 @styled
-def hysteresis_figure(result, fig=None):
-    """The isolators' force -m a against the displacement after the release: record and fitted model."""
+def hysteresis_figure(result, fig=None, ax=None):
+    """The isolators' force -m a against the displacement after the release: record and fitted model. ``ax``:
+    an Axes to draw into. Returns the figure."""
     loop = result.loop
-    fig = _figure(4.8, 3.8, fig=fig, left=0.16, bottom=0.13, top=0.9)
-    ax = fig.subplots()
+    fig, ax = panels(4.8, 3.8, fig=fig, ax=ax, left=0.16, bottom=0.13, top=0.9)
     ax.plot(1e3 * loop["x"], loop["force"] / 1e3, ".", ms=1.5, color=_COLORS["d"], alpha=0.6, label="record",
             rasterized=loop["x"].size > _RASTER)
     ax.plot(1e3 * loop["model_x"], loop["model_force"] / 1e3, color=_COLORS["a"], lw=1.0,

@@ -463,24 +463,27 @@ def law_panel(ax, law: LinearLaw, x, y, yerr, names, *, x_scale: float = 1.0, y_
 
 
 @styled
-def campaign_figure(result: CampaignResult, fig=None):
-    """Friction against each variable: the tests (95% error bars), the fitted law and its 95% band."""
-    from ._style import per
-    from .plots import _figure, user_label
+def campaign_figure(result: CampaignResult, fig=None, ax=None):
+    """Friction against each variable: the tests (95% error bars), the fitted law and its 95% band. ``ax``:
+    2 x (number of variables) Axes to draw into (F1's row, then F2's). Returns the figure."""
+    from ._style import panels, per
+    from .plots import user_label
 
     nv = len(result.variables)
-    fig = _figure(3.4 * nv + 0.6, 5.8, fig=fig, left=0.1, right=0.98, bottom=0.1, top=0.86, wspace=0.3, hspace=0.48)
-    axes = np.atleast_2d(fig.subplots(2, nv, squeeze=False))
+    fig, axes = panels(3.4 * nv + 0.6, 5.8, (2, nv), fig=fig, ax=ax, subplots={"squeeze": False}, left=0.1,
+                       right=0.98, bottom=0.1, top=0.86, wspace=0.3, hspace=0.48)
+    axes = np.asarray(axes, dtype=object).reshape(2, nv)
     for row, friction in enumerate(("F1", "F2")):
         for col, var in enumerate(result.variables):
-            ax = axes[row, col]
+            panel = axes[row, col]
             _, label, _, scale, unit = VARIABLES[var]
             se = np.array([getattr(t, f"{friction}_se") or 0.0 for t in result.tests])
-            law_panel(ax, result.laws[(friction, var)], [t.value(var) for t in result.tests],
+            law_panel(panel, result.laws[(friction, var)], [t.value(var) for t in result.tests],
                       [getattr(t, friction) for t in result.tests], 1.96 * se, [t.name for t in result.tests],
                       x_scale=scale, x_label=f"{label} [{unit}]", y_label=f"${friction[0]}_{friction[1]}$ [N]",
                       slope_unit=per("N", unit))
             if row == 0 and col == 0:
-                ax.legend(loc="best")
-    user_label(fig, "suptitle", f"{result.title}: friction against load and angle")
+                panel.legend(loc="best")
+    if ax is None:
+        user_label(fig, "suptitle", f"{result.title}: friction against load and angle")
     return fig

@@ -194,11 +194,12 @@ def _table(title: str, rows: list[tuple[str, ...]], headers: tuple[str, ...]) ->
 
 
 def _file_option(file: Path, out_old: Path | None, command: str) -> Path:
-    """The output file of ``sweep`` and ``synth``: ``--file`` (``--out`` names a folder in every other command;
-    here it is still accepted, with a note)."""
+    """The output file of ``sweep`` and ``synth``: ``--out`` (as every command's output; a file here, where the
+    command writes one). Its former name ``--file`` (-f) is still accepted, with a note."""
     if out_old is None:
         return file
-    _echo(f"note: {command} writes a file: its option is now --file (-f); --out still works for now", err=True)
+    _echo(f"note: {command}: --file is now --out (-o), the output option of every command; --file still works "
+          "for now", err=True)
     return out_old
 
 
@@ -259,6 +260,8 @@ def simulate(
     mass_model: MassOpt = None,
     method: Annotated[Literal["energy", "rk", "explicit"] | None, typer.Option("--method", help="Solver: the energy first integral (default), Runge-Kutta, or the paper's explicit scheme (Table 6).")] = None,
     dt: Annotated[str | None, typer.Option("--dt", help="Time step of the explicit method, e.g. '1e-4 s'.")] = None,
+    out: Annotated[Path | None, typer.Option("--out", "-o", show_default=False, help="Also write the release to this file: .csv or .nc (the time histories, as run's timeseries.csv/.nc) or .json (the --json summary) (default: none, print only).")] = None,
+    overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace the file --out names.")] = False,
     as_json: JsonOpt = False,
 ) -> None:
     """Simulate the release after the fuse breaks; print the stop time, final angle and peaks."""
@@ -268,6 +271,7 @@ def simulate(
     F1 = None if f1 is None else parse_quantity(f1, "force", "--f1")
     F2 = None if f2 is None else parse_quantity(f2, "force", "--f2")
     step = None if dt is None else parse_quantity(dt, "time", "--dt")
+    _one_file(out, (".csv", ".nc", ".json"), overwrite)
     case = _case_with_flags(case_file, device, force, energy, alpha0, mass_model, F1=F1, F2=F2, method=method,
                             dt=step)
     if case_file is not None and not case.has_friction and case.friction_case is None:
@@ -286,8 +290,15 @@ def simulate(
             if given is None:
                 _echo(f"note: {flag} not given: {name} = 0 N (frictionless)", err=True)
     summary = response.summary()
+    if out is not None:
+        from .export import write_csv, write_json, write_netcdf
+        from .runfolder import provenance
+
+        prov = provenance(case)
+        {".csv": lambda: write_csv(response, out), ".nc": lambda: write_netcdf(response, out, provenance=prov),
+         ".json": lambda: write_json(summary, out, prov)}[out.suffix.lower()]()
     if as_json:
-        _print_json(summary)
+        _print_json(summary if out is None else {**summary, "files": [str(out)]})
         return
     from .response import STOP_REASONS
 
@@ -296,6 +307,8 @@ def simulate(
     from .display import label, value_text
 
     _table("Release", [(label(k), words.get(k, value_text(k, v))) for k, v in summary.items()], ("quantity", "value"))
+    if out is not None:
+        _echo(f"Wrote 1 file: {out}")
 
 
 @app.command()
@@ -309,12 +322,15 @@ def identify(
     alpha_final: Annotated[str | None, typer.Option("--alpha-final", help="Observed final angle alpha_F, e.g. '0.7378 rad'.")] = None,
     stop_time: Annotated[str | None, typer.Option("--stop-time", help="Observed time from release to stop t_F, e.g. '1.05 s'.")] = None,
     mass_model: MassOpt = None,
+    out: Annotated[Path | None, typer.Option("--out", "-o", show_default=False, help="Also write the identification to this .json file (the --json keys) (default: none, print only).")] = None,
+    overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace the file --out names.")] = False,
     as_json: JsonOpt = False,
 ) -> None:
     """Identify the friction forces F1, F2 from a test (Eq. 11-13, Table 7)."""
     from .identify import identify_friction
     from .units import parse_quantity
 
+    _one_file(out, (".json",), overwrite)
     aF = None if alpha_final is None else parse_quantity(alpha_final, "angle", "--alpha-final")
     tF = None if stop_time is None else parse_quantity(stop_time, "time", "--stop-time")
     case = _case_with_flags(case_file, device, force, energy, alpha0, mass_model, alpha_final=aF, stop_time=tF)
@@ -324,22 +340,56 @@ def identify(
     result = identify_friction(case.alpha0, case.alpha_final, case.stop_time, stored_energy=case.stored_energy,
                                device=case.device, mass_model=case.mass_model)
     summary = {**result.summary(), "push_force_N": case.push_force}  # the P that stored E_S, when given
+    if out is not None:
+        from .export import write_json
+        from .runfolder import provenance
+
+        write_json(summary, out, provenance(case))
     if as_json:
-        _print_json(summary)
+        _print_json(summary if out is None else {**summary, "files": [str(out)]})
         return
     from .display import quantity_rows
 
     _table("Identified friction (Eq. 11-13)", quantity_rows(summary), ("quantity", "value"))
+    if out is not None:
+        _echo(f"Wrote 1 file: {out}")
 
 
 OutOpt = Annotated[Path, typer.Option("--out", "-o", help="Output folder (created if needed).")]
 OverwriteOpt = Annotated[bool, typer.Option("--overwrite", help="Replace an output holding another run's results.")]
 
 
+def _written(paths: dict[str, Path], out: Path) -> list[Path]:
+    """Every file a folder command wrote into ``out``: its results and the folder's ``manifest.json``."""
+    from .runfolder import MANIFEST
+
+    files = list(paths.values())
+    manifest = Path(out) / MANIFEST
+    if manifest.is_file() and manifest not in files:
+        files.append(manifest)
+    return files
+
+
 def _listing(paths: dict[str, Path], out: Path) -> None:
-    _echo(f"Wrote {len(paths)} files to {out}/:")
-    for path in paths.values():
+    files = _written(paths, out)
+    _echo(f"Wrote {len(files)} files to {out}/:")
+    for path in files:
         _echo(f"  {path.relative_to(out)}")
+
+
+def _one_file(out: Path | None, suffixes: tuple[str, ...], overwrite: bool) -> Path | None:
+    """Pre-flight of ``--out`` naming one file: a suffix the command writes, a place it can be written, and no
+    file already there unless ``--overwrite``."""
+    if out is None:
+        return None
+    from .runfolder import check_target
+
+    if out.suffix.lower() not in suffixes:
+        raise QuickReleaseError(f"--out {out}: expected a file name ending in {' or '.join(suffixes)}")
+    check_target(out, "file")
+    if (out.exists() or out.is_symlink()) and not overwrite:
+        raise QuickReleaseError(f"--out {out}: a file is already there; give --overwrite to replace it")
+    return out
 
 
 @app.command("run")
@@ -361,8 +411,11 @@ def run_command(
     paths = write_results(result, out, overwrite=overwrite)
     if as_json:
         extra = {} if result.building is None else {"building": result.building.summary()}
+        files = {k: str(v) for k, v in paths.items()}
+        if (Path(out) / "manifest.json").is_file():
+            files.setdefault("manifest", str(Path(out) / "manifest.json"))
         _print_json({"release": result.summary(), "identification": result.identification_summary(), **extra,
-                     "files": {k: str(v) for k, v in paths.items()}})
+                     "files": files})
         return
     from .display import label, quantity_rows, value_text
 
@@ -390,6 +443,7 @@ def report(
     case_file: Annotated[Path, typer.Argument(help="Case file (TOML).")],
     out: OutOpt = Path("quickrelease-out"),
     overwrite: OverwriteOpt = False,
+    as_json: JsonOpt = False,
 ) -> None:
     """Write the self-contained HTML report of a case (figures embedded) as --out/report.html."""
     from .case import load_case
@@ -399,7 +453,12 @@ def report(
     _check_case_optional(case)
     results_folder(case, out, figures=False, data=False, overwrite=overwrite)
     paths = write_results(run_case(case), out, figures=False, data=False, overwrite=overwrite)
-    _echo(f"Wrote {paths['report']}")
+    files = _written(paths, out)
+    if as_json:
+        _print_json({"report": str(paths["report"]), "files": [str(p) for p in files]})
+        return
+    _echo(f"Wrote {len(files)} files to {out}/: {paths['report'].relative_to(out)} (the report), "
+          + ", ".join(str(p.relative_to(out)) for p in files if p != paths["report"]))
 
 
 @app.command()
@@ -432,7 +491,7 @@ def demo(
     if as_json:
         paths = write_results(replace(run_case(case), paper=cmp), out, overwrite=overwrite)
         _print_json({"device": dev.name, "mass_model": mass_model, **cmp.summary(), "out": str(out),
-                     "files": sorted(str(p) for p in paths.values())})
+                     "files": sorted(str(p) for p in _written(paths, out))})
         return
     _echo(f"Device: {dev.name} (Table 2); mass model: {mass_model}")
     terms = [(k.replace("_", " "), f"{v:.2f}") for k, v in cmp.E_S_breakdown.items()]
@@ -445,7 +504,8 @@ def demo(
         f"peak u_dot = {cmp.peak_u_dot:.3f} m/s, peak v_dot = {cmp.peak_v_dot:.3f} m/s"
     )
     paths = write_results(replace(run_case(case), paper=cmp), out, overwrite=overwrite)
-    _echo(f"Figures and report of the paper case: {out / 'report.html'} ({len(paths)} files in {out}/)")
+    _echo(f"Figures and report of the paper case: {out / 'report.html'} ({len(_written(paths, out))} files "
+          f"in {out}/)")
 
 
 @app.command()
@@ -458,7 +518,7 @@ def uq(
     backend: Annotated[Literal["numpy", "dask", "gpu"], typer.Option("--backend", help="Where the samples are computed: this process, a Dask cluster, or a CUDA GPU (pip install 'quickrelease[gpu]').")] = "numpy",
     scheduler: Annotated[str | None, typer.Option("--scheduler", help="Dask scheduler address; default: a LocalCluster.")] = None,
     workers: Annotated[int, typer.Option("--workers", help="Workers of the LocalCluster.")] = 2,
-    out: Annotated[Path | None, typer.Option("--out", "-o", help="Folder for chunks, uq.json and the corner figure.")] = None,
+    out: Annotated[Path | None, typer.Option("--out", "-o", show_default=False, help="Folder for chunks, uq.json and the corner figure (default: none, nothing written).")] = None,
     resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted run in --out (same inputs only).")] = False,
     threads: Annotated[int | None, typer.Option("--threads", "-t", help="Threads of the compiled kernels, 1 to the cores numba may use (default: all; results do not depend on it); numpy backend only (a Dask task runs on one thread; the gpu backend needs none).")] = None,
     overwrite: OverwriteOpt = False,
@@ -498,12 +558,12 @@ def uq(
 def sweep_command(
     case_file: Annotated[Path, typer.Argument(help="Case file: the inputs not swept, and the device.")],
     grid: Annotated[list[str], typer.Option("--grid", "-g", help="NAME=start:stop:count (with units), e.g. 'force=500 kN:3000 kN:26'; repeat for more dimensions.")],
-    file: Annotated[Path, typer.Option("--file", "-f", help="Output file: .nc (NetCDF) or .zarr (Zarr store); the heat maps beside it.")] = Path("sweep.nc"),
-    out_old: Annotated[Path | None, typer.Option("--out", "-o", hidden=True, help="Old name of --file.")] = None,
-    backend: Annotated[Literal["numpy", "dask", "gpu"], typer.Option("--backend", help="Where the grid is computed: this process, a Dask cluster (needs --file *.zarr), or a CUDA GPU (pip install 'quickrelease[gpu]').")] = "numpy",
+    file: Annotated[Path, typer.Option("--out", "-o", help="Output file: .nc (NetCDF) or .zarr (Zarr store); the heat maps beside it.")] = Path("sweep.nc"),
+    out_old: Annotated[Path | None, typer.Option("--file", "-f", hidden=True, help="Former name of --out.")] = None,
+    backend: Annotated[Literal["numpy", "dask", "gpu"], typer.Option("--backend", help="Where the grid is computed: this process, a Dask cluster (needs --out *.zarr), or a CUDA GPU (pip install 'quickrelease[gpu]').")] = "numpy",
     scheduler: Annotated[str | None, typer.Option("--scheduler", help="Dask scheduler address; default: a LocalCluster.")] = None,
     workers: Annotated[int, typer.Option("--workers", help="Workers of the LocalCluster.")] = 2,
-    resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted dask sweep in --file (same inputs only).")] = False,
+    resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted dask sweep in --out (same inputs only).")] = False,
     block_rows: Annotated[int | None, typer.Option("--block-rows", help="Rows of the first grid per Dask block (default: about 10^6 points a block).")] = None,
     threads: Annotated[int | None, typer.Option("--threads", "-t", help="Threads of the compiled kernels, 1 to the cores numba may use (default: all; results do not depend on it); numpy backend only (a Dask task runs on one thread; the gpu backend needs none).")] = None,
     overwrite: OverwriteOpt = False,
@@ -559,8 +619,8 @@ def synth(
     jitter: Annotated[float, typer.Option("--jitter", help="Uneven sampling: instants shifted by up to +-jitter/2 intervals, in [0, 1).")] = 0.0,
     missing: Annotated[float, typer.Option("--missing", help="Share of missing samples per channel, in [0, 1).")] = 0.0,
     building: Annotated[bool, typer.Option("--building", help="Synthesize the building's free vibration ([building]) instead of the device's release (implied by a case without [test]).")] = False,
-    file: Annotated[Path, typer.Option("--file", "-f", help="Record file to write (CSV).")] = Path("record.csv"),
-    out_old: Annotated[Path | None, typer.Option("--out", "-o", hidden=True, help="Old name of --file.")] = None,
+    file: Annotated[Path, typer.Option("--out", "-o", help="Record file to write (CSV).")] = Path("record.csv"),
+    out_old: Annotated[Path | None, typer.Option("--file", "-f", hidden=True, help="Former name of --out.")] = None,
     case_out: Annotated[Path | None, typer.Option("--case-out", help="Also write a case file that fits this record.")] = None,
     as_json: JsonOpt = False,
 ) -> None:
@@ -686,7 +746,7 @@ def _synth_building(case, channels: str | None, rate: str | None, noise: list[st
 @_guard
 def fit_command(
     case_file: Annotated[Path, typer.Argument(help="Case file with [record] (and/or [observations] with a scatter).")],
-    out: Annotated[Path | None, typer.Option("--out", "-o", help="Also write fit.json, figures and report.html here.")] = None,
+    out: Annotated[Path | None, typer.Option("--out", "-o", show_default=False, help="Also write fit.json, figures and report.html into this folder (default: none, print only).")] = None,
     overwrite: OverwriteOpt = False,
     as_json: JsonOpt = False,
 ) -> None:
@@ -752,7 +812,7 @@ def building_command(
     case_file: Annotated[Path, typer.Argument(help="Case file with [building] and [building.record].")],
     model: Annotated[Literal["linear", "bilinear", "2dof"] | None, typer.Option("--model", help="Isolation model (default: the case's [building] model).")] = None,
     compare: Annotated[bool, typer.Option("--compare", help="Also fit the other models; rank them by AIC/BIC and residual whiteness.")] = False,
-    out: Annotated[Path | None, typer.Option("--out", "-o", help="Also write summary.json, the figures and report.html here.")] = None,
+    out: Annotated[Path | None, typer.Option("--out", "-o", show_default=False, help="Also write summary.json, the record, model and residuals (timeseries.csv, .nc), the figures and report.html into this folder (default: none, print only).")] = None,
     overwrite: OverwriteOpt = False,
     as_json: JsonOpt = False,
 ) -> None:
@@ -825,9 +885,10 @@ def _building_tables(result, summary: dict[str, Any], title: str) -> None:
     rows = result.decay_check.get("rows", [])
     if rows:
         _table("Decay cross-check (model-free, combined decrement law)", [
-            (key_for(r["parameter"])[0], quantity(r["fit"], key_for(r["parameter"])[1]),
-             quantity(r["decay"], key_for(r["parameter"])[1]), f"{r['difference_in_se']:+.3g}") for r in rows],
-            ("parameter", "fit", "decay", "difference [SE]"))
+            (key_for(r["parameter"])[0], *estimate_row(r["parameter"], r["fit"], r["decay_se"])[1:2],
+             *estimate_row(r["parameter"], r["decay"], r["decay_se"])[1:3], f"{r['difference_in_se']:+.3g}")
+            for r in rows],
+            ("parameter", "fit", "decay", "decay SE", "difference [SE]"))
     for text in result.notes:
         _echo(f"note: {text}")
     for text in result.warnings:
@@ -838,7 +899,7 @@ def _building_tables(result, summary: dict[str, Any], title: str) -> None:
 @_guard
 def campaign(
     campaign_file: Annotated[Path, typer.Argument(help="Campaign file (TOML): shared device and record mapping, [[tests]].")],
-    out: Annotated[Path | None, typer.Option("--out", "-o", help="Also write campaign.json, the figure and report.html here.")] = None,
+    out: Annotated[Path | None, typer.Option("--out", "-o", show_default=False, help="Also write campaign.json, the figure and report.html into this folder (default: none, print only).")] = None,
     overwrite: OverwriteOpt = False,
     as_json: JsonOpt = False,
 ) -> None:
@@ -927,7 +988,7 @@ def _building_campaign_tables(result) -> None:
 @_guard
 def plan(
     case_file: Annotated[Path, typer.Argument(help="Case file: the planned push ([test] force, alpha0), the friction estimate, and optionally [fuse], [building], [plan].")],
-    out: Annotated[Path | None, typer.Option("--out", "-o", help="Also write plan.json, the figures and report.html here.")] = None,
+    out: Annotated[Path | None, typer.Option("--out", "-o", show_default=False, help="Also write plan.json, the figures and report.html into this folder (default: none, print only).")] = None,
     threads: ThreadsOpt = None,
     overwrite: OverwriteOpt = False,
     as_json: JsonOpt = False,
@@ -1000,17 +1061,26 @@ def plan(
 def bench(
     quick: Annotated[bool, typer.Option("--quick", help="Smaller samples; skip the 1e8-sample Dask run.")] = False,
     threads: Annotated[int | None, typer.Option("--threads", "-t", help="Threads of the all-cores measurement, 1 to the cores numba may use (default: all).")] = None,
+    out: Annotated[Path | None, typer.Option("--out", "-o", show_default=False, help="Also write the results to this .json file (the --json keys) (default: none, print only).")] = None,
+    overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace the file --out names.")] = False,
     as_json: JsonOpt = False,
 ) -> None:
     """Benchmarks on the bench and the wide sample: kernel throughput on one core and on all, vs scipy (same run), accuracy vs mpmath (the error, and the backward error in input ulps: the error over the case's 1-ulp condition number), the targets of issue 12 (accuracy: median <= 1e-12, every case <= max(1e-10, 4 x its 1-ulp condition number))."""
     from .bench import run_bench
 
     _check_threads(threads)
+    _one_file(out, (".json",), overwrite)
     result = run_bench(quick=quick, threads=threads, log=lambda line: _echo(line, err=True))
+    if out is not None:
+        from .export import write_json
+
+        write_json(result, out)
     if as_json:
         _print_json(result)
         return
     _bench_tables(result)
+    if out is not None:
+        _echo(f"Wrote 1 file: {out}")
 
 
 def _bench_tables(result: dict[str, Any]) -> None:

@@ -210,9 +210,59 @@ def interval(bounds: Iterable[float] | None, unit: str = "", digits: int = 5) ->
     return f"[{inner}] {prefix}{unit}".rstrip()
 
 
+def places_for(width: float, digits: int = 2) -> int:
+    """Decimal places that show ``width`` (a standard error, or an interval's half-width) to ``digits``
+    significant digits, the width rounded first (``0.996`` -> ``1.0``: one place, not two); negative for
+    tens, hundreds (``996`` -> ``-2``). ``width`` must be finite and positive."""
+    rounded = float(f"{abs(width):.{digits}g}")
+    return digits - 1 - math.floor(math.log10(rounded))
+
+
+def fixed(value: float, places: int) -> str:
+    """``value`` rounded to ``places`` decimal places (negative: to tens, hundreds), as text: ``(2.0000802,
+    6)`` -> ``"2.000080"``, ``(223.0, -2)`` -> ``"200"``; ``-0`` is written ``0``."""
+    if places >= 0:
+        text = f"{value:.{places}f}"
+    else:
+        text = f"{round(value, places):.0f}"
+    return text[1:] if text.startswith("-") and float(text) == 0.0 else text
+
+
+def same_places(values: Iterable[float | None], width: float | None, digits: int = 2, sig: int = 5) -> list[str]:
+    """``values`` (an estimate, its error, its interval's ends) all rounded to one decimal place: where
+    ``width`` (the standard error, else the interval's half-width) shows ``digits`` significant digits, so
+    that the digits printed are the ones the uncertainty supports (2.0000802 with an interval half-width of
+    5.7e-5 is ``2.000080``, not ``2.0001``). Without a finite positive ``width``: ``sig`` significant digits of
+    the first value. Far from 1 (|value| < 1e-3 or >= 1e6) in the exponent form, to the same last digit.
+    ``None`` -> ``"-"``."""
+    values = list(values)
+    finite = [float(v) for v in values if v is not None and math.isfinite(float(v))]
+    lead = finite[0] if finite else 0.0
+
+    def far(v: float) -> bool:
+        return v != 0.0 and not 1e-3 <= abs(v) < 1e6
+
+    out = []
+    good = width is not None and math.isfinite(width) and width > 0
+    for v in values:
+        if v is None:
+            out.append("-")
+        elif not math.isfinite(float(v)):
+            out.append(str(float(v)))
+        elif not good:
+            out.append(_alike([float(v)], lead, sig)[0])
+        elif far(lead) or places_for(width, digits) > 9:  # the last digit kept is 10^-places
+            exponent = math.floor(math.log10(abs(float(v)))) if float(v) != 0.0 else 0
+            out.append(number(float(v), max(1, min(exponent + places_for(width, digits) + 1, 15)), zeros=True))
+        else:
+            out.append(fixed(float(v), places_for(width, digits)))
+    return out
+
+
 def _alike(values: list[float], lead: float, digits: int = 5) -> list[str]:
     """``values`` with the decimal places that show ``lead`` to ``digits`` significant digits (an interval
-    printed like its estimate: ``[2.0000, 2.0001]``, not ``[2, 2.0001]``); exponent form far from 1."""
+    printed like its estimate: ``[2.0000, 2.0001]``, not ``[2, 2.0001]``); exponent form far from 1. Used
+    only where no uncertainty is known (:func:`same_places` otherwise)."""
     if not math.isfinite(lead) or lead == 0.0 or not 1e-3 <= abs(lead) < 1e6 \
             or not all(math.isfinite(v) for v in values):
         return [number(v, digits) for v in values]
@@ -220,11 +270,23 @@ def _alike(values: list[float], lead: float, digits: int = 5) -> list[str]:
     return [f"{v:.{places}f}" for v in values]
 
 
+def half_width(ci: Iterable[float | None] | None) -> float | None:
+    """Half the width of an interval ``[lo, hi]`` (None when an end is missing or not finite)."""
+    if ci is None:
+        return None
+    ends = list(ci)
+    if len(ends) != 2 or any(b is None or not math.isfinite(float(b)) for b in ends):
+        return None
+    return 0.5 * abs(float(ends[1]) - float(ends[0]))
+
+
 def estimate_row(name: str, value: float | None, se: float | None = None, ci: Iterable[float] | None = None,
                  unit: str | None = None) -> tuple[str, str, str, str]:
     """(parameter, estimate, standard error, 95% interval) of one estimate for the tables of fits: the
-    parameter's human name (:func:`key_for`), the value to 5 significant digits, the error to 2, all three
-    with the unit and the SI prefix of the value (``12.346 MN/m``, ``0.23 MN/m``)."""
+    parameter's human name (:func:`key_for`); the error to 2 significant digits and the value and the
+    interval's ends rounded to the same decimal place (:func:`same_places`; without an error, to the
+    interval's half-width; without either, 5 significant digits), all with the unit and the SI prefix of the
+    value (``12.35 MN/m``, ``0.23 MN/m``, ``[12.00, 13.00] MN/m``)."""
     human, u = key_for(name, unit)
     if value is None:
         return human, "-", "-", "-"
@@ -233,11 +295,15 @@ def estimate_row(name: str, value: float | None, se: float | None = None, ci: It
     lead = float(value) / factor
     if se is not None and math.isinf(se):  # a parameter the record does not see: no error, no interval
         return human, _alike([lead], lead)[0] + suffix, "not identified", "not identified"
-    se_text = "-" if se is None or not math.isfinite(se) else number(float(se) / factor, 2, zeros=True) + suffix
     ci = None if ci is None else list(ci)
-    ci_text = "-" if ci is None or any(b is None for b in ci) else \
-        "[" + ", ".join(_alike([float(b) / factor for b in ci], lead)) + "]" + suffix
-    return human, _alike([lead], lead)[0] + suffix, se_text, ci_text
+    has_ci = ci is not None and not any(b is None for b in ci)
+    scaled_ci = [float(b) / factor for b in ci] if has_ci else []
+    se_scaled = None if se is None or not math.isfinite(se) or se <= 0 else float(se) / factor
+    width = se_scaled if se_scaled is not None else half_width(scaled_ci if has_ci else None)
+    texts = same_places([lead, *scaled_ci, se_scaled], width)
+    se_text = "-" if se_scaled is None else texts[-1] + suffix
+    ci_text = "[" + ", ".join(texts[1:-1]) + "]" + suffix if has_ci else "-"
+    return human, texts[0] + suffix, se_text, ci_text
 
 
 def quantity_rows(summary: Mapping[str, Any], skip: Iterable[str] = ()) -> list[tuple[str, str]]:

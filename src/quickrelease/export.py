@@ -88,13 +88,31 @@ def write_json(data: dict[str, Any], path: str | Path, provenance: dict[str, Any
 
 def write_csv(response: Response, path: str | Path) -> Path:
     """Write the time histories as CSV, one column per quantity, units in the names, full precision."""
-    data = response.to_dict()
-    names = list(data)
-    matrix = np.column_stack([np.asarray(data[n], dtype=float) for n in names])
+    return write_columns(response.to_dict(), path)
+
+
+def write_columns(columns: dict[str, Any], path: str | Path) -> Path:
+    """Write equal-length number columns as CSV atomically: a header of the names (units in them), full
+    precision, an empty cell for NaN (a sample a channel does not have)."""
+    names = list(columns)
+    matrix = np.column_stack([np.asarray(columns[n], dtype=float) for n in names])
     with atomic_path(path) as tmp:
         with open(tmp, "w", encoding="utf-8", newline="") as fh:
             fh.write(",".join(names) + "\n")
-            np.savetxt(fh, matrix, delimiter=",", fmt="%.17g")
+            for row in matrix:
+                fh.write(",".join("" if v != v else format(v, ".17g") for v in row) + "\n")
+    return Path(path)
+
+
+def write_dataset(ds: Any, path: str | Path, provenance: dict[str, Any] | None = None) -> Path:
+    """Write an ``xarray.Dataset`` as NetCDF (classic format, as :func:`write_netcdf`) atomically, with the
+    ``provenance`` (:func:`quickrelease.runfolder.provenance`) as global attributes."""
+    if provenance is not None:
+        from .runfolder import provenance_attrs
+
+        ds = ds.assign_attrs(provenance_attrs(provenance))
+    with atomic_path(path) as tmp:
+        ds.to_netcdf(tmp, engine="scipy", format="NETCDF3_64BIT")
     return Path(path)
 
 

@@ -99,6 +99,20 @@ class Identification(Summarised):
             "device": self.device.name,
         }
 
+    def to_pandas(self):
+        """The identification as a one-row DataFrame, columns keyed with their units as in
+        :meth:`summary` (``F1_N``, ..., the feasible interval as ``feasible_stop_time_min_s`` and ``_max_s``)."""
+        from .frames import summary_frame
+
+        return summary_frame(self.summary())
+
+    def to_xarray(self):
+        """The identification as an ``xarray.Dataset`` of 0-d variables (``F1``, ``F2``, ...) with ``units`` and
+        ``long_name``; the device and the boundary as global attributes."""
+        from .frames import summary_dataset
+
+        return summary_dataset(self.summary(), "quickrelease friction identification (Eq. 11-13)")
+
 
 def stop_time_on_line(F1: float, E_S: float, alpha0: float, alpha_final: float, *,
                       device: Device | None = None, mass_model: str | float = "distributed") -> float:

@@ -192,6 +192,20 @@ class IsolationFit:
                 "search": self.search.summary() if self.search is not None else None,
                 "warnings": list(self.warnings)}
 
+    def to_pandas(self):
+        """The record, the fitted model and the residuals of every channel on the record's time axis, as a
+        DataFrame indexed by ``t_s`` (:func:`quickrelease.frames.fit_columns`: ``x_record_m``, ...)."""
+        from .frames import fit_frame
+
+        return fit_frame(self)
+
+    def to_xarray(self):
+        """The same as an ``xarray.Dataset`` on the time coordinate ``t`` [s], with units and long names
+        (:func:`quickrelease.frames.fit_dataset`)."""
+        from .frames import fit_dataset
+
+        return fit_dataset(self)
+
 
 def _offset_kind(name: str, channels) -> str:
     for ch in channels:

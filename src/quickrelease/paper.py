@@ -68,6 +68,25 @@ def printed_table7() -> dict[str, PrintedValue]:
     return out
 
 
+#: SI unit suffix of each printed Table 7 value in :meth:`PaperComparison.summary` (``printed_F1_N``).
+PRINTED_UNITS = {"P": "N", "alpha0": "rad", "alpha_final": "rad", "E_S": "J", "t_F": "s", "F1": "N", "F2": "N"}
+
+#: The key of each comparison field in :meth:`PaperComparison.summary` (``quickrelease demo --json``,
+#: ``table7.json``): the name with its SI unit, as every command's JSON; fields not named keep their name.
+SUMMARY_KEYS = {
+    "E_S_eq2": "E_S_eq2_J", "E_S_breakdown": "E_S_breakdown_J", "P_for_printed_E_S": "P_for_printed_E_S_N",
+    "F1_printed_inputs": "F1_printed_inputs_N", "F2_printed_inputs": "F2_printed_inputs_N",
+    "F1_max": "F1_max_N", "F2_max": "F2_max_N", "F1_eq2": "F1_eq2_N", "F2_eq2": "F2_eq2_N",
+    "F1_range_t_F": "F1_range_t_F_N", "F1_range_all": "F1_range_all_N", "F2_range_all": "F2_range_all_N",
+    "t_F_for_paper_F1": "t_F_for_paper_F1_s", "E_S_implied_by_paper_pair": "E_S_implied_by_paper_pair_J",
+    "paper_pair_alpha_final": "paper_pair_alpha_final_rad", "paper_pair_stop_time": "paper_pair_stop_time_s",
+    "paper_pair_stop_time_on_line": "paper_pair_stop_time_on_line_s",
+    "lumped_feasible_stop_times": "lumped_feasible_stop_time_s", "feasible_stop_times": "feasible_stop_time_s",
+    "peak_u_dot": "peak_u_dot_m_s", "peak_v_dot": "peak_v_dot_m_s", "u_final": "u_final_m", "v_final": "v_final_m",
+    "alpha_dot0": "alpha_dot0_rad_s",
+}
+
+
 @dataclass(frozen=True, repr=False)
 class PaperComparison(Summarised):
     """Our numbers beside the paper's for the Table 7 test, with what explains the gaps.
@@ -147,13 +166,19 @@ class PaperComparison(Summarised):
 
     def summary(self) -> dict[str, Any]:
         """Every computed value (SI; intervals as two-element lists), the printed Table 7 values as
-        ``printed_<name>`` (SI) and the side-by-side ``table7`` rows: what ``quickrelease demo --json`` prints."""
-        out: dict[str, Any] = {f"printed_{k}": v.value for k, v in self.printed.items()}
+        ``printed_<name>`` (SI) and the side-by-side ``table7`` rows: what ``quickrelease demo --json`` prints
+        and ``table7.json`` holds. Keys end in their SI unit as every other command's (``F1_eq2_N``,
+        ``feasible_stop_time_s``; :data:`SUMMARY_KEYS`); ``line_sum_paper_pair`` and ``mass_factor`` are
+        dimensionless."""
+        out: dict[str, Any] = {}
+        for k, v in self.printed.items():
+            unit = PRINTED_UNITS.get(k, "")
+            out[f"printed_{k}_{unit}" if unit else f"printed_{k}"] = v.value
         for f in fields(self):
             if f.name == "printed":
                 continue
             value = getattr(self, f.name)
-            out[f.name] = list(value) if isinstance(value, tuple) else value
+            out[SUMMARY_KEYS.get(f.name, f.name)] = list(value) if isinstance(value, tuple) else value
         out["table7"] = [dict(zip(("quantity", "paper", "quickrelease", "note"), row, strict=True))
                          for row in self.rows()]
         return out

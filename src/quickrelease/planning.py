@@ -786,19 +786,19 @@ def plan_case(case: Case, *, clearance_samples: int = 200, threads: int | None =
 # -- figures --------------------------------------------------------------------------------------------------
 
 @styled
-def choices_figure(table: FuseTable, fig=None):
+def choices_figure(table: FuseTable, fig=None, ax=None):
     """The (diameter, angle) choices: push force at rupture (kN, +- one standard deviation) on a grid, the
-    choices inside the target range outlined, the most likely one in bold."""
+    choices inside the target range outlined, the most likely one in bold. ``ax``: an Axes to draw into.
+    Returns the figure."""
     from matplotlib.patches import Rectangle
 
-    from .plots import _figure
+    from ._style import panels
 
     P = table.grid("push_force") / 1e3
     std = table.grid("push_force_std") / 1e3
     within = table.grid("within")
     nd, na = P.shape
-    fig = _figure(1.6 + 1.05 * na, 1.5 + 0.55 * nd, fig=fig, left=0.16, right=0.97, bottom=0.2, top=0.8)
-    ax = fig.subplots()
+    fig, ax = panels(1.6 + 1.05 * na, 1.5 + 0.55 * nd, fig=fig, ax=ax, left=0.16, right=0.97, bottom=0.2, top=0.8)
     centre = 0.5 * sum(table.target) / 1e3
     dev = np.clip(P / centre - 1.0, -0.5, 0.5)
     ax.imshow(dev, cmap="RdBu_r", vmin=-0.5, vmax=0.5, aspect="auto")
@@ -823,63 +823,78 @@ def choices_figure(table: FuseTable, fig=None):
 
 
 @styled
-def utilisation_figure(members: MemberChecks, fig=None):
-    """Utilisation of every member check (skipped checks marked), with the limit 1."""
-    from .plots import _COLORS, _figure
+def utilisation_figure(members: MemberChecks, fig=None, ax=None):
+    """Utilisation of the member checks made (a check without its capacity in the device file has no bar;
+    the title counts them), with the limit 1 named under the axis, where it covers no bar or value. ``ax``: an
+    Axes to draw into. Returns the figure."""
+    from ._style import panels
+    from .plots import _COLORS
 
-    checks = list(members.checks)
-    fig = _figure(6.4, 0.8 + 0.42 * len(checks), fig=fig, left=0.46, right=0.95, bottom=0.22, top=0.86)
-    ax = fig.subplots()
+    checks = [c for c in members.checks if c.utilisation is not None]
+    if not checks:
+        raise QuickReleaseError("no member was checked (no capacity in the device file): "
+                                "there is no utilisation to draw")
+    skipped = len(members.checks) - len(checks)
+    height = 1.45 + 0.42 * len(checks) + (0.15 if skipped else 0.0)
+    fig, ax = panels(6.4, height, fig=fig, ax=ax, left=0.46, right=0.95, bottom=0.9 / height,
+                     top=1.0 - (0.65 if skipped else 0.5) / height)
     labels = [f"{c.member}: {c.check}" for c in checks]
-    values = [c.utilisation if c.utilisation is not None else 0.0 for c in checks]
-    colors = [_COLORS["d"] if c.member == "E4" else (_COLORS["b"] if (c.utilisation or 0) > 1 else _COLORS["a"])
+    values = [c.utilisation for c in checks]
+    colors = [_COLORS["d"] if c.member == "E4" else (_COLORS["b"] if c.utilisation > 1 else _COLORS["a"])
               for c in checks]
     bars = ax.barh(labels, values, color=colors)
     for bar, c in zip(bars, checks, strict=True):
-        text = " skipped (no capacity given)" if c.utilisation is None else f" {c.utilisation:.3f}"
-        ax.text(max(bar.get_width(), 0.0), bar.get_y() + bar.get_height() / 2, text, va="center",
-                fontsize=_STYLE["legend.fontsize"])
+        ax.text(max(bar.get_width(), 0.0), bar.get_y() + bar.get_height() / 2, f" {c.utilisation:.3f}",
+                va="center", fontsize=_STYLE["legend.fontsize"])
     ax.axvline(1.0, color=_COLORS["b"], lw=1.0, ls="--", label="capacity (utilisation 1)")
     ax.invert_yaxis()
     ax.set_xlim(0, max(1.2, max(values) * 1.25))
     ax.set_xlabel("utilisation, demand / capacity [-]")
-    ax.legend(loc="upper right")
+    axes_height = ax.get_position().height * fig.get_figheight() if hasattr(fig, "get_figheight") else height
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.55 / axes_height), frameon=False)
     f = members.forces
+    note = "" if not skipped else f"\n{skipped} check(s) skipped: no capacity in the device file"
     ax.set_title(f"Member checks at P = {f.P / 1e3:.0f} kN, $\\alpha_0$ = {f.alpha0:.4g} rad\n"
-                 "(the fuse E4 is meant to reach 1: it breaks)")
+                 f"(the fuse E4 is meant to reach 1: it breaks){note}")
     return fig
 
 
 @styled
-def envelope_figure(envelope: Envelope, fig=None):
+def envelope_figure(envelope: Envelope, fig=None, ax=None):
     """Distributions over the friction estimate of the stroke, the opening, the time to stop and the peak head
-    velocity, with the nominal value and the 5-95% range."""
-    from .plots import _COLORS, _figure
+    velocity, with the nominal value and the 5-95% range (an envelope of two samples or more). ``ax``: four
+    Axes to draw into. Returns the figure."""
+    from ._style import panels
+    from .plots import _COLORS
 
-    fig = _figure(7.0, 4.6, fig=fig, left=0.08, right=0.98, bottom=0.11, top=0.88, wspace=0.25, hspace=0.45)
-    axes = fig.subplots(2, 2)
-    for ax, key in zip(axes.flat, ("u_final", "v_final", "stop_time", "peak_u_dot"), strict=True):
+    if envelope.samples < 2:
+        raise QuickReleaseError(f"the envelope has {envelope.samples} friction sample(s): "
+                                "a histogram needs two or more")
+
+    fig, axes = panels(7.0, 4.6, (2, 2), fig=fig, ax=ax, left=0.08, right=0.98, bottom=0.11, top=0.88,
+                       wspace=0.25, hspace=0.45)
+    for panel, key in zip(axes.flat, ("u_final", "v_final", "stop_time", "peak_u_dot"), strict=True):
         unit, label = ENVELOPE_QUANTITIES[key]
-        values = envelope.values[key]
-        if values.size > 1:
-            ax.hist(values, bins=60, color=_COLORS["a"], alpha=0.75)
-            r = envelope.ranges[key]
-            for q in ("p5", "p95"):
-                ax.axvline(r[q], color=_COLORS["d"], ls="--", lw=0.9)
-        ax.axvline(envelope.nominal[key], color=_COLORS["b"], lw=1.4)
-        ax.set_yticks([])
-        ax.set_xlabel(f"{label} [{unit_text(unit)}]")
-    fig.suptitle(f"Release envelope over {envelope.samples:,} friction samples (red: nominal, dashed: 5-95%)")
+        panel.hist(envelope.values[key], bins=60, color=_COLORS["a"], alpha=0.75)
+        r = envelope.ranges[key]
+        for q in ("p5", "p95"):
+            panel.axvline(r[q], color=_COLORS["d"], ls="--", lw=0.9)
+        panel.axvline(envelope.nominal[key], color=_COLORS["b"], lw=1.4)
+        panel.set_yticks([])
+        panel.set_xlabel(f"{label} [{unit_text(unit)}]")
+    if ax is None:
+        fig.suptitle(f"Release envelope over {envelope.samples:,} friction samples (red: nominal, dashed: 5-95%)")
     return fig
 
 
 @styled
-def gap_figure(clear: Clearance, fig=None):
-    """The head's retraction, the building's approach and the gap between them after release."""
-    from .plots import _COLORS, _figure
+def gap_figure(clear: Clearance, fig=None, ax=None):
+    """The head's retraction, the building's approach and the gap between them after release. ``ax``: an Axes
+    to draw into. Returns the figure."""
+    from ._style import panels
+    from .plots import _COLORS
 
-    fig = _figure(6.4, 3.4, fig=fig, left=0.11, right=0.97, bottom=0.14, top=0.86)
-    ax = fig.subplots()
+    fig, ax = panels(6.4, 3.4, fig=fig, ax=ax, left=0.11, right=0.97, bottom=0.14, top=0.86)
     mm = 1e3  # plotted in mm
     ax.plot(clear.t, mm * clear.head, color=_COLORS["a"], label="head retraction u(t)")
     ax.plot(clear.t, mm * clear.approach, color=_COLORS["c"], label="building approach d0 - x(t)")
@@ -895,7 +910,11 @@ def gap_figure(clear: Clearance, fig=None):
     ax.set_ylabel("distance [mm]")
     verdict = "CONTACT" if clear.contact else "clear"
     ax.set_title(f"Clearance between the front head and the building ({verdict}); d0 = {1e3 * clear.d0:.0f} mm")
-    ax.legend(loc="best")
+    # the curves fill the axes from their lowest to their highest point: the legend goes in room made above
+    values = mm * np.concatenate([clear.head, clear.approach, clear.gap, [0.0]])
+    lo, hi = float(np.nanmin(values)), float(np.nanmax(values))
+    ax.set_ylim(lo - 0.05 * (hi - lo), hi + 0.45 * (hi - lo))
+    ax.legend(loc="upper left", ncol=2)
     return fig
 
 
@@ -904,8 +923,10 @@ def plan_figures(plan: PlanResult) -> dict[str, Any]:
     figs: dict[str, Any] = {}
     if plan.fuse is not None:
         figs["plan_choices"] = choices_figure(plan.fuse)
-    figs["plan_utilisation"] = utilisation_figure(plan.members)
-    figs["plan_envelope"] = envelope_figure(plan.envelope)
+    if any(c.utilisation is not None for c in plan.members.checks):  # a chart only of checks made
+        figs["plan_utilisation"] = utilisation_figure(plan.members)
+    if plan.envelope.samples > 1:  # histograms only over samples (one friction value: the table says it all)
+        figs["plan_envelope"] = envelope_figure(plan.envelope)
     if plan.clearance is not None:
         figs["plan_gap"] = gap_figure(plan.clearance)
     return figs

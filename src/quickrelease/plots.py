@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from . import dynamics
-from ._style import COLORS, STYLE, figure, styled, unit_text
+from ._style import COLORS, STYLE, figure, panels, styled, unit_text
 from .identify import Identification, stop_time_on_line
 from .response import Response
 from .statics import StrainEnergy
@@ -50,10 +50,14 @@ def _mark_stop(ax, response: Response) -> None:
 
 
 @styled
-def fig13(response: Response, fig=None):
-    """Fig. 13: (a) position angle, (b) angular velocity, (c) angular acceleration, (d) energy balance vs time."""
-    fig = _figure(7.0, 5.0, fig=fig, left=0.09, right=0.98, bottom=0.09, top=0.88, wspace=0.28, hspace=0.28)
-    axes = fig.subplots(2, 2, sharex=True)
+def fig13(response: Response, fig=None, ax=None):
+    """Fig. 13: (a) position angle, (b) angular velocity, (c) angular acceleration, (d) energy balance vs time.
+
+    ``fig``: a Figure or SubFigure to fill; ``ax``: four Axes to draw into instead (a 2 x 2 array or a list in
+    reading order; no title over them). Returns the figure."""
+    fig, axes = panels(7.0, 5.0, (2, 2), fig=fig, ax=ax, subplots={"sharex": True}, left=0.09, right=0.98,
+                       bottom=0.09, top=0.88, wspace=0.28, hspace=0.28)
+    titled = ax is None  # the user's axes get no title over them (``ax`` is reused below)
     r = response
     (a, b), (c, d) = axes
     a.plot(r.t, r.alpha, color=_COLORS["a"])
@@ -76,17 +80,26 @@ def fig13(response: Response, fig=None):
         ax.set_xlabel("time $t$ [s]")
     for ax in axes.flat:
         _mark_stop(ax, r)
-        ax.legend(loc="best")
-    fig.suptitle(f"Release response ({r.method}, c = {r.mass_factor:.4g}): "
-                 f"$t_F$ = {r.stop_time:.4f} s, $\\alpha_F$ = {r.alpha_final:.4f} rad")
+        if ax is not d:
+            ax.legend(loc="best")
+    # (d): every curve lies between 0 and E_S and crosses the panel; the legend goes in room made above E_S
+    # (two columns, the stop line named in the other panels), where it covers no curve
+    handles, labels = d.get_legend_handles_labels()
+    keep = [k for k, text in enumerate(labels) if not text.startswith("stop")]
+    headroom(d)
+    d.legend([handles[k] for k in keep], [labels[k] for k in keep], loc="upper left", ncol=2)
+    if titled:
+        fig.suptitle(f"Release response ({r.method}, c = {r.mass_factor:.4g}): "
+                     f"$t_F$ = {r.stop_time:.4f} s, $\\alpha_F$ = {r.alpha_final:.4f} rad")
     return fig
 
 
 @styled
-def fig14(response: Response, fig=None):
-    """Fig. 14: (a) retraction u and opening v, (b) their velocities, vs time."""
-    fig = _figure(7.0, 2.8, fig=fig, left=0.08, right=0.98, bottom=0.16, top=0.9, wspace=0.28)
-    a, b = fig.subplots(1, 2, sharex=True)
+def fig14(response: Response, fig=None, ax=None):
+    """Fig. 14: (a) retraction u and opening v, (b) their velocities, vs time. ``ax``: two Axes to draw into.
+    Returns the figure."""
+    fig, (a, b) = panels(7.0, 2.8, (1, 2), fig=fig, ax=ax, subplots={"sharex": True}, left=0.08, right=0.98,
+                         bottom=0.16, top=0.9, wspace=0.28)
     r = response
     a.plot(r.t, r.u, color=_COLORS["a"], label="longitudinal $u$")
     a.plot(r.t, r.v, color=_COLORS["b"], label="transverse $v$")
@@ -99,7 +112,8 @@ def fig14(response: Response, fig=None):
     for ax in (a, b):
         ax.set_xlabel("time $t$ [s]")
         _mark_stop(ax, r)
-        ax.legend()
+        headroom(ax, 0.38)
+        ax.legend(loc="upper left")
     return fig
 
 
@@ -128,18 +142,18 @@ def state_diagram_data(response: Response) -> dict[str, np.ndarray]:
 
 
 @styled
-def fig15(responses: Response | list[Response], n_markers: int = 40, fig=None):
+def fig15(responses: Response | list[Response], n_markers: int = 40, fig=None, ax=None):
     """Fig. 15: state diagram, numerical solutions (markers) with the analytic curve of Eq. 10 (a line drawn
     on top of them, so that it stays visible where the markers lie on it).
 
     Each response's legend entry gives its largest distance from the curve, as the energy residual relative
     to the stored energy, ``max |E_K + W_F - E_S| / E_S`` (dimensionless; see :func:`state_diagram_data`).
+    ``ax``: an Axes to draw into. Returns the figure.
     """
     responses = [responses] if isinstance(responses, Response) else list(responses)
     r = responses[0]
     d = r.device
-    fig = _figure(4.6, 3.4, fig=fig, left=0.14, bottom=0.14)
-    ax = fig.subplots()
+    fig, ax = panels(4.6, 3.4, fig=fig, ax=ax, left=0.14, bottom=0.14)
     fine = np.linspace(r.alpha0, r.alpha_final, 400)
     W = dynamics.dissipated_energy(fine, r.alpha0, r.F1, r.F2, d.L1)
     M = dynamics.generalized_mass(fine, d.m1, d.m2, d.L1, r.mass_factor)
@@ -178,11 +192,11 @@ def identification_curve_data(ident: Identification, n: int = 41) -> dict[str, n
 
 
 @styled
-def identification_figure(ident: Identification, fig=None):
-    """Stop time along the line of Eq. 13, with the measured t_F and the identified point."""
+def identification_figure(ident: Identification, fig=None, ax=None):
+    """Stop time along the line of Eq. 13, with the measured t_F and the identified point. ``ax``: an Axes
+    to draw into. Returns the figure."""
     data = identification_curve_data(ident)
-    fig = _figure(4.6, 3.4, fig=fig, left=0.14, bottom=0.15)
-    ax = fig.subplots()
+    fig, ax = panels(4.6, 3.4, fig=fig, ax=ax, left=0.14, bottom=0.15)
     ax.plot(data["F2_ratio"], data["stop_time"], color=_COLORS["a"], label="model $t_F$ on Eq. 13")
     ax.axhline(ident.stop_time, color=_COLORS["d"], ls="--", lw=0.9, label=f"measured $t_F$ = {ident.stop_time:g} s")
     ax.plot([ident.F2_ratio], [ident.stop_time + ident.stop_time_residual], "o", color=_COLORS["b"],
@@ -195,14 +209,14 @@ def identification_figure(ident: Identification, fig=None):
 
 
 @styled
-def strain_energy_figure(strain: StrainEnergy, fig=None):
-    """Bar chart of the six terms of Eq. 2, grouped by member and coloured by effect."""
+def strain_energy_figure(strain: StrainEnergy, fig=None, ax=None):
+    """Bar chart of the six terms of Eq. 2, grouped by member and coloured by effect. ``ax``: an Axes to draw
+    into. Returns the figure."""
     terms = strain.terms()
     labels = {"axial_E1": "E1 axial", "axial_E2": "E2 axial", "axial_E3": "E3 axial", "axial_E4": "E4 (fuse) axial",
               "bending_E2": "E2 bending", "shear_E2": "E2 shear"}
     colors = {"axial": _COLORS["a"], "bending": _COLORS["b"], "shear": _COLORS["c"]}
-    fig = _figure(5.6, 3.2, fig=fig, left=0.2, right=0.98, bottom=0.14, top=0.84)
-    ax = fig.subplots()
+    fig, ax = panels(5.6, 3.2, fig=fig, ax=ax, left=0.2, right=0.98, bottom=0.14, top=0.84)
     names = list(terms)
     values = [terms[n] for n in names]
     bars = ax.barh([labels[n] for n in names], values, color=[colors[n.split("_")[0]] for n in names])
@@ -219,28 +233,35 @@ def strain_energy_figure(strain: StrainEnergy, fig=None):
 
 
 @styled
-def fit_figure(result, fig=None):
+def fit_figure(result, fig=None, ax=None):
     """Measured and fitted channels of a fit to a record, each with its residuals (the band shaded is +-2 sigma,
     sigma the channel's noise level: about 95% of the residuals of a good fit lie inside it).
 
-    ``result`` is a :class:`quickrelease.fit.FitResult` with a record.
+    ``result`` is a :class:`quickrelease.fit.FitResult` with a record. ``ax``: two Axes per channel to draw
+    into (the channel, then its residuals, channel after channel). Returns the figure.
     """
     from .records import CHANNELS
 
     names = list(result.record.channels)
     n = len(names)
     height = 1.0 + 2.6 * n
-    fig = _figure(7.0, height, fig=fig, left=0.11, right=0.98, bottom=0.5 / height, top=1.0 - 0.55 / height)
-    grid = fig.add_gridspec(3 * n - 1, 1, height_ratios=([3, 1.2, 0.5] * n)[:-1], hspace=0.1)
+    fig, given = _channel_axes(7.0, height, n, fig, ax, left=0.11, right=0.98, bottom=0.5 / height,
+                               top=1.0 - 0.55 / height)
+    titled = given is None
+    grid = None if given is not None else \
+        fig.add_gridspec(3 * n - 1, 1, height_ratios=([3, 1.2, 0.5] * n)[:-1], hspace=0.1)
     t_fine, curves = result.model_curves()
     share = None
     t_rel = result.release_time
     for k, name in enumerate(names):
         ch = result.record.channels[name]
         unit = unit_text(CHANNELS[name][1])
-        top = fig.add_subplot(grid[3 * k], sharex=share)
-        share = share or top
-        bottom = fig.add_subplot(grid[3 * k + 1], sharex=share)
+        if given is not None:
+            top, bottom = given[2 * k], given[2 * k + 1]
+        else:
+            top = fig.add_subplot(grid[3 * k], sharex=share)
+            share = share or top
+            bottom = fig.add_subplot(grid[3 * k + 1], sharex=share)
         top.plot(ch.t, ch.values, ".", ms=1.6, color=_COLORS["d"], alpha=0.6, label="measured")
         top.plot(t_fine, curves[name], color=_COLORS["a"], lw=1.2, label="fitted model")
         top.set_ylabel(f"{name} [{unit}]")
@@ -255,13 +276,40 @@ def fit_figure(result, fig=None):
                        label="stop $t_F$" if ax is top else None)
             if ax is not bottom or k < n - 1:
                 ax.tick_params(labelbottom=False)
-        _joint_legend(top, bottom, loc="best")
+        headroom(top)
+        _joint_legend(top, bottom, loc="upper right", ncol=3)
         top.set_title(f"{name}: rms residual {result.residual_rms[name]:.3g} {unit}, noise {sigma:.3g} {unit} "
                       f"({result.noise_source[name]})", fontsize=_STYLE["legend.fontsize"])
     bottom.set_xlabel("record time [s]")
-    fig.suptitle(f"Fit to the record: $F_1$ = {result.F1:.1f} ± {result.std_errors['F1']:.2g} N, "
-                 f"$F_2$ = {result.F2:.1f} ± {result.std_errors['F2']:.2g} N")
+    if titled:
+        fig.suptitle(f"Fit to the record: $F_1$ = {result.F1:.1f} ± {result.std_errors['F1']:.2g} N, "
+                     f"$F_2$ = {result.F2:.1f} ± {result.std_errors['F2']:.2g} N")
     return fig
+
+
+def _channel_axes(width: float, height: float, n: int, fig, ax, **margins):
+    """(figure, the user's 2 n axes or None) of a figure of ``n`` channels, each above its residuals."""
+    if ax is None:
+        return _figure(width, height, fig=fig, **margins), None
+    fig, axes = panels(width, height, (2 * n, 1), fig=fig, ax=ax)
+    return fig, list(np.ravel(axes))
+
+
+def headroom(ax, share: float = 0.42) -> None:
+    """Make room for a legend above the curves of ``ax``: the y axis extended so that its top ``share`` holds
+    no data (the curves span the rest), for a legend placed ``upper ...`` that covers no curve."""
+    import numpy as np
+
+    ys = [np.asarray(line.get_ydata(), dtype=float) for line in ax.lines
+          if line.get_transform() == ax.transData and np.size(line.get_ydata()) > 2]
+    ys = [y[np.isfinite(y)] for y in ys]
+    ys = [y for y in ys if y.size]
+    if not ys:
+        return
+    lo, hi = min(float(y.min()) for y in ys), max(float(y.max()) for y in ys)
+    span = (hi - lo) or abs(hi) or 1.0
+    lo -= 0.05 * span
+    ax.set_ylim(lo, lo + (hi + 0.02 * span - lo) / (1.0 - share))
 
 
 def _joint_legend(top, bottom, **kwargs) -> None:

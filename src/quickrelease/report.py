@@ -19,7 +19,7 @@ from collections.abc import Iterable, Sequence
 from typing import Any
 
 from .device import DEVICE_KEYS
-from .display import key_for, number, plus_minus, unit_text
+from .display import half_width, key_for, number, plus_minus, same_places, unit_text
 from .workflow import FIGURES, CaseResult
 
 __all__ = ["render_report", "render_campaign_report", "render_building_report", "building_section"]
@@ -65,6 +65,19 @@ def _se(value: float | None) -> str:
     if value is None or not math.isfinite(value):
         return "&ndash;"
     return number(float(value), 2, zeros=True)
+
+
+def _estimate(value: float, se: float | None, ci: Sequence[float | None] | None, scale: float = 1.0) \
+        -> tuple[str, str, str]:
+    """(estimate, standard error, interval) cells of one estimate, times ``scale`` (the unit printed beside
+    them), all rounded to one decimal place: where the error (else the interval's half-width) shows two
+    significant digits (:func:`quickrelease.display.same_places`)."""
+    ends = None if ci is None or any(b is None for b in ci) else [float(b) * scale for b in ci]
+    err = None if se is None or not math.isfinite(se) or se <= 0 else float(se) * scale
+    width = err if err is not None else half_width(ends)
+    texts = same_places([float(value) * scale, err, *(ends or [])], width)
+    interval = f"[{texts[2]}, {texts[3]}]" if ends is not None else "&ndash;"
+    return texts[0], "&ndash;" if err is None else texts[1], interval
 
 
 def _html_table(headers: Sequence[str] | None, rows: Iterable[Sequence[Any]], *, num: Iterable[int] = (),
@@ -276,10 +289,11 @@ def _fit_section(fit, svgs: dict[str, str]) -> str:
     rows = []
     for name in fit.names:
         unit = _PARAM_UNITS.get(name) or CHANNELS[name.removeprefix("offset_")][1]
-        lo, hi = fit.ci95[name]
         ident = {"F1": "fit-F1", "F2": "fit-F2"}.get(name)
-        interval = f"[{_num(lo)}, {_num(hi)}]" if math.isfinite(fit.std_errors[name]) else "not identified"
-        rows.append((_e(name), (_num(fit.estimates[name]), ident), _se(fit.std_errors[name]), interval, _e(unit)))
+        value, se, interval = _estimate(fit.estimates[name], fit.std_errors[name], fit.ci95[name])
+        if not math.isfinite(fit.std_errors[name]):
+            value, interval = _num(fit.estimates[name]), "not identified"
+        rows.append((_e(name), (value, ident), se, interval, _e(unit)))
     parts.append(_html_table(("parameter", "estimate", "standard error", "95% interval", "unit"), rows,
                              num=(1, 2, 3)))
     i1, i2 = fit.names.index("F1"), fit.names.index("F2")
@@ -334,12 +348,10 @@ def building_section(result, svgs: dict[str, str]) -> str:
     for key, (label, unit, scale) in _ENGINEERING.items():
         if key not in s or s[key] is None:
             continue
-        ci = s.get(f"{key}_ci95")
-        interval = "&ndash;" if not ci else f"[{_num(None if ci[0] is None else ci[0] * scale)}, " \
-                                             f"{_num(None if ci[1] is None else ci[1] * scale)}]"
+        value, _, interval = _estimate(s[key], None, s.get(f"{key}_ci95") or None, scale)
         if key in s.get("not_identified", ()):
-            interval = "not identified"
-        rows.append((_e(label), (_num(s[key] * scale), f"building-{key}"), interval, _e(unit)))
+            value, interval = _num(s[key] * scale), "not identified"
+        rows.append((_e(label), (value, f"building-{key}"), interval, _e(unit)))
     parts.append(_html_table(("isolation system", "estimate", "95% interval", "unit"), rows, num=(1, 2)))
     rows = []
     for name in fit.names:
@@ -348,11 +360,11 @@ def building_section(result, svgs: dict[str, str]) -> str:
             ch = name.removeprefix("offset_")
             kind = next((c.kind for c in fit.channels if c.name == ch), "")
             label, unit, scale = f"offset of {ch}", CHANNEL_KINDS.get(kind, ""), 1.0
-        lo, hi = fit.ci95[name]
-        interval = "not identified" if fit.interval_method[name] == "not identified" else \
-            f"[{_num(lo * scale)}, {_num(hi * scale)}]"
-        rows.append((_e(name), _e(label), _num(fit.estimates[name] * scale), _se(fit.std_errors[name] * scale),
-                     interval, _e(fit.interval_method[name]), _e(unit)))
+        value, se, interval = _estimate(fit.estimates[name], fit.std_errors[name], fit.ci95[name], scale)
+        if fit.interval_method[name] == "not identified":
+            value, se, interval = _num(fit.estimates[name] * scale), _se(fit.std_errors[name] * scale), \
+                "not identified"
+        rows.append((_e(name), _e(label), value, se, interval, _e(fit.interval_method[name]), _e(unit)))
     table = _html_table(("parameter", "", "estimate", "standard error", "95% interval", "interval", "unit"), rows,
                         num=(2, 3, 4))
     parts.append(f"<details><summary>Every fitted parameter</summary>{table}"
@@ -389,7 +401,7 @@ def building_section(result, svgs: dict[str, str]) -> str:
     rows = result.decay_check.get("rows", [])
     if rows:
         parts.append(_html_table(("parameter", "fit", "decay analysis", "decay SE", "difference [SE]", "unit"), [
-            (_e(key_for(r["parameter"])[0]), _num(r["fit"]), _num(r["decay"]), _se(r["decay_se"]),
+            (_e(key_for(r["parameter"])[0]), *same_places([r["fit"], r["decay"], r["decay_se"]], r["decay_se"]),
              _num(r["difference_in_se"], "+.3g"), _e(key_for(r["parameter"])[1])) for r in rows], num=(1, 2, 3, 4)))
         parts.append("<p>The combined decrement law is exact for the linear model with sliders: a few standard errors "
                      "of difference are expected (fit and decay share the record); tens mean the record and the model "
@@ -451,16 +463,27 @@ def _plan_section(plan, svgs: dict[str, str]) -> str:
     over = [k for k, v in m.utilisation().items() if v is not None and v > 1]
     if over:
         parts.append(f"<p class=\"flag\">Over capacity: {_e(', '.join(over))}.</p>")
+    if all(c.utilisation is None for c in m.checks):
+        parts.append("<p class=\"meta\">No member was checked: the device file gives no capacity (yield "
+                     "strengths, I1, W2, the fuse's rupture strength); the table above lists the demands.</p>")
     parts.append(_figure(svgs, "plan_utilisation"))
     env = plan.envelope
     parts.append("<h3>Release envelope</h3>")
-    parts.append(f"<p>Friction: {_e(env.friction)}; nominal F1 = {_num(env.F1)} N, "
-                 f"F2 = {_num(env.F2)} N; {env.samples:,} sample(s); "
-                 f"{_num(100 * env.geometric_limit_share, '.3g')}% reach the flat rhombus.</p>")
-    parts.append(_html_table(("quantity", "nominal", "5%", "95%", "max", "unit"), [
-        (_e(label), _num(env.nominal[k]), _num(env.ranges[k]["p5"]), _num(env.ranges[k]["p95"]),
-         _num(env.ranges[k]["max"]), _e(unit_text(unit))) for k, (unit, label) in ENVELOPE_QUANTITIES.items()],
-        num=(1, 2, 3, 4)))
+    if env.samples > 1:
+        parts.append(f"<p>Friction: {_e(env.friction)}; nominal F1 = {_num(env.F1)} N, "
+                     f"F2 = {_num(env.F2)} N; {env.samples:,} samples; "
+                     f"{_num(100 * env.geometric_limit_share, '.3g')}% reach the flat rhombus.</p>")
+        parts.append(_html_table(("quantity", "nominal", "5%", "95%", "max", "unit"), [
+            (_e(label), _num(env.nominal[k]), _num(env.ranges[k]["p5"]), _num(env.ranges[k]["p95"]),
+             _num(env.ranges[k]["max"]), _e(unit_text(unit))) for k, (unit, label) in ENVELOPE_QUANTITIES.items()],
+            num=(1, 2, 3, 4)))
+    else:  # one friction value: no distribution, no percentiles, no histogram
+        parts.append(f"<p>Friction: {_e(env.friction)}; F1 = {_num(env.F1)} N, F2 = {_num(env.F2)} N, one value "
+                     "(no scatter given, so no distribution: give F1, F2 a scatter in [friction], or [friction] "
+                     "case naming observations with one, for the envelope's ranges).</p>")
+        parts.append(_html_table(("quantity", "value", "unit"), [
+            (_e(label), _num(env.nominal[k]), _e(unit_text(unit))) for k, (unit, label) in ENVELOPE_QUANTITIES.items()],
+            num=(1,)))
     parts.append(_figure(svgs, "plan_envelope"))
     if plan.clearance is not None:
         c = plan.clearance
@@ -469,7 +492,7 @@ def _plan_section(plan, svgs: dict[str, str]) -> str:
         verdict = ("<span class=\"flag\">CONTACT: the building reaches the front head "
                    f"(first at {_num(c.first_contact_time, '.3g')} s); {_num(1e3 * c.margin_needed)} mm more "
                    "room is needed</span>" if c.contact else "no contact: the head stays clear of the building")
-        parts.append(f"<p>Building ({_e(b.model)}): T = {_num(b.initial_period)} s, "
+        parts.append(f"<p>Building ({_e(b.model)}): T = {_e(number(b.initial_period, 6))} s, "
                      f"ζ = {_num(b.damping_ratio, '.3g')}, isolator "
                      f"friction {_num(b.friction_force / 1e3)} kN; pushed displacement d0 = "
                      f"{_num(1e3 * c.d0)} mm; {_e(c.describe_minimum())}; "
@@ -482,7 +505,8 @@ def _plan_section(plan, svgs: dict[str, str]) -> str:
                          f"{_num(100 * sp['contact_share'], '.3g')}% of them.</p>")
         parts.append(_figure(svgs, "plan_gap"))
     for text in plan.notes:
-        parts.append(f"<p class=\"meta\">{_e(text)}</p>")
+        if text not in plan.members.notes:  # those are in the member table's note column
+            parts.append(f"<p class=\"meta\">{_e(text)}</p>")
     return "\n".join(parts)
 
 

@@ -233,6 +233,20 @@ class Response(Summarised):
             attrs.update(provenance_attrs(provenance))
         return xr.Dataset(variables, coords=coords, attrs=attrs)
 
+    def plot(self, kind: str = "fig13", fig=None, ax=None):
+        """Draw the release: ``"fig13"`` (angle, rate, acceleration, energy balance; four panels), ``"fig14"``
+        (displacements and velocities; two) or ``"state"`` (the state diagram, Fig. 15; one). ``fig``: a
+        Figure or SubFigure to fill; ``ax``: Axes to draw into instead (as many as the figure has panels).
+        Returns the figure (:mod:`quickrelease.plots`)."""
+        from . import plots
+
+        kinds = {"fig13": plots.fig13, "fig14": plots.fig14, "state": plots.fig15}
+        if kind not in kinds:
+            from .errors import ParameterError
+
+            raise ParameterError("kind", repr(kind), ", ".join(kinds))
+        return kinds[kind](self, fig=fig, ax=ax)
+
     def __repr__(self) -> str:
         return (
             f"Response(method={self.method!r}, stop_time={self.stop_time:.6g} s, "

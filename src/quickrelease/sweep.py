@@ -334,39 +334,41 @@ _TITLES = {"stop_time": "stop time $t_F$", "alpha_final": r"final angle $\alpha_
 
 
 @styled
-def heatmap_figure(ds, fig=None) -> Any:
+def heatmap_figure(ds, fig=None, ax=None) -> Any:
     """Heat maps of t_F, alpha_F, u_F, v_F and the peak velocities over the first two grid dimensions
-    (other dimensions at their first value); line plots for a one-dimensional sweep."""
-    from .plots import _figure
+    (other dimensions at their first value); line plots for a one-dimensional sweep. ``ax``: six Axes to draw
+    into (2 x 3, in reading order). Returns the figure."""
+    from ._style import panels
 
     names = list(ds.dims)
     keys = ["stop_time", "alpha_final", "u_final", "v_final", "peak_u_dot", "peak_v_dot"]
-    fig = _figure(9.0, 5.6, fig=fig, left=0.08, right=0.97, bottom=0.1, top=0.9, wspace=0.45, hspace=0.45)
-    axes = fig.subplots(2, 3)
+    fig, axes = panels(9.0, 5.6, (2, 3), fig=fig, ax=ax, left=0.08, right=0.97, bottom=0.1, top=0.9, wspace=0.45,
+                       hspace=0.45)
     sel = {n: 0 for n in names[2:]}
-    for ax, key in zip(axes.flat, keys, strict=True):
+    for panel, key in zip(axes.flat, keys, strict=True):
         da = ds[key].isel(sel) if sel else ds[key]
         long, unit = OUTPUTS[key]
         if len(names) == 1:
-            ax.plot(ds[names[0]].values, da.values, color="#1f4e79")
-            ax.set_xlabel(f"{names[0]} [{SWEEP_PARAMETERS[names[0]][1]}]")
-            ax.set_ylabel(f"[{unit}]")
+            panel.plot(ds[names[0]].values, da.values, color="#1f4e79")
+            panel.set_xlabel(f"{names[0]} [{SWEEP_PARAMETERS[names[0]][1]}]")
+            panel.set_ylabel(f"[{unit}]")
         else:
             x, y = ds[names[1]].values, ds[names[0]].values
             z = np.asarray(da.values, dtype=float)
             if _even(x) and _even(y):  # one image per panel: seconds and a small SVG even for 1000 x 1000
                 dx, dy = (x[-1] - x[0]) / (x.size - 1), (y[-1] - y[0]) / (y.size - 1)
-                mesh = ax.imshow(z, origin="lower", aspect="auto", cmap="viridis",
+                mesh = panel.imshow(z, origin="lower", aspect="auto", cmap="viridis",
                                  extent=(x[0] - dx / 2, x[-1] + dx / 2, y[0] - dy / 2, y[-1] + dy / 2))
             else:  # rasterised: an SVG holds one image per panel, not a path per cell
-                mesh = ax.pcolormesh(x, y, z, shading="auto", cmap="viridis", rasterized=True)
-            fig.colorbar(mesh, ax=ax, label=f"[{unit}]")
+                mesh = panel.pcolormesh(x, y, z, shading="auto", cmap="viridis", rasterized=True)
+            fig.colorbar(mesh, ax=panel, label=f"[{unit}]")
             limit = np.asarray(ds["stopped_by"].isel(sel).values if sel else ds["stopped_by"].values) == 1
             if limit.any() and not limit.all():
-                ax.contour(x, y, limit, levels=[0.5], colors="w", linewidths=0.8).set_rasterized(True)
-            ax.set_xlabel(f"{names[1]} [{SWEEP_PARAMETERS[names[1]][1]}]")
-            ax.set_ylabel(f"{names[0]} [{SWEEP_PARAMETERS[names[0]][1]}]")
-        ax.set_title(_TITLES[key], fontsize=STYLE["legend.fontsize"])
+                panel.contour(x, y, limit, levels=[0.5], colors="w", linewidths=0.8).set_rasterized(True)
+            panel.set_xlabel(f"{names[1]} [{SWEEP_PARAMETERS[names[1]][1]}]")
+            panel.set_ylabel(f"{names[0]} [{SWEEP_PARAMETERS[names[0]][1]}]")
+        panel.set_title(_TITLES[key], fontsize=STYLE["legend.fontsize"])
     extra = f" ({', '.join(f'{n} = {float(ds[n][0]):.4g}' for n in names[2:])})" if names[2:] else ""
-    fig.suptitle(f"Release envelope over the sweep{extra}; white line: the geometric limit")
+    if ax is None:
+        fig.suptitle(f"Release envelope over the sweep{extra}; white line: the geometric limit")
     return fig

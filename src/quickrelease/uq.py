@@ -550,25 +550,26 @@ def _progress(enabled: bool, total: int, done: int):
 
 
 @styled
-def corner_figure(result: UQResult, fig=None):
-    """Histograms of F1 and F2 and their joint distribution (a corner plot) with the 95% intervals."""
-    from .plots import _figure
+def corner_figure(result: UQResult, fig=None, ax=None):
+    """Histograms of F1 and F2 and their joint distribution (a corner plot) with the 95% intervals. ``ax``: four
+    Axes to draw into (2 x 2, in reading order; the top right one holds the numbers). Returns the figure."""
+    from ._style import panels
 
-    fig = _figure(6.0, 5.8, fig=fig, left=0.12, right=0.97, bottom=0.1, top=0.88, wspace=0.08, hspace=0.12)
-    axes = fig.subplots(2, 2)
+    fig, axes = panels(6.0, 5.8, (2, 2), fig=fig, ax=ax, left=0.12, right=0.97, bottom=0.1, top=0.88, wspace=0.08,
+                       hspace=0.12)
     h = result.histograms
     coarse = N_BINS // 512
-    for ax, name in ((axes[0, 0], "F1"), (axes[1, 1], "F2")):
+    for panel, name in ((axes[0, 0], "F1"), (axes[1, 1], "F2")):
         counts = h[name].reshape(-1, coarse).sum(axis=1)
         edges = h[f"edges_{name}"][::coarse]
         centers = 0.5 * (edges[1:] + edges[:-1])
         nz = counts > 0
         lo, hi = np.nonzero(nz)[0][[0, -1]] if np.any(nz) else (0, counts.size - 1)
-        ax.fill_between(centers[lo:hi + 1], counts[lo:hi + 1], step="mid", color="#1f4e79", alpha=0.7)
+        panel.fill_between(centers[lo:hi + 1], counts[lo:hi + 1], step="mid", color="#1f4e79", alpha=0.7)
         for key in ("p2.5", "p50", "p97.5"):
-            ax.axvline(result.percentiles[name][key], color="#c0504d", lw=0.9, ls="--" if key != "p50" else "-")
-        ax.set_yticks([])
-        ax.set_xlim(edges[lo], edges[hi + 1])
+            panel.axvline(result.percentiles[name][key], color="#c0504d", lw=0.9, ls="--" if key != "p50" else "-")
+        panel.set_yticks([])
+        panel.set_xlim(edges[lo], edges[hi + 1])
     axes[0, 0].set_title("$F_1$: median (line), 95% interval (dashed)", fontsize=STYLE["legend.fontsize"])
     axes[1, 1].set_title("$F_2$: median (line), 95% interval (dashed)", fontsize=STYLE["legend.fontsize"])
     axes[0, 0].tick_params(labelbottom=False)  # the same F1 axis as the joint panel below, labelled there
@@ -582,19 +583,20 @@ def corner_figure(result: UQResult, fig=None):
         f"{result.percentiles['F2']['p97.5']:.1f}]",
         f"correlation {result.correlation:.3f}",
         f"infeasible {100 * result.infeasible_share:.2f}%"]), fontsize=STYLE["legend.fontsize"], va="center")
-    ax = axes[1, 0]
+    panel = axes[1, 0]
     h2 = h["2d"]
     e1 = h["edges_F1"][:: N_BINS // N_BINS_2D]
     e2 = h["edges_F2"][:: N_BINS // N_BINS_2D]
-    ax.pcolormesh(e1, e2, np.ma.masked_equal(h2.T, 0), cmap="Blues", shading="flat", rasterized=True)
+    panel.pcolormesh(e1, e2, np.ma.masked_equal(h2.T, 0), cmap="Blues", shading="flat", rasterized=True)
     nz1 = np.nonzero(h2.sum(axis=1))[0]
     nz2 = np.nonzero(h2.sum(axis=0))[0]
     if nz1.size and nz2.size:
-        ax.set_xlim(e1[nz1[0]], e1[nz1[-1] + 1])
-        ax.set_ylim(e2[nz2[0]], e2[nz2[-1] + 1])
+        panel.set_xlim(e1[nz1[0]], e1[nz1[-1] + 1])
+        panel.set_ylim(e2[nz2[0]], e2[nz2[-1] + 1])
         axes[0, 0].set_xlim(e1[nz1[0]], e1[nz1[-1] + 1])
         axes[1, 1].set_xlim(e2[nz2[0]], e2[nz2[-1] + 1])
-    ax.set_xlabel("$F_1$ [N]")
-    ax.set_ylabel("$F_2$ [N]")
-    fig.suptitle("Identified friction under observation uncertainty")
+    panel.set_xlabel("$F_1$ [N]")
+    panel.set_ylabel("$F_2$ [N]")
+    if ax is None:
+        fig.suptitle("Identified friction under observation uncertainty")
     return fig

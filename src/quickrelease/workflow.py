@@ -168,9 +168,38 @@ def identified_building(spec, building) -> tuple[Any, str]:
         changes["model"] = fit.model
     changes = {k: v for k, v in changes.items() if k in fields}
     identified = dataclasses.replace(spec, **changes)
-    words = ", ".join(f"{k} = {v:.6g}" for k, v in changes.items() if isinstance(v, float))
+    words = clearance_words(changes, fit.std_errors)
     return identified, (f"clearance checked with the building identified from its record ({fit.model} model: "
                         f"{words}), not the assumed [building] values")
+
+
+#: The building values the clearance note names: spec field -> (name, fit parameter, unit shown, scale to it).
+_NOTE_VALUES = {
+    "period": ("period T", "period", "s", 1.0), "damping_ratio": ("damping ratio zeta", "damping_ratio", "", 1.0),
+    "friction": ("slider friction F_s", "friction", "kN", 1e-3), "k1": ("initial stiffness k1", None, "kN/m", 1e-3),
+    "k2": ("post-yield stiffness k2", None, "kN/m", 1e-3), "yield_force": ("yield force F_y", None, "kN", 1e-3),
+    "mass": ("mass", None, "t", 1e-3), "displacement": ("pushed displacement d0", "d0", "mm", 1e3),
+}
+
+
+def clearance_words(values: dict[str, Any], std_errors: dict[str, float]) -> str:
+    """The identified building values of the clearance note, each with its unit: ``period T = 2.000080 s,
+    damping ratio zeta = 0.050009, slider friction F_s = 156.881 kN, mass = 800 t, pushed displacement d0 =
+    182.496 mm``; a fitted value rounded where its standard error shows two digits, another to 5 significant
+    digits."""
+    from .display import number, same_places
+
+    parts = []
+    for key, (name, param, unit, scale) in _NOTE_VALUES.items():
+        value = values.get(key)
+        if not isinstance(value, float):
+            continue
+        se = std_errors.get(param) if param is not None else None
+        se = None if se is None else abs(float(se)) * scale
+        shown = abs(value) * scale if key == "displacement" else value * scale
+        text = number(shown) if se is None or not se > 0 else same_places([shown], se)[0]
+        parts.append(f"{name} = {text} {unit}".rstrip())
+    return ", ".join(parts)
 
 
 def _wants_plan(case: Case, plan: bool | None) -> bool:
@@ -339,11 +368,14 @@ def write_building_results(result, data, out: str | Path, *, model: str | None =
                            title: str = "Building free-vibration test", overwrite: bool = False,
                            origin: Any = None) -> dict[str, Path]:
     """Write ``quickrelease building``'s results into ``out``: ``summary.json`` (the ``--json`` keys), the
-    building figures (``figures/<stem>.png``/``.svg``), ``report.html`` and ``manifest.json``, staged and
-    moved into place as :func:`write_results` does; returns the paths by name. ``origin`` (the case) is what
-    the files' provenance names (:func:`~quickrelease.runfolder.provenance`; by default the record)."""
+    record, the fitted model and the residuals as a time series (``timeseries.csv``, ``timeseries.nc`` on the
+    time coordinate ``t``: :func:`quickrelease.frames.fit_columns`), the building figures
+    (``figures/<stem>.png``/``.svg``), ``report.html`` and ``manifest.json``, staged and moved into place as
+    :func:`write_results` does; returns the paths by name. ``origin`` (the case) is what the files' provenance
+    names (:func:`~quickrelease.runfolder.provenance`; by default the record)."""
     from .building_plots import building_figures
-    from .export import write_json, write_text
+    from .export import write_columns, write_dataset, write_json, write_text
+    from .frames import fit_columns, fit_dataset
     from .plots import save_figure
     from .report import render_building_report
     from .runfolder import provenance
@@ -351,7 +383,9 @@ def write_building_results(result, data, out: str | Path, *, model: str | None =
     prov = provenance(origin if origin is not None else result.source)
     folder = building_folder(data, out, model=model, compare=compare, overwrite=overwrite)
     with folder.staged() as work:
-        paths = {"summary": write_json(result.summary(), work / "summary.json", prov)}
+        paths = {"summary": write_json(result.summary(), work / "summary.json", prov),
+                 "timeseries_csv": write_columns(fit_columns(result.fit), work / "timeseries.csv"),
+                 "timeseries_nc": write_dataset(fit_dataset(result.fit), work / "timeseries.nc", prov)}
         svgs = {}
         for stem, fig in building_figures(result).items():
             for fmt, path in save_figure(fig, work / "figures", stem).items():
