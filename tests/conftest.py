@@ -4,16 +4,51 @@ import pytest
 
 from quickrelease import preset
 
+#: matplotlib's settings when the session started: what every test, and every fixture of any scope, must leave.
+_RC_BASELINE: dict = {}
 
-@pytest.fixture(autouse=True)
-def _matplotlib_settings_unchanged():
-    """Every test: the package's figure functions draw in their own style and leave the user's matplotlib
-    settings (rcParams) exactly as they found them (issue 11)."""
+
+def _rc_changed(before: dict) -> list[str]:
+    import matplotlib
+
+    return sorted(k for k, v in matplotlib.rcParams.items() if before.get(k) != v)
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _matplotlib_settings_unchanged_by_the_session():
+    """Taken before any other session fixture: the baseline; checked again after the last teardown."""
+    import matplotlib
+
+    _RC_BASELINE.clear()
+    _RC_BASELINE.update(matplotlib.rcParams)
+    yield
+    changed = _rc_changed(_RC_BASELINE)
+    assert not changed, f"rcParams changed by the end of the session (a session-scoped fixture?): {changed}"
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _matplotlib_settings_unchanged_by_the_module(_matplotlib_settings_unchanged_by_the_session):
+    """A module's fixtures (set up after this one, torn down before it) leave the settings as they were."""
     import matplotlib
 
     before = dict(matplotlib.rcParams)
     yield
-    changed = sorted(k for k, v in matplotlib.rcParams.items() if before.get(k) != v)
+    changed = _rc_changed(before)
+    assert not changed, f"rcParams changed by this module (a module-scoped fixture?): {changed}"
+
+
+@pytest.fixture(autouse=True)
+def _matplotlib_settings_unchanged(_matplotlib_settings_unchanged_by_the_module):
+    """Every test: the package's figure functions draw in their own style and leave the user's matplotlib
+    settings (rcParams) exactly as they found them (issue 11), and so did every fixture set up before the test
+    (module- and session-scoped ones included: those run before this check's own snapshot)."""
+    import matplotlib
+
+    changed = _rc_changed(_RC_BASELINE)
+    assert not changed, f"rcParams changed before this test, by a fixture of a wider scope: {changed}"
+    before = dict(matplotlib.rcParams)
+    yield
+    changed = _rc_changed(before)
     assert not changed, f"rcParams changed: {changed}"
 
 

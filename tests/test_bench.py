@@ -297,3 +297,23 @@ def test_identify_sensitivities_agree_with_solving_again():
             want = max(float(abs(lm * F1m - lam * F1s) / F1s), float(abs((1 - lm) * F2m - (1 - lam) * F2s) / F2s))
             assert got[j] == pytest.approx(want, rel=1e-3, abs=0), (stratum, j)
         assert got.max() > least  # the immediate stop ill-conditioned: far above the 1e-16 of a typical case
+
+
+def test_cli_bench_tables_readable_at_80_columns(result, monkeypatch):
+    """At 80 columns (a terminal's default, and what a pipe gets): no line wider, no cell cut short with an
+    ellipsis, every stratum's numbers whole (the ten-column table by stratum cut every cell), every target line
+    there (wrapped, indented)."""
+    monkeypatch.setattr(bench, "run_bench", lambda quick, threads, log: result)
+    r = CliRunner().invoke(app, ["bench"], env={"COLUMNS": "80"})
+    assert r.exit_code == 0, r.output
+    lines = r.stdout.splitlines()
+    assert max(len(line) for line in lines) <= 80
+    assert "…" not in r.stdout
+    for key in ("stop_time", "identify"):
+        for row in result["wide"][key]["strata"]:
+            value = row["median_rel_error"]
+            if value is not None:
+                text = f"{value:.1e}".replace("e-0", "e-").replace("e+0", "e").replace("e+", "e")
+                assert text in r.stdout, (key, row["stratum"], text)
+    starts = [line for line in lines if line.strip().startswith(("met:", "not met:", "not measured:"))]
+    assert len(starts) == len(result["targets"])

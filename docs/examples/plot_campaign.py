@@ -13,7 +13,11 @@ from pathlib import Path
 from quickrelease.campaign import campaign_figure, run_campaign
 
 # the case files of the repository's examples/ folder (the gallery runs this script in docs/examples/)
-EXAMPLES = next(d / "examples" for d in (Path.cwd(), *Path.cwd().parents) if (d / "examples" / "paper.toml").is_file())
+EXAMPLES = next((d / "examples" for d in (Path.cwd(), *Path.cwd().parents)
+                 if (d / "examples" / "paper.toml").is_file()), None)
+if EXAMPLES is None:  # a downloaded script or notebook, run outside a clone of the repository
+    raise SystemExit("this example reads the case files and records of the quickrelease repository's examples/ "
+                     "folder: run it from a clone of the repository, or from a folder that holds examples/")
 camp = run_campaign(EXAMPLES / "campaign.toml")
 law = camp.laws[("F1", "force")]
 print(f"F1 against the push force: p = {law.p_value:.2g}")

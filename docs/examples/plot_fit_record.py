@@ -15,7 +15,11 @@ from quickrelease.case import load_case
 from quickrelease.fit import fit_record
 
 # the case files of the repository's examples/ folder (the gallery runs this script in docs/examples/)
-EXAMPLES = next(d / "examples" for d in (Path.cwd(), *Path.cwd().parents) if (d / "examples" / "paper.toml").is_file())
+EXAMPLES = next((d / "examples" for d in (Path.cwd(), *Path.cwd().parents)
+                 if (d / "examples" / "paper.toml").is_file()), None)
+if EXAMPLES is None:  # a downloaded script or notebook, run outside a clone of the repository
+    raise SystemExit("this example reads the case files and records of the quickrelease repository's examples/ "
+                     "folder: run it from a clone of the repository, or from a folder that holds examples/")
 fit = fit_record(load_case(EXAMPLES / "fit.toml"))
 for name in ("F1", "F2"):
     low, high = fit.ci95[name]

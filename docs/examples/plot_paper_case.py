@@ -16,7 +16,11 @@ from quickrelease.case import load_case
 from quickrelease.workflow import run_case
 
 # the case files of the repository's examples/ folder (the gallery runs this script in docs/examples/)
-EXAMPLES = next(d / "examples" for d in (Path.cwd(), *Path.cwd().parents) if (d / "examples" / "paper.toml").is_file())
+EXAMPLES = next((d / "examples" for d in (Path.cwd(), *Path.cwd().parents)
+                 if (d / "examples" / "paper.toml").is_file()), None)
+if EXAMPLES is None:  # a downloaded script or notebook, run outside a clone of the repository
+    raise SystemExit("this example reads the case files and records of the quickrelease repository's examples/ "
+                     "folder: run it from a clone of the repository, or from a folder that holds examples/")
 result = run_case(load_case(EXAMPLES / "paper.toml"))
 ident = result.identification
 print(f"identified: F1 = {ident.F1:.2f} N, F2 = {ident.F2:.2f} N")

@@ -13,7 +13,11 @@ from quickrelease.case import load_case
 from quickrelease.planning import choices_figure, gap_figure, plan_case
 
 # the case files of the repository's examples/ folder (the gallery runs this script in docs/examples/)
-EXAMPLES = next(d / "examples" for d in (Path.cwd(), *Path.cwd().parents) if (d / "examples" / "paper.toml").is_file())
+EXAMPLES = next((d / "examples" for d in (Path.cwd(), *Path.cwd().parents)
+                 if (d / "examples" / "paper.toml").is_file()), None)
+if EXAMPLES is None:  # a downloaded script or notebook, run outside a clone of the repository
+    raise SystemExit("this example reads the case files and records of the quickrelease repository's examples/ "
+                     "folder: run it from a clone of the repository, or from a folder that holds examples/")
 plan = plan_case(load_case(EXAMPLES / "plan.toml"))
 print(f"minimum gap {plan.clearance.min_gap * 1000:.1f} mm, contact: {plan.clearance.contact}")
 

@@ -16,7 +16,11 @@ from quickrelease.case import load_case
 from quickrelease.sweep import heatmap_figure, sweep
 
 # the case files of the repository's examples/ folder (the gallery runs this script in docs/examples/)
-EXAMPLES = next(d / "examples" for d in (Path.cwd(), *Path.cwd().parents) if (d / "examples" / "paper.toml").is_file())
+EXAMPLES = next((d / "examples" for d in (Path.cwd(), *Path.cwd().parents)
+                 if (d / "examples" / "paper.toml").is_file()), None)
+if EXAMPLES is None:  # a downloaded script or notebook, run outside a clone of the repository
+    raise SystemExit("this example reads the case files and records of the quickrelease repository's examples/ "
+                     "folder: run it from a clone of the repository, or from a folder that holds examples/")
 case = load_case(EXAMPLES / "larger_push.toml")
 ds = sweep(case, {"force": np.linspace(500e3, 3000e3, 26), "alpha0": np.linspace(0.1, 0.5, 41)})
 print(f"t_F from {float(ds.stop_time.min()):.3f} to {float(ds.stop_time.max()):.3f} {ds.stop_time.attrs['units']}; "

@@ -23,7 +23,7 @@ over-weighted, in the strata of :data:`sampling.WIDE_STRATA`):
   last place, by mpmath (:func:`_stop_sensitivities`, :func:`_identify_sensitivities`); the case's *1-ulp
   condition number* C = sum_j s_j, and its *backward error* err / C in ulps of the inputs, median and worst per
   sample and stratum (the most s_j at the worst case is the *1-ulp input sensitivity*).
-* A status line per target of issue 12 (met, not met, not measured). The accuracy target, relative to the
+* A status line per target (met, not met, not measured). The accuracy target, relative to the
   conditioning: the median error at most 1e-12 and every case's error at most max(1e-10, 4 C), i.e. 1e-10 where
   the case is well conditioned, else a backward error of at most 4 input ulps.
 * ``uq`` with 1e8 samples on a LocalCluster of two Dask workers: wall time and peak memory of the whole process
@@ -84,7 +84,7 @@ QUICK = Sizes(cases=100_000, stop_time=10, identify=5, repeat=2, strata_conditio
 #: the accuracy sets included).
 FULL = Sizes(cases=1_000_000, stop_time=60, identify=20, repeat=5, strata_conditioning=True)
 
-#: The targets of issue 12: (key, text, sample, what, bound); ``what`` names the measured value.
+#: The targets of the benchmark: (key, text, sample, what, bound); ``what`` names the measured value.
 TARGETS: tuple[tuple[str, str, str, str, float], ...] = (
     ("stop_time_rate_bench", "stop time, bench sample, one core >= 1e7 cases/s", "bench", "stop_time.cases_per_s",
      1e7),
@@ -494,7 +494,7 @@ def _accuracy_note(g: dict[str, Any]) -> str:
 
 
 def _targets(out: dict[str, Any], cores: int) -> list[dict[str, Any]]:
-    """One line per target of issue 12: what, the value measured, and met / not met / not measured."""
+    """One line per target of the benchmark: what, the value measured, and met / not met / not measured."""
     rows = []
     for key, text, sample, what, bound in TARGETS:
         group, name = what.split(".")
