@@ -886,8 +886,8 @@ def _building_tables(result, summary: dict[str, Any], title: str) -> None:
     if cert is not None:
         found = (f"global minimum {'confirmed' if cert.global_minimum_confirmed else 'NOT confirmed'} "
                  f"({cert.reached_best} of {cert.starts} starts reached it; next minimum "
-                 + (f"delta chi-square {cert.next_best_delta_chi2:.3g})" if math.isfinite(cert.next_best_delta_chi2)
-                    else "none found)"))
+                 + (f"delta chi-square {number(cert.next_best_delta_chi2, 2)})"
+                    if math.isfinite(cert.next_best_delta_chi2) else "none found)"))
         state = f"{state}, {found}"
     _table(f"{title}: {fit.model} isolation model, {state}, reduced chi-square {fit.chi2_reduced:.4g}, "
            f"AIC {fit.aic:.6g}, BIC {fit.bic:.6g}", rows, ("parameter", "estimate", "95% interval"))
