@@ -695,6 +695,9 @@ def fit_record(case: Case, record: Record | None = None, *, options: FitOptions 
         record = shifted_record(record, origin)
     problem = _Problem(case, record, options)
     x0, how = _start(problem)
+    if record is not None:  # a record that starts in motion: said before the work (and after it, below)
+        _check_release_inside(record, problem.values(x0)["release_time"], origin)
+        _check_rest_before(record, problem.values(x0)["release_time"], origin)
     lower = np.full(x0.size, -np.inf)
     upper = np.full(x0.size, np.inf)
     lower[0] = lower[1] = 0.0
@@ -792,6 +795,33 @@ def _check_release_inside(record: Record, release: float, origin: float) -> None
         raise RecordError(f"{record.file}: the record starts at {start + origin:.6g} s, at or after the release "
                           f"(fitted at {release + origin:.6g} s): the device is already moving in its first samples; "
                           "a fit needs the record from before the release, at rest")
+
+
+#: A displacement channel whose level moves by more than this many times its sample-to-sample scatter over the
+#: segment before the start value of the release is not at rest there: the record started in motion.
+REST_DRIFT_FACTOR = 50.0
+
+
+def _check_rest_before(record: Record, release: float, origin: float) -> None:
+    """RecordError when a displacement channel (alpha, u, v) moves before ``release`` (the start value of the
+    release instant): the first and last quarters of that segment differ by more than
+    :data:`REST_DRIFT_FACTOR` times the scatter of its sample-to-sample steps. A record that starts after the
+    release (already moving) is said at once, before a fit that would end at a bound after many evaluations."""
+    for ch in record.channels.values():
+        if ch.name not in DISPLACEMENT_CHANNELS:
+            continue
+        seg = ch.values[ch.t < release]
+        if seg.size < 40:
+            continue
+        q = seg.size // 4
+        drift = abs(float(np.median(seg[-q:])) - float(np.median(seg[:q])))
+        steps = np.diff(seg)
+        scatter = 1.4826 * float(np.median(np.abs(steps - np.median(steps))))
+        span = float(np.ptp(ch.values))
+        if drift > REST_DRIFT_FACTOR * scatter and drift > 1e-3 * span:
+            raise RecordError(f"{record.file}: the record starts at {float(ch.t[0]) + origin:.6g} s in motion: channel "
+                              f"{ch.name} moves by {drift:.3g} {ch.unit} before the release found at "
+                              f"{release + origin:.6g} s (the record must start before the release, at rest)")
 
 
 def _warnings(names, est, ses, corr, cond, x, lower, upper, problem) -> list[str]:

@@ -623,7 +623,7 @@ def _columns_text(frame) -> str:
     if not names or not all(isinstance(c, str) and _HEADER_NAME.fullmatch(c) and not c.startswith("Unnamed:")
                             for c in names):
         return "its first line is not a header of column names"
-    shown = ", ".join(repr(c) for c in names[:_LISTED])
+    shown = ", ".join(names[:_LISTED])
     more = f" and {len(names) - _LISTED} more" if len(names) > _LISTED else ""
     return f"columns: {shown}{more}"
 
