@@ -298,7 +298,7 @@ def _path_value(cls: str, suffix: str, rng: random.Random, cwd: Path) -> str:
 def _path_cases():
     rng = random.Random(20261126)
     out = []
-    for writer, (_, suffix) in WRITERS.items():
+    for writer in WRITERS:
         for cls in PATH_CLASSES:  # (a foreign file at a folder command's --out: refused, "is a file")
             marks = [pytest.mark.skipif(not ROOT, reason="mknod needs root")] if cls == "character device" else []
             out.append(pytest.param(writer, cls, rng.randrange(2**32), marks=marks, id=f"{writer}-{cls}"))
