@@ -249,3 +249,155 @@ def test_installed_script_one_line(tmp_path, args):
     assert r.returncode == 2, (r.stdout, r.stderr)
     assert r.stderr.startswith("error: ") and r.stderr.count("\n") == 1, r.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["uq.toml"]
+
+
+# -- issue 22: output paths and input files of every kind, as an adversary would name them ------------------------
+
+#: Commands that write, with the option naming the output ("{}" for it) and a cheap valid invocation; the
+#: output's kind: a folder, or a file with a suffix.
+WRITERS = {
+    "run --out": (("run", "case.toml", "--out", "{}"), ""),
+    "report --out": (("report", "case.toml", "--out", "{}"), ""),
+    "demo --out": (("demo", "--out", "{}"), ""),
+    "uq --out": (("uq", "uq.toml", "--samples", "400", "--chunk", "200", "--out", "{}"), ""),
+    "fit --out": (("fit", "case.toml", "--out", "{}"), ""),
+    "plan --out": (("plan", "case.toml", "--out", "{}"), ""),
+    "building --out": (("building", "building.toml", "--out", "{}"), ""),
+    "sweep --file": (("sweep", "case.toml", "--grid", "F1=100 N:900 N:2", "--file", "{}"), ".nc"),
+    "sweep --file zarr": (("sweep", "case.toml", "--grid", "F1=100 N:900 N:2", "--file", "{}"), ".zarr"),
+    "synth --file": (("synth", "case.toml", "--channels", "u", "--rate", "200 Hz", "--file", "{}"), ".csv"),
+    "synth --case-out": (("synth", "case.toml", "--channels", "u", "--rate", "200 Hz", "--file", "r.csv",
+                          "--case-out", "{}"), ".toml"),
+}
+ROOT = hasattr(os, "geteuid") and os.geteuid() == 0
+PATH_CLASSES = ("fifo", "character device", "foreign file", "long name", "long path", "under a file", "empty")
+
+
+def _path_value(cls: str, suffix: str, rng: random.Random, cwd: Path) -> str:
+    """An output path of class ``cls`` (made in ``cwd`` where it must exist), its lengths drawn from ``rng``."""
+    name = "target" + suffix
+    if cls == "fifo":
+        os.mkfifo(cwd / name)
+    elif cls == "character device":  # the null device's numbers (1:3), made here: never the machine's own
+        os.mknod(cwd / name, 0o666 | 0o020000, os.makedev(1, 3))
+    elif cls == "foreign file":
+        (cwd / name).write_text("the user's own file\n")
+    elif cls == "long name":
+        name = "n" * rng.randint(256, 2000) + suffix
+    elif cls == "long path":
+        depth = rng.randint(21, 60)
+        name = "/".join("p" * rng.randint(200, 255) for _ in range(depth)) + "/x" + suffix
+    elif cls == "under a file":
+        (cwd / "a_file").write_text("x")
+        name = "a_file/" + "s" * rng.randint(1, 50) + suffix
+    else:
+        name = rng.choice(["", " ", "   "])
+    return name
+
+
+def _path_cases():
+    rng = random.Random(20261126)
+    out = []
+    for writer in WRITERS:
+        for cls in PATH_CLASSES:  # (a foreign file at a folder command's --out: refused, "is a file")
+            marks = [pytest.mark.skipif(not ROOT, reason="mknod needs root")] if cls == "character device" else []
+            out.append(pytest.param(writer, cls, rng.randrange(2**32), marks=marks, id=f"{writer}-{cls}"))
+    return out
+
+
+@pytest.mark.parametrize("writer,cls,seed", _path_cases())
+def test_an_adversarial_output_path_is_one_line(tmp_path, writer, cls, seed):
+    """Every writing command against every kind of output path: refused before any work in one line, exit 2;
+    what was at the path is still there as it was (a FIFO, a device node, the user's file), and nothing else
+    is left behind."""
+    args, suffix = WRITERS[writer]
+    shutil.copy(_data("paper.toml"), tmp_path / "case.toml")
+    shutil.copy(_data("uq_paper.toml"), tmp_path / "uq.toml")
+    (tmp_path / "building.toml").write_text(BUILDING_CASE)
+    if writer in ("fit --out", "building --out"):  # cases with a record
+        examples = Path(__file__).parent.parent / "examples"
+        shutil.copy(examples / ("fit.toml" if writer == "fit --out" else "building.toml"),
+                    tmp_path / ("case.toml" if writer == "fit --out" else "building.toml"))
+        shutil.copytree(examples / "records", tmp_path / "records")
+    value = _path_value(cls, suffix, random.Random(seed), tmp_path)
+    before = {p.name: (os.lstat(p).st_mode, p.read_bytes() if p.is_file() else None) for p in tmp_path.iterdir()
+              if p.name != "records"}
+    old = os.getcwd()
+    os.chdir(tmp_path)
+    try:
+        result = runner.invoke(app, [a.replace("{}", value) for a in args])
+    finally:
+        os.chdir(old)
+    lines = result.stderr.strip().splitlines()
+    assert result.exit_code == 2 and len(lines) == 1 and lines[0].startswith("error: "), \
+        (result.exit_code, result.stderr[-500:], result.exception)
+    assert len(lines[0]) < 500 and "\x1b" not in lines[0]
+    after = {p.name: (os.lstat(p).st_mode, p.read_bytes() if p.is_file() else None) for p in tmp_path.iterdir()
+             if p.name != "records"}
+    assert after == before
+
+
+INPUT_COMMANDS = {  # a command and its arguments, "{}" the case file
+    "simulate": ("simulate", "{}", "--json"), "identify": ("identify", "{}", "--json"),
+    "run": ("run", "{}", "--out", "o"), "report": ("report", "{}", "--out", "o"),
+    "uq": ("uq", "{}", "--samples", "400"), "sweep": ("sweep", "{}", "--grid", "F1=100 N:900 N:2"),
+    "synth": ("synth", "{}"), "fit": ("fit", "{}"), "plan": ("plan", "{}"), "building": ("building", "{}"),
+    "campaign": ("campaign", "{}"),
+}
+
+
+@pytest.mark.parametrize("kind", ["fifo", pytest.param("zero", marks=pytest.mark.skipif(not ROOT, reason="root"))])
+@pytest.mark.parametrize("command", list(INPUT_COMMANDS))
+def test_a_case_file_that_is_not_a_regular_file_is_one_line(tmp_path, command, kind):
+    """The case (or campaign) file a FIFO (which would wait for a writer forever) or a device with the zero
+    device's numbers (read until memory runs out): one line naming it, "not a regular file", at once (in a
+    thread that must end within a minute)."""
+    import threading
+
+    path = tmp_path / "special.toml"
+    if kind == "fifo":
+        os.mkfifo(path)
+    else:
+        os.mknod(path, 0o666 | 0o020000, os.makedev(1, 5))
+    box = []
+    args = [a.replace("{}", str(path)) for a in INPUT_COMMANDS[command]]
+    thread = threading.Thread(target=lambda: box.append(runner.invoke(app, args)), daemon=True)
+    thread.start()
+    thread.join(60)
+    if thread.is_alive():
+        if kind == "fifo":
+            with open(path, "w"):
+                pass
+        pytest.fail("did not return within a minute")
+    result = box[0]
+    lines = result.stderr.strip().splitlines()
+    assert result.exit_code == 2 and len(lines) == 1 and "special.toml: not a regular file" in lines[0], \
+        result.stderr
+
+
+def test_an_epoch_clock_is_a_fuzzed_input(tmp_path):
+    """A record on a clock that starts anywhere (seeded: up to 4e9 s, Unix time to 2096) fits to the friction of
+    the same record from 0, to a hundredth of a standard error (issue 22, item 7)."""
+    import numpy as np
+
+    from quickrelease.case import load_case
+    from quickrelease.fit import fit_record
+
+    examples = Path(__file__).parent.parent / "examples"
+    lines = (examples / "records" / "paper_500Hz.csv").read_text().splitlines()
+    lines = lines[:1] + lines[1::5]  # 100 Hz: a quick fit
+    shift = random.Random(20261126).uniform(1e8, 4e9)
+    results = {}
+    for name, offset in (("plain", 0.0), ("epoch", shift)):
+        rows = [lines[0]]
+        for row in lines[1:]:
+            t, rest = row.split(",", 1)
+            rows.append(f"{float(t) + offset:.17g},{rest}")
+        (tmp_path / f"{name}.csv").write_text("\n".join(rows) + "\n")
+        (tmp_path / f"{name}.toml").write_text((examples / "fit.toml").read_text()
+                                               .replace("records/paper_500Hz.csv", f"{name}.csv"))
+        results[name] = fit_record(load_case(tmp_path / f"{name}.toml"))
+    plain, epoch = results["plain"], results["epoch"]
+    for f in ("F1", "F2"):
+        assert abs(epoch.estimates[f] - plain.estimates[f]) < 0.01 * plain.std_errors[f], (f, shift)
+    assert np.isclose(epoch.release_time - shift, plain.release_time, atol=1e-5)

@@ -196,3 +196,91 @@ def test_killed_uq_resumes_to_the_identical_result(tmp_path):
     assert r.returncode == 0, r.stderr
     assert (out / "uq.json").read_bytes() == (full / "uq.json").read_bytes()
     assert not staging.exists()
+
+
+# -- issue 22: a full disk at a seeded point of the writing, and a closed standard output ---------------------
+
+FULL_DISK_COMMANDS = {
+    "run": ["run", EXAMPLES / "paper.toml", "--out", "{out}"],
+    "uq": ["uq", "uq.toml", "--samples", "2000", "--chunk", "500", "--out", "{out}"],
+    "sweep-nc": ["sweep", EXAMPLES / "larger_push.toml", "--grid", "F1=100:900:3", "--file", "{out}.nc"],
+    "synth": ["synth", EXAMPLES / "paper.toml", "--channels", "u", "--rate", "200 Hz", "--file", "{out}.csv",
+              "--case-out", "{out}.toml"],
+}
+
+
+#: How many files each writes through export.atomic_path (at least): k is drawn up to it, so every draw fails
+#: at some write (uq: uq.json and the corner figure's two files; its chunks are counted apart).
+FILES_WRITTEN = {"run": 8, "uq": 3, "sweep-nc": 3, "synth": 2}
+
+
+@pytest.mark.parametrize("command", list(FULL_DISK_COMMANDS))
+@pytest.mark.parametrize("draw", range(3))
+def test_a_full_disk_at_a_seeded_write_leaves_the_whole_result_or_nothing(tmp_path, monkeypatch, command, draw):
+    """The disk fills at the k-th file written (k drawn from a seeded generator, the file's temporary already
+    made) or at the final rename: the command ends in one line naming the output, exit 2, and leaves no
+    staging folder, temporary file or partial output (uq's unfinished run included); or, when k is past its
+    last write, it finishes whole."""
+    import contextlib
+    import errno
+
+    from typer.testing import CliRunner
+
+    from quickrelease import export
+    from quickrelease.cli import app
+
+    rng = random.Random(f"{command}-{draw}-20261126")
+    k, at_rename = rng.randint(1, FILES_WRITTEN[command]), rng.random() < 0.3
+    (tmp_path / "uq.toml").write_text(UQ_CASE)
+    real_atomic, real_replace = export.atomic_path, os.replace
+    count = [0]
+
+    @contextlib.contextmanager
+    def filling(path):
+        with real_atomic(path) as tmp:
+            count[0] += 1
+            if count[0] == k and not at_rename:
+                Path(tmp).write_bytes(b"the first bytes")
+                raise OSError(errno.ENOSPC, "No space left on device")
+            yield tmp
+
+    def replace(src, dst, *args, **kwargs):
+        count[0] += 1
+        if at_rename and count[0] >= k:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return real_replace(src, dst, *args, **kwargs)
+
+    monkeypatch.setattr(export, "atomic_path", filling)
+    monkeypatch.setattr(os, "replace", replace)
+    monkeypatch.chdir(tmp_path)
+    args = [str(a).replace("{out}", "out") for a in FULL_DISK_COMMANDS[command]]
+    r = CliRunner().invoke(app, args)
+    monkeypatch.setattr(os, "replace", real_replace)
+    left = sorted(p.name for p in tmp_path.iterdir() if p.name != "uq.toml")
+    if r.exit_code == 0:  # k past the last write: the whole result
+        assert left and not [n for n in left if n.startswith(".")], left
+        return
+    lines = r.stderr.strip().splitlines()
+    assert r.exit_code == 2 and len(lines) == 1 and "no space left" in lines[0] and "out" in lines[0], \
+        (r.exit_code, r.stderr, r.exception)
+    # what is left is whole (each file written through its own temporary file): the record before its case file
+    # failed, the NetCDF file before its heat maps did
+    assert left in ([], ["out.csv"], ["out.nc"]), left
+    if left == ["out.csv"]:
+        assert command == "synth" and (tmp_path / "out.csv").read_text().startswith("t_s,")
+    if left == ["out.nc"]:
+        import xarray as xr
+
+        with xr.open_dataset(tmp_path / "out.nc") as ds:
+            assert command == "sweep-nc" and ds.sizes["F1"] == 3 and np.isfinite(ds.stop_time.values).all()
+
+
+def test_json_to_a_closed_standard_output_is_one_line_after_a_whole_result(tmp_path):
+    """--json into a pipe whose reader has gone: the files are whole (written before the JSON), then one line."""
+    proc = subprocess.Popen(_cmd("synth", EXAMPLES / "paper.toml", "--channels", "u", "--rate", "200 Hz", "--file",
+                                 tmp_path / "r.csv", "--json"), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
+    proc.stdout.close()
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 2 and err.count("\n") == 1 and "broken pipe" in err, err
+    assert (tmp_path / "r.csv").read_text().startswith("t_s,")

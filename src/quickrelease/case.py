@@ -40,7 +40,7 @@ from pathlib import Path
 from typing import Any
 
 from ._validate import check_size
-from .device import Device, load_device, preset, read_toml
+from .device import Device, load_device, preset, read_toml_text
 from .dynamics import mass_factor
 from .errors import QuickReleaseError
 from .records import RecordSpec, parse_record_spec
@@ -400,6 +400,12 @@ def _fail(source: str, key: str, value: Any, expected: str) -> CaseFileError:
     return CaseFileError(f"{source}: {key} = {shown}: expected {expected}")
 
 
+#: The masses a building may have [kg]: 1 kg (a bench model) to 1e12 kg (a hundred times the heaviest
+#: structure built). Outside it k = m (2 pi / T)^2 and c = 2 zeta sqrt(k m) leave the floats (1e-300 kg:
+#: k m underflows to 0 and the damping ratio divides by it).
+BUILDING_MASS_RANGE = (1.0, 1e12)
+
+
 def _entry(source: str, section: str, key: str, value: Any) -> Any:
     """Validate and convert one entry of the case file."""
     kind, expected = CASE_SCHEMA[section][key]
@@ -522,12 +528,8 @@ def load_case(path: str | Path, *, require_test: bool = True) -> Case:
     """
     path = Path(path)
     source = str(path)
-    data = read_toml(path, "case file", CaseFileError)
+    data, text = read_toml_text(path, "case file", CaseFileError)
     case = case_from_mapping(data, source=source, base=path.parent, require_test=require_test)
-    try:
-        text = path.read_bytes().decode("utf-8")
-    except (OSError, UnicodeDecodeError):  # read a moment ago: only a file replaced in between
-        text = None
     return replace(case, source_text=text)
 
 
@@ -706,6 +708,11 @@ def _building(values: dict[str, Any], table: Any, source: str, base: Path) -> Bu
         if mass is not None:
             raise CaseFileError(f"{source}: [building] mass and weight: give one of the two")
         mass = values["building.weight"] / STANDARD_GRAVITY
+    if mass is not None and not BUILDING_MASS_RANGE[0] <= mass <= BUILDING_MASS_RANGE[1]:
+        key = "weight" if "building.weight" in values else "mass"
+        raise _fail(source, f"[building] {key}", table[key], f"a building's mass in [{BUILDING_MASS_RANGE[0]:g}, "
+                    f"{BUILDING_MASS_RANGE[1]:g}] kg (its stiffness and damping are products with the mass: "
+                    "outside this range they underflow or overflow)")
     if "building.friction" in values and "building.friction_coefficient" in values:
         raise CaseFileError(f"{source}: [building] friction and friction_coefficient: give one of the two")
     if "building.friction_coefficient" in values and mass is None:

@@ -51,6 +51,23 @@ def _plain_flags(params: list[Any]) -> list[Any]:
     return params
 
 
+#: The options that name an output (a folder or a file): an empty value is refused, not taken as '.'.
+_PATH_OPTIONS = ("--out", "-o", "--file", "-f", "--case-out")
+
+
+def _empty_path_option(args: list[str]) -> str | None:
+    """The output option given an empty or blank value in ``args`` (``--out ""``, ``--out=``), else None."""
+    for i, arg in enumerate(args):
+        if arg == "--":
+            return None
+        name, eq, value = arg.partition("=")
+        if name in _PATH_OPTIONS and eq and not value.strip():
+            return name
+        if arg in _PATH_OPTIONS and i + 1 < len(args) and not args[i + 1].strip():
+            return arg
+    return None
+
+
 class _OneLineErrors(TyperGroup):
     """Usage errors (a bad integer, an unknown option, a missing argument) as one line on stderr, exit 2.
 
@@ -69,6 +86,10 @@ class _OneLineErrors(TyperGroup):
              standalone_mode: bool = True, **extra: Any) -> Any:
         if not standalone_mode:
             return super().main(args, prog_name, complete_var, standalone_mode, **extra)
+        empty = _empty_path_option(sys.argv[1:] if args is None else list(args))
+        if empty is not None:  # a path option given as "" (the path would be '.', the current folder)
+            typer.echo(f"error: {empty} is empty: give a file or folder name", err=True)
+            sys.exit(2)
         try:
             code = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
         except NoArgsIsHelpError as exc:  # the help text, once: Typer's rich help printed it while raising
@@ -135,7 +156,8 @@ def _fail(message: str) -> None:
 
 
 def _guard(func: Callable[..., Any]) -> Callable[..., Any]:
-    """Turn library input errors into one line on stderr and exit code 2."""
+    """Turn library input errors, and an ``OSError`` no writer turned into one (a full disk, a closed pipe on
+    the standard output), into one line on stderr and exit code 2."""
 
     @wraps(func)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
@@ -143,11 +165,35 @@ def _guard(func: Callable[..., Any]) -> Callable[..., Any]:
 
         try:  # floating-point warnings are not for the terminal: results are checked for finiteness instead
             with np.errstate(all="ignore"):
-                return func(*args, **kwargs)
+                result = func(*args, **kwargs)
+            sys.stdout.flush()  # a full device on the standard output shows here, not at exit
+            return result
         except QuickReleaseError as exc:
             _fail(str(exc))
+        except RecursionError:
+            _fail("an input is nested too deeply to read (a TOML file of thousands of nested arrays or tables?)")
+        except OSError as exc:
+            _fail(_os_error_line(exc))
 
     return wrapper
+
+
+def _os_error_line(exc: OSError) -> str:
+    """One line for an OSError that reached the command: a file named when the error names one, else the
+    standard output (which is then closed, so that the exit does not try to write to it again)."""
+    from .runfolder import _reason, _short_path
+
+    if exc.filename is not None:
+        return f"{_short_path(exc.filename)}: {_reason(exc)}"
+    with contextlib.suppress(OSError, ValueError):  # nothing more reaches the lost standard output
+        import os
+
+        fd = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(fd, sys.stdout.fileno())
+        os.close(fd)
+    if isinstance(exc, BrokenPipeError):
+        return "the standard output was closed before the output was written (broken pipe)"
+    return f"cannot write the standard output: {_reason(exc)}"
 
 
 def _device(path: Path | None):
@@ -196,7 +242,11 @@ def _busy(what: str) -> Iterator[None]:
 
 
 def _print_json(data: dict[str, Any]) -> None:
-    typer.echo(json.dumps(data, indent=2, allow_nan=False))
+    """One JSON object on stdout; NaN and infinities (a sweep whose every point is out of range) as null, so
+    the output is valid JSON."""
+    from .export import jsonable
+
+    typer.echo(json.dumps(jsonable(data), indent=2, allow_nan=False))
 
 
 def _table(title: str, rows: list[tuple[str, ...]], headers: tuple[str, ...]) -> None:
@@ -210,6 +260,26 @@ def _table(title: str, rows: list[tuple[str, ...]], headers: tuple[str, ...]) ->
     for row in rows:
         table.add_row(*(escape(_clean(str(cell))) for cell in row))
     Console().print(table)  # the terminal's width (80 columns when not a terminal)
+
+
+def _check_output_files(targets, overwrite: bool) -> None:
+    """Pre-flight of the files a command writes, ``(path or None, option)`` each: refused (one line) before any
+    work when a path names a device node, FIFO or folder, or an existing file without --overwrite, or the
+    same file twice (:func:`quickrelease._files.check_output_file`)."""
+    import os
+
+    from ._files import check_output_file
+    from .runfolder import OutputError
+
+    seen: dict[str, str] = {}
+    for path, option in targets:
+        if path is None:
+            continue
+        full = str(check_output_file(path, option, overwrite))
+        key = os.path.realpath(full)
+        if key in seen:
+            raise OutputError(f"{option} {path}: the same file as {seen[key]}; give two different files")
+        seen[key] = option
 
 
 def _file_option(file: Path, out_old: Path | None, command: str) -> Path:
@@ -428,6 +498,7 @@ def run_command(
     results_folder(case, out, overwrite=overwrite)  # pre-flight: refuse before the work
     result = run_case(case)
     paths = write_results(result, out, overwrite=overwrite)
+    _record_notes(result.fit, err=as_json)
     if as_json:
         extra = {} if result.building is None else {"building": result.building.summary()}
         files = {k: str(v) for k, v in paths.items()}
@@ -454,6 +525,17 @@ def run_command(
             if text.startswith("clearance checked with"):
                 _echo(f"note: {text}")
     _listing(paths, out)
+
+
+def _record_notes(fit, err: bool = False) -> None:
+    """The notes (rows without a time dropped, samples missing) and warnings of a fit to a record, one line each
+    (on stderr with --json, whose stdout is one JSON object)."""
+    if fit is None:
+        return
+    for text in fit.notes:
+        _echo(f"note: {text}", err=err)
+    for text in fit.warnings:
+        _echo(f"warning: {text}", err=err)
 
 
 @app.command()
@@ -572,6 +654,17 @@ def uq(
                                                                 "finite diff."))
 
 
+def _grids(texts: list[str], parse_grid) -> dict[str, Any]:
+    """The --grid options as {name: values}; a name given twice is refused (one would be lost)."""
+    grids: dict[str, Any] = {}
+    for text in texts:
+        name, values = parse_grid(text)
+        if name in grids:
+            raise QuickReleaseError(f"--grid {text}: {name} is given twice (one --grid per input)")
+        grids[name] = values
+    return grids
+
+
 @app.command("sweep")
 @_guard
 def sweep_command(
@@ -596,13 +689,20 @@ def sweep_command(
 
     _check_threads(threads, backend)
     out = _file_option(file, out_old, "sweep")
-    grids = dict(parse_grid(g) for g in grid)
+    grids = _grids(grid, parse_grid)
+    stem = out.name.rsplit(".", 1)[0] + "_heatmaps"
+    if out.suffix in (".nc", ".zarr"):  # the figures beside it: companions of the file, checked alike
+        from .runfolder import check_target
+
+        check_target(out, "file" if out.suffix == ".nc" else "folder", "--file")
+        _check_output_files(((out.parent / f"{stem}.{fmt}", "--file") for fmt in ("png", "svg")),
+                            overwrite or out.exists())
     case = load_case(case_file)
     with _busy("sweeping the grid"):
         ds = sweep(case, grids, backend=backend, out=out, scheduler=scheduler, workers=workers,
                    block_rows=block_rows, resume=resume, overwrite=overwrite,
                    log=lambda line: _echo(f"note: {line}", err=True), threads=threads)
-        figs = save_figure(heatmap_figure(ds), out.parent, out.name.rsplit(".", 1)[0] + "_heatmaps")
+        figs = save_figure(heatmap_figure(ds), out.parent, stem)
     summary = {"file": str(out), "dims": {k: int(v) for k, v in ds.sizes.items()},
                "stop_time_s": [float(ds.stop_time.min()),  # creeping cases (stopped_by 2, t_F = inf): counted apart
                                float(ds.stop_time.where(ds.stopped_by != 2).max())],
@@ -641,6 +741,7 @@ def synth(
     file: Annotated[Path, typer.Option("--out", "-o", help="Record file to write (CSV).")] = Path("record.csv"),
     out_old: Annotated[Path | None, typer.Option("--file", "-f", hidden=True, help="Former name of --out.")] = None,
     case_out: Annotated[Path | None, typer.Option("--case-out", help="Also write a case file that fits this record.")] = None,
+    overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing --file or --case-out (a device node, FIFO or folder never).")] = False,
     as_json: JsonOpt = False,
 ) -> None:
     """A synthetic record of the case's release (offsets, noise), and the precision a fit to it would have;
@@ -653,6 +754,7 @@ def synth(
     from .synth import case_toml, parse_channel_values, predicted_errors, synthesize
     from .units import parse_quantity
 
+    _check_output_files(((out, "--file"), (case_out, "--case-out")), overwrite)
     case = load_case(case_file, require_test=False)
     if building or not case.has_test:
         _synth_building(case, channels, rate, noise, offset, release_time, duration, seed, jitter, missing, out,

@@ -213,15 +213,23 @@ class Device:
 
 
 def read_toml(path: Path, what: str, error: type[Exception]) -> dict[str, Any]:
-    """Parse a TOML file; ``error`` (naming the file) when it cannot be read or is not valid TOML."""
+    """Parse a TOML file; ``error`` (naming the file) when it cannot be read, is not a regular file of at most
+    16 MiB (a device node, a FIFO), is not valid TOML or is nested too deeply to parse."""
+    return read_toml_text(path, what, error)[0]
+
+
+def read_toml_text(path: Path, what: str, error: type[Exception]) -> tuple[dict[str, Any], str]:
+    """:func:`read_toml`, and the file's text as read (once)."""
+    from ._files import TOML_MAX_BYTES, read_input
+
+    raw = read_input(path, what, error, TOML_MAX_BYTES)
     try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise error(f"{path}: cannot read the {what} ({exc.strerror})") from None
-    try:
-        return tomllib.loads(raw.decode("utf-8"))
+        text = raw.decode("utf-8")
+        return tomllib.loads(text), text
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise error(f"{path}: not valid TOML ({exc})") from None
+    except RecursionError:
+        raise error(f"{path}: not valid TOML (nested too deeply to parse)") from None
 
 
 def load_device(path: str | Path) -> Device:

@@ -43,7 +43,9 @@ from .records import (
     ReleaseChannels,
     detect_release,
     load_record,
+    record_origin,
     release_channels,
+    shifted_record,
 )
 from .solvers import FirstIntegral
 
@@ -687,8 +689,15 @@ def fit_record(case: Case, record: Record | None = None, *, options: FitOptions 
     options = options or case.fit
     if record is None and case.record is not None:
         record = load_record(case.record)
+    given, origin = record, 0.0
+    if record is not None:  # record-relative time: a Unix-time clock (1.7e9 s) would drown the release in rounding
+        origin = record_origin(record)
+        record = shifted_record(record, origin)
     problem = _Problem(case, record, options)
     x0, how = _start(problem)
+    if record is not None:  # a record that starts in motion: said before the work (and after it, below)
+        _check_release_inside(record, problem.values(x0)["release_time"], origin)
+        _check_rest_before(record, problem.values(x0)["release_time"], origin)
     lower = np.full(x0.size, -np.inf)
     upper = np.full(x0.size, np.inf)
     lower[0] = lower[1] = 0.0
@@ -738,27 +747,81 @@ def fit_record(case: Case, record: Record | None = None, *, options: FitOptions 
     model, fi = problem.model(x)
     t_stop = fi.stop_time()
     values = problem.values(x)
+    if record is not None:
+        _check_release_inside(record, values["release_time"], origin)
     if record is not None and values["release_time"] + t_stop > record.end:
-        raise RecordError(f"{record.file}: the record ends at {record.end:.4g} s, before the device stops: "
-                          f"release at {values['release_time']:.4g} s + t_F {t_stop:.4g} s = "
-                          f"{values['release_time'] + t_stop:.4g} s; record past the stop")
+        raise RecordError(f"{record.file}: the record ends at {record.end + origin:.6g} s, before the device "
+                          f"stops: release at {values['release_time'] + origin:.6g} s + t_F {t_stop:.4g} s = "
+                          f"{values['release_time'] + origin + t_stop:.6g} s; record past the stop")
     rms = {n: float(np.sqrt(np.mean((model[n] - ch.values) ** 2))) for n, ch in problem.channels.items()}
     fitted_obs = {"alpha_final": fi.alpha_final, "stop_time": t_stop}
     obs = {n: (o, s, float(fitted_obs[n])) for n, (o, s) in problem.obs.items()}
     warns = [f"{n} not identified by this record (standard error inf, no interval)"
              for n, b in zip(names, blind, strict=True) if b]
     warns += _warnings(names, est, ses, corr, cond, x, lower, upper, problem)
+    start = {n: float(x0[i]) for i, n in enumerate(names)}
     fixed = {k: v for k, v in problem.fixed.items() if k not in est}
+    if origin != 0.0:  # back on the record's own clock
+        for table in (est, start, fixed):
+            if "release_time" in table:
+                table["release_time"] += origin
+        if "release_time" in ci:
+            ci["release_time"] = (ci["release_time"][0] + origin, ci["release_time"][1] + origin)
+    record = given
     return FitResult(
         names=names, estimates=est, std_errors=ses, ci95=ci, correlation=corr, condition_number=cond,
         fixed=fixed, noise=dict(problem.sigma), noise_source=dict(problem.sigma_source), residual_rms=rms,
         samples={n: int(ch.values.size) for n, ch in problem.channels.items()},
         chi2_reduced=chi2_red, dof=dof, converged=bool(res.success), message=str(res.message), nfev=nfev,
-        start={n: float(x0[i]) for i, n in enumerate(names)}, start_source=how, stop_time=float(t_stop),
+        start=start, start_source=how, stop_time=float(t_stop),
         alpha_final=float(fi.alpha_final), stopped_by=fi.stopped_by, warnings=tuple(warns),
         notes=tuple(record.notes) if record is not None else (), device=case.device, record=record, fitted=model,
         observations=obs,
     )
+
+
+#: Samples a record must hold before the fitted release instant: fewer, and the record started while the
+#: device was already moving (the model starts at rest at alpha0 and cannot describe it).
+PRE_RELEASE_SAMPLES = 3
+
+
+def _check_release_inside(record: Record, release: float, origin: float) -> None:
+    """RecordError when the fitted release instant is not after the record's start (record-relative times):
+    a record that starts after the release (its first samples already in motion) gives a fit that puts the
+    release at the record's first sample, and friction that is wrong without a word."""
+    start = min(float(ch.t[0]) for ch in record.channels.values())
+    dt = record.sampling_interval()
+    if not release > start + PRE_RELEASE_SAMPLES * dt:
+        raise RecordError(f"{record.file}: the record starts at {start + origin:.6g} s, at or after the release "
+                          f"(fitted at {release + origin:.6g} s): the device is already moving in its first samples; "
+                          "a fit needs the record from before the release, at rest")
+
+
+#: A displacement channel whose level moves by more than this many times its sample-to-sample scatter over the
+#: segment before the start value of the release is not at rest there: the record started in motion.
+REST_DRIFT_FACTOR = 50.0
+
+
+def _check_rest_before(record: Record, release: float, origin: float) -> None:
+    """RecordError when a displacement channel (alpha, u, v) moves before ``release`` (the start value of the
+    release instant): the first and last quarters of that segment differ by more than
+    :data:`REST_DRIFT_FACTOR` times the scatter of its sample-to-sample steps. A record that starts after the
+    release (already moving) is said at once, before a fit that would end at a bound after many evaluations."""
+    for ch in record.channels.values():
+        if ch.name not in DISPLACEMENT_CHANNELS:
+            continue
+        seg = ch.values[ch.t < release]
+        if seg.size < 40:
+            continue
+        q = seg.size // 4
+        drift = abs(float(np.median(seg[-q:])) - float(np.median(seg[:q])))
+        steps = np.diff(seg)
+        scatter = 1.4826 * float(np.median(np.abs(steps - np.median(steps))))
+        span = float(np.ptp(ch.values))
+        if drift > REST_DRIFT_FACTOR * scatter and drift > 1e-3 * span:
+            raise RecordError(f"{record.file}: the record starts at {float(ch.t[0]) + origin:.6g} s in motion: channel "
+                              f"{ch.name} moves by {drift:.3g} {ch.unit} before the release found at "
+                              f"{release + origin:.6g} s (the record must start before the release, at rest)")
 
 
 def _warnings(names, est, ses, corr, cond, x, lower, upper, problem) -> list[str]:

@@ -29,7 +29,8 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass, field
+import re
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -43,6 +44,7 @@ from .units import parse_quantity
 __all__ = [
     "CHANNELS", "DISPLACEMENT_CHANNELS", "RecordError", "ChannelSpec", "RecordSpec", "Channel", "Record",
     "RATE_OF", "channel_model", "release_channels", "parse_record_spec", "load_record", "read_table", "detect_release",
+    "record_origin", "shifted_record",
     "record_files",
 ]
 
@@ -585,17 +587,53 @@ def read_table(path: Path):
     """Read a table with pandas, by extension (CSV for anything unknown); RecordError naming the file."""
     import pandas as pd
 
+    from ._files import RECORD_MAX_BYTES, check_input
+
     reader = _READERS.get(path.suffix.lower(), "read_csv")
     kwargs: dict[str, Any] = {"sep": "\t"} if path.suffix.lower() == ".tsv" else {}
     if not path.exists():
         raise RecordError(f"{path}: record file not found")
+    check_input(path, "record file", RecordError, RECORD_MAX_BYTES)  # a device or FIFO would never end
     try:
         return getattr(pd, reader)(path, **kwargs)
     except ImportError as exc:
         raise RecordError(f"{path}: reading {path.suffix} files needs an extra package ({exc})") from None
     except Exception as exc:  # pandas raises many kinds: parser errors, bad files
-        raise RecordError(f"{path}: cannot read the table ({type(exc).__name__}: {str(exc).splitlines()[0]})") \
+        reason = (str(exc).splitlines() or [""])[0]
+        reason = reason if len(reason) <= 160 else reason[:157] + "..."
+        raise RecordError(f"{path}: cannot read the table ({type(exc).__name__}: {_clean_text(reason)})") \
             from None
+
+
+#: A column name as a header holds it: letters, digits and the marks units are written with, 40 at most.
+_HEADER_NAME = re.compile(r"[A-Za-z0-9_ .,()\[\]/^*%+\-]{1,40}")
+#: Column names listed in a message, at most.
+_LISTED = 8
+
+
+def _clean_text(text: str) -> str:
+    """``text`` with control characters shown as '?' (a message must not carry a file's bytes to a terminal)."""
+    return "".join(c if c.isprintable() else "?" for c in text)
+
+
+def _columns_text(frame) -> str:
+    """The columns of ``frame`` for a message: listed (the first eight) only when its first line reads as a
+    header of column names; a file's content (a line of another kind of file) is never quoted."""
+    names = [c for c in frame.columns]
+    if not names or not all(isinstance(c, str) and _HEADER_NAME.fullmatch(c) and not c.startswith("Unnamed:")
+                            for c in names):
+        return "its first line is not a header of column names"
+    shown = ", ".join(names[:_LISTED])
+    more = f" and {len(names) - _LISTED} more" if len(names) > _LISTED else ""
+    return f"columns: {shown}{more}"
+
+
+def _cell_text(value: Any) -> str:
+    """A cell for a message: short plain text quoted, anything else only described."""
+    text = str(value)
+    if len(text) <= 24 and _HEADER_NAME.fullmatch(text):
+        return repr(text)
+    return f"a text of {len(text)} characters"
 
 
 def _numeric(frame, column: str, path: Path) -> np.ndarray:
@@ -606,7 +644,7 @@ def _numeric(frame, column: str, path: Path) -> np.ndarray:
     bad = np.isnan(values) & raw.notna().to_numpy() & (raw.astype(str).str.strip() != "").to_numpy()
     if np.any(bad):
         row = int(np.nonzero(bad)[0][0])
-        raise RecordError(f"{path}: column {column!r}: non-numeric value {raw.iloc[row]!r} at row {row + 1}")
+        raise RecordError(f"{path}: column {column!r}: non-numeric value {_cell_text(raw.iloc[row])} at row {row + 1}")
     return values
 
 
@@ -643,8 +681,7 @@ def _time_axis(frame, column: str, factor: float, path: Path) -> tuple[np.ndarra
     """The time column ``column`` of ``frame`` in seconds (rows with a time) and those rows; RecordError naming
     the file and the column when it is missing, not numeric, shorter than two values or not increasing."""
     if column not in frame.columns:
-        columns = ", ".join(map(str, frame.columns))
-        raise RecordError(f"{path}: no time column {column!r} (columns: {columns})")
+        raise RecordError(f"{path}: no time column {column!r} ({_columns_text(frame)})")
     t = _numeric(frame, column, path) * factor
     rows = np.nonzero(np.isfinite(t))[0]
     if rows.size < 2:
@@ -688,8 +725,7 @@ def load_record(spec: RecordSpec) -> Record:
         path = cs.file or spec.file
         frame = frame_of(path)
         if cs.column not in frame.columns:
-            raise RecordError(f"{path}: no column {cs.column!r} for channel {name} "
-                              f"(columns: {', '.join(map(str, frame.columns))})")
+            raise RecordError(f"{path}: no column {cs.column!r} for channel {name} ({_columns_text(frame)})")
         axis, axis_rows, own = t, rows, None
         if cs.time_column is not None:  # the channel's own time axis: its file's time column
             key = (path, cs.time_column, cs.time_factor)
@@ -720,6 +756,25 @@ def load_record(spec: RecordSpec) -> Record:
         channels[name] = Channel(spec=cs, t=axis[idx], values=values[idx], index=idx, missing=missing, own_axis=own)
     return Record(file=spec.file, t=t, channels=channels, dropped_rows=dropped, release_time=spec.release_time,
                   notes=notes)
+
+
+def record_origin(record: Record) -> float:
+    """The record's first time stamp (of its time axis or of any channel's own) [s, record time]."""
+    starts = [float(record.t[0])] + [float(ch.own_axis[0]) for ch in record.channels.values()
+                                     if ch.own_axis is not None and ch.own_axis.size]
+    return min(starts)
+
+
+def shifted_record(record: Record, origin: float) -> Record:
+    """``record`` on a clock that starts at ``origin`` (every time stamp minus ``origin``): a record stamped
+    with Unix time (1.7e9 s) keeps its sample spacing to 1e-16 of the record's length instead of 1e-16 of
+    1.7e9 s, and the fit's relative tolerances act on the motion, not on the date."""
+    if origin == 0.0:
+        return record
+    channels = {name: replace(ch, t=ch.t - origin, own_axis=None if ch.own_axis is None else ch.own_axis - origin)
+                for name, ch in record.channels.items()}
+    return replace(record, t=record.t - origin, channels=channels,
+                   release_time=None if record.release_time is None else record.release_time - origin)
 
 
 def detect_release(record: Record) -> float:

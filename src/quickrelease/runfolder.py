@@ -41,7 +41,7 @@ import numpy as np
 from .errors import QuickReleaseError
 
 __all__ = ["OutputError", "RunFolder", "canonical", "fingerprint", "case_inputs", "differences", "check_target",
-           "MANIFEST", "output_error", "commit_files", "provenance", "provenance_attrs"]
+           "MANIFEST", "output_error", "commit_files", "staging_name", "provenance", "provenance_attrs"]
 
 MANIFEST = "manifest.json"
 _FORMAT = "quickrelease-run/1"
@@ -202,37 +202,93 @@ def _version() -> str:
 
 # -- pre-flight -------------------------------------------------------------------------------------------------
 
+def _name_max(folder: Path) -> int:
+    """The longest file name (bytes) the file system of ``folder`` allows (255 where it cannot say)."""
+    try:
+        return int(os.pathconf(folder, "PC_NAME_MAX"))
+    except (OSError, ValueError, AttributeError):
+        return 255
+
+
+#: The longest path (bytes) the system takes (Linux PATH_MAX, with its terminating zero).
+PATH_MAX = 4095
+
+
+#: Bytes a staging name may add after ``.NAME.``: its tag (``partial-PID``, ``old-PID``) and, for a temporary
+#: file, the random part and ``.part``.
+_TAG_ROOM = 40
+
+
+def staging_name(name: str, tag: str, folder: Path | None = None) -> str:
+    """The hidden name ``.NAME.TAG`` of a staging file or folder beside ``NAME`` (``TAG`` up to 40 bytes with
+    what a temporary file adds). When NAME is too long for that (a legal 240-character NAME), it is cut and a
+    hash of the whole keeps the name unique; the cut does not depend on the tag, so every staging name of one
+    NAME starts alike."""
+    limit = _name_max(folder) if folder is not None else 255
+    raw = os.fsencode(name)
+    if len(raw) + 2 + _TAG_ROOM <= limit:
+        return f".{name}.{tag}"
+    digest = hashlib.sha256(raw).hexdigest()[:16]
+    room = max(limit - len(f".~{digest}.") - _TAG_ROOM, 1)
+    head = raw[:room].decode("utf-8", errors="ignore")
+    return f".{head}~{digest}.{tag}"
+
+
 def check_target(out: str | Path, kind: str, option: str = "--out") -> Path:
     """Check before the work that ``out`` can take a ``kind`` ("folder" or "file") result; returns its
-    absolute path. Raises :class:`OutputError` (one line) when it cannot."""
+    absolute path. Raises :class:`OutputError` (one line) when it cannot: an empty name, a name or path longer
+    than the system allows, a file where a folder is expected (or the reverse), a path under a file, a place
+    that cannot be written."""
+    if not os.fspath(out).strip():
+        raise OutputError(f"{option} is empty: give a {kind} name")
     path = Path(os.path.abspath(os.fspath(out)))
-    if path.exists() or path.is_symlink():
-        if kind == "folder" and not path.is_dir():
-            raise OutputError(f"{option} {out}: is a file; expected a folder (choose another {option})")
-        if kind == "file" and path.is_dir():
-            raise OutputError(f"{option} {out}: is a folder; expected a file name (choose another {option})")
-    anc = path.parent
-    while not anc.exists():
-        if anc.parent == anc:
-            break
-        anc = anc.parent
-    if not anc.is_dir():
-        raise OutputError(f"{option} {out}: {anc} is a file, not a folder")
-    try:  # a real test (os.access says yes to root on a read-only file system)
-        fd, probe = tempfile.mkstemp(prefix=".quickrelease-probe-", dir=anc)
-        os.close(fd)
+    shown = _short_path(out)
+    if len(os.fsencode(str(path))) > PATH_MAX:
+        raise OutputError(f"{option} {shown}: the path is {len(os.fsencode(str(path)))} bytes long, over the "
+                          f"{PATH_MAX} the system allows")
+    for part in path.parts:
+        if len(os.fsencode(part)) > 255:
+            raise OutputError(f"{option} {shown}: a name in it is {len(os.fsencode(part))} bytes long, over the "
+                              "255 the file system allows")
+    try:
+        if path.exists() or path.is_symlink():
+            if kind == "folder" and not path.is_dir():
+                raise OutputError(f"{option} {shown}: is a file; expected a folder (choose another {option})")
+            if kind == "file" and path.is_dir():
+                raise OutputError(f"{option} {shown}: is a folder; expected a file name (choose another {option})")
+        anc = path.parent
+        while not anc.exists() and not anc.is_symlink():
+            if anc.parent == anc:
+                break
+            anc = anc.parent
+        if not anc.is_dir():
+            raise OutputError(f"{option} {shown}: {_short_path(anc)} is a file, not a folder")
+        fd, probe = tempfile.mkstemp(prefix=".quickrelease-probe-", dir=anc)  # a real test (os.access says yes
+        os.close(fd)  # to root on a read-only file system)
         os.unlink(probe)
     except OSError as exc:
-        raise OutputError(f"{option} {out}: cannot write in {anc}: {exc.strerror or exc}") from None
+        raise OutputError(f"{option} {shown}: cannot write there: {_reason(exc)}") from None
     return path
+
+
+def _short_path(path: str | Path, limit: int = 120) -> str:
+    """A path for a message: long ones cut in the middle."""
+    text = os.fspath(path)
+    return text if len(text) <= limit else f"{text[:limit // 2 - 2]}...{text[-(limit // 2 - 2):]}"
+
+
+def _reason(exc: OSError) -> str:
+    """An OSError in words, without a traceback (a full disk said plainly)."""
+    if exc.errno == errno.ENOSPC:
+        return "no space left on the device"
+    if exc.errno == errno.EROFS:
+        return "read-only file system"
+    return exc.strerror or type(exc).__name__
 
 
 def output_error(exc: OSError, out: str | Path) -> OutputError:
     """One line for an ``OSError`` met while writing ``out`` (a full disk, a lost permission)."""
-    reason = exc.strerror or str(exc)
-    if exc.errno == errno.ENOSPC:
-        reason = "no space left on the device"
-    return OutputError(f"cannot write {out}: {reason}; nothing was written there")
+    return OutputError(f"cannot write {_short_path(out)}: {_reason(exc)}; nothing was written there")
 
 
 # -- the staged folder ------------------------------------------------------------------------------------------
@@ -323,9 +379,12 @@ class RunFolder:
         self.resume = resume
         self.resumable = resumable
         self.notes: list[str] = []
-        name = self.out.name
-        self.partial = self.out.with_name(f".{name}.partial")
-        self.work = self.partial if resumable else self.out.with_name(f".{name}.partial-{os.getpid()}")
+        name, parent = self.out.name, self.out.parent
+        self.partial = self.out.with_name(staging_name(name, "partial", _existing(parent)))
+        self.work = self.partial if resumable else \
+            self.out.with_name(staging_name(name, f"partial-{os.getpid()}", _existing(parent)))
+        self._prefix = staging_name(name, "partial-", _existing(parent))  # of other runs' staging folders
+        self._old = staging_name(name, "old-", _existing(parent))
         self._seed_from_out = False
         self._continue = False
         self._check()
@@ -399,12 +458,12 @@ class RunFolder:
         parent = self.out.parent
         if not parent.is_dir():
             return
-        prefix = f".{self.out.name}.partial-"
+        prefix = self._prefix
         for p in parent.iterdir():
             if p.name.startswith(prefix) and p.name[len(prefix):].isdigit() and p != self.work:
                 if not _pid_alive(int(p.name[len(prefix):])):
                     shutil.rmtree(p, ignore_errors=True)
-            elif p.name.startswith(f".{self.out.name}.old-"):
+            elif p.name.startswith(self._old):
                 shutil.rmtree(p, ignore_errors=True)
 
     def open(self) -> Path:
@@ -439,10 +498,10 @@ class RunFolder:
             _fsync_dir(self.work)
             if self.out.exists():
                 if self.out.is_dir() and _exchange(self.work, self.out):
-                    trash = self.out.with_name(f".{self.out.name}.old-{os.getpid()}")
+                    trash = self.out.with_name(f"{self._old}{os.getpid()}")
                     os.replace(self.work, trash)
                 else:
-                    trash = self.out.with_name(f".{self.out.name}.old-{os.getpid()}")
+                    trash = self.out.with_name(f"{self._old}{os.getpid()}")
                     os.replace(self.out, trash)
                     os.replace(self.work, self.out)
                 _fsync_dir(self.out.parent)
@@ -451,11 +510,12 @@ class RunFolder:
                 os.replace(self.work, self.out)
                 _fsync_dir(self.out.parent)
         except OSError as exc:
-            self.abandon()
+            self.abandon(force=True)  # a full disk at the end: complete or absent
             raise output_error(exc, self.given) from None
 
     def abandon(self, force: bool = False) -> None:
-        """Remove the staging folder after a failure (a resumable one is kept: it can be resumed)."""
+        """Remove the staging folder after a failure (a resumable one is kept, it can be resumed, unless
+        ``force``: after a write error such as a full disk; one this run continued is kept even then)."""
         if self.resumable and not force:
             return
         if self.work.exists() and (not self.resumable or not self._continue):
@@ -479,6 +539,13 @@ class RunFolder:
     def final(self, path: Path) -> Path:
         """Where a file written into the staging folder lies after the commit."""
         return Path(self.given) / Path(path).relative_to(self.work)
+
+
+def _existing(path: Path) -> Path:
+    """``path`` or its nearest existing ancestor (to ask its file system for its limits)."""
+    while not path.exists() and path.parent != path:
+        path = path.parent
+    return path
 
 
 def _fsync_dir(path: Path) -> None:

@@ -19,7 +19,9 @@ naming what differs) and computes only the blocks not marked done.
 
 from __future__ import annotations
 
+import contextlib
 import math
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -194,7 +196,8 @@ def sweep(case: Case, grids: dict[str, np.ndarray], *, backend: str = "numpy", o
         Dask backend: continue the unfinished store of ``out`` (same fingerprint only): keep its finished
         blocks and compute the rest.
     overwrite : bool
-        Replace a Zarr store holding another sweep (or discard an unfinished one).
+        Replace a Zarr store holding another sweep (or discard an unfinished one), or an existing NetCDF file
+        (without it an existing file is refused: it may not be a sweep).
     log : callable, optional
         Receives one line per note (how many blocks a resume computes).
     threads : int, optional
@@ -223,29 +226,45 @@ def sweep(case: Case, grids: dict[str, np.ndarray], *, backend: str = "numpy", o
     rows_total = grids[next(iter(grids))].size
     if backend == "dask":
         per_row = int(np.prod([g.size for g in list(grids.values())[1:]]))
-        if block_rows is not None and (not isinstance(block_rows, int | np.integer) or block_rows < 1):
-            raise ParameterError("--block-rows", block_rows, "integers >= 1")
+        if block_rows is not None and (isinstance(block_rows, bool) or not isinstance(block_rows, int | np.integer)
+                                       or not 1 <= block_rows <= rows_total):
+            raise ParameterError("--block-rows", block_rows, f"integers in [1, {rows_total}] (the values of the "
+                                 f"first grid, {next(iter(grids))})")
+        if block_rows is not None:
+            check_size("--block-rows", block_rows, int(block_rows) * per_row, "grid points a block")
         block_rows = int(block_rows or max(1, 1_000_000 // max(per_row, 1)))
     folder = None
     if out is not None:  # pre-flight, before the work
-        from .runfolder import check_target
+        from ._files import check_output_file
 
         if Path(out).suffix == ".zarr":
             folder = _store_folder(case, grids, out, block_rows if backend == "dask" else None, resume=resume,
                                    overwrite=overwrite)
-        else:
-            check_target(out, "file")
+        else:  # a NetCDF file: never over a device node, FIFO or folder; over a file only with overwrite
+            check_output_file(out, "--file", overwrite)
     if backend != "dask":
         with using_threads(threads):
             data = _compute(case, grids, base, backend=backend)
         ds = _dataset(case, grids, data, base)
         if folder is not None:
             with folder.staged() as work:
-                ds.to_zarr(work, mode="w")  # the manifest is (re)written complete by the commit
+                with _quiet_zarr():
+                    ds.to_zarr(work, mode="w")  # the manifest is (re)written complete by the commit
         elif out is not None:
             _write_netcdf(ds, Path(out))
         return ds
     return _sweep_dask(case, grids, base, folder, scheduler, workers, block_rows, rows_total, log)
+
+
+@contextlib.contextmanager
+def _quiet_zarr():
+    """Zarr 3's two-line warning that consolidated metadata (which xarray writes and reads, and which makes
+    the store open fast) is not in the Zarr 3 specification, silenced where we write and open a store: it
+    said nothing the user could act on, on every Zarr sweep. Other warnings pass."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=r"Consolidated metadata is currently not part",
+                                category=UserWarning)
+        yield
 
 
 def _store_folder(case: Case, grids: dict[str, np.ndarray], out, block_rows: int | None, *, resume: bool,
@@ -278,7 +297,8 @@ def _block(case: Case, grids, base, path: str, rows: slice, index: int) -> int:
     sub = {**grids, first: grids[first][rows]}
     ds = _dataset(case, sub, data, base).drop_vars(list(grids))
     ds.attrs = {}
-    ds.to_zarr(path, region={first: rows}, mode="r+")
+    with _quiet_zarr():
+        ds.to_zarr(path, region={first: rows}, mode="r+")
     Path(path, _DONE, f"{index:06d}").touch()
     return index
 
@@ -302,7 +322,8 @@ def _sweep_dask(case, grids, base, folder, scheduler, workers, block_rows, rows_
             # a new store, or one killed before its template was whole: (re)build it; mode="w" empties it
             template = _dataset(case, grids, None, base)
             encoding = {v: {"chunks": (block_rows, *template[v].shape[1:])} for v in OUTPUTS}
-            template.to_zarr(work, mode="w", compute=False, encoding=encoding)
+            with _quiet_zarr():
+                template.to_zarr(work, mode="w", compute=False, encoding=encoding)
             folder._write_manifest(False)
             done_dir.mkdir(parents=True, exist_ok=True)
             mark.write_text(folder.fingerprint, encoding="ascii")
@@ -315,10 +336,12 @@ def _sweep_dask(case, grids, base, folder, scheduler, workers, block_rows, rows_
             pass
         if {int(p.name) for p in done_dir.iterdir() if p.name.isdigit()} != set(range(len(blocks))):
             raise QuickReleaseError(f"{folder.given}: blocks are missing after the sweep; run it again with --resume")
-    except OSError as exc:  # a full disk: the finished blocks stay, --resume continues
+    except OSError as exc:  # a full disk: nothing is left (a resumed run's earlier blocks stay)
+        folder.abandon(force=True)
         raise output_error(exc, folder.given) from None
     folder.commit()
-    return xr.open_zarr(folder.out)
+    with _quiet_zarr():
+        return xr.open_zarr(folder.out)
 
 
 def _even(v: np.ndarray) -> bool:

@@ -269,6 +269,8 @@ def parse_channel_values(items: list[str] | tuple[str, ...], what: str,
             name = name.strip()
             if not sep or name not in channels:
                 raise ParameterError(what, part.strip(), f"CHANNEL=VALUE with CHANNEL one of {', '.join(channels)}")
+            if name in out:
+                raise QuickReleaseError(f"{what} {part.strip()}: channel {name} is given twice (once per channel)")
             out[name] = parse_quantity(value.strip(), channels[name][0], f"{what} {name}")
     return out
 

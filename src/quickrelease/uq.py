@@ -405,7 +405,8 @@ def _run(case, samples, seed, chunk, backend, scheduler, workers, out, resume, o
             from .plots import save_figure
 
             save_figure(corner_figure(result), work, "uq_corner")
-    except OSError as exc:  # a full disk: the finished chunks stay, --resume continues
+    except OSError as exc:  # a full disk: nothing is left (a resumed run's earlier chunks stay)
+        folder.abandon(force=True)
         raise output_error(exc, out) from None
     folder.commit()
     return result
