@@ -694,8 +694,8 @@ def sweep_command(
     if out.suffix in (".nc", ".zarr"):  # the figures beside it: companions of the file, checked alike
         from .runfolder import check_target
 
-        check_target(out, "file" if out.suffix == ".nc" else "folder", "--file")
-        _check_output_files(((out.parent / f"{stem}.{fmt}", "--file") for fmt in ("png", "svg")),
+        check_target(out, "file" if out.suffix == ".nc" else "folder", "--out")
+        _check_output_files(((out.parent / f"{stem}.{fmt}", "--out") for fmt in ("png", "svg")),
                             overwrite or out.exists())
     case = load_case(case_file)
     with _busy("sweeping the grid"):
@@ -741,7 +741,7 @@ def synth(
     file: Annotated[Path, typer.Option("--out", "-o", help="Record file to write (CSV).")] = Path("record.csv"),
     out_old: Annotated[Path | None, typer.Option("--file", "-f", hidden=True, help="Former name of --out.")] = None,
     case_out: Annotated[Path | None, typer.Option("--case-out", help="Also write a case file that fits this record.")] = None,
-    overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing --file or --case-out (a device node, FIFO or folder never).")] = False,
+    overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing --out or --case-out (a device node, FIFO or folder never).")] = False,
     as_json: JsonOpt = False,
 ) -> None:
     """A synthetic record of the case's release (offsets, noise), and the precision a fit to it would have;
@@ -754,7 +754,7 @@ def synth(
     from .synth import case_toml, parse_channel_values, predicted_errors, synthesize
     from .units import parse_quantity
 
-    _check_output_files(((out, "--file"), (case_out, "--case-out")), overwrite)
+    _check_output_files(((out, "--out"), (case_out, "--case-out")), overwrite)
     case = load_case(case_file, require_test=False)
     if building or not case.has_test:
         _synth_building(case, channels, rate, noise, offset, release_time, duration, seed, jitter, missing, out,
