@@ -103,7 +103,7 @@ COMMANDS: dict[str, Command] = {
     "synth-building": Command(("{building_case}", "--out", "record.csv", "--channels", "x", "--duration", "5 s",
                                "--json"), {"--noise": "x={}", "--offset": "x={}"}, command="synth",
                                skip=("--seed", "--jitter", "--missing")),  # checked as for the device (above)
-    "demo": Command(("--file", "demo",), {}),
+    "demo": Command(("--out", "demo",), {}),
     "plan": Command(("{case}", "--json"), {}),
     "bench": Command(("--quick", "--json"), {}),  # --threads is its only value option: every value fuzzed is refused
     "building": Command(("{building_case}", "--json"), {}),  # --model is checked before the case is read
@@ -263,10 +263,10 @@ WRITERS = {
     "fit --out": (("fit", "case.toml", "--out", "{}"), ""),
     "plan --out": (("plan", "case.toml", "--out", "{}"), ""),
     "building --out": (("building", "building.toml", "--out", "{}"), ""),
-    "sweep --file": (("sweep", "case.toml", "--grid", "F1=100 N:900 N:2", "--file", "{}"), ".nc"),
-    "sweep --file zarr": (("sweep", "case.toml", "--grid", "F1=100 N:900 N:2", "--file", "{}"), ".zarr"),
-    "synth --file": (("synth", "case.toml", "--channels", "u", "--rate", "200 Hz", "--file", "{}"), ".csv"),
-    "synth --case-out": (("synth", "case.toml", "--channels", "u", "--rate", "200 Hz", "--file", "r.csv",
+    "sweep --out": (("sweep", "case.toml", "--grid", "F1=100 N:900 N:2", "--out", "{}"), ".nc"),
+    "sweep --out zarr": (("sweep", "case.toml", "--grid", "F1=100 N:900 N:2", "--out", "{}"), ".zarr"),
+    "synth --out": (("synth", "case.toml", "--channels", "u", "--rate", "200 Hz", "--out", "{}"), ".csv"),
+    "synth --case-out": (("synth", "case.toml", "--channels", "u", "--rate", "200 Hz", "--out", "r.csv",
                           "--case-out", "{}"), ".toml"),
 }
 ROOT = hasattr(os, "geteuid") and os.geteuid() == 0

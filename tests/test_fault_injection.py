@@ -203,8 +203,8 @@ def test_killed_uq_resumes_to_the_identical_result(tmp_path):
 FULL_DISK_COMMANDS = {
     "run": ["run", EXAMPLES / "paper.toml", "--out", "{out}"],
     "uq": ["uq", "uq.toml", "--samples", "2000", "--chunk", "500", "--out", "{out}"],
-    "sweep-nc": ["sweep", EXAMPLES / "larger_push.toml", "--grid", "F1=100:900:3", "--file", "{out}.nc"],
-    "synth": ["synth", EXAMPLES / "paper.toml", "--channels", "u", "--rate", "200 Hz", "--file", "{out}.csv",
+    "sweep-nc": ["sweep", EXAMPLES / "larger_push.toml", "--grid", "F1=100:900:3", "--out", "{out}.nc"],
+    "synth": ["synth", EXAMPLES / "paper.toml", "--channels", "u", "--rate", "200 Hz", "--out", "{out}.csv",
               "--case-out", "{out}.toml"],
 }
 
@@ -277,7 +277,7 @@ def test_a_full_disk_at_a_seeded_write_leaves_the_whole_result_or_nothing(tmp_pa
 
 def test_json_to_a_closed_standard_output_is_one_line_after_a_whole_result(tmp_path):
     """--json into a pipe whose reader has gone: the files are whole (written before the JSON), then one line."""
-    proc = subprocess.Popen(_cmd("synth", EXAMPLES / "paper.toml", "--channels", "u", "--rate", "200 Hz", "--file",
+    proc = subprocess.Popen(_cmd("synth", EXAMPLES / "paper.toml", "--channels", "u", "--rate", "200 Hz", "--out",
                                  tmp_path / "r.csv", "--json"), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True)
     proc.stdout.close()

@@ -95,9 +95,9 @@ def _hidden(folder: Path) -> list[str]:
 
 KINDS = ["fifo", "folder", pytest.param("chardev", marks=needs_root)]
 TARGETS = {  # command line with the target named "{}", and the target's name
-    "synth --file": (SYNTH + ["--file", "{}"], "target.csv"),
-    "synth --case-out": (SYNTH + ["--file", "r.csv", "--case-out", "{}"], "target.toml"),
-    "sweep --file .nc": (SWEEP + ["--file", "{}"], "target.nc"),
+    "synth --out": (SYNTH + ["--out", "{}"], "target.csv"),
+    "synth --case-out": (SYNTH + ["--out", "r.csv", "--case-out", "{}"], "target.toml"),
+    "sweep --out .nc": (SWEEP + ["--out", "{}"], "target.nc"),
 }
 
 
@@ -132,13 +132,13 @@ def test_a_file_the_program_did_not_write_is_replaced_only_with_overwrite(work, 
 
 def test_sweep_heat_maps_beside_a_new_file_are_not_replaced_without_overwrite(work):
     (work / "s_heatmaps.svg").write_text("my drawing")
-    line = _one_line(_cli(SWEEP + ["--file", "s.nc"], work))
+    line = _one_line(_cli(SWEEP + ["--out", "s.nc"], work))
     assert "s_heatmaps.svg" in line
     assert (work / "s_heatmaps.svg").read_text() == "my drawing" and not (work / "s.nc").exists()
 
 
 def test_the_same_file_twice_is_refused(work):
-    line = _one_line(_cli(SYNTH + ["--file", "r.csv", "--case-out", "./r.csv"], work))
+    line = _one_line(_cli(SYNTH + ["--out", "r.csv", "--case-out", "./r.csv"], work))
     assert "same file" in line
 
 
@@ -255,8 +255,8 @@ PATH_COMMANDS = {  # command -> (args with "{}" for the output, suffix)
     "demo": (["demo", "--out", "{}"], ""),
     "uq": (["uq", "uq.toml", "--samples", "400", "--chunk", "200", "--out", "{}"], ""),
     "fit": (["fit", "fit.toml", "--out", "{}"], ""),
-    "sweep": (SWEEP + ["--file", "{}"], ".nc"),
-    "synth": (SYNTH + ["--file", "{}"], ".csv"),
+    "sweep": (SWEEP + ["--out", "{}"], ".nc"),
+    "synth": (SYNTH + ["--out", "{}"], ".csv"),
 }
 
 
@@ -328,7 +328,7 @@ def test_uq_on_a_full_disk_leaves_no_staging_folder(work, monkeypatch):
 
 
 def test_a_write_error_without_a_file_name_names_the_file(work, monkeypatch):
-    """A write on a full disk may raise an OSError without a file name: the message names --file, not the
+    """A write on a full disk may raise an OSError without a file name: the message names --out, not the
     standard output, and nothing is left."""
     from quickrelease import synth
 
@@ -336,13 +336,13 @@ def test_a_write_error_without_a_file_name_names_the_file(work, monkeypatch):
         raise OSError(errno.ENOSPC, "No space left on device")
 
     monkeypatch.setattr(synth, "open", full, raising=False)  # the CSV writer's open, inside atomic_path
-    line = _one_line(_cli(SYNTH + ["--file", "r.csv"], work))
+    line = _one_line(_cli(SYNTH + ["--out", "r.csv"], work))
     assert "r.csv" in line and "no space left" in line and "standard output" not in line, line
     assert sorted(p.name for p in work.iterdir() if p.name.startswith((".", "r."))) == []
 
 
 def test_json_to_a_closed_pipe_is_one_line(work):
-    p = subprocess.Popen([sys.executable, "-m", "quickrelease.cli", *SYNTH, "--file", "r.csv", "--json"], cwd=work,
+    p = subprocess.Popen([sys.executable, "-m", "quickrelease.cli", *SYNTH, "--out", "r.csv", "--json"], cwd=work,
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                          env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
     p.stdout.close()
@@ -384,7 +384,7 @@ def test_sweep_json_with_every_point_out_of_range_is_valid_json(work):
     """Pushes of 1e300 N store an E_S beyond the floats: every point flagged, its outputs NaN; the JSON has null."""
     shutil.copy(EXAMPLES / "larger_push.toml", work / "push.toml")
     shutil.copy(EXAMPLES / "device.toml", work / "device.toml")
-    r = _cli(["sweep", "push.toml", "--grid", "force=1e300 N:1e301 N:3", "--file", "s.nc", "--json"], work)
+    r = _cli(["sweep", "push.toml", "--grid", "force=1e300 N:1e301 N:3", "--out", "s.nc", "--json"], work)
     assert r.exit_code == 0, r.stderr
     data = json.loads(r.stdout, parse_constant=lambda c: pytest.fail(f"{c} in JSON"))
     assert data["flagged"] == 3 and data["stop_time_s"] == [None, None] and data["u_final_m"] == [None, None]
@@ -394,7 +394,7 @@ def test_sweep_json_with_every_point_out_of_range_is_valid_json(work):
 def test_dask_block_rows_beyond_the_grid_is_one_line(work, rows):
     pytest.importorskip("dask")
     pytest.importorskip("zarr")
-    line = _one_line(_cli(SWEEP[:-1] + ["F1=100 N:900 N:4", "--file", "s.zarr", "--backend", "dask",
+    line = _one_line(_cli(SWEEP[:-1] + ["F1=100 N:900 N:4", "--out", "s.zarr", "--backend", "dask",
                                         "--block-rows", rows], work))
     assert "--block-rows" in line and "[1, 4]" in line
     assert not (work / "s.zarr").exists() and _hidden(work) == []
@@ -414,25 +414,25 @@ displacement = "0.15 m"
 @pytest.mark.parametrize("mass", ["1e-300 kg", "0.5 kg", "1e13 kg"])
 def test_a_building_mass_outside_the_sane_range_is_one_line(work, mass):
     (work / "b.toml").write_text(BUILDING.format(mass=mass))
-    line = _one_line(_cli(["synth", "b.toml", "--file", "b.csv", "--duration", "5 s"], work))
+    line = _one_line(_cli(["synth", "b.toml", "--out", "b.csv", "--duration", "5 s"], work))
     assert "[building] mass" in line and "[1, 1e+12] kg" in line, line
 
 
 def test_a_building_of_one_kilogram_is_accepted(work):
     """The bound's edge: 1 kg simulates (k m = 1e1 N/m kg, far from underflow)."""
     (work / "b.toml").write_text(BUILDING.format(mass="1 kg"))
-    r = _cli(["synth", "b.toml", "--file", "b.csv", "--duration", "5 s", "--json"], work)
+    r = _cli(["synth", "b.toml", "--out", "b.csv", "--duration", "5 s", "--json"], work)
     assert r.exit_code == 0, r.stderr
 
 
 @pytest.mark.parametrize("args,words", [
-    (SWEEP + ["--grid", "F1=200 N:300 N:2", "--file", "s.nc"], "F1 is given twice"),
-    (SYNTH + ["--noise", "u=1 mm,u=2 mm", "--file", "n.csv"], "channel u is given twice"),
-    (SYNTH + ["--noise", "u=1 mm", "--noise", "u=2 mm", "--file", "n.csv"], "channel u is given twice"),
-    (SYNTH + ["--offset", "u=1 mm,u=2 mm", "--file", "n.csv"], "channel u is given twice"),
+    (SWEEP + ["--grid", "F1=200 N:300 N:2", "--out", "s.nc"], "F1 is given twice"),
+    (SYNTH + ["--noise", "u=1 mm,u=2 mm", "--out", "n.csv"], "channel u is given twice"),
+    (SYNTH + ["--noise", "u=1 mm", "--noise", "u=2 mm", "--out", "n.csv"], "channel u is given twice"),
+    (SYNTH + ["--offset", "u=1 mm,u=2 mm", "--out", "n.csv"], "channel u is given twice"),
     (["run", "case.toml", "--out", ""], "--out is empty"),
     (["run", "case.toml", "--out="], "--out is empty"),
-    (SYNTH + ["--file", " "], "--file is empty"),
+    (SYNTH + ["--out", " "], "--out is empty"),
 ])
 def test_an_option_given_twice_or_empty_is_refused(work, args, words):
     before = sorted(p.name for p in work.iterdir())
