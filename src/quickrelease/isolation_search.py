@@ -102,7 +102,8 @@ def record_period(channels, t_r: float) -> float | None:
     does not count), on the first channel (x, v, a, then the roof's) with at least two such crossings after
     the release ``t_r``. A displacement that crosses once or never (sliders that stick after a swing or two)
     gives twice the time from the release to its first turning point (a half-period after a release from
-    rest)."""
+    rest); a velocity that crosses once, twice the time to its crossing (the turn); an acceleration that
+    crosses once, four times (the equilibrium, a quarter-period after the release)."""
     for kind in ("x", "v", "a", "x_roof", "v_roof", "a_roof"):
         for ch in channels:
             if ch.kind != kind:
@@ -134,6 +135,10 @@ def record_period(channels, t_r: float) -> float | None:
                 return float(np.median(c[2:] - c[:-2]))
             if len(crossings) == 2:
                 return float(2.0 * (crossings[1] - crossings[0]))
+            if kind in ("v", "v_roof") and len(crossings) == 1:  # the velocity changes sign at the first turn
+                return float(2.0 * (crossings[0] - t_r))
+            if kind in ("a", "a_roof") and len(crossings) == 1:  # the acceleration a quarter-period after the release
+                return float(4.0 * (crossings[0] - t_r))
             if kind in ("x", "x_roof") and not crossings:  # stuck at its first turning point: the final level
                 z = y * math.copysign(1.0, float(y[0]))
                 near = np.nonzero(z <= 3.0 * sigma + 1e-3 * h)[0]
