@@ -600,7 +600,8 @@ def turning_points_with_errors(t, x, noise: float = 0.0, rest: float = 0.0, jitt
     # samples on the flanks by up to jitter |dx/dt|: that counts as noise for the zigzag
     spread = float(noise)
     if jitter > 0.0:
-        rate = np.abs(np.diff(x)) / float(np.median(np.diff(t)))
+        span = min(16, n - 1)  # the typical step: bursts of stamps make short and long steps
+        rate = np.abs(np.diff(x)) / float(np.median((t[span:] - t[:-span]) / span))
         spread = math.hypot(spread, jitter * float(np.percentile(rate, 99)))
     threshold = spread * (2.0 * math.sqrt(2.0 * math.log(n)) + 2.0)
     direction = -1.0 if x[0] > rest else 1.0

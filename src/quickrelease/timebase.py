@@ -25,6 +25,8 @@ __all__ = ["TimeBase", "clipped_samples", "jitter_misfit", "merge_repeated_times
 
 #: Stamps scatter about a uniform clock by more than this fraction of the step before a record says so.
 JITTER_NOTE_FRACTION = 0.01
+#: A step longer than this many typical steps is a gap in the record (longer than a logger's bursts).
+GAP_STEPS = 20.0
 
 
 def _times(t) -> np.ndarray:
@@ -67,7 +69,8 @@ class TimeBase:
     """How regular a record's time stamps are (:func:`time_base`), SI units."""
 
     step: float
-    """Median time step [s]."""
+    """Typical time step [s]: the median over the record of the time spanned by 16 steps, divided by 16
+    (a logger that stamps in bursts makes short and long steps whose median is neither)."""
     jitter: float
     """Robust standard deviation (1.4826 MAD) of the stamps about a uniform clock fitted to each stretch
     between gaps [s]: random jitter, or the sawtooth of burst stamping."""
@@ -75,9 +78,9 @@ class TimeBase:
     """Robust standard deviation of the steps about their median, relative to it [-] (sqrt(2) jitter / step
     for independent jitter)."""
     burst_fraction: float
-    """Fraction of the steps below half or above one and a half median steps [-]."""
+    """Fraction of the steps below half or above one and a half typical steps (gaps aside) [-]."""
     gaps: int
-    """Steps longer than five median steps (stretches measured apart)."""
+    """Steps longer than GAP_STEPS typical steps (stretches measured apart)."""
     samples: int
 
     @property
@@ -92,25 +95,26 @@ class TimeBase:
         if self.burst_fraction > 0.05:
             text += f"; {100 * self.burst_fraction:.0f}% of the steps are under half or over 1.5 steps (burst stamping)"
         if self.gaps:
-            text += f"; {self.gaps} gap(s) over five steps"
+            text += f"; {self.gaps} gap(s) over {GAP_STEPS:g} steps"
         return text
 
 
 def time_base(t) -> TimeBase:
     """Measure a record's time base from its stamps t [s] (increasing).
 
-    The record is cut at gaps longer than five median steps; in each stretch of at least three samples the
-    stamps are compared with the uniform clock through its first and last stamps' least-squares line
-    against the sample count, and the jitter is the robust spread (1.4826 MAD) of all the deviations. A
-    clock that is merely uneven by design (a slower rate in one stretch) is uniform within each stretch; a
+    The record is cut at gaps longer than :data:`GAP_STEPS` typical steps (:attr:`TimeBase.step`); in each
+    stretch of at least three samples the stamps are compared with the uniform clock of their least-squares
+    line against the sample count, and the jitter is the robust spread (1.4826 MAD) of all the deviations.
+    A clock that is merely uneven by design (a slower rate after a gap) is uniform within each stretch; a
     logger that stamps in bursts, or a clock read with jitter, is not.
     """
     t = _times(t)
     steps = np.diff(t)
     if np.any(steps <= 0):
         raise ParameterError("t", "not increasing", "increasing times (merge repeated stamps first)", "s")
-    step = float(np.median(steps))
-    cuts = np.nonzero(steps > 5.0 * step)[0]
+    span = min(16, t.size - 1)  # a bursting logger's steps alternate short and long: their span is regular
+    step = float(np.median((t[span:] - t[:-span]) / span))
+    cuts = np.nonzero(steps > GAP_STEPS * step)[0]
     bounds = np.concatenate([[0], cuts + 1, [t.size]])
     dev = []
     for a, b in zip(bounds[:-1], bounds[1:], strict=True):
@@ -122,7 +126,7 @@ def time_base(t) -> TimeBase:
     jitter = 1.4826 * float(np.median(np.abs(d - np.median(d))))
     rel = steps / step - 1.0
     spread = 1.4826 * float(np.median(np.abs(rel - np.median(rel))))
-    burst = float(np.mean((steps < 0.5 * step) | ((steps > 1.5 * step) & (steps <= 5.0 * step))))
+    burst = float(np.mean((steps < 0.5 * step) | ((steps > 1.5 * step) & (steps <= GAP_STEPS * step))))
     return TimeBase(step=step, jitter=jitter, step_spread=spread, burst_fraction=burst, gaps=int(cuts.size),
                     samples=int(t.size))
 
