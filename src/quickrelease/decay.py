@@ -276,14 +276,40 @@ def _on_bound(value: float, lo: float, hi: float, tol: float) -> bool:
     return any(math.isfinite(b) and abs(value - b) <= tol * max(1.0, abs(b)) for b in (lo, hi))
 
 
+def _box_lstsq(A: np.ndarray, y: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """min |A c - y| with lo <= c <= hi, exactly: the unconstrained least squares where it is feasible, else the
+    best feasible solution over the faces of the box (each bounded coefficient free, or fixed at one of its
+    finite bounds; a convex problem's minimum lies on one of them). For the two bounded coefficients of the
+    decrement laws that is at most nine small solves."""
+    import itertools
+
+    bounded = [i for i in range(A.shape[1]) if math.isfinite(lo[i]) or math.isfinite(hi[i])]
+    best, best_rss = None, math.inf
+    options = [[None] + [b for b in (lo[i], hi[i]) if math.isfinite(b)] for i in bounded]
+    for fixes in itertools.product(*options):
+        c = np.zeros(A.shape[1])
+        fixed = {i: v for i, v in zip(bounded, fixes, strict=True) if v is not None}
+        free = [i for i in range(A.shape[1]) if i not in fixed]
+        for i, v in fixed.items():
+            c[i] = v
+        rhs = y - A[:, list(fixed)] @ np.array(list(fixed.values())) if fixed else y
+        if free:
+            c[free] = np.linalg.lstsq(A[:, free], rhs, rcond=None)[0]
+        if np.any(c < lo - 1e-12 * np.maximum(1.0, np.abs(lo))) or np.any(c > hi + 1e-12 * np.maximum(1.0, np.abs(hi))):
+            continue
+        rss = float(np.sum((A @ c - y) ** 2))
+        if rss < best_rss * (1.0 - 1e-12) or best is None:
+            best, best_rss = np.clip(c, lo, hi), rss
+        if not fixed:  # the unconstrained solution is feasible: it is the minimum
+            break
+    return best
+
+
 def _linear_law(name: str, x: np.ndarray, s: np.ndarray, se: np.ndarray, offset: bool):
     """The viscous, Coulomb and combined laws, linear in (r, g, h): ``x_{n+1} = -r x_n + g s_n + h`` with
     g = (1 + r) delta, h = (1 + r) e, solved by bounded generalised least squares (lsq_linear on the
     whitened equations; the residual covariance of :func:`_one_step_cov` with F' = r, updated three times).
     Returns (parameters, covariance, whitened residuals, raw residuals, ln det cov, bound flags)."""
-    from scipy.linalg import solve_triangular
-    from scipy.optimize import lsq_linear
-
     xn, xn1 = x[:-1], x[1:]
     one = np.ones_like(xn)
     if name == "coulomb":  # r = 1: x_{n+1} + x_n = g s_n + h
@@ -302,14 +328,13 @@ def _linear_law(name: str, x: np.ndarray, s: np.ndarray, se: np.ndarray, offset:
     for _ in range(4):
         cov = _one_step_cov(np.full(xn.size - 1, r), se, np.full(xn.size, r))
         L, logdet = _whitener(cov)
-        Aw = solve_triangular(L, A / scale, lower=True)
-        yw = solve_triangular(L, y, lower=True)
-        sol = lsq_linear(Aw, yw, bounds=(np.array(lo) * scale, np.array(hi) * scale), method="bvls",
-                         tol=1e-15, lsmr_tol=None)
-        coef = sol.x / scale
+        Li = np.linalg.inv(L)  # a few dozen half-cycles at most: the explicit inverse is cheapest
+        Aw = Li @ (A / scale)
+        yw = Li @ y
+        coef = _box_lstsq(Aw, yw, np.array(lo) * scale, np.array(hi) * scale) / scale
         r = 1.0 if name == "coulomb" else float(coef[0])
     resid = y - A @ coef
-    resid_w = solve_triangular(L, resid, lower=True)
+    resid_w = Li @ resid
     cov_coef = np.linalg.pinv(Aw.T @ Aw) / np.outer(scale, scale)
     bound = [_on_bound(c, lo_, hi_, 1e-12) for c, lo_, hi_ in zip(coef, lo, hi, strict=True)
              if math.isfinite(lo_) or math.isfinite(hi_)]
@@ -319,7 +344,6 @@ def _linear_law(name: str, x: np.ndarray, s: np.ndarray, se: np.ndarray, offset:
 def _nonlinear_law(name: str, x: np.ndarray, s: np.ndarray, se: np.ndarray, offset: bool, starts, scale: float):
     """The quadratic and power laws: bounded nonlinear least squares (scipy least_squares, trust region
     reflective) of the whitened one-step residuals, the covariance updated with the law's slope F'(a)."""
-    from scipy.linalg import solve_triangular
     from scipy.optimize import least_squares
 
     def next_amp(a, th):
@@ -346,9 +370,10 @@ def _nonlinear_law(name: str, x: np.ndarray, s: np.ndarray, se: np.ndarray, offs
         f = slopes(th)
         cov = _one_step_cov(f[1:], se, f)  # the last peak's slope enters the next equation's covariance only
         L, logdet = _whitener(cov)
-        sol = least_squares(lambda p: solve_triangular(L, raw(p), lower=True), th, bounds=(lo, hi), method="trf",
-                            x_scale=[1.0] * npar + ([scale] if offset else []), xtol=1e-13, ftol=1e-13,
-                            gtol=1e-13, max_nfev=200)
+        Li = np.linalg.inv(L)
+        sol = least_squares(lambda p: Li @ raw(p), th, bounds=(lo, hi), method="trf",
+                            x_scale=[1.0] * npar + ([scale] if offset else []), xtol=1e-10, ftol=1e-10,
+                            gtol=1e-10, max_nfev=200)
         return float(sol.fun @ sol.fun), sol.x, sol.jac, sol.fun, logdet
 
     # each start once with the covariance at the start, then the best one twice more with its own
