@@ -246,11 +246,7 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
         except QuickReleaseError as exc:
             notes.append(f"decay analysis of {xch.name} not possible: {exc}")
         notes += [n for n in check.get("notes", []) if n not in notes]
-        far = [r for r in check.get("rows", []) if math.isfinite(r["difference_in_se"])
-               and abs(r["difference_in_se"]) > 10]
-        for r in far:
-            warnings.append(f"{r['parameter']}: the decay analysis ({r['decay']:.6g}) and the fit "
-                            f"({r['fit']:.6g}) differ by {r['difference_in_se']:.3g} standard errors")
+        warnings += [w for w in check.get("warnings", []) if w not in warnings]
     loop = _loop(fit, channels, notes)
     return BuildingResult(fit=fit, compared=tuple(compared), comparison=tuple(comparison), decay=decay,
                           decay_check=check, loop=loop, warnings=tuple(warnings), notes=tuple(notes),

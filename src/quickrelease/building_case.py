@@ -126,6 +126,9 @@ class BuildingData:
     """2dof: the superstructure's mass at the roof [kg] (part of ``mass``)."""
     spec: BuildingSpec | None = None
     """The parsed ``[building]`` table."""
+    jitter: dict[str, float] = field(default_factory=dict)
+    """Per channel, how far its time stamps scatter about a uniform clock [s] where the record says so
+    (:func:`quickrelease.timebase.time_base`; for :func:`quickrelease.decay.analyse_decay`'s ``jitter``)."""
 
 
 def _start(spec: BuildingSpec) -> dict[str, float]:
@@ -179,6 +182,7 @@ def load_building(case: Case) -> BuildingData:
     channels: list[BuildingChannel] = []
     notes: list[str] = []
     release_time = None
+    jitter: dict[str, float] = {}
     if spec.record is not None:
         record = load_record(spec.record)
         notes = list(record.notes)
@@ -187,6 +191,8 @@ def load_building(case: Case) -> BuildingData:
             where = f"{(ch.spec.file or spec.record.file)}: column {ch.spec.column!r} (channel {name})"
             if ch.values.size < MIN_SAMPLES:
                 raise RecordError(f"{where}: {ch.values.size} valid sample(s), fewer than {MIN_SAMPLES}")
+            if ch.jitter > 0.0:
+                jitter[name] = ch.jitter
             try:
                 channels.append(BuildingChannel(name=name, kind=name, t=ch.t, values=ch.values,
                                                 noise=ch.spec.noise, offset=ch.spec.offset))
@@ -202,4 +208,4 @@ def load_building(case: Case) -> BuildingData:
         start["d0"] = pushed_displacement(case.push_force, spec)
     return BuildingData(model=spec.model, mass=float(spec.mass), isolation=isolation, start=start,
                         d0=spec.displacement, channels=channels, release_time=release_time, notes=notes,
-                        source=case.source, superstructure_mass=spec.superstructure_mass, spec=spec)
+                        source=case.source, superstructure_mass=spec.superstructure_mass, spec=spec, jitter=jitter)

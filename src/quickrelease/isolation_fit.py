@@ -1400,6 +1400,11 @@ def compare_models(fits) -> list[dict[str, Any]]:
     return sorted(rows, key=lambda row: row["bic"])
 
 
+#: Difference between the fit and the decay analysis, in combined standard errors, beyond which
+#: :func:`decay_check` warns (the standard errors include the decay law's own misfit).
+DECAY_CHECK_LIMIT = 5.0
+
+
 def decay_check(fit: IsolationFit) -> dict[str, Any]:
     """The model-free decay analysis (:mod:`quickrelease.decay`) of the fit's displacement channel beside
     the fitted model: where they agree, and where they cannot.
@@ -1407,19 +1412,28 @@ def decay_check(fit: IsolationFit) -> dict[str, Any]:
     For the linear model the combined decrement law is exact, so the period, damping ratio and friction of
     the decay and of the fit estimate the same quantities: each row gives both values and their
     difference in units of the combined standard error (the fit's and the decay's, the two taken as
-    independent, which overstates the spread a little since they share the record: a few units are
-    expected; tens mean the record and the model disagree). For the bilinear model no decay law exists
-    (period and decrement change with the amplitude by themselves) and only the per-half-cycle
-    equivalents are returned, with a note saying so.
+    independent, which overstates the spread a little since they share the record). The decay's standard
+    errors come from the turning points' own errors (the channel's noise through the local fits), the
+    residuals' correlation (each peak enters two half-cycles) and the law's misfit (scaled up by
+    sqrt(chi2 / dof) where the peaks scatter more than their errors), and the friction's includes the
+    stiffness' (from the period). Earlier versions took the standard errors from the scatter of 1 to 3
+    residuals alone and left the period's error out of the friction's: on correct fits of short records
+    they came out tens of times too small.
+
+    A row whose difference exceeds :data:`DECAY_CHECK_LIMIT` is flagged (``disagrees``) and said in
+    ``warnings``; notes say where the combined law misfits the peaks, and where another decrement law
+    (quadratic or power-law damping) describes them clearly better (Delta AIC > 10). For the bilinear model
+    no decay law exists (period and decrement change with the amplitude by themselves) and only the
+    per-half-cycle equivalents are returned, with a note saying so.
     """
-    from .decay import analyse_decay
+    from .decay import MISFIT_REDUCED_CHI2, analyse_decay
 
     xch = next((c for c in fit.channels if c.kind == "x"), None)
     if xch is None:
-        return {"rows": [], "notes": ["no displacement channel: no decay analysis"]}
+        return {"rows": [], "notes": ["no displacement channel: no decay analysis"], "warnings": []}
     offset = fit.offsets().get(xch.name, 0.0)
     analysis = analyse_decay(xch.t, xch.values - offset, release_time=fit.release_time, noise=fit.noise[xch.name])
-    out: dict[str, Any] = {"analysis": analysis.summary(fit.mass), "rows": [], "notes": []}
+    out: dict[str, Any] = {"analysis": analysis.summary(fit.mass), "rows": [], "notes": [], "warnings": []}
     if fit.model == "bilinear":
         out["notes"].append("bilinear isolators follow no decay law: compare the equivalent period and damping "
                             "against the amplitude instead")
@@ -1433,15 +1447,29 @@ def decay_check(fit: IsolationFit) -> dict[str, Any]:
         out["notes"].append("fewer than four half-cycles: no decay law")
         return out
     law = analysis.law
-    k = analysis.stiffness(fit.mass)
+    if law.known_errors and law.dof > 0 and law.reduced_chi2 > MISFIT_REDUCED_CHI2:
+        out["notes"].append(f"the combined decrement law misfits the turning points (reduced chi-square "
+                            f"{law.reduced_chi2:.3g} on {law.dof} degrees of freedom): the decay's standard errors "
+                            "are scaled up by its square root")
+    aic = {f.name: f.aic for f in analysis.laws}
+    best = analysis.best_law
+    if best is not None and best.name in ("quadratic", "power") and aic.get("combined", math.inf) - best.aic > 10:
+        out["notes"].append(f"the turning points follow the {best.name} decrement law better than the combined "
+                            f"viscous and Coulomb law (AIC lower by {aic['combined'] - best.aic:.3g}): the model's "
+                            "damping may not describe the isolators")
     pairs = {"period": (analysis.natural_period, analysis.period_se),
              "damping_ratio": (law.damping_ratio, law.damping_ratio_se),
-             "friction": (analysis.friction_force(fit.mass), k * law.friction_displacement_se)}
+             "friction": (analysis.friction_force(fit.mass), analysis.friction_force_se(fit.mass))}
     for name, (value, decay_se) in pairs.items():
         if name not in fit.estimates:
             continue
         se = math.hypot(fit.std_errors[name], decay_se if math.isfinite(decay_se) else 0.0)
-        out["rows"].append({"parameter": name, "fit": fit.estimates[name], "decay": float(value),
-                            "decay_se": float(decay_se), "difference_in_se": (float(value) - fit.estimates[name]) / se
-                            if se > 0 else math.nan})
+        z = (float(value) - fit.estimates[name]) / se if se > 0 else math.nan
+        row = {"parameter": name, "fit": fit.estimates[name], "decay": float(value), "decay_se": float(decay_se),
+               "difference_in_se": z, "disagrees": bool(math.isfinite(z) and abs(z) > DECAY_CHECK_LIMIT)}
+        out["rows"].append(row)
+        if row["disagrees"]:
+            out["warnings"].append(f"{name}: the decay analysis ({float(value):.6g}) and the fit "
+                                   f"({fit.estimates[name]:.6g}) differ by {z:.3g} standard errors (the fit's and "
+                                   "the decay law's, its misfit included)")
     return out

@@ -39,6 +39,7 @@ import numpy as np
 from . import kinematics
 from .dynamics import angular_acceleration
 from .errors import QuickReleaseError
+from .timebase import clipped_samples, jitter_misfit, merge_repeated_times, time_base
 from .units import parse_quantity
 
 __all__ = [
@@ -389,10 +390,17 @@ class RecordSpec:
     """Start value of the release instant [s, record time], else detected."""
     source: str = "<record>"
     """The case file the mapping came from (for messages)."""
+    duplicates: str = "merge"
+    """Rows that repeat the time stamp of the row before: ``"merge"`` (one sample, the rows' values
+    averaged, said in a note) or ``"refuse"`` (an error naming the row)."""
+    clipped: str = "exclude"
+    """Clipped samples (:func:`quickrelease.timebase.clipped_samples`): ``"exclude"`` (left out like missing
+    samples, said in a note) or ``"keep"``."""
 
 
 _CHANNEL_KEYS = ("column", "unit", "noise", "offset", "scale", "file", "time")
-_RECORD_KEYS = ("file", "time", "release_time", "channels")
+_RECORD_KEYS = ("file", "time", "release_time", "channels", "duplicates", "clipped")
+_CHOICES = {"duplicates": ("merge", "refuse"), "clipped": ("exclude", "keep")}
 
 
 def _time_spec(time: Any, where: str) -> tuple[str, float]:
@@ -453,6 +461,11 @@ def parse_record_spec(table: Any, source: str, base: Path, *, channels: dict[str
             release = parse_quantity(table["release_time"], "time", "release_time")
         except QuickReleaseError as exc:
             raise RecordError(f"{where}: {exc}") from None
+    choices = {}
+    for key, valid in _CHOICES.items():
+        choices[key] = table.get(key, valid[0])
+        if choices[key] not in valid:
+            raise RecordError(f"{where}: {key} = {choices[key]!r}: expected " + " or ".join(map(repr, valid)))
     channels_table = table["channels"]
     if not isinstance(channels_table, dict) or not channels_table:
         raise RecordError(f"{where}: channels: expected a table mapping channels ({', '.join(channels)}) to columns")
@@ -460,7 +473,7 @@ def parse_record_spec(table: Any, source: str, base: Path, *, channels: dict[str
     for name, entry in channels_table.items():
         specs[name] = _channel_spec(name, entry, f"{where} channels.{name}", base, channels, offsets)
     return RecordSpec(file=file, time_column=time_column, time_factor=time_factor, channels=specs,
-                      release_time=release, source=source)
+                      release_time=release, source=source, **choices)
 
 
 def _channel_spec(name: str, entry: Any, where: str, base: Path, channels: dict[str, tuple[str, str, str]],
@@ -526,6 +539,11 @@ class Channel:
     """Samples missing (NaN or empty) in this channel, skipped."""
     own_axis: np.ndarray | None = None
     """The channel's own time axis [s] (a file with its own time column and rate); None: the record's."""
+    clipped: int = 0
+    """Clipped samples left out (:func:`quickrelease.timebase.clipped_samples`)."""
+    jitter: float = 0.0
+    """How far the channel's time stamps scatter about a uniform clock [s]
+    (:func:`quickrelease.timebase.time_base`)."""
 
     def axis(self, record_t: np.ndarray) -> np.ndarray:
         """The time axis :attr:`index` refers to: the channel's own, else the record's ``record_t`` [s]."""
@@ -677,9 +695,12 @@ def _check_glitches(values: np.ndarray, empty: np.ndarray, rows: np.ndarray, pat
                           "(an empty cell is a missing sample)")
 
 
-def _time_axis(frame, column: str, factor: float, path: Path) -> tuple[np.ndarray, np.ndarray]:
-    """The time column ``column`` of ``frame`` in seconds (rows with a time) and those rows; RecordError naming
-    the file and the column when it is missing, not numeric, shorter than two values or not increasing."""
+def _time_axis(frame, column: str, factor: float, path: Path, duplicates: str = "refuse") \
+        -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The time column ``column`` of ``frame`` in seconds (rows with a time, repeated stamps once), those
+    rows, and the sample each row belongs to; RecordError naming the file and the column when it is
+    missing, not numeric, shorter than two values, decreasing, or repeats a stamp with ``duplicates =
+    "refuse"``."""
     if column not in frame.columns:
         raise RecordError(f"{path}: no time column {column!r} ({_columns_text(frame)})")
     t = _numeric(frame, column, path) * factor
@@ -688,11 +709,39 @@ def _time_axis(frame, column: str, factor: float, path: Path) -> tuple[np.ndarra
         raise RecordError(f"{path}: column {column!r}: fewer than two time values")
     tt = t[rows]
     steps = np.diff(tt)
-    if np.any(steps <= 0):
-        k = int(np.nonzero(steps <= 0)[0][0])
+    bad = steps < 0 if duplicates == "merge" else steps <= 0
+    if np.any(bad):
+        k = int(np.nonzero(bad)[0][0])
+        hint = (" (a repeated time stamp; duplicates = 'merge' averages the rows of one stamp)" if steps[k] == 0
+                else "")
         raise RecordError(f"{path}: column {column!r}: time is not increasing at row {rows[k + 1] + 1} "
-                          f"({tt[k + 1]:.6g} s after {tt[k]:.6g} s)")
-    return tt, rows
+                          f"({tt[k + 1]:.6g} s after {tt[k]:.6g} s){hint}")
+    group = np.concatenate([[0], np.cumsum(steps > 0)])
+    unique = tt[np.concatenate([[True], steps > 0])]
+    if unique.size < 2:
+        raise RecordError(f"{path}: column {column!r}: fewer than two distinct time values")
+    return unique, rows, group
+
+
+def _note_axis(notes: list[str], file: str, column: str, t: np.ndarray, rows: np.ndarray, groups: np.ndarray) -> None:
+    """Notes on a time axis: repeated stamps merged, and stamps that scatter about a uniform clock."""
+    repeated = int(rows.size - t.size)
+    if repeated:
+        shared = int(np.count_nonzero(np.bincount(groups) > 1))
+        notes.append(f"{file}: column {column!r}: {repeated + shared} row(s) share {shared} repeated time stamp(s); "
+                     "each stamp's rows merged into one sample, their values averaged")
+    if t.size >= 3:
+        base = time_base(t)
+        if base.irregular:
+            notes.append(f"{file}: column {column!r}: {base.describe()}")
+
+
+def _axis_jitter(t: np.ndarray) -> float:
+    """The stamps' scatter about a uniform clock [s] where it is worth a note, else 0."""
+    if t.size < 3:
+        return 0.0
+    base = time_base(t)
+    return base.jitter if base.irregular else 0.0
 
 
 def load_record(spec: RecordSpec) -> Record:
@@ -714,28 +763,30 @@ def load_record(spec: RecordSpec) -> Record:
         return frames[path]
 
     main = frame_of(spec.file)
-    t, rows = _time_axis(main, spec.time_column, spec.time_factor, spec.file)
+    t, rows, groups = _time_axis(main, spec.time_column, spec.time_factor, spec.file, spec.duplicates)
     notes = []
     dropped = int(len(main) - rows.size)
     if dropped:
         notes.append(f"{spec.file.name}: {dropped} row(s) without a time value dropped")
+    _note_axis(notes, spec.file.name, spec.time_column, t, rows, groups)
     channels = {}
-    own_axes: dict[tuple[Path, str, float], tuple[np.ndarray, np.ndarray]] = {}
+    own_axes: dict[tuple[Path, str, float], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
     for name, cs in spec.channels.items():
         path = cs.file or spec.file
         frame = frame_of(path)
         if cs.column not in frame.columns:
             raise RecordError(f"{path}: no column {cs.column!r} for channel {name} ({_columns_text(frame)})")
-        axis, axis_rows, own = t, rows, None
+        axis, axis_rows, axis_groups, own = t, rows, groups, None
         if cs.time_column is not None:  # the channel's own time axis: its file's time column
             key = (path, cs.time_column, cs.time_factor)
             if key not in own_axes:
-                own_axes[key] = _time_axis(frame, cs.time_column, cs.time_factor, path)
+                own_axes[key] = _time_axis(frame, cs.time_column, cs.time_factor, path, spec.duplicates)
                 lost = int(len(frame) - own_axes[key][1].size)
                 if lost:
                     notes.append(f"{path.name}: {lost} row(s) without a time value in column {cs.time_column!r} "
                                  "dropped")
-            axis, axis_rows = own_axes[key]
+                _note_axis(notes, path.name, cs.time_column, *own_axes[key])
+            axis, axis_rows, axis_groups = own_axes[key]
             own = axis
         elif cs.file is not None and len(frame) != len(main):
             raise RecordError(f"{path}: column {cs.column!r} has {len(frame)} rows, the time column "
@@ -746,14 +797,34 @@ def load_record(spec: RecordSpec) -> Record:
         with np.errstate(over="ignore", invalid="ignore"):
             values = raw * cs.factor
         _check_glitches(values, np.isnan(raw), rows_ch, path, cs.column, name)
+        if axis.size < values.size:  # repeated time stamps: one sample per stamp, the rows averaged
+            values = merge_repeated_times(np.asarray(axis_groups, dtype=float), values)[1][0]
         ok = np.isfinite(values)
         if not np.any(ok):
             raise RecordError(f"{path}: column {cs.column!r} (channel {name}): all values missing")
         missing = int(values.size - ok.sum())
         if missing:
             notes.append(f"{path.name}: column {cs.column!r}: {missing} missing sample(s) skipped (not interpolated)")
+        clipped = 0
+        if spec.clipped == "exclude":
+            clip = clipped_samples(values)
+            clipped = int(clip.sum())
+            if clipped:
+                ok &= ~clip
+                levels = ", ".join(f"{v:.6g}" for v in np.unique(values[clip]))
+                notes.append(f"{path.name}: column {cs.column!r} (channel {name}): {clipped} clipped sample(s) at "
+                             f"{levels} (SI; runs of one value at the channel's extreme, reached at full swing) "
+                             "left out")
         idx = np.nonzero(ok)[0]
-        channels[name] = Channel(spec=cs, t=axis[idx], values=values[idx], index=idx, missing=missing, own_axis=own)
+        jitter = _axis_jitter(axis)
+        if jitter > 0.0:
+            floor = jitter_misfit(axis[idx], values[idx], jitter)
+            against = (f" against the given noise {cs.noise:.3g}: the reduced chi-square of a fit cannot fall below "
+                       f"about {1.0 + (floor / cs.noise) ** 2:.3g}") if cs.noise else ""
+            notes.append(f"{path.name}: column {cs.column!r} (channel {name}): the time stamps' scatter of "
+                         f"{jitter:.3g} s moves its samples by {floor:.3g} rms (jitter |d{name}/dt|){against}")
+        channels[name] = Channel(spec=cs, t=axis[idx], values=values[idx], index=idx, missing=missing, own_axis=own,
+                                 clipped=clipped, jitter=jitter)
     return Record(file=spec.file, t=t, channels=channels, dropped_rows=dropped, release_time=spec.release_time,
                   notes=notes)
 
