@@ -248,3 +248,24 @@ def test_a_record_that_never_stops_gets_a_clear_answer():
     assert fit.estimates["period"] == pytest.approx(2.5, rel=1e-4)
     assert fit.ci95["damping_ratio"][0] == 0.0 and fit.ci95["damping_ratio"][1] < 1e-3
     assert fit.ci95["friction"][0] == 0.0 and fit.interval_method["friction"] == "profile"
+
+
+def test_a_record_that_starts_mid_swing():
+    """A record caught mid-swing (no quiet segment: it starts 0.3 of a period after the release): the fit
+    takes the first turning point as a release from rest (exact for the linear layer with Coulomb sliders:
+    at a turning point it is at rest, and the motion after it is that of a release from there), says so,
+    and its intervals hold the truth of the independent simulation."""
+    seed = 1
+    truth = _linear_truth(seed)
+    t, x, a = _rows("linear", seed)
+    cut = t >= RELEASE + 0.3 * truth["period"]
+    rng = np.random.default_rng(11)
+    channels = [BuildingChannel("lvdt", "x", t[cut], x[cut] + 0.002 + rng.normal(0, 2e-4, cut.sum())),
+                BuildingChannel("acc", "a", t[cut] + 0.0013, a[cut] + 0.01 + rng.normal(0, 0.02, cut.sum()))]
+    fit = fit_isolation(channels, M, "linear", profile=False)
+    assert any("starts in motion" in w for w in fit.warnings)
+    # the turning point half a period after the release
+    assert fit.release_time == pytest.approx(RELEASE + 0.5 * truth["period"], abs=0.02)
+    for name in ("period", "damping_ratio", "friction"):
+        lo, hi = fit.ci95[name]
+        assert lo <= truth[name] <= hi, (name, fit.estimates[name], truth[name], (lo, hi))

@@ -67,6 +67,9 @@ __all__ = ["BuildingChannel", "IsolationFit", "fit_isolation", "compare_models",
 CHANNEL_KINDS = {name: unit for name, (_, unit, _) in RECORD_CHANNELS.items()}
 _UNITS = {"period": "s", "damping_ratio": "-", "friction": "N", "stiffness_ratio": "-", "yield_force": "N",
           "superstructure_period": "s", "superstructure_damping_ratio": "-", "d0": "m", "release_time": "s"}
+#: The decrement laws whose fits give the start values (the linear model's; the other laws of
+#: :mod:`quickrelease.decay` cost 0.3 s more on a 60 s record and give no start).
+START_LAWS = ("viscous", "coulomb", "combined")
 #: Models :func:`fit_isolation` fits.
 FIT_MODELS = ("linear", "bilinear", "2dof")
 #: Relative standard error above which the profile-likelihood interval replaces the Jacobian's.
@@ -304,7 +307,7 @@ def _start(model: str, mass: float, channels: list[BuildingChannel], t_r: float,
     xch = next((c for c in channels if c.kind == "x"), None)
     if xch is not None:
         try:
-            analysis = analyse_decay(xch.t, xch.values, release_time=t_r, noise=noise[xch.name])
+            analysis = analyse_decay(xch.t, xch.values, release_time=t_r, noise=noise[xch.name], laws=START_LAWS)
             if math.isfinite(analysis.period) and analysis.period > 0:
                 start["period"] = analysis.natural_period if math.isfinite(analysis.natural_period) \
                     else analysis.period
@@ -379,7 +382,7 @@ def _bilinear_start(mass: float, xch: BuildingChannel | None, t_r: float, noise:
     if xch is None:
         return guess
     try:
-        analysis = analyse_decay(xch.t, xch.values, release_time=t_r, noise=noise[xch.name])
+        analysis = analyse_decay(xch.t, xch.values, release_time=t_r, noise=noise[xch.name], laws=START_LAWS)
     except QuickReleaseError:
         return guess
     ach = next((c for c in channels if c.kind == "a"), None) or next((c for c in channels if c.kind == "a_roof"),
@@ -594,6 +597,43 @@ def _check_decays(channels) -> None:
                 f"{first:.3g} {unit}): a free vibration from a push and release only decays, so no isolation "
                 "model describes this record (a forced or self-excited motion, a wrong time column, or records "
                 "joined end to end?)")
+
+
+#: Samples at the head of a displacement channel that must rest (within 8 noise levels) for the record to
+#: hold its release; a record that moves beyond that within them started in motion.
+REST_HEAD = 40
+
+
+def _start_in_motion(channels):
+    """A record that starts in motion (caught mid-swing, no quiet segment before the release): its first
+    turning point, where the layer is at rest for an instant, taken as a release from rest
+    (:func:`quickrelease.decay.first_turning_point` on the displacement channel), every channel cut there.
+    Returns the channels (cut or as given), the release instant (None where the record rests at its head or
+    has no displacement channel) and the warnings to report."""
+    from .decay import estimate_noise, first_turning_point
+
+    xch = next((c for c in channels if c.kind == "x"), None)
+    if xch is None or xch.t.size < 4 * REST_HEAD:
+        return channels, None, []
+    sigma = estimate_noise(xch.values)
+    head = xch.values[:REST_HEAD]
+    if not np.max(np.abs(head - head[0])) > 8.0 * sigma + 1e-12 * max(abs(float(head[0])), 1.0):
+        return channels, None, []
+    try:
+        turn = first_turning_point(xch.t, xch.values, noise=sigma)
+    except QuickReleaseError:
+        return channels, None, []
+    kept = []
+    for ch in channels:
+        keep = ch.t >= turn.time
+        if np.count_nonzero(keep) < 10:
+            continue
+        kept.append(BuildingChannel(ch.name, ch.kind, ch.t[keep], ch.values[keep], ch.noise, ch.offset))
+    return kept, turn.time, [
+        f"the record starts in motion (channel {xch.name} moves in its first {REST_HEAD} samples): its first "
+        f"turning point, t = {turn.time:.6g} s at {turn.d0:.6g} m, is taken as a release from rest (exact for the "
+        "linear model; for the bilinear one the bearings' state there is not that of a push), the samples "
+        "before it left out and the noise levels taken from the residuals"]
 
 
 def _d0_from_motion(channels, t_r: float, mass: float) -> float:
@@ -915,6 +955,9 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
     if len(set(names_seen)) != len(names_seen):
         raise ParameterError("channels", ", ".join(names_seen), "distinct channel names")
     fixed = dict(fixed or {})
+    started_in_motion = []
+    if release_time is None and model != "2dof":
+        channels, release_time, started_in_motion = _start_in_motion(channels)
     t_r0 = float(release_time) if release_time is not None else _detect_release(channels)
     if not fit_release_time:
         fixed["release_time"] = t_r0
@@ -1056,6 +1099,7 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
     if cond > CONDITION_WARNING:
         warnings.append(f"ill-conditioned fit (condition number of the correlations {cond:.2g}): some combination "
                         "of parameters is not determined by the record")
+    warnings += started_in_motion
     rms, samples, white = {}, {}, {}
     i = 0
     for ch in channels:
