@@ -404,6 +404,7 @@ def test_a_release_in_a_local_minimum_is_refitted_from_the_others(monkeypatch):
         return real(channels, *args, start=start, fixed=fixed, **kwargs)
 
     monkeypatch.setattr(bc, "fit_isolation", first_fit_stuck)
+    monkeypatch.setattr(bc, "CAMPAIGN_WORKERS", 1)  # the planted fit lives in this process only
     result = fit_building_campaign(releases, M, "linear", quantities=("friction",), start=design)
     assert [r.restarted_from for r in result.releases] == ["R4", "R4", None]
     for r in result.releases:
