@@ -306,3 +306,19 @@ a_roof = {{ column = "a_roof_g", unit = "g0", file = "roof.csv", time = "t_r_s" 
     for key, truth, rel in (("period", T1, 0.01), ("superstructure_period", Ts, 0.01), ("damping_ratio", z, 0.05),
                             ("friction", fs, 0.05)):
         assert abs(est[key] / truth - 1) < rel, (key, est[key], truth)
+
+
+def test_a_long_building_fit_tells_a_pipe_what_runs(monkeypatch):
+    """Piped (stderr no terminal), a run that goes past PROGRESS_AFTER seconds prints ``progress:`` lines on
+    stderr naming the model and the start with counts, and stdout stays the one JSON object."""
+    import quickrelease.cli as cli
+
+    monkeypatch.setattr(cli, "PROGRESS_AFTER", 0.0)
+    monkeypatch.setattr(cli, "PROGRESS_EVERY", 0.0)
+    r = runner.invoke(app, ["building", str(Path(__file__).parent.parent / "examples" / "building.toml"), "--json"])
+    assert r.exit_code == 0, r.output
+    json.loads(r.stdout)
+    lines = r.stderr.strip().splitlines()
+    assert any(line.startswith("progress: fitting the linear isolation model: linear: global search, run 1 of 3")
+               for line in lines), lines
+    assert any("linear: start 1 of " in line for line in lines)

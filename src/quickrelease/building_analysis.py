@@ -159,8 +159,8 @@ COMPARE_TOLERANCE = 1e-8
 
 def analyse_building(data: Any = None, *, channels=None, mass: float | None = None, model: str | None = None,
                      start: dict[str, float] | None = None, release_time: float | None = None,
-                     compare: bool = False, source: str = "", superstructure_mass: float | None = None) \
-        -> BuildingResult:
+                     compare: bool = False, source: str = "", superstructure_mass: float | None = None,
+                     progress=None) -> BuildingResult:
     """Fit the isolation model to the building's record and cross-check it (see the module docstring).
 
     Parameters
@@ -174,6 +174,8 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
         The roof mass m_s [kg] of the ``2dof`` model (default: the data's ``[building] superstructure_mass``).
     compare : bool
         Also fit the other models and rank them by AIC/BIC and residual whiteness.
+    progress : callable, optional
+        Called with a line saying what runs (see :func:`quickrelease.isolation_fit.fit_isolation`).
 
     Raises
     ------
@@ -199,7 +201,7 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
     if mass is None:
         raise ParameterError("mass", None, "(0, inf), the mass carried by the isolators", "kg")
     prefix = f"{source}: " if source else ""
-    fit = _fit(channels, mass, model, start, release_time, prefix, superstructure_mass)
+    fit = _fit(channels, mass, model, start, release_time, prefix, superstructure_mass, progress)
     _check_long_enough(fit, prefix)
     warnings = list(fit.warnings)
     warnings += _bilinear_yield_warning(fit)
@@ -216,7 +218,7 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
             try:  # the case's start values belong to its model: the others start from the decay analysis; their
                 # intervals are not reported (AIC/BIC only), so no profile-likelihood re-fits
                 compared.append(fit_isolation(channels, mass, other, release_time=release_time, profile=False,
-                                              tolerance=COMPARE_TOLERANCE,
+                                              tolerance=COMPARE_TOLERANCE, progress=progress,
                                               superstructure_mass=superstructure_mass if other == "2dof" else None,
                                               start={k: v for k, v in (start or {}).items()
                                                      if k in ("d0", "release_time")} or None))
@@ -253,10 +255,10 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
                           source=source)
 
 
-def _fit(channels, mass, model, start, release_time, prefix, superstructure_mass=None) -> IsolationFit:
+def _fit(channels, mass, model, start, release_time, prefix, superstructure_mass=None, progress=None) -> IsolationFit:
     try:
         return fit_isolation(channels, mass, model, release_time=release_time, start=start or None,
-                             superstructure_mass=superstructure_mass if model == "2dof" else None)
+                             superstructure_mass=superstructure_mass if model == "2dof" else None, progress=progress)
     except ParameterError:
         raise
     except QuickReleaseError as exc:  # e.g. no release found: name the record

@@ -226,19 +226,42 @@ def _check_case_optional(case) -> None:
 
 
 @contextlib.contextmanager
-def _busy(what: str) -> Iterator[None]:
-    """A spinner with ``what`` on stderr while a long computation runs, when stderr is a terminal (never in
-    pipes, files or tests); it is gone before the command prints its results."""
+def _busy(what: str) -> Iterator[Callable[[str], None]]:
+    """A spinner with ``what`` on stderr while a long computation runs, when stderr is a terminal; it is gone
+    before the command prints its results. Yields a function that says what step runs: the spinner's text on a
+    terminal, else a throttled ``progress:`` line (:func:`_progress_lines`)."""
     if not sys.stderr.isatty():
-        yield
+        yield _progress_lines(what)
         return
     from rich.console import Console
     from rich.live import Live
     from rich.spinner import Spinner
 
-    with Live(Spinner("dots", text=_clean(what)), console=Console(stderr=True), transient=True,
-              redirect_stdout=False, redirect_stderr=False, refresh_per_second=8):
-        yield
+    spinner = Spinner("dots", text=_clean(what))
+    with Live(spinner, console=Console(stderr=True), transient=True, redirect_stdout=False, redirect_stderr=False,
+              refresh_per_second=8):
+        yield lambda text: spinner.update(text=_clean(f"{what}: {text}"))
+
+
+#: Seconds a run goes before a pipe or a file is told what runs, and between two such lines at least.
+PROGRESS_AFTER, PROGRESS_EVERY = 3.0, 5.0
+
+
+def _progress_lines(what: str):
+    """What a long run is doing, for stderr that is no terminal: a line ``progress: <what>: <step>`` once the run
+    has gone ``PROGRESS_AFTER`` seconds, then at most one every ``PROGRESS_EVERY`` seconds (quick runs and
+    their errors print nothing more)."""
+    import time
+
+    start, last = time.monotonic(), [-math.inf]
+
+    def step(text: str) -> None:
+        now = time.monotonic()
+        if now - start >= PROGRESS_AFTER and now - last[0] >= PROGRESS_EVERY:
+            last[0] = now
+            _echo(f"progress: {what}: {text}", err=True)
+
+    return step
 
 
 def _print_json(data: dict[str, Any]) -> None:
@@ -954,8 +977,8 @@ def building_command(
         from .workflow import building_folder
 
         building_folder(data, out, model=model, compare=compare, overwrite=overwrite)  # pre-flight
-    with _busy(f"fitting the {model or data.model} isolation model"):
-        result = analyse_building(data, model=model, compare=compare)
+    with _busy(f"fitting the {model or data.model} isolation model") as step:
+        result = analyse_building(data, model=model, compare=compare, progress=step)
     paths = {}
     if out is not None:
         from .workflow import write_building_results

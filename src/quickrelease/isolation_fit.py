@@ -779,16 +779,19 @@ def _basin_errors(J, names: list[str], compare: list[str], chi2: float, dof: int
     return {n: (math.nan if blind[i] else float(se[i])) for i, n in enumerate(names) if n in compare}
 
 
-def _multistart(named, names: list[str], values: dict[str, float], solve, thin_misfit, model: str, factor: float):
+def _multistart(named, names: list[str], values: dict[str, float], solve, thin_misfit, model: str, factor: float,
+                progress=None):
     """Every start polished on the thinned record (``THIN_TOLERANCE``), the results grouped into basins
     (:func:`quickrelease.isolation_search.same_basin`, on the standard errors of the thinned record's best
     fit), and the lowest ``FULL_SOLVES`` basins solved on the whole record. Returns the best whole-record
     least-squares result and the groups (``{"chi2", "parameters", "x", "starts", "res"}``; chi2 on the whole
     record where solved there, else the thinned one times ``factor``), lowest first."""
     polished = []
-    for origin, trial in named:
+    for k, (origin, trial) in enumerate(named):
         if not all(n in trial and math.isfinite(trial[n]) for n in names):
             continue
+        if progress is not None:
+            progress(f"{model}: start {k + 1} of {len(named)} ({origin})")
         r = solve(names, values, [trial[n] for n in names], tol=THIN_TOLERANCE, on=thin_misfit,
                   max_nfev=THIN_EVALUATIONS * len(names))
         polished.append({"origin": origin, "chi2": 2.0 * float(r.cost) * factor, "x": np.asarray(r.x), "jac": r.jac})
@@ -807,7 +810,9 @@ def _multistart(named, names: list[str], values: dict[str, float], solve, thin_m
             groups.append({"chi2": item["chi2"], "parameters": p, "x": item["x"], "starts": [item["origin"]],
                            "res": None})
     red = max(groups[0]["chi2"] / factor / max(dof_thin, 1), 1.0)
-    for g in groups[:FULL_SOLVES]:
+    for k, g in enumerate(groups[:FULL_SOLVES]):
+        if progress is not None:
+            progress(f"{model}: minimum {k + 1} of {min(len(groups), FULL_SOLVES)} on the whole record")
         if g is not groups[0] and (g["chi2"] - groups[0]["chi2"]) / red > FULL_SOLVE_DELTA:
             break
         g["res"] = solve(names, values, g["x"])
@@ -842,7 +847,7 @@ def _final_groups(groups, res, names: list[str], values: dict[str, float], misfi
 def _profile_step(names: list[str], physical: list[str], unseen: set[str], est: dict[str, float],
                   std_errors: dict[str, float], lower: dict[str, float], upper: dict[str, float],
                   profile: bool | None, chi2: float, tq: float, scale: float, solve,
-                  ci: dict[str, tuple[float, float]], method: dict[str, str]) -> list[str]:
+                  ci: dict[str, tuple[float, float]], method: dict[str, str], progress=None) -> list[str]:
     """Profile-likelihood intervals (into ``ci`` and ``method``) for the physical parameters that want one
     (``profile`` True; or None and at a bound or with a relative standard error above
     ``PROFILE_RELATIVE_SE``), the chi-square target ``chi2 + t^2 scale``. Returns the warnings."""
@@ -855,6 +860,8 @@ def _profile_step(names: list[str], physical: list[str], unseen: set[str], est: 
         want = profile if profile is not None else (at_bound or rel > PROFILE_RELATIVE_SE)
         if want and len(names) > 1:
             target = chi2 + tq**2 * scale
+            if progress is not None:
+                progress(f"profile-likelihood interval of {n}")
             ci[n] = _profile_interval(n, names, est, lower[n], upper[n], std_errors[n], target, solve)
             method[n] = "profile"
             if ci[n] == (lower[n], upper[n]):
@@ -869,7 +876,7 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
                   fit_release_time: bool = True, start: dict[str, float] | None = None,
                   fixed: dict[str, float] | None = None, profile: bool | None = None,
                   superstructure_mass: float | None = None, tolerance: float = 1e-12, global_search: bool = True,
-                  seed: int = 0) -> IsolationFit:
+                  seed: int = 0, progress=None) -> IsolationFit:
     """Fit the isolation system (:mod:`quickrelease.building`) to records of the isolation layer.
 
     Parameters
@@ -916,6 +923,9 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
         and the design values only (faster; no certificate that the minimum is global).
     seed : int
         Seed of the global search's runs (the fit is deterministic for a given seed).
+    progress : callable, optional
+        Called with a line saying what runs (the model, the global search's run or the start, with counts;
+        the profile intervals), for a progress display.
     tolerance : float
         Relative tolerance of the least-squares solves (scipy's ``ftol``, ``xtol``, ``gtol``). The default, 1e-12,
         settles the estimates to far below their standard errors; a model fitted only to be ranked by AIC/BIC
@@ -930,11 +940,11 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
     with threadpool_limits(1, user_api="blas"):  # thin Jacobians: BLAS threads cost more than they give
         return _fit_isolation(channels, mass, model, release_time=release_time, fit_release_time=fit_release_time,
                               start=start, fixed=fixed, profile=profile, superstructure_mass=superstructure_mass,
-                              tolerance=tolerance, global_search=global_search, seed=seed)
+                              tolerance=tolerance, global_search=global_search, seed=seed, progress=progress)
 
 
 def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_release_time, start, fixed, profile,
-                   superstructure_mass, tolerance, global_search, seed) -> IsolationFit:
+                   superstructure_mass, tolerance, global_search, seed, progress=None) -> IsolationFit:
     channels = list(channels)
     if not channels:
         raise ParameterError("channels", "none", "at least one channel of the isolation layer")
@@ -1022,9 +1032,9 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
         found, evaluations = global_candidates(model, mass, thin_misfit, box, record_values, record_values["d0"],
                                                runs=SEARCH_RUNS[model] + search_d0,
                                                evaluations=SEARCH_EVALUATIONS[model] * (1 + search_d0),
-                                               seed=seed, fixed=fixed)
+                                               seed=seed, fixed=fixed, progress=progress)
         named += [(c["origin"], c["parameters"]) for c in found]
-    res, groups = _multistart(named, names, values, solve, thin_misfit, model, factor)
+    res, groups = _multistart(named, names, values, solve, thin_misfit, model, factor, progress)
     res = _requiet(res, channels, noise, source, sig, names, values, solve, t_r0)
     if model in ("linear", "bilinear"):
         res = _polish(res, names, values, solve, misfit.residuals, lower, upper, misfit.dt)
@@ -1080,7 +1090,7 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
             ci[n], method[n] = (math.nan, math.nan), "not identified"
             warnings.append(f"{n} not identified by this record (standard error inf, no interval)")
     warnings += _profile_step(names, physical, unseen, est, std_errors, lower, upper, profile, chi2, tq, scale,
-                              solve, ci, method)
+                              solve, ci, method, progress)
     final = _final_groups(groups, res, names, values, misfit, model, std_errors)
     cert = certificate(final, len([o for o, _ in named]), chi2_red, evaluations)
     warnings += list(cert.warnings)

@@ -304,7 +304,7 @@ def profiled_chi2(misfit, params: dict[str, float]) -> float:
 
 def global_candidates(model: str, mass: float, misfit, box: SearchBox, base: dict[str, float], d0: float, *,
                       runs: int, evaluations: int, seed: int = 0, fixed: dict[str, float] | None = None,
-                      method: str | None = None) \
+                      method: str | None = None, progress=None) \
         -> tuple[list[dict[str, Any]], int]:
     """Independent CMA-ES runs over ``box`` (unit-cube coordinates, bounds [0, 1]) of the profiled chi-square
     of the thinned record, each from a seeded uniform random point with step 0.3. Returns each run's best
@@ -323,6 +323,8 @@ def global_candidates(model: str, mass: float, misfit, box: SearchBox, base: dic
         return profiled_chi2(misfit, p)
 
     for run in range(runs):
+        if progress is not None:
+            progress(f"{model}: global search, run {run + 1} of {runs}")
         run_seed = int(rng.integers(1, 2**31 - 1))
         if method == "de":
             u, f = _differential_evolution(objective, len(box.names), evaluations, run_seed)
