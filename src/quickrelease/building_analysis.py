@@ -160,7 +160,7 @@ COMPARE_TOLERANCE = 1e-8
 def analyse_building(data: Any = None, *, channels=None, mass: float | None = None, model: str | None = None,
                      start: dict[str, float] | None = None, release_time: float | None = None,
                      compare: bool = False, source: str = "", superstructure_mass: float | None = None,
-                     progress=None) -> BuildingResult:
+                     progress=None, global_search: bool = True) -> BuildingResult:
     """Fit the isolation model to the building's record and cross-check it (see the module docstring).
 
     Parameters
@@ -176,6 +176,8 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
         Also fit the other models and rank them by AIC/BIC and residual whiteness.
     progress : callable, optional
         Called with a line saying what runs (see :func:`quickrelease.isolation_fit.fit_isolation`).
+    global_search : bool
+        The fit's global stage (:func:`quickrelease.isolation_fit.fit_isolation`; default True).
 
     Raises
     ------
@@ -201,7 +203,7 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
     if mass is None:
         raise ParameterError("mass", None, "(0, inf), the mass carried by the isolators", "kg")
     prefix = f"{source}: " if source else ""
-    fit = _fit(channels, mass, model, start, release_time, prefix, superstructure_mass, progress)
+    fit = _fit(channels, mass, model, start, release_time, prefix, superstructure_mass, progress, global_search)
     _check_long_enough(fit, prefix)
     warnings = list(fit.warnings)
     warnings += _bilinear_yield_warning(fit)
@@ -255,10 +257,12 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
                           source=source)
 
 
-def _fit(channels, mass, model, start, release_time, prefix, superstructure_mass=None, progress=None) -> IsolationFit:
+def _fit(channels, mass, model, start, release_time, prefix, superstructure_mass=None, progress=None,
+         global_search=True) -> IsolationFit:
     try:
         return fit_isolation(channels, mass, model, release_time=release_time, start=start or None,
-                             superstructure_mass=superstructure_mass if model == "2dof" else None, progress=progress)
+                             superstructure_mass=superstructure_mass if model == "2dof" else None, progress=progress,
+                             global_search=global_search)
     except ParameterError:
         raise
     except QuickReleaseError as exc:  # e.g. no release found: name the record
