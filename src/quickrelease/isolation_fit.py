@@ -53,6 +53,7 @@ from .isolation_search import (
     SearchCertificate,
     certificate,
     global_candidates,
+    noise_scatter,
     record_period,
     same_basin,
     search_box,
@@ -579,8 +580,7 @@ def _check_decays(channels) -> None:
             continue
         level = float(np.median(ch.values[-max(ch.values.size // 10, 5):]))
         dev = np.abs(ch.values - level)
-        d2 = np.diff(ch.values, 2)
-        sigma = 1.4826 * float(np.median(np.abs(d2 - np.median(d2)))) / math.sqrt(6.0)
+        sigma = noise_scatter(ch.values)
         if ch.kind != "x":  # a velocity or an acceleration rests at 0 before the release: from its first motion
             pre = ch.values[: max(ch.values.size // 20, 3)]
             moved = np.nonzero(np.abs(ch.values - np.median(pre)) > 8.0 * sigma)[0]

@@ -30,7 +30,8 @@ from typing import Any
 import numpy as np
 
 __all__ = ["SearchBox", "search_box", "thin_channels", "profiled_chi2", "global_candidates", "Minimum",
-           "SearchCertificate", "certificate", "SEARCH_SAMPLES", "SEARCH_RUNS", "SEARCH_EVALUATIONS"]
+           "SearchCertificate", "certificate", "cma_es", "noise_scatter", "record_period", "same_basin",
+           "SEARCH_SAMPLES", "SEARCH_RUNS", "SEARCH_EVALUATIONS"]
 
 #: Samples a channel at most in the global stage (the record thinned by an integer step).
 SEARCH_SAMPLES = 1200
@@ -38,9 +39,6 @@ SEARCH_SAMPLES = 1200
 SEARCH_RUNS = {"linear": 3, "bilinear": 4, "2dof": 3}
 #: Objective evaluations per CMA-ES run at most, per model.
 SEARCH_EVALUATIONS = {"linear": 500, "bilinear": 700, "2dof": 300}
-#: The global search's optimiser: "cma-es" (:func:`cma_es`), "de" (scipy's differential evolution) or "cma"
-#: (the cma package's CMA-ES; its import loads matplotlib.pyplot).
-SEARCH_METHOD = "cma-es"
 #: Two minima are the same basin where every searched parameter lies within this many standard errors.
 SAME_BASIN_SE = 3.0
 #: The certificate calls a second basin competing when its chi-square lies within this of the best.
@@ -87,7 +85,7 @@ class SearchBox:
         return np.array(out)
 
 
-def _noise_scatter(y: np.ndarray) -> float:
+def noise_scatter(y: np.ndarray) -> float:
     """A channel's white-noise level from its second differences (1.4826 MAD / sqrt(6)), whatever it shows."""
     d2 = np.diff(y, 2)
     return 1.4826 * float(np.median(np.abs(d2 - np.median(d2)))) / math.sqrt(6.0)
@@ -113,7 +111,7 @@ def record_period(channels, t_r: float) -> float | None:
                 continue
             t, y = ch.t[moving], ch.values[moving]
             y = y - np.median(y[-max(y.size // 10, 5):])
-            sigma = _noise_scatter(ch.values)
+            sigma = noise_scatter(ch.values)
             h = max(0.05 * float(np.max(np.abs(y[: max(y.size // 4, 10)]))), 5.0 * sigma)
             if not h > 0:
                 continue
@@ -253,7 +251,7 @@ def thin_channels(channels, t_r: float | None = None, samples: int = SEARCH_SAMP
     if t_r is not None:
         for ch in channels:
             level = float(np.median(ch.values[-max(ch.values.size // 10, 5):]))
-            off = np.nonzero(np.abs(ch.values - level) > 8.0 * _noise_scatter(ch.values))[0]
+            off = np.nonzero(np.abs(ch.values - level) > 8.0 * noise_scatter(ch.values))[0]
             if off.size:
                 moving_end = max(moving_end, float(ch.t[off[-1]]))
     out, n_full, n_thin = [], 0, 0
@@ -305,14 +303,13 @@ def profiled_chi2(misfit, params: dict[str, float]) -> float:
 
 def global_candidates(model: str, mass: float, misfit, box: SearchBox, base: dict[str, float], d0: float, *,
                       runs: int, evaluations: int, seed: int = 0, fixed: dict[str, float] | None = None,
-                      method: str | None = None, progress=None) \
+                      progress=None) \
         -> tuple[list[dict[str, Any]], int]:
     """Independent CMA-ES runs over ``box`` (unit-cube coordinates, bounds [0, 1]) of the profiled chi-square
     of the thinned record, each from a seeded uniform random point with step 0.3. Returns each run's best
     point (``{"chi2", "parameters", "origin"}``, parameters in the fit's names, the offsets at their
     profiled values) and the evaluations spent."""
     rng = np.random.default_rng(seed)
-    method = method or SEARCH_METHOD
     fixed = dict(fixed or {})
     spent = 0
     out = []
@@ -327,30 +324,11 @@ def global_candidates(model: str, mass: float, misfit, box: SearchBox, base: dic
         if progress is not None:
             progress(f"{model}: global search, run {run + 1} of {runs}")
         run_seed = int(rng.integers(1, 2**31 - 1))
-        if method == "de":
-            u, f = _differential_evolution(objective, len(box.names), evaluations, run_seed)
-        elif method == "cma":
-            u, f = _cma(objective, len(box.names), evaluations, run_seed)
-        else:
-            x0 = np.random.default_rng(run_seed).uniform(0.1, 0.9, len(box.names))
-            u, f, _ = cma_es(objective, x0, 0.3, evaluations, run_seed)
+        x0 = np.random.default_rng(run_seed).uniform(0.1, 0.9, len(box.names))
+        u, f, _ = cma_es(objective, x0, 0.3, evaluations, run_seed)
         p = {**base, **box_parameters(model, mass, box.to_values(u), d0), **fixed}
         out.append({"chi2": float(f), "parameters": p, "origin": f"global search {run + 1}"})
     return out, spent
-
-
-def _cma(objective, dim: int, evaluations: int, seed: int):
-    """The cma package's CMA-ES (for comparison: its import, which loads matplotlib.pyplot, costs 2-4 s)."""
-    import cma
-
-    x0 = np.random.default_rng(seed).uniform(0.1, 0.9, dim)
-    es = cma.CMAEvolutionStrategy(x0, 0.3, {"bounds": [0.0, 1.0], "seed": seed, "maxfevals": evaluations,
-                                            "verbose": -9, "tolfun": 1e-2, "tolx": 1e-4,
-                                            "popsize": 4 + int(3 * math.log(dim))})
-    while not es.stop():
-        xs = es.ask()
-        es.tell(xs, [_finite_or_big(objective(x)) for x in xs])
-    return (es.result.xbest if es.result.xbest is not None else x0), es.result.fbest
 
 
 def cma_es(objective, x0, sigma0: float, evaluations: int, seed: int, *, tolfun: float = 1e-2,
@@ -421,16 +399,6 @@ def cma_es(objective, x0, sigma0: float, evaluations: int, seed: int, *, tolfun:
     return best_x, best_f, spent
 
 
-def _differential_evolution(objective, dim: int, evaluations: int, seed: int):
-    from scipy.optimize import differential_evolution
-
-    pop = 5
-    res = differential_evolution(lambda u: _finite_or_big(objective(u)), [(0.0, 1.0)] * dim, seed=seed,
-                                 popsize=pop, maxiter=max(evaluations // (pop * dim) - 1, 1), polish=False,
-                                 init="sobol", tol=1e-3, mutation=(0.5, 1.0), recombination=0.7)
-    return res.x, res.fun
-
-
 def _finite_or_big(value: float) -> float:
     return value if math.isfinite(value) else 1e300
 
@@ -470,7 +438,7 @@ class SearchCertificate:
     """The distinct minima, best first."""
     evaluations: int
     """Objective evaluations of the global search."""
-    method: str = "CMA-ES (cma), independent seeded runs on the thinned record, then least squares"
+    method: str = "CMA-ES (isolation_search.cma_es), independent seeded runs on the thinned record, then least squares"
     warnings: tuple[str, ...] = field(default=())
 
     def summary(self) -> dict[str, Any]:
