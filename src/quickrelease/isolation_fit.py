@@ -306,6 +306,7 @@ def _start(model: str, mass: float, channels: list[BuildingChannel], t_r: float,
 
     start = {"period": 2.0, "damping_ratio": 0.05, "friction": 0.0}
     xch = next((c for c in channels if c.kind == "x"), None)
+    analysis = None
     if xch is not None:
         try:
             analysis = analyse_decay(xch.t, xch.values, release_time=t_r, noise=noise[xch.name], laws=START_LAWS)
@@ -322,7 +323,7 @@ def _start(model: str, mass: float, channels: list[BuildingChannel], t_r: float,
         except QuickReleaseError:
             pass
     if model == "bilinear":
-        start.update(_bilinear_start(mass, xch, t_r, noise, start, channels))
+        start.update(_bilinear_start(mass, xch, t_r, noise, start, channels, analysis))
     if model == "2dof":
         start.update(_two_dof_start(mass, superstructure_mass, channels, t_r, start))
     return start
@@ -366,8 +367,9 @@ def _two_dof_start(mass: float, ms: float, channels: list[BuildingChannel], t_r:
 
 
 def _bilinear_start(mass: float, xch: BuildingChannel | None, t_r: float, noise: dict[str, float],
-                    linear: dict[str, float], channels: list[BuildingChannel] = ()) -> dict[str, float]:
-    """Start values of the bilinear model from the record, without design values.
+                    linear: dict[str, float], channels: list[BuildingChannel] = (), analysis=None) -> dict[str, float]:
+    """Start values of the bilinear model from the record, without design values (``analysis``: the decay
+    analysis of the displacement channel, made once by :func:`_start`).
 
     With an acceleration channel of the layer: the hysteresis loop (:func:`quickrelease.decay.bilinear_loop`:
     k2, Q and c from the loading branches, k1 and the sliders' share of Q from the elastic unloading after
@@ -375,16 +377,12 @@ def _bilinear_start(mass: float, xch: BuildingChannel | None, t_r: float, noise:
     k1), and the first ones, on the soft branch, have the equivalent stiffness ``k_eff = k2 + f_p / A``
     (A the half-cycle's amplitude, f_p = F_y (1 - k2 / k1) the plastic element's force), so two of them
     give k2 and f_p."""
-    from .decay import analyse_decay, bilinear_loop
+    from .decay import bilinear_loop
 
     k_lin = mass * (2.0 * math.pi / linear["period"]) ** 2
     guess = {"period": linear["period"] / 2.0, "stiffness_ratio": 0.2, "yield_force": 0.5 * k_lin * 0.02,
              "friction": 0.5 * linear["friction"]}
-    if xch is None:
-        return guess
-    try:
-        analysis = analyse_decay(xch.t, xch.values, release_time=t_r, noise=noise[xch.name], laws=START_LAWS)
-    except QuickReleaseError:
+    if xch is None or analysis is None:  # no displacement, or its decay analysis failed (in _start)
         return guess
     ach = next((c for c in channels if c.kind == "a"), None) or next((c for c in channels if c.kind == "a_roof"),
                                                                       None)
