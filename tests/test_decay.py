@@ -186,3 +186,21 @@ def test_the_stick_is_found_when_the_rests_largest_noise_sample_is_near_the_end(
     np.testing.assert_allclose(analysis.peaks, expected, atol=5 * sigma)
     assert analysis.law is not None
     assert analysis.friction_force(M) == pytest.approx(Fs, rel=0.05)
+
+
+@pytest.mark.parametrize("n", [13, 14, 200, 4001])
+def test_noise_estimate_smooths_as_scipys_savitzky_golay(n):
+    """estimate_noise's own cubic Savitzky-Golay smoothing (numpy, to spare the fit scipy.signal's import)
+    against scipy.signal.savgol_filter (mode "interp", edges included) and the formula of its docstring."""
+    from scipy.signal import savgol_coeffs, savgol_filter
+
+    from quickrelease.decay import estimate_noise
+
+    rng = np.random.default_rng(n)
+    t = np.arange(n) / 200.0
+    x = 0.1 * np.sin(2.3 * t) + 0.05 * t**2 + rng.normal(0.0, 1e-3, n)
+    resid = x - savgol_filter(x, 11, 3)
+    c0 = float(savgol_coeffs(11, 3)[5])
+    expected = 1.4826 * float(np.median(np.abs(resid - np.median(resid)))) / math.sqrt(1.0 - c0)
+    assert estimate_noise(x) == pytest.approx(expected, rel=1e-9)
+    assert estimate_noise(x[:12]) == 0.0  # too short for an 11-sample window and its edges

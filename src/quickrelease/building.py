@@ -26,6 +26,7 @@ The release starts from the pushed state: the jack has pushed the layer monotoni
 
 from __future__ import annotations
 
+import cmath
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -634,6 +635,46 @@ EVENT_GRID = 16
 EIGEN_CONDITION = 1e7
 
 
+@dataclass(frozen=True)
+class _Modes:
+    """The sliding system's matrix ``A`` (y' = A y + f, y = (x_b, x_s, v_b, v_s)) and its eigen-decomposition
+    ``A V = V diag(lam)``; ``modal``: V is well conditioned (cond < EIGEN_CONDITION), so the closed form sums
+    the modes (else the pieces use the matrix exponential). The same for every sliding piece of a motion."""
+
+    A: np.ndarray
+    lam: np.ndarray
+    V: np.ndarray
+    modal: bool
+    Vinv: np.ndarray | None
+    """V's inverse where modal (a piece's modal amplitudes are ``Vinv (y0 - y_eq)``)."""
+    rate: float
+    """The fastest oscillation's |lam| [rad/s] (the event grid's scale; the slowest |lam| if none oscillates)."""
+    decay: float
+    """The slowest decay rate, min(-Re lam) [1/s]."""
+
+
+def _modes(b: TwoDOF) -> _Modes:
+    """The sliding 2-DOF system's :class:`_Modes` (one eigen-decomposition per motion)."""
+    M, C, K = b.matrices()
+    Minv = np.diag(1.0 / np.diag(M))
+    A = np.zeros((4, 4))
+    A[0, 2] = A[1, 3] = 1.0
+    A[2:, :2] = -Minv @ K
+    A[2:, 2:] = -Minv @ C
+    lam, V = np.linalg.eig(A)
+    Vinv = None
+    try:
+        if np.linalg.cond(V) < EIGEN_CONDITION:
+            Vinv = np.linalg.inv(V)
+    except np.linalg.LinAlgError:
+        Vinv = None
+    # the fastest oscillation sets the grid that brackets the events (an over-damped mode is monotone:
+    # its fast transient near tau = 0 is resolved by the grid's geometric start instead)
+    oscillating = np.abs(lam.imag) > 0.0
+    rate = float(np.max(np.abs(lam[oscillating]))) if np.any(oscillating) else float(np.min(np.abs(lam)))
+    return _Modes(A, lam, V, Vinv is not None, Vinv, rate, float(np.min(-lam.real)))
+
+
 class _Slide:
     """A sliding piece of the 2-DOF model: ``y' = A y + f`` with y = (x_b, x_s, v_b, v_s), in closed form
     ``y(tau) = y_eq + sum_j V_j alpha_j exp(lambda_j tau)`` (eigen-decomposition of the 4x4 matrix A;
@@ -641,39 +682,30 @@ class _Slide:
 
     kind = "slide"
 
-    def __init__(self, b: TwoDOF, t0: float, y0, direction: float):
-        M, C, K = b.matrices()
-        Minv = np.diag(1.0 / np.diag(M))
-        A = np.zeros((4, 4))
-        A[0, 2] = A[1, 3] = 1.0
-        A[2:, :2] = -Minv @ K
-        A[2:, 2:] = -Minv @ C
+    def __init__(self, b: TwoDOF, t0: float, y0, direction: float, modes: _Modes | None = None):
+        modes = _modes(b) if modes is None else modes
+        A, lam, V = modes.A, modes.lam, modes.V
         self.A = A
         self.t0, self.direction = float(t0), float(direction)
         self.y0 = np.asarray(y0, dtype=float)
         self.x_eq = -b.friction * direction / b.stiffness
         self.y_eq = np.array([self.x_eq, self.x_eq, 0.0, 0.0])
         self.w0 = self.y0 - self.y_eq
-        lam, V = np.linalg.eig(A)
         self.lam = lam
-        self.modal = False
-        try:
-            cond = np.linalg.cond(V)
-            if cond < EIGEN_CONDITION:
-                alpha = np.linalg.solve(V, self.w0.astype(complex))
-                P = V[:2] * alpha  # position rows of each mode's contribution
-                self.P, self.Pv, self.Pa = P, P * lam, P * lam**2
-                self.modal = True
-        except np.linalg.LinAlgError:
-            pass
-        # the fastest oscillation sets the grid that brackets the events (an over-damped mode is monotone:
-        # its fast transient near tau = 0 is resolved by the grid's geometric start instead)
-        oscillating = np.abs(lam.imag) > 0.0
-        self.rate = float(np.max(np.abs(lam[oscillating]))) if np.any(oscillating) else float(np.min(np.abs(lam)))
-        self.decay = float(np.min(-lam.real))
+        self.modal = modes.modal
+        if self.modal:
+            alpha = modes.Vinv @ self.w0
+            P = V[:2] * alpha  # position rows of each mode's contribution
+            self.P, self.Pv, self.Pa = P, P * lam, P * lam**2
+        self.rate, self.decay = modes.rate, modes.decay
         self.speed = float(np.sum(np.abs(self.Pv[0]))) if self.modal else float(np.max(np.abs(lam))) * float(
             np.max(np.abs(self.w0)))
         """A bound on |v_b| over the piece [m/s] (the scale of its rounding)."""
+        self.jerk = float(np.sum(np.abs(self.Pa[0] * lam))) if self.modal else math.inf
+        """A bound on |a_b'| over the piece [m/s^3] (every mode decays: |exp(lam tau)| <= 1)."""
+        if self.modal:  # the root finder's scalar path in Python complex arithmetic (no array per call)
+            self._terms = tuple((complex(lj), complex(vj), complex(aj))
+                                for lj, vj, aj in zip(lam, self.Pv[0], self.Pa[0], strict=True))
         self.t1, self.end = math.inf, ""
 
     def _evaluate(self, tau):
@@ -705,8 +737,12 @@ class _Slide:
     def va1(self, tau: float) -> tuple[float, float]:
         """Base velocity and acceleration at one tau (the root finder's fast path)."""
         if self.modal:
-            e = np.exp(self.lam * tau)
-            return float((self.Pv[0] @ e).real), float((self.Pa[0] @ e).real)
+            v = a = 0.0
+            for lj, vj, aj in self._terms:
+                e = cmath.exp(lj * tau)
+                v += (vj * e).real
+                a += (aj * e).real
+            return v, a
         vals = self._evaluate(tau)
         return float(vals[2][0]), float(vals[4][0])
 
@@ -748,7 +784,8 @@ class _Stick:
         return (np.full(tau.shape, self.xb), self.xb + u, zero, du, zero, ddu)
 
 
-def _first_rise(FF, f, fp, hi: float, step: float, start_zero: bool, floor: float = 0.0) -> float | None:
+def _first_rise(FF, f, fp, hi: float, step: float, start_zero: bool, floor: float = 0.0,
+                curvature: float = math.inf) -> float | None:
     """The first tau in (0, hi] where F crosses from <= 0 to > 0 (F(0) <= 0), to machine precision.
 
     ``FF(tau)`` gives F and its derivative F' on an array of tau; ``f``, ``fp`` the same at one tau (for
@@ -756,13 +793,17 @@ def _first_rise(FF, f, fp, hi: float, step: float, start_zero: bool, floor: floa
     from + to - (an interior maximum) is checked at the maximum (a brentq root of F'), so two crossings
     within one step are not missed. ``start_zero``: F(0) = 0 with F < 0 just after (a piece that starts at
     a reversal or a breakaway), so the bracket's left end is moved off 0, and values of F up to ``floor``
-    (its rounding level) within the first step count as <= 0. Returns None if F stays <= 0.
+    (its rounding level) within the first step count as <= 0. ``curvature``: a bound J on |F''| over
+    (0, hi]; an interior maximum in [a, b] (h = b - a) is then skipped without a root where
+    ``F(a) + F'(a) h + J h^2 / 2 < 0`` or ``F(b) - F'(b) h + J h^2 / 2 < 0`` (Taylor's bound: F stays
+    below zero there). Returns None if F stays <= 0.
     """
     tol = dict(xtol=1e-300, rtol=4.0 * np.finfo(float).eps, maxiter=200)
     lo_chunk = 0.0
-    chunk = 2048 * step
+    chunk = 64 * step  # doubled each chunk up to 2048 steps: most events come within a few dozen steps
     while lo_chunk < hi:
         hi_chunk = min(lo_chunk + chunk, hi)
+        chunk = min(2.0 * chunk, 2048 * step)
         n = max(int(math.ceil((hi_chunk - lo_chunk) / step)), 1)
         tau = np.linspace(lo_chunk, hi_chunk, n + 1)
         if lo_chunk == 0.0:  # a geometric start resolves fast transients near 0
@@ -777,6 +818,9 @@ def _first_rise(FF, f, fp, hi: float, step: float, start_zero: bool, floor: floa
         for i in np.nonzero(rising | peaked)[0] + 1:
             a, b = float(tau[i - 1]), float(tau[i])
             if not F[i] > 0.0:
+                h2 = 0.5 * curvature * (b - a) ** 2
+                if F[i - 1] + Fp[i - 1] * (b - a) + h2 < 0.0 or F[i] - Fp[i] * (b - a) + h2 < 0.0:
+                    continue
                 tm = brentq(fp, a, b, **tol)
                 if f(tm) <= 0.0:
                     continue
@@ -945,6 +989,7 @@ def free_vibration_2dof(building: TwoDOF, d0: float, t_end: float | None = None)
     def holding_force(xb, u, du):  # what the sliders must resist to hold the base [N]
         return k * xb - ks * u - cs * du
 
+    modes = _modes(b)
     t, y = 0.0, np.array([d0, d0, 0.0, 0.0])
     g = holding_force(d0, 0.0, 0.0)
     stuck = abs(g) <= Fs
@@ -959,6 +1004,9 @@ def free_vibration_2dof(building: TwoDOF, d0: float, t_end: float | None = None)
                 stop = t
                 break
             Td = 2.0 * math.pi / math.sqrt(p.q)
+            # |u^(n)| <= R b^(n/2) (R the drift's amplitude, b = a^2 + w^2): a bound on |G''| = |k_s u'' + c_s u^(3)|
+            amp = math.hypot(p.u0, (p.du0 + p.a * p.u0) / math.sqrt(p.q))
+            curvature = (ks * p.b + cs * p.b**1.5) * amp * (1.0 + 1e-9)
 
             found = []
             for sign in (1.0, -1.0):  # sign G - F_s rising: G reaches +F_s, or -F_s
@@ -975,7 +1023,7 @@ def free_vibration_2dof(building: TwoDOF, d0: float, t_end: float | None = None)
                     _, du, ddu = p.drift1(tau)
                     return sign * (-ks * du - cs * ddu)
 
-                tau = _first_rise(FF, f, fp, Td, Td / (2 * EVENT_GRID), False)
+                tau = _first_rise(FF, f, fp, Td, Td / (2 * EVENT_GRID), False, curvature=curvature)
                 if tau is not None:
                     found.append((tau, sign))
             if not found:
@@ -991,7 +1039,7 @@ def free_vibration_2dof(building: TwoDOF, d0: float, t_end: float | None = None)
             direction = -sign  # the base moves along the net force on it, -G (G = sign F_s here)
             stuck = False
             continue
-        p = _Slide(b, t, y, direction)
+        p = _Slide(b, t, y, direction, modes)
         pieces.append(p)
         step = 2.0 * math.pi / p.rate / EVENT_GRID
         hi = horizon - t
@@ -999,7 +1047,7 @@ def free_vibration_2dof(building: TwoDOF, d0: float, t_end: float | None = None)
             hi = 40.0 / p.decay if p.decay > 0 else math.inf
         tau = _first_rise(lambda s, p=p: (-p.direction * p.va(s)[0], -p.direction * p.va(s)[1]),
                           lambda s, p=p: -p.direction * p.va1(s)[0], lambda s, p=p: -p.direction * p.va1(s)[1],
-                          hi, step, True, 64.0 * np.finfo(float).eps * p.speed)
+                          hi, step, True, 64.0 * np.finfo(float).eps * p.speed, curvature=p.jerk * (1.0 + 1e-9))
         if tau is None or t + tau >= horizon:
             break
         t1 = t + tau
