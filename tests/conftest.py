@@ -52,6 +52,17 @@ def _matplotlib_settings_unchanged(_matplotlib_settings_unchanged_by_the_module)
     assert not changed, f"rcParams changed: {changed}"
 
 
+@pytest.fixture(autouse=True)
+def _no_progress_lines(monkeypatch):
+    """In-process CLI runs print no ``progress:`` lines (a run on a loaded machine passes PROGRESS_AFTER, and
+    the one-line error contracts would see them); the test of those lines sets its own PROGRESS_AFTER."""
+    import math
+
+    from quickrelease import cli
+
+    monkeypatch.setattr(cli, "PROGRESS_AFTER", math.inf)
+
+
 @pytest.fixture(scope="session")
 def paper_device():
     return preset("paper")
