@@ -42,7 +42,9 @@ exclude_patterns = ["_build", "examples/README.rst", "Thumbs.db", ".DS_Store"]
 templates_path = ["_templates"]
 
 # MyST: the user guide is Markdown (it was the README); headings get anchors for links within a page.
-myst_enable_extensions = ["colon_fence", "deflist"]
+# Equations: $...$ inline and $$...$$ (or \begin{align}) displayed, typeset by MathJax in the browser
+# (sphinx.ext.mathjax); a displayed equation may carry a label, $$...$$ (eq-name), cited as {eq}`eq-name`.
+myst_enable_extensions = ["colon_fence", "deflist", "dollarmath", "amsmath"]
 myst_heading_anchors = 4
 
 # API reference: autosummary writes one page per public object from the docstrings (numpy style).

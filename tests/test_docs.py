@@ -255,3 +255,37 @@ def test_every_internal_link_of_the_built_site_resolves():
     assert (site / "index.html").exists(), f"no site at {site}"
     assert len(list(site.rglob("*.html"))) > 20
     assert broken_links(site) == []
+
+
+# --- equations of a built site ------------------------------------------------------------------------------------
+
+def math_pages() -> list[Path]:
+    """The pages whose Markdown writes $...$ mathematics outside code."""
+    found = []
+    for page in PAGES:
+        prose = re.sub(r"^```.*?^```", "", page.read_text(encoding="utf-8"), flags=re.S | re.M)
+        if re.search(r"\$[^$\s][^$\n]*\$", re.sub(r"`[^`\n]*`", "", prose)):
+            found.append(page)
+    return found
+
+
+def unrendered_math(site: Path) -> list[str]:
+    """The pages whose $...$ mathematics the built HTML does not hand to MathJax: no math element, no MathJax
+    script, or TeX left as text between dollars."""
+    bad = []
+    for page in math_pages():
+        html_path = site / page.relative_to(DOCS).with_suffix(".html")
+        html = html_path.read_text(encoding="utf-8") if html_path.exists() else ""
+        body = re.sub(r"<(script|pre)\b.*?</\1>", "", html, flags=re.S)
+        if ('class="math notranslate nohighlight"' not in html or "mathjax" not in html.lower()
+                or re.search(r"\$[^$<\s][^$<]*\\[A-Za-z]+[^$<]*\$", body)):
+            bad.append(str(page.relative_to(DOCS)))
+    return bad
+
+
+def test_every_equation_of_the_built_site_is_typeset():
+    site = Path(os.environ.get("QUICKRELEASE_DOCS_HTML", DOCS / "_build" / "html"))
+    if "QUICKRELEASE_DOCS_HTML" not in os.environ and not (site / "index.html").exists():
+        pytest.skip("no built site: sphinx-build -W -b html docs docs/_build/html (CI builds it)")
+    assert len(math_pages()) >= 5
+    assert unrendered_math(site) == []
