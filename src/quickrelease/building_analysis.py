@@ -28,7 +28,7 @@ from .decay import DecayAnalysis, analyse_decay, hysteresis_loop
 from .display import Summarised
 from .errors import ParameterError, QuickReleaseError
 from .export import jsonable
-from .isolation_fit import BuildingChannel, IsolationFit, compare_models, decay_check, fit_isolation
+from .isolation_fit import BuildingChannel, IsolationFit, compare_models, decay_check, drop_excluded, fit_isolation
 
 __all__ = ["BuildingResult", "analyse_building", "MODELS", "physical_estimates"]
 
@@ -160,7 +160,7 @@ COMPARE_TOLERANCE = 1e-8
 def analyse_building(data: Any = None, *, channels=None, mass: float | None = None, model: str | None = None,
                      start: dict[str, float] | None = None, release_time: float | None = None,
                      compare: bool = False, source: str = "", superstructure_mass: float | None = None,
-                     progress=None, global_search: bool = True) -> BuildingResult:
+                     progress=None, global_search: bool = True, exclude_spikes: bool | None = None) -> BuildingResult:
     """Fit the isolation model to the building's record and cross-check it (see the module docstring).
 
     Parameters
@@ -178,6 +178,9 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
         Called with a line saying what runs (see :func:`quickrelease.isolation_fit.fit_isolation`).
     global_search : bool
         The fit's global stage (:func:`quickrelease.isolation_fit.fit_isolation`; default True).
+    exclude_spikes : bool, optional
+        Leave out the samples the residuals show as spikes (``fit_isolation(exclude_spikes=True)``; default:
+        the data's ``[building.record] spikes``, else False).
 
     Raises
     ------
@@ -196,6 +199,9 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
         notes += list(data.notes or ())
         if superstructure_mass is None:
             superstructure_mass = getattr(data, "superstructure_mass", None)
+        if exclude_spikes is None:
+            exclude_spikes = bool(getattr(data, "exclude_spikes", False))
+    exclude_spikes = bool(exclude_spikes)
     model = model or "linear"
     if model not in MODELS:
         raise ParameterError("model", model, ", ".join(MODELS))
@@ -203,8 +209,11 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
     if mass is None:
         raise ParameterError("mass", None, "(0, inf), the mass carried by the isolators", "kg")
     prefix = f"{source}: " if source else ""
-    fit = _fit(channels, mass, model, start, release_time, prefix, superstructure_mass, progress, global_search)
+    fit = _fit(channels, mass, model, start, release_time, prefix, superstructure_mass, progress, global_search,
+               exclude_spikes)
     _check_long_enough(fit, prefix)
+    if fit.excluded:  # the decay analysis, the loop and the other models see what the fit saw
+        channels = drop_excluded(channels, fit.excluded)
     warnings = list(fit.warnings)
     warnings += _bilinear_yield_warning(fit)
     compared: list[IsolationFit] = []
@@ -221,6 +230,7 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
                 # intervals are not reported (AIC/BIC only), so no profile-likelihood re-fits
                 compared.append(fit_isolation(channels, mass, other, release_time=release_time, profile=False,
                                               tolerance=COMPARE_TOLERANCE, progress=progress,
+                                              exclude_spikes=exclude_spikes,
                                               superstructure_mass=superstructure_mass if other == "2dof" else None,
                                               start={k: v for k, v in (start or {}).items()
                                                      if k in ("d0", "release_time")} or None))
@@ -243,9 +253,9 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
         notes.append("no displacement channel of the isolation layer: no model-free decay analysis (the double "
                      "integral of an acceleration drifts); the fit alone describes the decay")
     else:
-        offset = fit.offsets().get(xch.name, 0.0)
         try:
-            decay = analyse_decay(xch.t, xch.values - offset, release_time=fit.release_time, noise=fit.noise[xch.name])
+            decay = analyse_decay(xch.t, xch.values - fit.zero(xch), release_time=fit.release_time,
+                                  noise=fit.noise[xch.name])
             check = decay_check(fit)
         except QuickReleaseError as exc:
             notes.append(f"decay analysis of {xch.name} not possible: {exc}")
@@ -258,11 +268,11 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
 
 
 def _fit(channels, mass, model, start, release_time, prefix, superstructure_mass=None, progress=None,
-         global_search=True) -> IsolationFit:
+         global_search=True, exclude_spikes=False) -> IsolationFit:
     try:
         return fit_isolation(channels, mass, model, release_time=release_time, start=start or None,
                              superstructure_mass=superstructure_mass if model == "2dof" else None, progress=progress,
-                             global_search=global_search)
+                             global_search=global_search, exclude_spikes=exclude_spikes)
     except ParameterError:
         raise
     except QuickReleaseError as exc:  # e.g. no release found: name the record
@@ -314,21 +324,20 @@ def _loop(fit: IsolationFit, channels, notes: list[str]) -> dict[str, np.ndarray
     if xch is None or ach is None:
         notes.append("no hysteresis loop: it needs a displacement and an acceleration channel of the isolation layer")
         return None
-    offsets = fit.offsets()
     t_r = fit.release_time
     t = xch.t[(xch.t >= max(t_r, ach.t[0])) & (xch.t <= ach.t[-1])]
     if t.size < 8:
         notes.append("no hysteresis loop: the displacement and acceleration channels do not overlap after the release")
         return None
     same = xch.t.size == ach.t.size and np.array_equal(xch.t, ach.t)
-    acc = np.interp(t, ach.t, ach.values - offsets.get(ach.name, 0.0))
+    acc = np.interp(t, ach.t, ach.values - fit.zero(ach))
     if not same:
         notes.append(f"hysteresis loop: {ach.name} interpolated linearly onto the times of {xch.name} (own time axes)")
-    x = np.interp(t, xch.t, xch.values - offsets.get(xch.name, 0.0))
+    x = np.interp(t, xch.t, xch.values - fit.zero(xch))
     x, force = hysteresis_loop(x, acc, fit.mass)
     tm = np.linspace(t_r, float(t[-1]), _CURVE_POINTS)
-    mx = fit.model_values(xch, tm) - offsets.get(xch.name, 0.0)
-    ma = fit.model_values(ach, tm) - offsets.get(ach.name, 0.0)
+    mx = fit.model_values(xch, tm) - fit.zero(xch, tm)
+    ma = fit.model_values(ach, tm) - fit.zero(ach, tm)
     model_x, model_force = hysteresis_loop(mx, ma, fit.mass)
     return {"t": t, "x": x, "force": force, "model_x": model_x, "model_force": model_force}
 

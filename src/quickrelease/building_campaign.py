@@ -241,7 +241,7 @@ def _estimates(release: BuildingRelease, fit: IsolationFit, quantities: tuple[st
         values[q] = derived_quantity(q, fit.model, fit.mass, params)
         grad = np.zeros(len(fit.names))
         for i, n in enumerate(fit.names):  # central differences on the free parameters
-            if n.startswith("offset_") or n == "release_time":
+            if n.startswith(("offset_", "drift_")) or n == "release_time":
                 continue
             # relative to the value (a standard error far above it, as of a parameter the record hardly sees,
             # would step out of the model's domain); to the standard error for a value of 0

@@ -16,7 +16,9 @@ v_roof     velocity of the top of the superstructure             m/s
 a_roof     acceleration of the top of the superstructure         m/s^2
 ========== ===================================================== ==========
 
-Every channel has a constant offset by default (a sensor's zero is never exactly zero). With a rigid
+Every channel has a constant offset by default (a sensor's zero is never exactly zero); ``drift = true``
+adds a linear drift of the zero (a displacement transducer whose zero creeps through a long record: the
+fit's ``drift_<channel>`` per second, from the detected release). With a rigid
 superstructure (models ``linear`` and ``bilinear``) the roof moves with the isolation layer.
 
 :func:`load_building` turns a case into :class:`BuildingData`: the ``[building]`` values as a model (the
@@ -53,7 +55,7 @@ def parse_building_record(table: Any, source: str, base: Path) -> RecordSpec:
     """Validate ``[building.record]`` (the grammar of :func:`quickrelease.records.parse_record_spec`, the
     channels of :data:`BUILDING_CHANNELS`, an offset on every channel by default)."""
     return parse_record_spec(table, source, base, channels=BUILDING_CHANNELS, offsets=tuple(BUILDING_CHANNELS),
-                             section="building.record")
+                             section="building.record", drifts=True)
 
 
 def spec_isolation(spec: BuildingSpec) -> Isolation:
@@ -126,6 +128,8 @@ class BuildingData:
     """2dof: the superstructure's mass at the roof [kg] (part of ``mass``)."""
     spec: BuildingSpec | None = None
     """The parsed ``[building]`` table."""
+    exclude_spikes: bool = False
+    """``[building.record] spikes = "exclude"``: the fit leaves out the samples its residuals show as spikes."""
     jitter: dict[str, float] = field(default_factory=dict)
     """Per channel, how far its time stamps scatter about a uniform clock [s] where the record says so
     (:func:`quickrelease.timebase.time_base`; for :func:`quickrelease.decay.analyse_decay`'s ``jitter``)."""
@@ -195,7 +199,8 @@ def load_building(case: Case) -> BuildingData:
                 jitter[name] = ch.jitter
             try:
                 channels.append(BuildingChannel(name=name, kind=name, t=ch.t, values=ch.values,
-                                                noise=ch.spec.noise, offset=ch.spec.offset))
+                                                noise=ch.spec.noise, offset=ch.spec.offset,
+                                                drift=ch.spec.drift))
             except QuickReleaseError as exc:
                 raise RecordError(f"{where}: {exc}") from None
     start = _start(spec)
@@ -208,4 +213,5 @@ def load_building(case: Case) -> BuildingData:
         start["d0"] = pushed_displacement(case.push_force, spec)
     return BuildingData(model=spec.model, mass=float(spec.mass), isolation=isolation, start=start,
                         d0=spec.displacement, channels=channels, release_time=release_time, notes=notes,
-                        source=case.source, superstructure_mass=spec.superstructure_mass, spec=spec, jitter=jitter)
+                        source=case.source, superstructure_mass=spec.superstructure_mass, spec=spec, jitter=jitter,
+                        exclude_spikes=spec.record is not None and spec.record.spikes == "exclude")

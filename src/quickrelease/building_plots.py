@@ -107,7 +107,7 @@ def model_decay(result):
     if xch is None:
         return None
     t = np.linspace(fit.release_time, float(xch.t[-1]), 8000)
-    x = fit.model_values(xch, t) - fit.offsets().get(xch.name, 0.0)
+    x = fit.model_values(xch, t) - fit.zero(xch, t)
     try:
         return analyse_decay(t, x, noise=1e-9 * max(abs(float(x[0])), 1e-12))
     except ValueError:

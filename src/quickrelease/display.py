@@ -157,6 +157,8 @@ def key_for(name: str, unit: str | None = None) -> tuple[str, str]:
     human, known = PARAMETERS.get(name, (None, ""))
     if human is None and name.startswith("offset_"):
         human = f"offset of {name.removeprefix('offset_')}"
+    if human is None and name.startswith("drift_"):
+        human = f"drift of {name.removeprefix('drift_')}'s zero"
     return human or name.replace("_", " "), unit_text(known if unit is None else unit)
 
 

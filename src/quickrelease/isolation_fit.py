@@ -36,7 +36,7 @@ noise levels, and the residuals are tested for whiteness (Ljung-Box).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -79,6 +79,12 @@ PROFILE_RELATIVE_SE = 0.3
 CONDITION_WARNING = 1e8
 #: Lower bound of the fitted fixed-base superstructure period [s] (a stiffer storey is the rigid model).
 SUPERSTRUCTURE_PERIOD_MIN = 0.02
+#: Spikes (``fit_isolation(exclude_spikes=True)``): a sample whose residual, less the median of its six neighbours,
+#: exceeds ``max(SPIKE_LEVEL, sqrt(2 ln n) + 1.5)`` robust scatters (1.4826 MAD of those, n its channel's
+#: samples) is excluded; ``SPIKE_ROUNDS`` fits at most. Gaussian noise crosses 5.8 scatters (n = 12000) with
+#: probability 7e-9 a sample: a clean record loses none.
+SPIKE_LEVEL = 5.0
+SPIKE_ROUNDS = 3
 
 
 @dataclass(frozen=True, eq=False)
@@ -93,6 +99,10 @@ class BuildingChannel:
     """Noise standard deviation [SI]; None: estimated from the pre-release segment (or the residuals)."""
     offset: bool = True
     """Estimate a constant offset (the sensor's zero)."""
+    drift: bool = False
+    """Estimate a linear drift of the sensor's zero, ``drift_<name>`` [SI unit / s] (a displacement
+    transducer whose zero creeps through a long record): the channel reads ``model + offset + drift (t -
+    t_0)``, t_0 the release first detected (the fit's ``drift_origin``), so the offset is the zero at it."""
 
     def __post_init__(self) -> None:
         if self.kind not in CHANNEL_KINDS:
@@ -146,6 +156,10 @@ class IsolationFit:
     """The superstructure (roof) mass m_s [kg] given to the 2-DOF fit; None for the rigid models."""
     fixed: dict[str, float] = field(default_factory=dict)
     """Parameters held fixed in the fit (not in ``estimates``), by name."""
+    drift_origin: float = math.nan
+    """t_0 of the drifts [s, record time]: a channel's zero is ``offset + drift (t - t_0)``."""
+    excluded: dict[str, tuple[float, ...]] = field(default_factory=dict)
+    """Samples excluded as spikes (``exclude_spikes=True``): their times per channel [s, record time]."""
     search: SearchCertificate | None = field(default=None, repr=False)
     """The multi-start's certificate (:class:`quickrelease.isolation_search.SearchCertificate`): the starts,
     how many reached the best minimum, the distinct minima and the next-best's delta chi-square."""
@@ -172,12 +186,24 @@ class IsolationFit:
     def offsets(self) -> dict[str, float]:
         return {n.removeprefix("offset_"): v for n, v in self.parameters.items() if n.startswith("offset_")}
 
+    def drifts(self) -> dict[str, float]:
+        """The fitted drift of each channel's zero that has one [SI unit / s]."""
+        return {n.removeprefix("drift_"): v for n, v in self.parameters.items() if n.startswith("drift_")}
+
+    def zero(self, channel: BuildingChannel, t=None) -> np.ndarray | float:
+        """The channel's fitted zero at times t (default: the channel's) [SI]: its offset, plus its drift
+        times ``t - drift_origin`` where it has one (a float where it has none)."""
+        t = channel.t if t is None else np.asarray(t, dtype=float)
+        drift = self.drifts().get(channel.name)
+        offset = self.offsets().get(channel.name, 0.0)
+        return offset if drift is None else offset + drift * (t - self.drift_origin)
+
     def model_values(self, channel: BuildingChannel, t=None) -> np.ndarray:
-        """The fitted model (with the channel's offset) at times t (default: the channel's) [SI]."""
+        """The fitted model (with the channel's zero: offset and drift) at times t (default: the channel's) [SI]."""
         t = channel.t if t is None else np.asarray(t, dtype=float)
         out = _channel_model(self.isolation(), self.parameters["d0"], self.release_time, channel.kind, t,
                              float(np.max(t)))
-        return out + self.offsets().get(channel.name, 0.0)
+        return out + self.zero(channel, t)
 
     def summary(self) -> dict[str, Any]:
         iso = self.isolation()
@@ -186,7 +212,7 @@ class IsolationFit:
         return {"model": self.model, "mass_kg": self.mass, "isolation": iso.summary(),
                 "estimates": self.estimates, "fixed": self.fixed, "std_errors": self.std_errors,
                 "ci95": {k: list(v) for k, v in self.ci95.items()}, "interval_method": self.interval_method,
-                "units": {n: _UNITS.get(n, CHANNEL_KINDS.get(_offset_kind(n, self.channels), "")) for n in self.names},
+                "units": {n: _unit(n, self.channels) for n in self.names},
                 "correlation": corr, "condition_number": self.condition_number, "noise": self.noise,
                 "noise_source": self.noise_source, "residual_rms": self.residual_rms, "samples": self.samples,
                 "chi2": self.chi2, "dof": self.dof, "chi2_reduced": self.chi2_reduced,
@@ -194,6 +220,8 @@ class IsolationFit:
                 "whiteness_p": self.whiteness_p, "converged": self.converged, "nfev": self.nfev,
                 "global_minimum_confirmed": self.global_minimum_confirmed,
                 "search": self.search.summary() if self.search is not None else None,
+                **({"drift_origin_s": self.drift_origin} if self.drifts() else {}),
+                **({"excluded_samples": {k: list(v) for k, v in self.excluded.items()}} if self.excluded else {}),
                 "warnings": list(self.warnings)}
 
     def to_pandas(self):
@@ -213,9 +241,17 @@ class IsolationFit:
 
 def _offset_kind(name: str, channels) -> str:
     for ch in channels:
-        if name == f"offset_{ch.name}":
+        if name in (f"offset_{ch.name}", f"drift_{ch.name}"):
             return ch.kind
     return ""
+
+
+def _unit(name: str, channels) -> str:
+    """The SI unit of a fit parameter: the model's, an offset's (its channel's), a drift's (per second)."""
+    if name in _UNITS:
+        return _UNITS[name]
+    unit = CHANNEL_KINDS.get(_offset_kind(name, channels), "")
+    return {"m": "m/s", "m/s": "m/s^2", "m/s^2": "m/s^3"}.get(unit, unit) if name.startswith("drift_") else unit
 
 
 def _isolation(model: str, mass: float, p: dict[str, float], superstructure_mass: float | None = None) \
@@ -437,9 +473,10 @@ def _physical_names(model: str) -> list[str]:
 
 
 def _parameter_names(model: str, channels) -> list[str]:
-    """Every parameter of a fit of ``model`` to ``channels``: the physical ones, d0, the release time and an
-    offset per channel that has one."""
-    return _physical_names(model) + ["d0", "release_time"] + [f"offset_{c.name}" for c in channels if c.offset]
+    """Every parameter of a fit of ``model`` to ``channels``: the physical ones, d0, the release time, an
+    offset per channel that has one and a drift per channel that has one."""
+    return (_physical_names(model) + ["d0", "release_time"] + [f"offset_{c.name}" for c in channels if c.offset]
+            + [f"drift_{c.name}" for c in channels if c.drift])
 
 
 def _bounds(channels, t_r0: float, period: float = 0.0) -> tuple[dict[str, float], dict[str, float]]:
@@ -470,7 +507,8 @@ class _Misfit:
     truth."""
 
     def __init__(self, channels, noise: dict[str, float], mass: float, model: str,
-                 superstructure_mass: float | None, lower: dict[str, float], upper: dict[str, float]) -> None:
+                 superstructure_mass: float | None, lower: dict[str, float], upper: dict[str, float],
+                 drift_origin: float = 0.0) -> None:
         self.channels, self.mass, self.model, self.superstructure_mass = channels, mass, model, superstructure_mass
         self.lower, self.upper = lower, upper
         self.t_last = max(float(c.t[-1]) for c in channels)
@@ -484,8 +522,13 @@ class _Misfit:
         # the offsets enter linearly: their columns are exact (1 / sigma on their channel's rows), and only the
         # other parameters need the two model evaluations each of the central differences
         self.rows_of, i0 = {}, 0
+        self.drift_origin = float(drift_origin)
+        self.ramp = {}  # a drifting channel's t - t_0 [s]: its drift's column times sigma
         for c in channels:
             self.rows_of[f"offset_{c.name}"] = slice(i0, i0 + c.t.size)
+            if c.drift:
+                self.rows_of[f"drift_{c.name}"] = self.rows_of[f"offset_{c.name}"]
+                self.ramp[f"drift_{c.name}"] = c.t - self.drift_origin
             i0 += c.t.size
 
     def model_vector(self, p: dict[str, float]) -> np.ndarray:
@@ -495,7 +538,10 @@ class _Misfit:
         kinds = fv.channels(self.t_all - p["release_time"])
         for c, at in zip(self.channels, self.where, strict=True):
             y = kinds[c.kind][at]
-            out.append(y + p.get(f"offset_{c.name}", 0.0))
+            y = y + p.get(f"offset_{c.name}", 0.0)
+            if c.drift:
+                y = y + p.get(f"drift_{c.name}", 0.0) * self.ramp[f"drift_{c.name}"]
+            out.append(y)
         return np.concatenate(out)
 
     def residuals(self, theta, free, base) -> np.ndarray:
@@ -515,7 +561,7 @@ class _Misfit:
         f0 = None
         for i, n in enumerate(free):
             if n in self.rows_of:
-                J[self.rows_of[n], i] = 1.0 / self.sig[self.rows_of[n]]
+                J[self.rows_of[n], i] = self.ramp.get(n, 1.0) / self.sig[self.rows_of[n]]
                 continue
             if f0 is None:
                 f0 = self.residuals(theta, free, base)
@@ -626,7 +672,7 @@ def _start_in_motion(channels):
         keep = ch.t >= turn.time
         if np.count_nonzero(keep) < 10:
             continue
-        kept.append(BuildingChannel(ch.name, ch.kind, ch.t[keep], ch.values[keep], ch.noise, ch.offset))
+        kept.append(BuildingChannel(ch.name, ch.kind, ch.t[keep], ch.values[keep], ch.noise, ch.offset, ch.drift))
     return kept, turn.time, [
         f"the record starts in motion (channel {xch.name} moves in its first {REST_HEAD} samples): its first "
         f"turning point, t = {turn.time:.6g} s at {turn.d0:.6g} m, is taken as a release from rest (exact for the "
@@ -695,6 +741,8 @@ def _initial_values(model: str, mass: float, channels, t_r0: float, fixed: dict[
     for ch in channels:
         if ch.offset:
             p0[f"offset_{ch.name}"] = offsets0[ch.name]
+        if ch.drift:
+            p0[f"drift_{ch.name}"] = 0.0
     if (model == "linear" and rest is not None and xch is not None and xch.offset and "d0" not in fixed
             and abs(rest) < 0.5 * abs(d0)):
         # the displacement sensor's zero: the decay law's rest reading, not 0 (the pushed level is d0 plus
@@ -874,7 +922,7 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
                   fit_release_time: bool = True, start: dict[str, float] | None = None,
                   fixed: dict[str, float] | None = None, profile: bool | None = None,
                   superstructure_mass: float | None = None, tolerance: float = 1e-12, global_search: bool = True,
-                  seed: int = 0, progress=None) -> IsolationFit:
+                  seed: int = 0, progress=None, exclude_spikes: bool = False) -> IsolationFit:
     """Fit the isolation system (:mod:`quickrelease.building`) to records of the isolation layer.
 
     Parameters
@@ -924,6 +972,14 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
     progress : callable, optional
         Called with a line saying what runs (the model, the global search's run or the start, with counts;
         the profile intervals), for a progress display.
+    exclude_spikes : bool
+        Spikes (a logger's glitches, a sensor's dropouts): after the fit, the samples whose residual less
+        the median of its six neighbours exceeds ``max(SPIKE_LEVEL, sqrt(2 ln n) + 1.5)`` robust
+        scatters of those (1.4826 MAD; a misfit that varies over many samples is not a spike) are excluded
+        and the fit is redone on the rest, global stage included; each round judges the whole record again
+        by the latest fit, until the excluded samples stay the same (``SPIKE_ROUNDS`` fits at most). The
+        estimates and intervals are those of ordinary least squares on the kept samples (a clean record
+        keeps them all); ``excluded`` lists the times, a warning counts them.
     tolerance : float
         Relative tolerance of the least-squares solves (scipy's ``ftol``, ``xtol``, ``gtol``). The default, 1e-12,
         settles the estimates to far below their standard errors; a model fitted only to be ranked by AIC/BIC
@@ -935,10 +991,77 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
     """
     from threadpoolctl import threadpool_limits
 
+    kwargs = dict(release_time=release_time, fit_release_time=fit_release_time, start=start, fixed=fixed,
+                  profile=profile, superstructure_mass=superstructure_mass, tolerance=tolerance,
+                  global_search=global_search, seed=seed, progress=progress)
     with threadpool_limits(1, user_api="blas"):  # thin Jacobians: BLAS threads cost more than they give
-        return _fit_isolation(channels, mass, model, release_time=release_time, fit_release_time=fit_release_time,
-                              start=start, fixed=fixed, profile=profile, superstructure_mass=superstructure_mass,
-                              tolerance=tolerance, global_search=global_search, seed=seed, progress=progress)
+        fit = _fit_isolation(channels, mass, model, **kwargs)
+        if not exclude_spikes:
+            return fit
+        # a fixed point: each round judges every sample of the whole record by the latest fit, so a sample a
+        # first fit in a wrong minimum took for a spike comes back once the fit is right
+        channels = list(channels)
+        excluded: dict[str, tuple[float, ...]] = {}
+        for _ in range(SPIKE_ROUNDS - 1):
+            found = _spikes(fit, channels)
+            if found == excluded:
+                break
+            excluded = found
+            fit = _fit_isolation(drop_excluded(channels, excluded), mass, model, **kwargs)
+    if not excluded:
+        return fit
+    count = sum(len(v) for v in excluded.values())
+    where = ", ".join(f"{len(v)} of {k}" for k, v in excluded.items())
+    note = (f"{count} sample(s) excluded as spikes ({where}): residuals that stand out of their neighbours' by "
+            f"{SPIKE_LEVEL:g} or more robust scatters")
+    return replace(fit, excluded=excluded, warnings=(*fit.warnings, note))
+
+
+def drop_excluded(channels, excluded: dict[str, Any]) -> list[BuildingChannel]:
+    """The channels without the samples at the times ``excluded`` lists for them (an
+    :attr:`IsolationFit.excluded`), so that what is drawn or analysed beside the fit is what it saw."""
+    out = []
+    for ch in channels:
+        gone = excluded.get(ch.name)
+        if gone:
+            keep = ~np.isin(ch.t, np.asarray(gone, dtype=float))
+            ch = replace(ch, t=ch.t[keep], values=ch.values[keep])
+        out.append(ch)
+    return out
+
+
+def _local_residuals(resid: np.ndarray) -> np.ndarray:
+    """Each residual less the median of its six neighbours (three each side): a spike stands out of it whole
+    (two spikes among the six leave the median between clean values), while a misfit that varies over many
+    samples (a first fit in a wrong minimum, pulled there by the spikes themselves) and a step (a friction
+    force that flips a sample early) do not. The sample itself is left out of the median, so white noise
+    gives a difference of independent terms (no share of exact zeros to shrink its MAD)."""
+    from numpy.lib.stride_tricks import sliding_window_view
+
+    window = sliding_window_view(np.pad(resid, 3, mode="edge"), 7)
+    return resid - np.median(window[:, [0, 1, 2, 4, 5, 6]], axis=1)
+
+
+def _spikes(fit: IsolationFit, channels) -> dict[str, tuple[float, ...]]:
+    """The times of the samples of ``channels`` (the whole record) that ``fit`` shows as spikes: the residual
+    less the median of its six neighbours (:func:`_local_residuals`) beyond ``max(SPIKE_LEVEL, sqrt(2 ln n) + 1.5)``
+    times 1.4826 MAD of those, within the span the fit saw (a record that starts in motion is fitted from its
+    first turning point)."""
+    fitted = {c.name: c for c in fit.channels}
+    out = {}
+    for ch in channels:
+        seen = fitted.get(ch.name)
+        if seen is None:
+            continue
+        inside = ch.t >= seen.t[0]
+        t, values = ch.t[inside], ch.values[inside]
+        local = _local_residuals(values - fit.model_values(ch, t))
+        scatter = 1.4826 * float(np.median(np.abs(local)))
+        level = max(SPIKE_LEVEL, math.sqrt(2.0 * math.log(local.size)) + 1.5)
+        spikes = t[np.abs(local) > level * scatter] if scatter > 0 else t[:0]
+        if spikes.size and ch.t.size - spikes.size >= 10:
+            out[ch.name] = tuple(float(v) for v in spikes)
+    return out
 
 
 def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_release_time, start, fixed, profile,
@@ -986,7 +1109,7 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
     hint = record_period(channels, t_r0)
     # the release's search reaches back a quarter of the record's apparent period (else the start's)
     lower, upper = _bounds(channels, t_r0, hint if hint is not None else values["period"])
-    misfit = _Misfit(channels, noise, mass, model, superstructure_mass, lower, upper)
+    misfit = _Misfit(channels, noise, mass, model, superstructure_mass, lower, upper, drift_origin=t_r0)
     sig, data = misfit.sig, misfit.data
 
     def unpack(theta, free=names, base=values) -> dict[str, float]:
@@ -1016,7 +1139,7 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
     if start:
         named.append(("design values", values))
     thin, factor = thin_channels(channels, t_r0)
-    thin_misfit = _Misfit(thin, noise, mass, model, superstructure_mass, lower, upper)
+    thin_misfit = _Misfit(thin, noise, mass, model, superstructure_mass, lower, upper, drift_origin=t_r0)
     evaluations = 0
     if global_search:
         search_d0 = xch is None and "d0" not in fixed
@@ -1133,7 +1256,7 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
                         chi2_reduced=chi2_red, absolute_sigma=absolute, aic=aic, bic=bic, whiteness_p=white,
                         converged=bool(res.success), nfev=int(res.nfev), warnings=tuple(warnings),
                         channels=tuple(channels), superstructure_mass=superstructure_mass,
-                        fixed={n: float(values[n]) for n in fixed}, search=cert)
+                        fixed={n: float(values[n]) for n in fixed}, search=cert, drift_origin=misfit.drift_origin)
 
 
 #: The chi-square drop a polish restart must reach to replace the fit (:func:`_polish`).
@@ -1332,7 +1455,7 @@ class IsolationPrecision:
             if name in index:
                 out[key] = row(p[name], {name: 1.0}, self.units[name], relative=name != "release_time")
         for name in self.names:
-            if name.startswith("offset_"):
+            if name.startswith(("offset_", "drift_")):
                 out[name] = row(p[name], {name: 1.0}, self.units[name])
         return out
 
@@ -1391,7 +1514,7 @@ def predicted_isolation_errors(channels, mass: float, model: str, parameters: di
             raise ParameterError(f"{ch.name}.noise", None, "given (the noise weights the information)",
                                  CHANNEL_KINDS[ch.kind])
     all_names = _parameter_names(model, channels)
-    values = {n: 0.0 for n in all_names if n.startswith("offset_")}
+    values = {n: 0.0 for n in all_names if n.startswith(("offset_", "drift_"))}
     values.update({n: float(v) for n, v in parameters.items() if n in all_names})
     missing = [n for n in all_names if n not in values]
     if missing:
@@ -1405,7 +1528,7 @@ def predicted_isolation_errors(channels, mass: float, model: str, parameters: di
     # noise levels of any size, and the covariance is s^2 times that of the relative levels
     s = max(float(c.noise) for c in channels)
     misfit = _Misfit(channels, {c.name: float(c.noise) / s for c in channels}, float(mass), model,
-                     superstructure_mass, lower, upper)
+                     superstructure_mass, lower, upper, drift_origin=values["release_time"])
     J = misfit.jacobian(np.array([values[n] for n in names]), names, values)  # weighted: rows / (sigma_i / s)
     if not np.all(np.isfinite(J)):
         levels = ", ".join(f"{c.name} = {c.noise:.3g} {CHANNEL_KINDS[c.kind]}" for c in channels)
@@ -1430,7 +1553,7 @@ def predicted_isolation_errors(channels, mass: float, model: str, parameters: di
                 and s_ / abs(values[n]) > PROFILE_RELATIVE_SE):
             warnings.append(f"{n} would be poorly determined (standard error {100 * s_ / abs(values[n]):.3g}% of the "
                             "truth)")
-    units = {n: _UNITS.get(n, CHANNEL_KINDS.get(_offset_kind(n, channels), "")) for n in names}
+    units = {n: _unit(n, channels) for n in names}
     return IsolationPrecision(model=model, mass=float(mass), names=tuple(names), parameters=values, covariance=cov,
                               std_errors={n: float(v) for n, v in zip(names, se, strict=True)}, correlation=corr,
                               condition_number=cond, units=units, warnings=tuple(warnings), noise_scale=s,
@@ -1483,8 +1606,8 @@ def decay_check(fit: IsolationFit) -> dict[str, Any]:
     xch = next((c for c in fit.channels if c.kind == "x"), None)
     if xch is None:
         return {"rows": [], "notes": ["no displacement channel: no decay analysis"], "warnings": []}
-    offset = fit.offsets().get(xch.name, 0.0)
-    analysis = analyse_decay(xch.t, xch.values - offset, release_time=fit.release_time, noise=fit.noise[xch.name])
+    analysis = analyse_decay(xch.t, xch.values - fit.zero(xch), release_time=fit.release_time,
+                             noise=fit.noise[xch.name])
     out: dict[str, Any] = {"analysis": analysis.summary(fit.mass), "rows": [], "notes": [], "warnings": []}
     if fit.model == "bilinear":
         out["notes"].append("bilinear isolators follow no decay law: compare the equivalent period and damping "

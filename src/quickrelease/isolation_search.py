@@ -272,7 +272,7 @@ def thin_channels(channels, t_r: float | None = None, samples: int = SEARCH_SAMP
         keep = np.concatenate(keep)
         if keep.size < 10:
             keep = np.arange(ch.t.size)[:: max(1, ch.t.size // 10)]
-        out.append(BuildingChannel(ch.name, ch.kind, ch.t[keep], ch.values[keep], ch.noise, ch.offset))
+        out.append(BuildingChannel(ch.name, ch.kind, ch.t[keep], ch.values[keep], ch.noise, ch.offset, ch.drift))
         n_full += ch.t.size
         n_thin += out[-1].t.size
     return out, n_full / n_thin
@@ -280,13 +280,14 @@ def thin_channels(channels, t_r: float | None = None, samples: int = SEARCH_SAMP
 
 def profiled_chi2(misfit, params: dict[str, float]) -> float:
     """The chi-square of ``misfit`` (an :class:`quickrelease.isolation_fit._Misfit`) at ``params``, each
-    channel's offset at its best value in closed form: the offsets enter linearly and a channel's weights
-    are equal, so its best offset is the mean of data minus model over its samples. inf outside the
-    model's domain."""
+    channel's offset (and drift) at its best value in closed form: they enter linearly and a channel's
+    weights are equal, so its best offset is the mean of data minus model over its samples (with a drift,
+    the straight line fitted to them). inf outside the model's domain."""
     from .errors import ParameterError
 
+    zeros = {f"{z}_{c.name}": 0.0 for c in misfit.channels for z in ("offset", "drift")}
     try:
-        model = misfit.model_vector({**params, **{f"offset_{c.name}": 0.0 for c in misfit.channels}})
+        model = misfit.model_vector({**params, **zeros})
     except (ParameterError, ValueError, ZeroDivisionError, OverflowError):
         return math.inf
     r = (model - misfit.data) / misfit.sig
@@ -295,7 +296,12 @@ def profiled_chi2(misfit, params: dict[str, float]) -> float:
     total = 0.0
     for c in misfit.channels:
         seg = r[misfit.rows_of[f"offset_{c.name}"]]
-        if c.offset:
+        if c.drift:  # least squares on the columns (1, t - t_0) (or t - t_0 alone)
+            ramp = misfit.ramp[f"drift_{c.name}"]
+            cols = np.column_stack([np.ones_like(ramp), ramp] if c.offset else [ramp])
+            coef = np.linalg.lstsq(cols, seg, rcond=None)[0]
+            seg = seg - cols @ coef
+        elif c.offset:
             seg = seg - float(np.mean(seg))
         total += float(seg @ seg)
     return total

@@ -368,6 +368,8 @@ class ChannelSpec:
     """Noise standard deviation [SI]; None: estimated from the pre-release segment."""
     offset: bool = False
     """Estimate a constant offset of this channel."""
+    drift: bool = False
+    """Estimate a linear drift of its zero too (the building's channels only: ``drift = true``)."""
     file: Path | None = None
     """A file of its own (time in the same column name unless ``time_column`` is given), else the record's file."""
     time_column: str | None = None
@@ -396,11 +398,14 @@ class RecordSpec:
     clipped: str = "exclude"
     """Clipped samples (:func:`quickrelease.timebase.clipped_samples`): ``"exclude"`` (left out like missing
     samples, said in a note) or ``"keep"``."""
+    spikes: str = "keep"
+    """The building's record only: ``"exclude"`` has the fit leave out the samples its residuals show as
+    spikes (``fit_isolation(exclude_spikes=True)``), ``"keep"`` (default) fits every sample."""
 
 
-_CHANNEL_KEYS = ("column", "unit", "noise", "offset", "scale", "file", "time")
-_RECORD_KEYS = ("file", "time", "release_time", "channels", "duplicates", "clipped")
-_CHOICES = {"duplicates": ("merge", "refuse"), "clipped": ("exclude", "keep")}
+_CHANNEL_KEYS = ("column", "unit", "noise", "offset", "drift", "scale", "file", "time")
+_RECORD_KEYS = ("file", "time", "release_time", "channels", "duplicates", "clipped", "spikes")
+_CHOICES = {"duplicates": ("merge", "refuse"), "clipped": ("exclude", "keep"), "spikes": ("keep", "exclude")}
 
 
 def _time_spec(time: Any, where: str) -> tuple[str, float]:
@@ -423,7 +428,8 @@ def _unit_factor(unit: str, kind: str, where: str) -> float:
 
 
 def parse_record_spec(table: Any, source: str, base: Path, *, channels: dict[str, tuple[str, str, str]] | None = None,
-                      offsets: tuple[str, ...] | None = None, section: str = "record") -> RecordSpec:
+                      offsets: tuple[str, ...] | None = None, section: str = "record",
+                      drifts: bool = False) -> RecordSpec:
     """Validate the ``[record]`` table of a case file.
 
     ``file`` (relative to the case file), ``time`` (a column name in seconds, or a table
@@ -437,7 +443,9 @@ def parse_record_spec(table: Any, source: str, base: Path, *, channels: dict[str
 
     ``channels`` (name -> (quantity kind, SI unit, description)), ``offsets`` (the channels with an offset
     by default) and ``section`` (the table's name in messages) default to the device's record; the
-    building's record (``[building.record]``) passes its own.
+    building's record (``[building.record]``) passes its own, and ``drifts=True``: its channels may also say
+    ``drift = true`` (a linear drift of the sensor's zero, fitted beside the offset) and the record
+    ``spikes = "exclude"`` (the fit leaves out the samples its residuals show as spikes).
     """
     channels = CHANNELS if channels is None else channels
     offsets = DISPLACEMENT_CHANNELS if offsets is None else offsets
@@ -466,18 +474,21 @@ def parse_record_spec(table: Any, source: str, base: Path, *, channels: dict[str
         choices[key] = table.get(key, valid[0])
         if choices[key] not in valid:
             raise RecordError(f"{where}: {key} = {choices[key]!r}: expected " + " or ".join(map(repr, valid)))
+    if choices["spikes"] != "keep" and not drifts:
+        raise RecordError(f"{where}: spikes = {choices['spikes']!r}: spikes are excluded by the building's fit "
+                          "only ([building.record])")
     channels_table = table["channels"]
     if not isinstance(channels_table, dict) or not channels_table:
         raise RecordError(f"{where}: channels: expected a table mapping channels ({', '.join(channels)}) to columns")
     specs = {}
     for name, entry in channels_table.items():
-        specs[name] = _channel_spec(name, entry, f"{where} channels.{name}", base, channels, offsets)
+        specs[name] = _channel_spec(name, entry, f"{where} channels.{name}", base, channels, offsets, drifts)
     return RecordSpec(file=file, time_column=time_column, time_factor=time_factor, channels=specs,
                       release_time=release, source=source, **choices)
 
 
 def _channel_spec(name: str, entry: Any, where: str, base: Path, channels: dict[str, tuple[str, str, str]],
-                  offsets: tuple[str, ...]) -> ChannelSpec:
+                  offsets: tuple[str, ...], drifts: bool = False) -> ChannelSpec:
     if name not in channels:
         raise RecordError(f"{where}: unknown channel {name!r}; valid: {', '.join(channels)}")
     kind, si_unit, _ = channels[name]
@@ -506,6 +517,12 @@ def _channel_spec(name: str, entry: Any, where: str, base: Path, channels: dict[
     offset = entry.get("offset", name in offsets)
     if not isinstance(offset, bool):
         raise RecordError(f"{where}: offset = {offset!r}: expected true or false")
+    drift = entry.get("drift", False)
+    if not isinstance(drift, bool):
+        raise RecordError(f"{where}: drift = {drift!r}: expected true or false")
+    if drift and not drifts:
+        raise RecordError(f"{where}: drift = true: a drifting zero is fitted for the building's channels only "
+                          "([building.record])")
     file = None
     if "file" in entry:
         if not isinstance(entry["file"], str):
@@ -519,7 +536,7 @@ def _channel_spec(name: str, entry: Any, where: str, base: Path, channels: dict[
                               "shares its time column (give file = ... for a file with its own time axis)")
         time_column, time_factor = _time_spec(entry["time"], f"{where}.time")
     return ChannelSpec(name=name, column=entry["column"], unit=unit, factor=factor * float(scale), noise=noise,
-                       offset=offset, file=file, time_column=time_column, time_factor=time_factor)
+                       offset=offset, drift=drift, file=file, time_column=time_column, time_factor=time_factor)
 
 
 # -- the data ------------------------------------------------------------------------------------------
