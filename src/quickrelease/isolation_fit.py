@@ -1159,6 +1159,8 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
     res = _requiet(res, channels, noise, source, sig, names, values, solve, t_r0)
     if model in ("linear", "bilinear"):
         res = _polish(res, names, values, solve, misfit.residuals, lower, upper, misfit.dt)
+        if not any(c.kind in ("x", "x_roof") for c in channels):  # no smooth channel: the steps rule the misfit
+            res = _step_search(res, names, values, solve, misfit.residuals, lower, upper, seed)
     if not absolute:
         # a noise level taken from the residuals: weight each such channel by its own residual scatter
         # and refit (twice; the weights settle at once). One global chi-square scale cannot correct
@@ -1318,6 +1320,56 @@ def _polish(res, names, values, solve, residuals, lower, upper, dt: float):
         if best is None:
             return res
         done = solve(names, values, best)
+        if 2.0 * (res.cost - done.cost) < POLISH_GAIN:
+            return res
+        res = done
+    return res
+
+
+#: The step search (:func:`_step_search`): half-width of its box in standard errors, evaluations a run, runs.
+STEP_BOX, STEP_EVALUATIONS, STEP_ROUNDS = 3.0, 400, 4
+
+
+def _step_search(res, names, values, solve, residuals, lower, upper, seed: int):
+    """A CMA-ES run on the whole record within ``STEP_BOX`` standard errors of the fit, restarted by least
+    squares from its best point and kept where it fits better by ``POLISH_GAIN``; ``STEP_ROUNDS`` rounds.
+
+    The misfit is piecewise smooth: a piece per sample that the release, a reversal or the stick crosses,
+    and on an acceleration record each such crossing is a step (the acceleration jumps there). Within one
+    basin the pieces form a staircase that a local search stops on, tens of chi-square above the basin's
+    floor (an acceleration-only record: 87 above the fit started at the truth, though every parameter lay
+    within its standard error of it), and the certificate counted the basin as reached. The evolution
+    strategy needs no derivative and steps across them (``STEP_EVALUATIONS`` a run: about 0.4 s on a linear
+    record of 12 000 samples). Run on records without a displacement channel: a displacement is continuous
+    at every event, and where one is recorded its smooth misfit rules (the fits of x and x + a records reach
+    the truth-started minimum without it, and on the benchmark's records it found nothing lower while it
+    cost a linear fit 30% and a bilinear one 140% more)."""
+    from .isolation_search import cma_es
+
+    lo = np.array([lower.get(n, -math.inf) for n in names])
+    hi = np.array([upper.get(n, math.inf) for n in names])
+    for k in range(STEP_ROUNDS):
+        x = np.asarray(res.x, dtype=float)
+        try:
+            cov, blind = identified_covariance(np.asarray(res.jac, dtype=float))
+        except np.linalg.LinAlgError:
+            return res
+        se = np.where(blind, 0.0, np.sqrt(np.clip(np.diag(cov), 0.0, None)))
+        se = np.where(np.isfinite(se), se, 0.0)
+        if not np.any(se > 0.0):
+            return res
+
+        def point(u, x=x, se=se):
+            return np.clip(x + (2.0 * np.asarray(u) - 1.0) * STEP_BOX * se, lo, hi)
+
+        def chi2(u):
+            r = residuals(point(u), names, values)
+            return float(r @ r)
+
+        u, best, _ = cma_es(chi2, np.full(x.size, 0.5), 0.5 / STEP_BOX, STEP_EVALUATIONS, seed + 7919 * (k + 1))
+        if not best < 2.0 * res.cost - POLISH_GAIN:
+            return res
+        done = solve(names, values, point(u))
         if 2.0 * (res.cost - done.cost) < POLISH_GAIN:
             return res
         res = done
