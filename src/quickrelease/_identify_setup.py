@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import math
 import types
-from functools import lru_cache
 
 sin = math.sin
 cos = math.cos
@@ -84,10 +83,9 @@ def identify_setup(a0, aF, E, k, m2, L1):
     return sA, cA, sm, c1, c2, F1max, F2max, ratio, msq, pref
 
 
-@lru_cache(maxsize=4)
 def for_arrays(xp):
     """:func:`identify_setup` elementwise on ``xp`` arrays (numpy or CuPy): the same code, its ``sin``, ``cos`` and
-    ``sqrt`` bound to ``xp``'s."""
+    ``sqrt`` bound to ``xp``'s (any object with those three functions: a module, or a test's stand-in for one)."""
     fn = identify_setup
     env = {**fn.__globals__, "sin": xp.sin, "cos": xp.cos, "sqrt": xp.sqrt}
     return types.FunctionType(fn.__code__, env, fn.__name__, fn.__defaults__)
