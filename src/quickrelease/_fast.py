@@ -53,10 +53,12 @@ def _refresh_stale_cache(kernels, stamp: str | None = None) -> bool:
     """Drop the cached kernels of this file when the modules they inline have changed; True when it did.
 
     numba stamps a cached function with its own source file only (its mtime and size in older releases, a
-    sha256 of its content since 0.6x), and the kernels here inline functions of :mod:`quickrelease.dynamics` and
-    :mod:`quickrelease._kernels`: after an edit or a checkout that changes those alone, the cached kernels would
-    keep the old formulas (a stale kernel once made batch and simulate differ by an ulp, and another reported a
-    release as creeping that the numpy path stopped by friction). So the sha256 of those sources is kept beside
+    sha256 of its content since 0.6x), and the kernels here inline functions of :mod:`quickrelease.dynamics`,
+    :mod:`quickrelease._kernels` and :mod:`quickrelease._identify_setup`: after an edit or a checkout that changes
+    those alone, the cached kernels would keep the old formulas (a stale kernel once made batch and simulate differ
+    by an ulp, and another reported a release as creeping that the numpy path stopped by friction; without the
+    setup's file in the stamp, a planted error in it left the compiled identification passing its tests while the
+    numpy and GPU back-ends failed them). So the sha256 of those sources is kept beside
     the cache; where it differs (or is missing) the kernels' cache indexes are flushed and they recompile on first
     use. (Touching this file, the earlier remedy, invalidates nothing once numba hashes the content.) A read-only
     install is left as is.

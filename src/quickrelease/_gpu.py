@@ -10,7 +10,9 @@ The stop time (Eq. 8-10), the release envelope (Table 4, Eq. 6) and the identifi
   ``limit_sweep``, ``_stop_terms``, ``sweep_sides``) and ``_kernels.feasible_slack`` are arithmetic and numpy
   ufuncs (``np.sqrt``, ``np.maximum``, ``np.abs``, ``np.cos``), which CuPy arrays take through
   ``__array_ufunc__``: they are called as they are, one definition of the classifier and of Eq. 8 for every backend
-  (a test checks they call nothing else). ``np.where``, ``np.clip``, ``np.argmax`` and
+  (a test checks they call nothing else). The identification's setup is
+  :func:`quickrelease._identify_setup.identify_setup`, the function the compiled kernel calls, bound to ``xp``'s
+  ``sin``, ``cos`` and ``sqrt``. ``np.where``, ``np.clip``, ``np.argmax`` and
   ``_kernels.tier_of`` are not ufuncs and are not called (the tiers are re-stated below with ``xp.where``).
 * Float64 throughout. No Python loop over cases: loops run over quadrature nodes, graded panels, Halley steps and
   Illinois steps, each a vectorised pass over the cases still concerned.
