@@ -27,7 +27,7 @@ from numba import types as _nbtypes
 from numba.core import cgutils
 from numba.extending import intrinsic
 
-from . import _kernels, dynamics
+from . import _identify_setup, _kernels, dynamics
 
 _HALF_PI = 0.5 * math.pi
 #: Grading steps past a near-singularity's distance that the graded rule goes on panelling (calibrated against
@@ -36,7 +36,7 @@ GRADED_REACH = 1
 
 
 #: The modules whose functions the kernels of this file compile in (inline): their sources stamp the cache.
-_DEPENDENCIES = (dynamics, _kernels)
+_DEPENDENCIES = (dynamics, _kernels, _identify_setup)
 _STAMP_FILE = "_fast.dependencies.sha256"
 
 
@@ -53,10 +53,12 @@ def _refresh_stale_cache(kernels, stamp: str | None = None) -> bool:
     """Drop the cached kernels of this file when the modules they inline have changed; True when it did.
 
     numba stamps a cached function with its own source file only (its mtime and size in older releases, a
-    sha256 of its content since 0.6x), and the kernels here inline functions of :mod:`quickrelease.dynamics` and
-    :mod:`quickrelease._kernels`: after an edit or a checkout that changes those alone, the cached kernels would
-    keep the old formulas (a stale kernel once made batch and simulate differ by an ulp, and another reported a
-    release as creeping that the numpy path stopped by friction). So the sha256 of those sources is kept beside
+    sha256 of its content since 0.6x), and the kernels here inline functions of :mod:`quickrelease.dynamics`,
+    :mod:`quickrelease._kernels` and :mod:`quickrelease._identify_setup`: after an edit or a checkout that changes
+    those alone, the cached kernels would keep the old formulas (a stale kernel once made batch and simulate differ
+    by an ulp, and another reported a release as creeping that the numpy path stopped by friction; without the
+    setup's file in the stamp, a planted error in it left the compiled identification passing its tests while the
+    numpy and GPU back-ends failed them). So the sha256 of those sources is kept beside
     the cache; where it differs (or is missing) the kernels' cache indexes are flushed and they recompile on first
     use. (Touching this file, the earlier remedy, invalidates nothing once numba hashes the content.) A read-only
     install is left as is.
@@ -585,24 +587,18 @@ def _line_sums(P, d, b, n, lam):
     return t0, t1, t2
 
 
+#: The setup of an observation (sines, cosines, F1*, F2*, the tier ratios, the prefactor: Eq. 11-13), compiled from
+#: the function the numpy and GPU back-ends call (:mod:`quickrelease._identify_setup`): one definition, the same bits.
+_identify_setup_one = _jit(_identify_setup.identify_setup)
+
+
 @njit(cache=True, nogil=True, error_model="numpy")
 def _identify_one(a0, aF, tF, E, kk, m2, L1, x16, w16, x24, w24, near, hard, mass_sq, mass_hard_sq, tol, max_iter,
                   grading, reach, panels, P, d, b):
     """(lambda, F1*, F2*, t_lo, t_hi, status, iterations) of one observation: Halley's method in lambda = F1/F1* on
     the line of Eq. 13 (t(lambda) increasing and convex; cubic convergence, 3-4 steps; Newton's step where Halley's
     denominator is not safely positive), on the rule of the stop-time kernel (graded panels where needed)."""
-    sA = math.sin(aF)
-    cA = math.cos(aF)
-    half = 0.5 * (aF - a0)
-    sm = math.sin(half)
-    ch = math.cos(half)
-    c1 = cA * ch + sA * sm
-    c2 = sA * ch - cA * sm
-    F1max = E / (4.0 * L1 * c1 * sm)
-    F2max = E / (8.0 * L1 * c2 * sm)
-    ratio = cA / c1
-    sa0 = math.sin(a0)
-    msq = (kk + sa0 * sa0) / (aF - a0) ** 2
+    sA, cA, sm, c1, c2, F1max, F2max, ratio, msq, pref = _identify_setup_one(a0, aF, E, kk, m2, L1)
     tier = _tier(ratio, msq, near, hard, mass_sq, mass_hard_sq)
     if tier == 2:
         jl = _panel_count(math.sqrt(ratio) if ratio > 0.0 else 0.0, grading, reach, panels)
@@ -640,7 +636,6 @@ def _identify_one(a0, aF, tF, E, kk, m2, L1, x16, w16, x24, w24, near, hard, mas
     else:
         lo, hi = _line_nodes(x16, w16, 0.0, 1.0, sm, sA, cA, c1, c2, kk, P, d, b, 0)
         n = x16.size
-    pref = 4.0 * sm * L1 * math.sqrt(m2 / E)
     lo *= pref
     hi *= pref
     # an observation within rounding of an end of the feasible interval is that end (F1 = 0 or F2 = 0)

@@ -10,7 +10,9 @@ The stop time (Eq. 8-10), the release envelope (Table 4, Eq. 6) and the identifi
   ``limit_sweep``, ``_stop_terms``, ``sweep_sides``) and ``_kernels.feasible_slack`` are arithmetic and numpy
   ufuncs (``np.sqrt``, ``np.maximum``, ``np.abs``, ``np.cos``), which CuPy arrays take through
   ``__array_ufunc__``: they are called as they are, one definition of the classifier and of Eq. 8 for every backend
-  (a test checks they call nothing else). ``np.where``, ``np.clip``, ``np.argmax`` and
+  (a test checks they call nothing else). The identification's setup is
+  :func:`quickrelease._identify_setup.identify_setup`, the function the compiled kernel calls, bound to ``xp``'s
+  ``sin``, ``cos`` and ``sqrt``. ``np.where``, ``np.clip``, ``np.argmax`` and
   ``_kernels.tier_of`` are not ufuncs and are not called (the tiers are re-stated below with ``xp.where``).
 * Float64 throughout. No Python loop over cases: loops run over quadrature nodes, graded panels, Halley steps and
   Illinois steps, each a vectorised pass over the cases still concerned.
@@ -37,7 +39,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from . import _kernels, dynamics
+from . import _identify_setup, _kernels, dynamics
 from .errors import QuickReleaseError
 
 __all__ = ["gpu_available", "require_gpu", "array_module", "stop_arrays", "release_arrays", "identify_arrays",
@@ -547,20 +549,8 @@ def identify_arrays(xp, alpha0, alpha_final, stop_time, E, k, m2, L1, tol: float
 
 
 def _identify_chunk(xp, a0, aF, tF, E, k, m2, L1, tol, max_iter, chunk):
-    with np.errstate(all="ignore"):
-        sA = xp.sin(aF)
-        cA = xp.cos(aF)
-        half = 0.5 * (aF - a0)
-        sm = xp.sin(half)
-        ch = xp.cos(half)
-        c1 = cA * ch + sA * sm
-        c2 = sA * ch - cA * sm
-        F1max = E / (4.0 * L1 * c1 * sm)
-        F2max = E / (8.0 * L1 * c2 * sm)
-        ratio = cA / c1
-        sa0 = xp.sin(a0)
-        msq = (k + sa0 * sa0) / (aF - a0) ** 2
-        pref = 4.0 * sm * L1 * xp.sqrt(m2 / E)
+    with np.errstate(all="ignore"):  # the setup of every back-end (Eq. 11-13), elementwise on xp's arrays
+        sA, cA, sm, c1, c2, F1max, F2max, ratio, msq, pref = _identify_setup.for_arrays(xp)(a0, aF, E, k, m2, L1)
     c = {"sm": sm, "sA": sA, "cA": cA, "c1": c1, "c2": c2, "k": k, "ratio": ratio, "msq": msq, "pref": pref,
          "tF": tF, "a0": a0, "aF": aF}
     tier = _tier(xp, ratio, msq)

@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from . import _kernels, dynamics
+from . import _identify_setup, _kernels, dynamics
 from ._kernels import HALF_PI, gauss_unit, graded_unit
 from .errors import ParameterError
 
@@ -536,20 +536,11 @@ def _newton_on_line(x, wt, sigma_m, sA, cA, c1_0, c2_0, k, pref, target, tol, ma
 def _identify_chunk(alpha0, aF, tF, E_S, k, m2, L1, tol, max_iter) -> dict[str, Any]:
     """The numpy reference of the compiled ``_fast.identify_kernel`` (Newton's method on the full graded rule of
     ``_kernels``): tests check the two agree."""
-    sA, cA = np.sin(aF), np.cos(aF)
-    half = 0.5 * (aF - alpha0)
-    sigma_m = np.sin(half)
-    # normalizers: cos and sin of (aF + alpha0)/2 = aF - half
-    c1_0 = cA * np.cos(half) + sA * sigma_m
-    c2_0 = sA * np.cos(half) - cA * sigma_m
-    F1_max = E_S / (4.0 * L1 * c1_0 * sigma_m)  # Eq. 11: E_S / (2 L1 (sin aF - sin a0))
-    F2_max = E_S / (8.0 * L1 * c2_0 * sigma_m)  # Eq. 12: E_S / (4 L1 (cos a0 - cos aF))
-    # tiers as for the stop-time kernel: the pure-hinge remaining energy a vanishes at the stop when
-    # alpha_F -> pi/2 (a(0) = cos aF / c1_0); a small mass factor near the start needs more nodes
-    end_ratio = cA / c1_0
-    mass_sq = (k + np.sin(alpha0) ** 2) / (aF - alpha0) ** 2
+    # sines, cosines, the normalizers c1_0, c2_0, F1* and F2* (Eq. 11-12), the tiers' ratios and the prefactor: the
+    # setup of every back-end (the tiers as for the stop-time kernel)
+    sA, cA, sigma_m, c1_0, c2_0, F1_max, F2_max, end_ratio, mass_sq, pref = _identify_setup.for_arrays(np)(
+        alpha0, aF, E_S, k, m2, L1)
     tier = _kernels.tier_of(end_ratio, mass_sq)
-    pref = 4.0 * sigma_m * L1 * np.sqrt(m2 / E_S)
     lam = np.empty(alpha0.size)
     t_lo = np.empty(alpha0.size)
     t_hi = np.empty(alpha0.size)
