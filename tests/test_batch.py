@@ -3,9 +3,10 @@
 import numpy as np
 import pytest
 
-from quickrelease import _kernels, batch, simulate, stop_time
-from quickrelease.reference import identify_mp, stop_time_mp
-from quickrelease.sampling import random_releases
+from quickrelease import batch, simulate, stop_time
+from quickrelease.batch.sampling import random_releases
+from quickrelease.device import _kernels
+from quickrelease.device.reference import identify_mp, stop_time_mp
 
 
 @pytest.fixture(scope="module")
@@ -139,7 +140,7 @@ def test_peak_accelerations_against_dense_single_releases():
     """Peak |u_ddot|, |v_ddot| of the batch kernel: the compiled loop equals its numpy reference, and both
     match the maximum over a 100,001-sample single release to 1e-4."""
     from quickrelease import preset, simulate
-    from quickrelease.sampling import random_releases
+    from quickrelease.batch.sampling import random_releases
 
     cases = random_releases(40, seed=21)
     r = batch.release(**cases)

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from quickrelease import bench
+from quickrelease.batch.sampling import WIDE_STRATA
 from quickrelease.cli import app
-from quickrelease.sampling import WIDE_STRATA
+from quickrelease.studies import bench
 
 TINY = bench.Sizes(cases=3000, stop_time=2, identify=1, repeat=1, strata_conditioning=False,
                    case_conditioning=False)
@@ -31,7 +31,7 @@ GROUP_KEYS = {"cases", "cases_per_s", "cpu_cases_per_s", "all_cores_cases_per_s"
 def test_json_schema_groups_both_samples(result):
     assert {"bench", "wide", "targets", "threads", "quick", "seed"} <= result.keys()
     assert "uq_dask" not in result  # quick: no Dask run
-    from quickrelease._gpu import gpu_available
+    from quickrelease.batch._gpu import gpu_available
 
     assert "gpu" in result and (result["gpu"] is None) == (not gpu_available())  # the GPU section: null without one
     json.dumps(result, allow_nan=False)  # what --json prints: no NaN, no numpy scalars
@@ -191,7 +191,7 @@ def test_a_kernel_that_depends_on_the_thread_count_is_caught(monkeypatch):
     import numba
 
     from quickrelease import batch
-    from quickrelease.sampling import random_releases
+    from quickrelease.batch.sampling import random_releases
 
     if numba.config.NUMBA_NUM_THREADS < 2:
         pytest.skip("numba may use one thread only here")
@@ -278,8 +278,8 @@ def test_identify_sensitivities_agree_with_solving_again():
     ulp up: on a typical case (every input; lambda and F1*, F2* move by a few 1e-16 alike) and on a nearly immediate
     stop (one ulp of alpha_F moves F1 by ~1e-7 of F1*; the three inputs that matter most)."""
     from quickrelease import batch
-    from quickrelease.reference import identify_lambda_mp
-    from quickrelease.sampling import wide_releases
+    from quickrelease.batch.sampling import wide_releases
+    from quickrelease.device.reference import identify_lambda_mp
 
     draw = wide_releases(400, seed=3, strata=True)
     st = batch.stop_time(*(draw[k] for k in bench._KEYS))

@@ -17,14 +17,14 @@ import pytest
 
 from quickrelease import preset
 from quickrelease._validate import available_memory, check_seed, check_size, check_workers
-from quickrelease.case import load_case
+from quickrelease.device.identify import identify_friction
+from quickrelease.device.solvers import simulate
+from quickrelease.device.statics import internal_forces, strain_energy, strain_energy_limit
 from quickrelease.errors import ParameterError, QuickReleaseError
-from quickrelease.identify import identify_friction
-from quickrelease.solvers import simulate
-from quickrelease.statics import internal_forces, strain_energy, strain_energy_limit
-from quickrelease.sweep import parse_grid, sweep
-from quickrelease.synth import _toml_value, synthesize
-from quickrelease.uq import run_uq
+from quickrelease.io.case import load_case
+from quickrelease.studies.sweep import parse_grid, sweep
+from quickrelease.studies.synth import _toml_value, synthesize
+from quickrelease.studies.uq import run_uq
 
 PAPER = Path(str(resources.files("quickrelease") / "data" / "cases" / "paper.toml"))
 UQ = Path(str(resources.files("quickrelease") / "data" / "cases" / "uq_paper.toml"))
@@ -67,7 +67,7 @@ def test_release_not_resolvable_names_the_input(kwargs, culprit):
 
 def test_first_integral_checks_itself():
     """The single-case release every path builds (fit, synth, identify) refuses what it cannot resolve."""
-    from quickrelease.solvers import FirstIntegral
+    from quickrelease.device.solvers import FirstIntegral
 
     d = preset("paper")
     with np.errstate(all="ignore"), pytest.raises(ParameterError, match=r"^F2 = 1e\+308 N"):
@@ -215,7 +215,7 @@ def test_toml_strings_round_trip(text):
 
 def test_synth_case_out_round_trips(tmp_path):
     """A record file name with a quote, a backslash and a title with a newline: the case file parses."""
-    from quickrelease.synth import case_toml
+    from quickrelease.studies.synth import case_toml
 
     case = load_case(PAPER).replace(source='lab "B"\\n\nrun')
     syn = synthesize(case, ["u"], rate=200.0)
@@ -228,7 +228,7 @@ def test_synth_case_out_round_trips(tmp_path):
 # -- item 11 (part): the fit refuses noise below the resolution of the record ----------------------------
 
 def test_fit_noise_floor(tmp_path):
-    from quickrelease.fit import fit_record
+    from quickrelease.studies.fit import fit_record
 
     syn = synthesize(load_case(PAPER), ["u"], rate=200.0, noise={"u": 5e-4})
     syn.write_csv(tmp_path / "r.csv")
@@ -242,7 +242,7 @@ def test_fit_noise_floor(tmp_path):
                                               ("u_m", 10, "inf"), ("u_m", 20, "1e400")])
 def test_fit_names_a_glitched_sample(tmp_path, column, row, value):
     """One absurd sample in a record: file, column and row named, no traceback (the clean record fits)."""
-    from quickrelease.fit import fit_record
+    from quickrelease.studies.fit import fit_record
 
     syn = synthesize(load_case(PAPER), ["u", "a_head"], rate=200.0)
     syn.write_csv(tmp_path / "r.csv")

@@ -11,7 +11,7 @@ import pytest
 from building_reference import reference as _reference
 from scipy.integrate import quad
 
-from quickrelease.building import Isolation, free_vibration, pushed_state
+from quickrelease.building.model import Isolation, free_vibration, pushed_state
 from quickrelease.errors import ParameterError
 
 G = 9.80665

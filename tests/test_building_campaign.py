@@ -13,18 +13,18 @@ from building_reference import reference, reference_2dof
 from scipy import stats
 from typer.testing import CliRunner
 
-from quickrelease.building_campaign import (
+from quickrelease.building.isolation_fit import BuildingChannel, fit_isolation
+from quickrelease.cli import _building_campaign_tables, app
+from quickrelease.errors import ParameterError, QuickReleaseError
+from quickrelease.report.html import render_campaign_report
+from quickrelease.studies.building_campaign import (
     BuildingRelease,
     building_campaign_figure,
     derived_quantity,
     fit_building_campaign,
     law_standard_error,
 )
-from quickrelease.campaign import fit_line, run_campaign, weights_or_none
-from quickrelease.cli import _building_campaign_tables, app
-from quickrelease.errors import ParameterError, QuickReleaseError
-from quickrelease.isolation_fit import BuildingChannel, fit_isolation
-from quickrelease.report import render_campaign_report
+from quickrelease.studies.campaign import fit_line, run_campaign, weights_or_none
 
 M = 4.0e5  # 400 t
 T, ZETA = 2.0, 0.03
@@ -390,7 +390,7 @@ def test_a_release_in_a_local_minimum_is_refitted_from_the_others(monkeypatch):
     refitted from the estimates of the release that fits, and every friction then holds the truth. (The fit
     itself now also tries the decay analysis' start beside far-off design values, so real local minima of
     the linear model are rare; the campaign's restart is checked on a planted one.)"""
-    import quickrelease.building_campaign as bc
+    import quickrelease.studies.building_campaign as bc
 
     releases = [BuildingRelease(f"R{i}", _record(d0, 2.0e4, 100 + i), d0=d0) for i, d0 in ((0, 0.05), (2, 0.13),
                                                                                              (4, 0.20))]

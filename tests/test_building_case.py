@@ -1,5 +1,5 @@
 """The building in a case file (issue 10, items 2, 5 and 8): ``[building]`` with its models, ``[building.record]``
-read by :func:`quickrelease.building_case.load_building`, and synthetic building records (``synth``).
+read by :func:`quickrelease.io.building_case.load_building`, and synthetic building records (``synth``).
 
 References: hand calculations (the bilinear push curve, the start values), and the independent solve_ivp
 simulation of tests/building_reference.py for the synthetic records.
@@ -12,14 +12,14 @@ import pytest
 from building_reference import reference, reference_2dof
 from typer.testing import CliRunner
 
-from quickrelease.building import TwoDOF
-from quickrelease.building_case import load_building
-from quickrelease.case import CaseFileError, load_case
+from quickrelease.building.model import TwoDOF
 from quickrelease.cli import app
 from quickrelease.errors import QuickReleaseError
-from quickrelease.planning import building_isolation, pushed_displacement
-from quickrelease.records import RecordError
-from quickrelease.synth import synthesize_building
+from quickrelease.io.building_case import load_building
+from quickrelease.io.case import CaseFileError, load_case
+from quickrelease.io.records import RecordError
+from quickrelease.studies.planning import building_isolation, pushed_displacement
+from quickrelease.studies.synth import synthesize_building
 
 G = 9.80665
 runner = CliRunner()
@@ -86,7 +86,7 @@ def test_bilinear_push_curve_gives_d0():
     d_y + (P - F_s - F_y) / k2 (hand calculation with F_y = 80 kN, k1 = 40 MN/m, k2 = 4 MN/m, F_s = 20 kN)."""
     from dataclasses import replace
 
-    from quickrelease.case import BuildingSpec
+    from quickrelease.io.case import BuildingSpec
 
     b = BuildingSpec(model="bilinear", mass=4e5, k1=4e7, k2=4e6, yield_force=8e4, friction=2e4)
     assert pushed_displacement(80e3, b) == pytest.approx(60e3 / 4e7, rel=1e-14)          # elastic: 1.5 mm
@@ -132,7 +132,7 @@ NO_DESIGN = [
 
 @pytest.mark.parametrize("text, missing, message", NO_DESIGN)
 def test_design_values_are_optional_until_needed(tmp_path, text, missing, message):
-    from quickrelease.building_case import spec_building
+    from quickrelease.io.building_case import spec_building
 
     spec = _case(tmp_path, text).building
     assert spec.missing_design() == missing
@@ -277,7 +277,7 @@ def test_synth_refuses_a_push_the_sliders_hold(tmp_path):
 
 def test_an_edited_building_record_is_another_run(tmp_path):
     """The run folder's fingerprint takes the building's record files by their content, as the device's."""
-    from quickrelease.runfolder import case_inputs, fingerprint
+    from quickrelease.io.runfolder import case_inputs, fingerprint
 
     _write_record(tmp_path)
     case = _case(tmp_path, RECORD)
@@ -295,7 +295,7 @@ def test_the_shipped_whole_test_example(tmp_path):
     from pathlib import Path
 
     from quickrelease import preset
-    from quickrelease.planning import member_checks
+    from quickrelease.studies.planning import member_checks
 
     path = Path(__file__).parent.parent / "examples" / "building.toml"
     case = load_case(path)
@@ -321,9 +321,9 @@ def test_clearance_with_a_bilinear_building_reaches_its_first_return():
     here), later than 1.5 t_F and its initial period (0.63 s): the clearance covers the largest approach, which
     the independent solve_ivp reference puts at d0 - min x."""
     from quickrelease import preset
-    from quickrelease.case import BuildingSpec
-    from quickrelease.planning import clearance
-    from quickrelease.solvers import FirstIntegral
+    from quickrelease.device.solvers import FirstIntegral
+    from quickrelease.io.case import BuildingSpec
+    from quickrelease.studies.planning import clearance
 
     d = preset("paper")
     release = FirstIntegral(2900.0, 0.2, 419.85, 804.57, d.m1, d.m2, d.L1, 2 / 3)
@@ -337,7 +337,7 @@ def test_clearance_with_a_bilinear_building_reaches_its_first_return():
 
 
 def test_planning_says_it_takes_the_2dof_building_as_rigid(tmp_path):
-    from quickrelease.planning import plan_case
+    from quickrelease.studies.planning import plan_case
 
     path = tmp_path / "case.toml"
     path.write_text('[test]\nforce = "1598 kN"\nenergy = "2.90 kJ"\nalpha0 = 0.2\n[friction]\nF1 = "420 N"\n'

@@ -190,8 +190,8 @@ def test_bilinear_that_never_yields_is_named_in_a_warning(yield_force, warned):
     cannot tell k2 and F_y, and the analysis says so in a warning naming yield_force (the command exits 0
     with it). A spring that does yield gets no such warning. (The bilinear parameters are held at the truth:
     the multi-start bilinear fit costs tens of seconds, and the warning depends on the fitted spring only.)"""
-    from quickrelease.building_analysis import _bilinear_yield_warning
-    from quickrelease.isolation_fit import BuildingChannel, fit_isolation
+    from quickrelease.building.isolation_fit import BuildingChannel, fit_isolation
+    from quickrelease.studies.building_analysis import _bilinear_yield_warning
 
     rng = np.random.default_rng(1)
     t = np.arange(0.0, 8.0, 0.01)
@@ -209,7 +209,7 @@ def test_bilinear_that_never_yields_is_named_in_a_warning(yield_force, warned):
 def test_whole_test_run_uses_the_identified_building_for_the_clearance(tmp_path):
     """A case with the device part and a building record: run identifies the building, and the clearance
     check uses it (period 2 s, d0 = 0.15 m from the record, not the assumed 2.3 s and 0.17 m), saying so."""
-    from quickrelease.case import load_case
+    from quickrelease.io.case import load_case
     from quickrelease.workflow import run_case, write_results
 
     _write_record(tmp_path, duration=12.0)

@@ -18,12 +18,17 @@ from building_reference import reference
 from scipy import stats
 from typer.testing import CliRunner
 
-from quickrelease.building import RECORD_CHANNELS, Isolation, TwoDOF, free_vibration
-from quickrelease.building_case import BUILDING_CHANNELS
-from quickrelease.case import load_case
+from quickrelease.building.isolation_fit import (
+    CHANNEL_KINDS,
+    BuildingChannel,
+    fit_isolation,
+    predicted_isolation_errors,
+)
+from quickrelease.building.model import RECORD_CHANNELS, Isolation, TwoDOF, free_vibration
 from quickrelease.cli import app
-from quickrelease.isolation_fit import CHANNEL_KINDS, BuildingChannel, fit_isolation, predicted_isolation_errors
-from quickrelease.synth import BUILDING_NOISE, predicted_building_errors, synthesize_building
+from quickrelease.io.building_case import BUILDING_CHANNELS
+from quickrelease.io.case import load_case
+from quickrelease.studies.synth import BUILDING_NOISE, predicted_building_errors, synthesize_building
 
 runner = CliRunner()
 
@@ -183,7 +188,7 @@ def test_missing_samples_cost_precision(tmp_path):
 def test_the_device_prediction_also_uses_the_samples_the_record_has():
     """The same fault class on the device's synth: its prediction (a fit to the noise-free record) took every
     sample, as if none were missing (F1's standard error identical with half the samples gone)."""
-    from quickrelease.synth import predicted_errors, synthesize
+    from quickrelease.studies.synth import predicted_errors, synthesize
 
     case = load_case(Path(__file__).parent.parent / "examples" / "building.toml")
     kw = dict(rate=500.0, seed=2)

@@ -3,7 +3,7 @@ from pathlib import Path
 import pytest
 
 from quickrelease import DeviceFileError, preset, strain_energy
-from quickrelease.case import CaseFileError, load_case
+from quickrelease.io.case import CaseFileError, load_case
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
 BASE = """

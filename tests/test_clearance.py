@@ -1,5 +1,5 @@
 """Clearance with the building (issue 9, item 19a; issue 10, item 1): the building's motion from
-:mod:`quickrelease.building`, the first contact located on the continuous gap, the gap that never falls.
+:mod:`quickrelease.building.model`, the first contact located on the continuous gap, the gap that never falls.
 
 The reference is written here, independently of the package: the device's equation of motion (Eq. 4, c = 2/3)
 and the building's (``x'' = -2 zeta w x' - w^2 x - a_f sign(x')``) integrated together by ``solve_ivp`` with a
@@ -13,9 +13,9 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from quickrelease import preset
-from quickrelease.case import BuildingSpec
-from quickrelease.planning import GAP_GROWS, building_motion, clearance, gap_figure
-from quickrelease.solvers import FirstIntegral
+from quickrelease.device.solvers import FirstIntegral
+from quickrelease.io.case import BuildingSpec
+from quickrelease.studies.planning import GAP_GROWS, building_motion, clearance, gap_figure
 
 DEVICE = preset("paper")
 

@@ -13,8 +13,8 @@ import typer
 from typer.testing import CliRunner
 
 import quickrelease
-from quickrelease import display
 from quickrelease.cli import app
+from quickrelease.report import display
 
 runner = CliRunner()
 WIDE = {"COLUMNS": "200"}  # a wide terminal: long help lines are not wrapped inside a bracketed name
@@ -101,7 +101,7 @@ def test_simulate_says_when_friction_defaults_to_zero():
 def test_zarr_output_without_zarr_fails_before_the_work(tmp_path, monkeypatch):
     import importlib.util
 
-    from quickrelease import sweep as sweep_module
+    from quickrelease.studies import sweep as sweep_module
 
     real = importlib.util.find_spec
     monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "zarr" else real(name, *a))

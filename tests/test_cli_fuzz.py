@@ -380,8 +380,8 @@ def test_an_epoch_clock_is_a_fuzzed_input(tmp_path):
     the same record from 0, to a hundredth of a standard error (issue 22, item 7)."""
     import numpy as np
 
-    from quickrelease.case import load_case
-    from quickrelease.fit import fit_record
+    from quickrelease.io.case import load_case
+    from quickrelease.studies.fit import fit_record
 
     examples = Path(__file__).parent.parent / "examples"
     lines = (examples / "records" / "paper_500Hz.csv").read_text().splitlines()

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import quickrelease as qr
-from quickrelease import dynamics
+from quickrelease.device import dynamics
 
 #: A device unlike the paper's: other bar length and masses (its other members do not enter these results).
 OTHER = dataclasses.replace(qr.preset("paper"), L1=3.1, m1=812.0, m2=377.0, name="other")

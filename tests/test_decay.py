@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from building_reference import reference
 
-from quickrelease.decay import analyse_decay, combined_decay_law, hysteresis_loop, zero_crossings
+from quickrelease.building.decay import analyse_decay, combined_decay_law, hysteresis_loop, zero_crossings
 from quickrelease.errors import ParameterError
 
 M, T, D0 = 4.0e5, 2.0, 0.15

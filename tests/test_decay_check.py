@@ -9,7 +9,7 @@ import math
 import numpy as np
 from building_reference import reference
 
-from quickrelease.isolation_fit import BuildingChannel, decay_check, fit_isolation
+from quickrelease.building.isolation_fit import BuildingChannel, decay_check, fit_isolation
 
 M, T, ZETA, FS, D0 = 1.0e6, 2.9285, 0.092, 70.7e3, 0.2
 

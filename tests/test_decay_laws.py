@@ -9,7 +9,7 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from quickrelease.decay import (
+from quickrelease.building.decay import (
     analyse_decay,
     combined_decay_law,
     decay_laws,

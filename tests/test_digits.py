@@ -4,7 +4,7 @@ Every expected string below is written by hand from that rule."""
 
 import pytest
 
-from quickrelease.display import estimate_row, fixed, places_for, same_places
+from quickrelease.report.display import estimate_row, fixed, places_for, same_places
 
 #: The building's period of examples/building.toml: 2.00008 s, 95% interval [2.00002, 2.00014] s.
 T, LO, HI = 2.000080211619833, 2.0000236160448783, 2.0001368071947874
@@ -46,7 +46,7 @@ def test_without_an_uncertainty_five_significant_digits():
 
 
 def test_the_report_tables_follow_the_interval(tmp_path):
-    from quickrelease.report import _estimate
+    from quickrelease.report.html import _estimate
 
     assert _estimate(T, None, [LO, HI]) == ("2.000080", "&ndash;", "[2.000024, 2.000137]")
     assert _estimate(156880.5, 24.0, [156833.1, 156927.9], 1e-3) == ("156.881", "0.024", "[156.833, 156.928]")

@@ -5,7 +5,8 @@ import pytest
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
-from quickrelease import ParameterError, dynamics
+from quickrelease import ParameterError
+from quickrelease.device import dynamics
 
 m1, m2, L1 = 576.78, 531.69, 2.477
 

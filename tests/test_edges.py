@@ -17,7 +17,8 @@ import numpy as np
 import pytest
 
 import quickrelease as qr
-from quickrelease import _kernels, batch, dynamics, solvers
+from quickrelease import batch
+from quickrelease.device import _kernels, dynamics, solvers
 
 PAPER = qr.preset("paper")
 
@@ -541,7 +542,7 @@ def test_fast_kernel_cache_flushed_when_the_modules_it_inlines_change(tmp_path):
     flushes the indexes of all its kernels when it differs."""
     import types
 
-    from quickrelease import _fast
+    from quickrelease.batch import _fast
 
     class Cache:
         cache_path = str(tmp_path)

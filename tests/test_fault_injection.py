@@ -19,9 +19,9 @@ import numpy as np
 import pytest
 from conftest import UQ_CASE
 
-from quickrelease.case import load_case
-from quickrelease.sweep import sweep
-from quickrelease.uq import run_uq
+from quickrelease.io.case import load_case
+from quickrelease.studies.sweep import sweep
+from quickrelease.studies.uq import run_uq
 from quickrelease.workflow import run_case, write_results
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
@@ -226,8 +226,8 @@ def test_a_full_disk_at_a_seeded_write_leaves_the_whole_result_or_nothing(tmp_pa
 
     from typer.testing import CliRunner
 
-    from quickrelease import export
     from quickrelease.cli import app
+    from quickrelease.io import export
 
     rng = random.Random(f"{command}-{draw}-20261126")
     k, at_rename = rng.randint(1, FILES_WRITTEN[command]), rng.random() < 0.3

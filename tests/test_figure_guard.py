@@ -59,7 +59,7 @@ def test_save_figure_writes_png_and_svg_at_the_dpi_asked_and_leaves_the_settings
 
     from matplotlib.figure import Figure
 
-    from quickrelease.plots import save_figure
+    from quickrelease.report.plots import save_figure
 
     fig = Figure(figsize=(4, 3))
     fig.add_subplot().plot([0, 1], [0, 1], label="line")

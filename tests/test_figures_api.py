@@ -7,7 +7,8 @@ from collections import Counter
 import matplotlib
 import pytest
 
-from quickrelease import plots, simulate
+from quickrelease import simulate
+from quickrelease.report import plots
 from quickrelease.workflow import run_case, write_results
 
 
@@ -38,7 +39,7 @@ def test_draw_into_a_users_figure_or_subfigure(response):
 
 
 def test_svg_text_is_text_and_report_ids_are_unique(tmp_path):
-    from quickrelease.case import load_case
+    from quickrelease.io.case import load_case
 
     paths = write_results(run_case(load_case("examples/paper.toml")), tmp_path / "out")
     assert paths

@@ -9,12 +9,12 @@ import pytest
 from conftest import mp_identify
 from typer.testing import CliRunner
 
-from quickrelease.case import FitOptions, load_case
 from quickrelease.cli import app
-from quickrelease.fit import fit_record
-from quickrelease.records import RecordError, detect_release, load_record, release_channels
-from quickrelease.solvers import FirstIntegral
-from quickrelease.synth import predicted_errors, synthesize
+from quickrelease.device.solvers import FirstIntegral
+from quickrelease.io.case import FitOptions, load_case
+from quickrelease.io.records import RecordError, detect_release, load_record, release_channels
+from quickrelease.studies.fit import fit_record
+from quickrelease.studies.synth import predicted_errors, synthesize
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
 runner = CliRunner()
@@ -121,7 +121,7 @@ def instrument_record(t, clean, seed, missing=0.0):
 
 
 def as_record(t, data):
-    from quickrelease.records import Channel, ChannelSpec, Record
+    from quickrelease.io.records import Channel, ChannelSpec, Record
 
     channels = {}
     for name, values in data.items():
@@ -240,7 +240,7 @@ def test_predicted_errors_are_the_fit_errors_at_the_truth(paper):
     assert pred["correlation_F1_F2"] == pytest.approx(fit.correlation[0, 1], abs=0.01)
     from quality import figure_faults  # the figure of such a fit: residual axes with units, lines in legends
 
-    from quickrelease.plots import fit_figure
+    from quickrelease.report.plots import fit_figure
 
     assert figure_faults(fit_figure(fit)) == []
 
@@ -310,7 +310,7 @@ def test_release_detection_within_a_few_samples(paper):
 # -- stop observations only: the delta method, checked against the uq sensitivities -------------------------
 
 def test_stop_observations_with_scatter_give_delta_method_errors(tmp_path):
-    from quickrelease.uq import sensitivities
+    from quickrelease.studies.uq import sensitivities
 
     text = (EXAMPLES / "paper.toml").read_text().replace(
         'alpha_final = "0.7378 rad"', 'alpha_final = { value = "0.7378 rad", std = "0.01 rad" }').replace(
@@ -373,7 +373,7 @@ def test_channel_of_the_wrong_length(tmp_path, good_rows):
 
 def test_channel_with_the_wrong_units(tmp_path, good_rows):
     name = _csv(tmp_path, _rows(good_rows))
-    from quickrelease.case import CaseFileError
+    from quickrelease.io.case import CaseFileError
 
     with pytest.raises(CaseFileError, match=r"case.toml \[record\] channels.u.unit = 'mm/s': has dimension "
                                             r"\[length\] / \[time\]; expected a length \(e.g. in m\)"):
@@ -481,7 +481,7 @@ def test_campaign_recovers_the_load_law(tmp_path):
 
 
 def test_campaign_law_arithmetic():
-    from quickrelease.campaign import CampaignTest, fit_law
+    from quickrelease.studies.campaign import CampaignTest, fit_law
 
     class FakeCase:
         def __init__(self, P):
@@ -502,8 +502,8 @@ def test_campaign_law_arithmetic():
 
 
 def test_campaign_errors(tmp_path):
-    from quickrelease.campaign import run_campaign
-    from quickrelease.case import CaseFileError
+    from quickrelease.io.case import CaseFileError
+    from quickrelease.studies.campaign import run_campaign
 
     path = tmp_path / "c.toml"
     path.write_text('[[tests]]\nname = "A"\nforce = "1 MN"\nalpha0 = 0.2\nalpha_final = 0.6\nstop_time = 1\n'
@@ -549,7 +549,7 @@ def test_iterations_from_a_poor_start_do_not_grow_with_the_sampling_rate(paper, 
     cost about the same number of evaluations, and both fits must reach the minimum found from the truth,
     which is within 4 standard errors of it. The acceleration alone checks that the coarse stages widen
     the window (decimating alone left its jumps between samples: 25 and 107 evaluations)."""
-    import quickrelease.fit as fit_module
+    import quickrelease.studies.fit as fit_module
 
     start = fit_module._start
 

@@ -16,10 +16,10 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from quickrelease.case import load_case
-from quickrelease.device import preset
-from quickrelease.fit import fit_record
-from quickrelease.records import RecordError
+from quickrelease.device.parameters import preset
+from quickrelease.io.case import load_case
+from quickrelease.io.records import RecordError
+from quickrelease.studies.fit import fit_record
 
 TRUTH = {"F1": 420.0, "F2": 805.0}
 E_S, ALPHA0, C = 2900.0, 0.2, 2.0 / 3.0

@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 from scipy.optimize import least_squares
 
-from quickrelease import fit
 from quickrelease._lsq import jacobian_covariance
-from quickrelease.case import load_case
-from quickrelease.fit import _Problem, _start, fit_record
-from quickrelease.synth import synthesize
+from quickrelease.io.case import load_case
+from quickrelease.studies import fit
+from quickrelease.studies.fit import _Problem, _start, fit_record
+from quickrelease.studies.synth import synthesize
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
 

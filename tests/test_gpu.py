@@ -1,19 +1,19 @@
-"""The GPU path (:mod:`quickrelease._gpu`, issue 12 item 4): kernels written once against an array module.
+"""The GPU path (:mod:`quickrelease.batch._gpu`, issue 12 item 4): kernels written once against an array module.
 
 No GPU here: the very same code runs with ``xp = numpy`` and is checked
 
-* against the compiled CPU kernels (:mod:`quickrelease._fast` through :mod:`quickrelease.batch`) to 1e-13 relative:
+* against the compiled CPU kernels (:mod:`quickrelease.batch._fast` through :mod:`quickrelease.batch`) to 1e-13 relative:
   stop time, alpha_F, the regime, every field of the release envelope, the identification's F1*, F2* and feasible
   ends, and lambda = F1/F1* to 1e-13 plus its rounding floor ``8 eps t_F / (t_hi - t_lo)`` (an observation whose t_F
   barely changes along the line of Eq. 13 determines lambda no better), on the bench and the wide samples, per tier;
 * its tiers against ``_kernels.Releases.build`` (the numpy kernels) and its panel counts against ``_fast._panel_count``;
 * on device-array stand-ins that refuse any numpy function but the ufuncs (as CuPy arrays take them), through an
   array module of functions CuPy has: no numpy-only call, and numpy's bits;
-* against mpmath (:mod:`quickrelease.reference`) on cases of every (regime, tier): 18 stop times and 3
+* against mpmath (:mod:`quickrelease.device.reference`) on cases of every (regime, tier): 18 stop times and 3
   identifications here, 300 and 60 with QUICKRELEASE_SLOW=1;
 * the wiring of ``backend="gpu"`` (batch, uq, sweep) with the array module replaced by numpy.
 
-The same checks on CuPy run where :func:`quickrelease._gpu.gpu_available` (skipped cleanly elsewhere), and the
+The same checks on CuPy run where :func:`quickrelease.batch._gpu.gpu_available` (skipped cleanly elsewhere), and the
 refusals without CuPy or without a device: one line, exit 2, nothing written.
 """
 
@@ -28,11 +28,13 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from quickrelease import QuickReleaseError, _fast, _gpu, _kernels, batch
+from quickrelease import QuickReleaseError, batch
+from quickrelease.batch import _fast, _gpu
+from quickrelease.batch.sampling import random_releases, wide_releases
 from quickrelease.cli import app
+from quickrelease.device import _kernels
+from quickrelease.device.reference import identify_mp, stop_time_mp
 from quickrelease.errors import ParameterError
-from quickrelease.reference import identify_mp, stop_time_mp
-from quickrelease.sampling import random_releases, wide_releases
 
 SLOW = bool(os.environ.get("QUICKRELEASE_SLOW"))
 KEYS = ("E_S", "alpha0", "F1", "F2", "c", "m1", "m2", "L1")
@@ -223,7 +225,7 @@ def test_the_kernels_use_only_what_numpy_and_cupy_share():
     import inspect
     import re
 
-    from quickrelease import dynamics
+    from quickrelease.device import dynamics
 
     for fn in (dynamics.amplitude_terms, dynamics.limit_margin_terms, dynamics._limit_dissipation, dynamics.one_minus_sin_terms,
                dynamics.creeps_terms, dynamics.limit_sweep, dynamics._stop_terms, dynamics.sweep_sides,
@@ -332,7 +334,7 @@ def test_on_the_gpu_as_the_compiled_kernels(sample):
 @pytest.fixture
 def numpy_gpu(monkeypatch):
     """``backend="gpu"`` run by the xp kernels on numpy (the device check passed, the array module numpy)."""
-    import quickrelease.distributed as distributed
+    import quickrelease.studies.distributed as distributed
 
     monkeypatch.setattr(_gpu, "array_module", lambda: np)
     monkeypatch.setattr(_gpu, "require_gpu", lambda: None)
@@ -361,9 +363,9 @@ def test_batch_backend_gpu_wiring(numpy_gpu):
 
 
 def test_sweep_and_uq_backend_gpu_wiring(numpy_gpu, tmp_path):
-    from quickrelease.case import load_case
-    from quickrelease.sweep import sweep
-    from quickrelease.uq import run_uq
+    from quickrelease.io.case import load_case
+    from quickrelease.studies.sweep import sweep
+    from quickrelease.studies.uq import run_uq
 
     case = load_case(EXAMPLES / "larger_push.toml")
     grids = {"alpha0": np.linspace(0.1, 0.5, 4), "F1": np.linspace(100.0, 4000.0, 5)}
@@ -411,7 +413,7 @@ def test_backend_gpu_without_cupy(monkeypatch, tmp_path, command):
 
 @pytest.mark.parametrize("command", ["uq", "sweep"])
 def test_backend_gpu_without_a_device(monkeypatch, tmp_path, command):
-    import quickrelease.distributed as distributed
+    import quickrelease.studies.distributed as distributed
 
     real = distributed._installed
     monkeypatch.setattr(distributed, "_installed", lambda name: name == "cupy" or real(name))
@@ -431,8 +433,8 @@ def test_threads_refused_with_the_gpu_backend(tmp_path, command):
 
 @pytest.mark.skipif(ON_GPU, reason="a GPU is here")
 def test_api_refuses_without_a_gpu(monkeypatch, tmp_path):
-    from quickrelease.case import load_case
-    from quickrelease.uq import run_uq
+    from quickrelease.io.case import load_case
+    from quickrelease.studies.uq import run_uq
 
     monkeypatch.setitem(sys.modules, "cupy", None)
     for fn, args in ((batch.stop_time, (1e3, 0.5, 100.0, 100.0)), (batch.release, (1e3, 0.5, 100.0, 100.0)),
@@ -451,7 +453,7 @@ def test_api_refuses_without_a_gpu(monkeypatch, tmp_path):
 
 def test_bench_gpu_section(numpy_gpu, monkeypatch):
     """Without a GPU: None and one line saying so; with one (numpy standing in): throughput and agreement."""
-    from quickrelease import bench
+    from quickrelease.studies import bench
 
     sizes = bench.Sizes(cases=300, stop_time=1, identify=1, repeat=1)
     log: list[str] = []

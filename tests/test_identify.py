@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from quickrelease import InfeasibleObservationError, ParameterError, identify_friction, simulate
-from quickrelease.paper import printed_table7, reproduce_table7
+from quickrelease.device.paper import printed_table7, reproduce_table7
 
 
 @pytest.fixture(scope="module")

@@ -20,7 +20,7 @@ import pytest
 from building_reference import reference
 from scipy import stats
 
-from quickrelease.isolation_fit import BuildingChannel, compare_models, decay_check, fit_isolation
+from quickrelease.building.isolation_fit import BuildingChannel, compare_models, decay_check, fit_isolation
 
 SLOW = bool(os.environ.get("QUICKRELEASE_SLOW"))
 M = 4.0e5  # kg

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from building_reference import reference
 
+from quickrelease.building.isolation_fit import BuildingChannel, compare_models, decay_check, fit_isolation, ljung_box
 from quickrelease.errors import ParameterError
-from quickrelease.isolation_fit import BuildingChannel, compare_models, decay_check, fit_isolation, ljung_box
 
 M = 4.0e5
 

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 from building_reference import reference, reference_2dof
 
-import quickrelease.isolation_fit as isolation_fit
-from quickrelease.building import TwoDOF
+import quickrelease.building.isolation_fit as isolation_fit
+from quickrelease.building.isolation_fit import BuildingChannel, compare_models, fit_isolation
+from quickrelease.building.model import TwoDOF
 from quickrelease.errors import ParameterError
-from quickrelease.isolation_fit import BuildingChannel, compare_models, fit_isolation
 
 M, RATIO, G = 4.0e5, 0.75, 9.80665
 

@@ -6,8 +6,8 @@ import math
 import numpy as np
 from building_reference import reference
 
-import quickrelease.isolation_fit as isolation_fit
-from quickrelease.isolation_fit import BuildingChannel, fit_isolation
+import quickrelease.building.isolation_fit as isolation_fit
+from quickrelease.building.isolation_fit import BuildingChannel, fit_isolation
 
 M = 4.0e5  # kg
 T, ZETA, FS, D0, RELEASE = 2.0, 0.04, 1.2e4, 0.15, 1.5137  # the linear + Coulomb building; release [s]

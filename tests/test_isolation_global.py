@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 from building_reference import reference
 
+from quickrelease.building.isolation_fit import BuildingChannel, fit_isolation
+from quickrelease.building.isolation_search import SearchBox, cma_es, record_period, same_basin
 from quickrelease.errors import QuickReleaseError
-from quickrelease.isolation_fit import BuildingChannel, fit_isolation
-from quickrelease.isolation_search import SearchBox, cma_es, record_period, same_basin
 
 SLOW = bool(os.environ.get("QUICKRELEASE_SLOW"))
 M = 8.0e5

@@ -12,7 +12,7 @@ import pytest
 from test_isolation_coverage import D0, FS, RELEASE, ZETA, C, K, M, T, _channels, _rows
 
 from quickrelease._lsq import identified_covariance, unidentified
-from quickrelease.building_analysis import analyse_building
+from quickrelease.studies.building_analysis import analyse_building
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
 
@@ -40,7 +40,7 @@ def _never_yielding():
     residuals (its Jacobian column is 0) and k2 / k1 none either."""
     from unittest import mock
 
-    import quickrelease.isolation_fit as isolation_fit
+    import quickrelease.building.isolation_fit as isolation_fit
 
     channels = _channels(_rows(K, K, math.inf, C, FS, D0, 6.0), 3)
     # the design values' local fit alone (no record starts, no global stage): it stays where the spring never
@@ -85,7 +85,7 @@ def test_bilinear_fit_of_a_record_that_never_yields():
 
 def test_tables_and_report_say_not_identified(capsys):
     from quickrelease.cli import _building_tables
-    from quickrelease.report import building_section
+    from quickrelease.report.html import building_section
 
     result = _never_yielding()
     _building_tables(result, result.summary(), "never yields")
@@ -102,7 +102,7 @@ def test_device_fit_writes_a_parameter_it_cannot_see_as_null(monkeypatch):
     "not identified" in the table."""
     from typer.testing import CliRunner
 
-    import quickrelease.fit as fit_module
+    import quickrelease.studies.fit as fit_module
     from quickrelease.cli import app
 
     real = fit_module.identified_covariance
@@ -133,7 +133,7 @@ def test_campaign_release_with_a_parameter_not_identified():
     interval, the quantities that do not depend on it (the secant period and equivalent damping at d0: the
     spring is elastic there) keep finite standard errors by the delta method (the covariance with an infinite
     variance gave NaN for all of them), and the release's JSON is valid."""
-    from quickrelease.building_campaign import BuildingRelease, _estimates
+    from quickrelease.studies.building_campaign import BuildingRelease, _estimates
 
     fit = _never_yielding().fit
     quantities = ("secant_period", "equivalent_damping_ratio", "yield_force", "damping_ratio")

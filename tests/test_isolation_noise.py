@@ -9,7 +9,7 @@ import pytest
 from building_reference import reference
 from test_isolation_coverage import D0, FS, RELEASE, C, K, M
 
-from quickrelease.isolation_fit import BuildingChannel, _detect_release, _quiet_noise, fit_isolation
+from quickrelease.building.isolation_fit import BuildingChannel, _detect_release, _quiet_noise, fit_isolation
 
 NOISE = 2e-4  # m
 

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from building_reference import reference
 
-from quickrelease.decay import analyse_decay, bilinear_loop
-from quickrelease.isolation_fit import BuildingChannel, fit_isolation
+from quickrelease.building.decay import analyse_decay, bilinear_loop
+from quickrelease.building.isolation_fit import BuildingChannel, fit_isolation
 
 M = 4.0e5
 SLOW_RUN = bool(os.environ.get("QUICKRELEASE_SLOW"))

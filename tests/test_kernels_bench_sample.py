@@ -31,9 +31,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from quickrelease import _kernels, batch
-from quickrelease.reference import stop_time_mp
-from quickrelease.sampling import random_releases
+from quickrelease import batch
+from quickrelease.batch.sampling import random_releases
+from quickrelease.device import _kernels
+from quickrelease.device.reference import stop_time_mp
 
 KEYS = ("E_S", "alpha0", "F1", "F2", "c", "m1", "m2", "L1")
 BOUND = 1e-12
@@ -118,7 +119,7 @@ def test_every_tier_within_its_bound_on_100k_bench_cases(bench_sample):
 
 def test_the_reference_agrees_with_mpmath_where_the_kernel_is_worst(bench_sample):
     """The reference itself, on the three cases where the kernel and it disagree most in each regime, against
-    mpmath's quadrature (``quickrelease.reference``, 30 digits): to 1e-14, a hundred times below the bound."""
+    mpmath's quadrature (``quickrelease.device.reference``, 30 digits): to 1e-14, a hundred times below the bound."""
     s = bench_sample
     picks = []
     for regime in (False, True):

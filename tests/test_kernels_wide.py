@@ -1,4 +1,4 @@
-"""The compiled kernels (:mod:`quickrelease._fast`) on the wide sample: every tier, against mpmath and the numpy rules.
+"""The compiled kernels (:mod:`quickrelease.batch._fast`) on the wide sample: every tier, against mpmath and the numpy rules.
 
 * stop times of cases drawn from every (regime, tier) of the wide sample against mpmath (:mod:`reference`), to
   1e-12 or four times the change one ulp of E_S makes (an ill-conditioned margin near pi/2);
@@ -14,9 +14,10 @@ import numba
 import numpy as np
 import pytest
 
-from quickrelease import _kernels, batch
-from quickrelease.reference import identify_mp, stop_time_mp
-from quickrelease.sampling import wide_releases
+from quickrelease import batch
+from quickrelease.batch.sampling import wide_releases
+from quickrelease.device import _kernels
+from quickrelease.device.reference import identify_mp, stop_time_mp
 
 KEYS = ("E_S", "alpha0", "F1", "F2", "c", "m1", "m2", "L1")
 EPS = np.finfo(float).eps
@@ -146,7 +147,8 @@ def test_one_and_two_threads_bit_identical():
 
 _FRESH_OR_CACHED = """
 import sys, numpy as np
-from quickrelease import batch, sampling
+from quickrelease import batch
+from quickrelease.batch import sampling
 out = []
 for draw in (sampling.random_releases, sampling.wide_releases):
     s = draw(40_000, seed=5)

@@ -3,7 +3,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from quickrelease import kinematics as k
+from quickrelease.device import kinematics as k
 
 L1 = 2.477
 

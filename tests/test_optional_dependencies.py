@@ -13,7 +13,7 @@ from typer.testing import CliRunner
 
 from quickrelease import QuickReleaseError
 from quickrelease.cli import app
-from quickrelease.distributed import check_optional
+from quickrelease.studies.distributed import check_optional
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
 runner = CliRunner()
@@ -74,7 +74,7 @@ def test_campaign_checks_every_test_before_the_first_fit(monkeypatch, tmp_path):
     (tmp_path / "records").symlink_to(EXAMPLES / "records")
     path = tmp_path / "campaign.toml"
     path.write_text(text, encoding="utf-8")
-    import quickrelease.campaign as campaign
+    import quickrelease.studies.campaign as campaign
 
     monkeypatch.setattr(campaign, "_identify_test", lambda *a: pytest.fail("a test was fitted before the check"))
     r = runner.invoke(app, ["campaign", str(path)])

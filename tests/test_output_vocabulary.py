@@ -88,7 +88,7 @@ def test_demo_json_keys_carry_their_units(tmp_path):
 def test_simulate_and_identify_write_one_file(tmp_path):
     import xarray as xr
 
-    from quickrelease.export import read_csv
+    from quickrelease.io.export import read_csv
 
     base = ["simulate", "--energy", "2900", "--alpha0", "0.2", "--f1", "420", "--f2", "800"]
     r = runner.invoke(app, [*base, "--out", str(tmp_path / "s.csv")])
@@ -117,7 +117,7 @@ def test_simulate_and_identify_write_one_file(tmp_path):
 
 
 def test_bench_out_is_checked_before_the_work(tmp_path, monkeypatch):
-    import quickrelease.bench as bench
+    import quickrelease.studies.bench as bench
 
     monkeypatch.setattr(bench, "run_bench", lambda **kw: pytest.fail("the bench started before the check"))
     r = runner.invoke(app, ["bench", "--quick", "--out", str(tmp_path / "b.csv")])

@@ -12,9 +12,10 @@ import numpy as np
 import pytest
 from conftest import mp_identify
 
-from quickrelease import plots, simulate
-from quickrelease.case import load_case
-from quickrelease.export import atomic_path, read_csv, read_netcdf, write_csv, write_json, write_netcdf
+from quickrelease import simulate
+from quickrelease.io.case import load_case
+from quickrelease.io.export import atomic_path, read_csv, read_netcdf, write_csv, write_json, write_netcdf
+from quickrelease.report import plots
 from quickrelease.workflow import FIGURES, run_case, write_results
 
 EXAMPLES = Path(__file__).parent.parent / "examples"

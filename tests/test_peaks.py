@@ -14,7 +14,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import minimize_scalar
 
 from quickrelease import batch
-from quickrelease.sampling import random_releases
+from quickrelease.batch.sampling import random_releases
 
 
 def reference_peaks(E_S, alpha0, F1, F2, c, m1, m2, L1, n=4001):

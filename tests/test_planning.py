@@ -10,9 +10,10 @@ from conftest import mp_alpha_final
 from typer.testing import CliRunner
 
 from quickrelease import ParameterError, load_device, preset, simulate, strain_energy
-from quickrelease.case import BuildingSpec, CaseFileError, load_case
 from quickrelease.cli import app
-from quickrelease.planning import (
+from quickrelease.device.solvers import FirstIntegral
+from quickrelease.io.case import BuildingSpec, CaseFileError, load_case
+from quickrelease.studies.planning import (
     building_motion,
     clearance,
     friction_samples,
@@ -21,7 +22,6 @@ from quickrelease.planning import (
     plan_case,
     release_envelope,
 )
-from quickrelease.solvers import FirstIntegral
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
 runner = CliRunner()
@@ -236,12 +236,12 @@ def test_gap_at_small_times_follows_its_series():
     d = rel
     assert u_dot0 == pytest.approx(d.L1 * math.sin(0.2) * d.alpha_dot0, rel=1e-14)
     w = 2 * math.pi
-    from quickrelease.dynamics import angular_acceleration
+    from quickrelease.device.dynamics import angular_acceleration
 
     acc0 = angular_acceleration(0.2, d.alpha_dot0, d.F1, d.F2, d.m1, d.m2, d.L1, d.c)
     u_ddot0 = d.L1 * (math.cos(0.2) * d.alpha_dot0**2 + math.sin(0.2) * acc0)
     assert half_acc == pytest.approx(0.5 * (u_ddot0 - (w * w * 0.25 - 0.2)), rel=1e-12)
-    from quickrelease.planning import _gap_at
+    from quickrelease.studies.planning import _gap_at
 
     errors = []
     for t in (0.004, 0.002, 0.001):

@@ -27,9 +27,9 @@ def response():
 @pytest.fixture(scope="module")
 def building_run(tmp_path_factory):
     """``quickrelease building examples/building.toml --out <tmp>/b`` and the analysis behind it."""
-    from quickrelease.building_analysis import analyse_building
-    from quickrelease.building_case import load_building
-    from quickrelease.case import load_case
+    from quickrelease.io.building_case import load_building
+    from quickrelease.io.case import load_case
+    from quickrelease.studies.building_analysis import analyse_building
 
     out = tmp_path_factory.mktemp("building") / "b"
     r = runner.invoke(app, ["building", str(EXAMPLES / "building.toml"), "--out", str(out)])
@@ -44,9 +44,9 @@ def _axes(n):
 
 
 def test_device_figures_draw_into_the_users_axes(response):
-    from quickrelease import plots
-    from quickrelease.identify import identify_friction
-    from quickrelease.statics import strain_energy
+    from quickrelease.device.identify import identify_friction
+    from quickrelease.device.statics import strain_energy
+    from quickrelease.report import plots
 
     cases = [(plots.fig13, (response,), 4), (plots.fig14, (response,), 2), (plots.fig15, (response,), 1),
              (plots.identification_figure, (identify_friction(0.2, 0.7378, 1.05, stored_energy=2900.0),), 1),
@@ -62,7 +62,7 @@ def test_device_figures_draw_into_the_users_axes(response):
 def test_own_figures_keep_their_titles(response, building_run):
     """Without ``ax`` each figure keeps the title it draws over its panels (a loop reusing the name ``ax``
     once dropped them)."""
-    from quickrelease import building_plots, plots
+    from quickrelease.report import building_plots, plots
 
     _, _, result = building_run
     assert plots.fig13(response)._suptitle.get_text().startswith("Release response (energy, c = 0.6667)")
@@ -80,7 +80,7 @@ def test_response_plot(response):
 
 
 def test_ax_of_the_wrong_count_or_with_fig_is_refused(response):
-    from quickrelease import plots
+    from quickrelease.report import plots
 
     mine, axes = _axes(3)
     with pytest.raises(QuickReleaseError, match="4 matplotlib Axes"):
@@ -90,9 +90,9 @@ def test_ax_of_the_wrong_count_or_with_fig_is_refused(response):
 
 
 def test_planning_and_building_figures_draw_into_the_users_axes(building_run):
-    from quickrelease import building_plots
-    from quickrelease.case import load_case
-    from quickrelease.planning import choices_figure, envelope_figure, gap_figure, plan_case, utilisation_figure
+    from quickrelease.io.case import load_case
+    from quickrelease.report import building_plots
+    from quickrelease.studies.planning import choices_figure, envelope_figure, gap_figure, plan_case, utilisation_figure
 
     plan = plan_case(load_case(EXAMPLES / "plan.toml"))
     _, _, result = building_run
@@ -108,7 +108,7 @@ def test_planning_and_building_figures_draw_into_the_users_axes(building_run):
 
 
 def test_identification_to_pandas_and_xarray():
-    from quickrelease.identify import identify_friction
+    from quickrelease.device.identify import identify_friction
 
     ident = identify_friction(0.2, 0.7378, 1.05, stored_energy=2900.0)
     df = ident.to_pandas()
@@ -177,8 +177,8 @@ def test_building_out_writes_the_time_series_that_parses_back(building_run):
 
 
 def test_free_vibration_as_tables():
-    from quickrelease.building import Isolation, free_vibration
-    from quickrelease.frames import free_vibration_dataset, free_vibration_frame
+    from quickrelease.building.model import Isolation, free_vibration
+    from quickrelease.io.frames import free_vibration_dataset, free_vibration_frame
 
     iso = Isolation.linear(mass=8e5, period=2.0, damping_ratio=0.0, friction=0.0)
     motion = free_vibration(iso, 0.1, t_end=4.0)
@@ -193,9 +193,9 @@ def test_free_vibration_as_tables():
 
 
 def test_study_figures_draw_into_the_users_axes():
-    from quickrelease.case import load_case
-    from quickrelease.sweep import heatmap_figure, sweep
-    from quickrelease.uq import corner_figure, run_uq
+    from quickrelease.io.case import load_case
+    from quickrelease.studies.sweep import heatmap_figure, sweep
+    from quickrelease.studies.uq import corner_figure, run_uq
 
     ds = sweep(load_case(EXAMPLES / "larger_push.toml"), {"alpha0": np.linspace(0.1, 0.5, 3),
                                                           "F1": np.linspace(100.0, 400.0, 3)})
@@ -208,8 +208,8 @@ def test_study_figures_draw_into_the_users_axes():
 
 
 def test_campaign_figures_draw_into_the_users_axes():
-    from quickrelease.building_campaign import building_campaign_figure
-    from quickrelease.campaign import campaign_figure, run_campaign
+    from quickrelease.studies.building_campaign import building_campaign_figure
+    from quickrelease.studies.campaign import campaign_figure, run_campaign
 
     result = run_campaign(EXAMPLES / "campaign.toml")
     mine = Figure()

@@ -15,8 +15,9 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 import quickrelease as qr
-from quickrelease import batch, dynamics
-from quickrelease._kernels import feasible_slack
+from quickrelease import batch
+from quickrelease.device import dynamics
+from quickrelease.device._kernels import feasible_slack
 
 PAPER = qr.preset("paper")
 HALF_PI = 0.5 * math.pi

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from scipy.signal import find_peaks, savgol_filter
 
-from quickrelease.decay import MISFIT_REDUCED_CHI2, analyse_decay, estimate_noise
-from quickrelease.timebase import time_base
+from quickrelease.building.decay import MISFIT_REDUCED_CHI2, analyse_decay, estimate_noise
+from quickrelease.io.timebase import time_base
 
 DATA = Path(__file__).resolve().parent / "data" / "seismometer"
 # file, start of the free decay after the blow's disturbance [s], and whether its cycles keep their period

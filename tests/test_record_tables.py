@@ -14,9 +14,9 @@ from scipy.integrate import quad, solve_ivp
 
 from quickrelease import preset
 from quickrelease._statetable import CHANNEL_TOL, TOL, ChannelTable, StateTable
-from quickrelease.dynamics import angular_acceleration
-from quickrelease.records import _direct, channel_model, release_channels
-from quickrelease.solvers import FirstIntegral
+from quickrelease.device.dynamics import angular_acceleration
+from quickrelease.device.solvers import FirstIntegral
+from quickrelease.io.records import _direct, channel_model, release_channels
 
 D = preset("paper")
 CASES = {"friction": (2900.0, 0.2, 419.85, 804.57), "geometric_limit": (2900.0, 0.2, 0.0, 0.0)}

@@ -6,8 +6,8 @@ import mpmath
 import numpy as np
 import pytest
 
-from quickrelease.reference import identify_lambda_mp, identify_mp, stop_time_mp
-from quickrelease.sampling import WIDE_STRATA, wide_releases
+from quickrelease.batch.sampling import WIDE_STRATA, wide_releases
+from quickrelease.device.reference import identify_lambda_mp, identify_mp, stop_time_mp
 
 
 def _w(a, a0, A, B):

@@ -9,10 +9,10 @@ import pytest
 from quality import figure_faults, overlap_faults
 
 from quickrelease import simulate
-from quickrelease.case import load_case
-from quickrelease.device import load_device
+from quickrelease.device.parameters import load_device
 from quickrelease.errors import QuickReleaseError
-from quickrelease.planning import envelope_figure, member_checks, plan_case, plan_figures, utilisation_figure
+from quickrelease.io.case import load_case
+from quickrelease.studies.planning import envelope_figure, member_checks, plan_case, plan_figures, utilisation_figure
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 
@@ -70,7 +70,7 @@ def test_member_chart_values_are_not_under_its_legend():
 
 
 def test_fig13_legends_cover_no_curve():
-    from quickrelease.plots import fig13
+    from quickrelease.report.plots import fig13
 
     fig = fig13(simulate(2900.0, 0.2, 419.85, 804.57, mass_model="distributed"))
     assert overlap_faults(fig) == []
@@ -80,8 +80,8 @@ def test_fig13_legends_cover_no_curve():
 
 
 def test_the_whole_tests_figures_have_no_legend_over_a_curve(whole_test):
-    from quickrelease.building_plots import building_figures
-    from quickrelease.plots import fig14, fig15
+    from quickrelease.report.building_plots import building_figures
+    from quickrelease.report.plots import fig14, fig15
 
     result, _, _ = whole_test
     for name, fig in building_figures(result.building).items():
@@ -91,7 +91,7 @@ def test_the_whole_tests_figures_have_no_legend_over_a_curve(whole_test):
 
 
 def test_period_axis_is_not_squashed_by_one_point_and_its_label_is_mathtext(whole_test):
-    from quickrelease.building_plots import amplitude_figure, off_scale
+    from quickrelease.report.building_plots import amplitude_figure, off_scale
 
     result, _, _ = whole_test
     periods = np.asarray(result.building.decay.equivalent_period)

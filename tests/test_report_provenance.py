@@ -14,9 +14,9 @@ from pathlib import Path
 import pytest
 from quality import figure_faults, html_faults
 
-from quickrelease import plots
-from quickrelease.case import CaseFileError, load_case
-from quickrelease.report import render_report
+from quickrelease.io.case import CaseFileError, load_case
+from quickrelease.report import plots
+from quickrelease.report.html import render_report
 from quickrelease.workflow import render_figures, run_case, write_results
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
@@ -147,8 +147,8 @@ def test_fig15_curve_over_the_markers_and_its_distance_defined(written):
 def test_planning_figures_are_labelled():
     """The member checks with a check skipped (no yield strength of E3 in the device file) and the fuse
     choices: cheap to make, so checked here; the gap figure in test_clearance.py."""
-    from quickrelease.device import load_device
-    from quickrelease.planning import member_checks, utilisation_figure
+    from quickrelease.device.parameters import load_device
+    from quickrelease.studies.planning import member_checks, utilisation_figure
 
     checks = member_checks(1598e3, 0.2, load_device(EXAMPLES / "device_checked.toml"), rupture_strength=610e6)
     assert any(c.utilisation is None for c in checks.checks)
@@ -161,7 +161,7 @@ def test_planning_figures_are_labelled():
 
 
 def test_uq_corner_figure_is_labelled():
-    from quickrelease.uq import corner_figure, run_uq
+    from quickrelease.studies.uq import corner_figure, run_uq
 
     result = run_uq(load_case(EXAMPLES / "uq_paper.toml"), 2000, seed=1, chunk=2000)
     assert figure_faults(corner_figure(result)) == []

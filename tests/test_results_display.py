@@ -5,8 +5,8 @@ import xml.etree.ElementTree as ET
 import pytest
 
 import quickrelease as qr
-from quickrelease.case import load_case
-from quickrelease.display import Summarised
+from quickrelease.io.case import load_case
+from quickrelease.report.display import Summarised
 from quickrelease.workflow import run_case
 
 

@@ -11,11 +11,11 @@ import pytest
 from conftest import UQ_CASE
 from typer.testing import CliRunner
 
-from quickrelease import uq as uq_module
-from quickrelease.case import load_case
 from quickrelease.cli import app
-from quickrelease.runfolder import OutputError
-from quickrelease.uq import run_uq
+from quickrelease.io.case import load_case
+from quickrelease.io.runfolder import OutputError
+from quickrelease.studies import uq as uq_module
+from quickrelease.studies.uq import run_uq
 from quickrelease.workflow import run_case, write_results
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
@@ -284,7 +284,7 @@ def test_full_disk_midway_leaves_the_previous_complete_result(tmp_path, monkeypa
     result = run_case(paper, state_diagram=False)
     write_results(result, out, figures=False, report=False)
     first = _files(out)
-    from quickrelease import export
+    from quickrelease.io import export
 
     def full(*args, **kwargs):
         raise OSError(errno.ENOSPC, "No space left on device")

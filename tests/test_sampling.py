@@ -1,9 +1,9 @@
-"""The two case distributions of quickrelease.sampling: valid, reproducible, and the wide one as documented."""
+"""The two case distributions of quickrelease.batch.sampling: valid, reproducible, and the wide one as documented."""
 
 import numpy as np
 
 from quickrelease import batch
-from quickrelease.sampling import WIDE_STRATA, random_releases, wide_releases
+from quickrelease.batch.sampling import WIDE_STRATA, random_releases, wide_releases
 
 
 def _valid(cases):

@@ -9,7 +9,8 @@ from conftest import PAPER_CASE
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from quickrelease import METHODS, ParameterError, dynamics, simulate, stop_time
+from quickrelease import METHODS, ParameterError, simulate, stop_time
+from quickrelease.device import dynamics
 
 
 @pytest.fixture(scope="module")
@@ -78,7 +79,7 @@ def test_energy_balance_of_rk(solutions):
 def test_energy_method_history_against_mpmath_time_of_angle(solutions):
     """t(alpha) = int_alpha0^alpha sqrt(M / (E_S - W_F)) (Eq. 10) by mpmath at five interior angles: the
     energy solution passes each angle at that time (its state at t_j is alpha_j to 1e-12)."""
-    from quickrelease.solvers import FirstIntegral
+    from quickrelease.device.solvers import FirstIntegral
 
     mpmath.mp.dps = 30
     E_S, a0, F1, F2 = (mpmath.mpf(x) for x in ("2900", "0.2", "419.85", "804.57"))
@@ -238,9 +239,9 @@ def test_bad_input(kwargs, match):
 
 def test_time_map_against_mpmath_on_random_cases():
     """The Chebyshev time map t(w) of the energy solution: t(0) = t_F to ~1e-15 against mpmath, hard cases included."""
-    from quickrelease.reference import stop_time_mp
-    from quickrelease.sampling import random_releases
-    from quickrelease.solvers import FirstIntegral
+    from quickrelease.batch.sampling import random_releases
+    from quickrelease.device.reference import stop_time_mp
+    from quickrelease.device.solvers import FirstIntegral
 
     cases = random_releases(16, seed=11, limit_share=0.4)
     worst = 0.0
@@ -255,7 +256,7 @@ def test_time_map_against_mpmath_on_random_cases():
 
 
 def test_state_at_uneven_times_matches_rk_with_rest_before_and_after():
-    from quickrelease.solvers import FirstIntegral
+    from quickrelease.device.solvers import FirstIntegral
 
     d = simulate(**PAPER_CASE).device
     fi = FirstIntegral(*PAPER_CASE.values(), d.m1, d.m2, d.L1, 2.0 / 3.0)

@@ -25,9 +25,9 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from quickrelease import export
 from quickrelease.cli import app
-from quickrelease.runfolder import OutputError, RunFolder, staging_name
+from quickrelease.io import export
+from quickrelease.io.runfolder import OutputError, RunFolder, staging_name
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
 ROOT = hasattr(os, "geteuid") and os.geteuid() == 0
@@ -314,7 +314,7 @@ def test_an_unwritable_folder_is_refused_before_the_work(work, monkeypatch, erro
 
 
 def test_uq_on_a_full_disk_leaves_no_staging_folder(work, monkeypatch):
-    from quickrelease import uq
+    from quickrelease.studies import uq
 
     shutil.copy(EXAMPLES / "uq_paper.toml", work / "uq.toml")
 
@@ -330,7 +330,7 @@ def test_uq_on_a_full_disk_leaves_no_staging_folder(work, monkeypatch):
 def test_a_write_error_without_a_file_name_names_the_file(work, monkeypatch):
     """A write on a full disk may raise an OSError without a file name: the message names --out, not the
     standard output, and nothing is left."""
-    from quickrelease import synth
+    from quickrelease.studies import synth
 
     def full(*args, **kwargs):
         raise OSError(errno.ENOSPC, "No space left on device")
@@ -477,7 +477,7 @@ def test_rk_at_huge_energies_agrees_with_the_energy_balance(E, a0):
     """rk located its events to an absolute 4 eps in seconds: t_F of 1e-12 s came out 1e-5 to 1e-2 off, and 0
     at 1e35 J. Against the energy balance integrated in 40 digits (written here)."""
     from quickrelease import simulate
-    from quickrelease.device import preset
+    from quickrelease.device.parameters import preset
 
     d = preset("paper")
     r = simulate(E, a0, 420.0, 805.0, method="rk", mass_model="distributed")
@@ -487,7 +487,7 @@ def test_rk_at_huge_energies_agrees_with_the_energy_balance(E, a0):
 
 def test_rk_at_the_paper_case_agrees_with_the_energy_balance():
     from quickrelease import simulate
-    from quickrelease.device import preset
+    from quickrelease.device.parameters import preset
 
     d = preset("paper")
     r = simulate(2900.0, 0.2, 420.0, 805.0, method="rk", mass_model="distributed")
@@ -498,8 +498,8 @@ def test_rk_at_the_paper_case_agrees_with_the_energy_balance():
 def test_rows_without_a_time_are_noted_by_run_and_fit(work):
     """The docs promise a note for rows without a time; ``fit`` printed it, ``run`` of the same case did not."""
     from quickrelease import cli
-    from quickrelease.case import load_case
-    from quickrelease.fit import fit_record
+    from quickrelease.io.case import load_case
+    from quickrelease.studies.fit import fit_record
 
     text = (work / "records" / "paper_500Hz.csv").read_text().splitlines()
     text = text[:1] + text[1::4]  # 125 Hz: a fast fit
@@ -535,8 +535,8 @@ def test_a_zarr_sweep_gives_no_zarr_warning(work):
     pytest.importorskip("zarr")
     import warnings
 
-    from quickrelease.case import load_case
-    from quickrelease.sweep import sweep
+    from quickrelease.io.case import load_case
+    from quickrelease.studies.sweep import sweep
 
     case = load_case(work / "case.toml")
     with warnings.catch_warnings(record=True) as caught:

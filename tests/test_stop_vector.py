@@ -1,4 +1,4 @@
-"""The vectorised stop-time setup (:func:`quickrelease._fast.stop_kernel_sides`) and what it relies on.
+"""The vectorised stop-time setup (:func:`quickrelease.batch._fast.stop_kernel_sides`) and what it relies on.
 
 * the block kernel gives, case by case and bit for bit, what the one-case loop ``_fast._stop_one`` gives (the
   vectorised setup computes both regimes and selects one: a wrong select, a row mixed up or a case left out of the
@@ -18,8 +18,10 @@ import numpy as np
 import pytest
 from numba import njit
 
-from quickrelease import _fast, batch, dynamics
-from quickrelease.sampling import random_releases, wide_releases
+from quickrelease import batch
+from quickrelease.batch import _fast
+from quickrelease.batch.sampling import random_releases, wide_releases
+from quickrelease.device import dynamics
 
 ARGS = ("E_S", "alpha0", "F1", "F2", "k", "m2", "L1")
 
@@ -58,7 +60,7 @@ def _one_by_one(c):
     code = np.empty(t.size, dtype=np.int8)
     x16, w16, x24, w24 = _fast.rules()
     near, hard, msq, mhard = _fast.tier_constants()
-    from quickrelease import _kernels
+    from quickrelease.device import _kernels
 
     for i in range(t.size):
         s, co = math.sin(c["alpha0"][i]), math.cos(c["alpha0"][i])

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from quickrelease import ParameterError, simulate, strain_energy
-from quickrelease.case import load_case
-from quickrelease.sweep import heatmap_figure, parse_grid, sweep
+from quickrelease.io.case import load_case
+from quickrelease.studies.sweep import heatmap_figure, parse_grid, sweep
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
 HAS_DASK = importlib.util.find_spec("dask") is not None and importlib.util.find_spec("zarr") is not None
@@ -163,7 +163,7 @@ def test_heatmaps_of_a_large_grid_are_small(spacing):
 
     import xarray as xr
 
-    from quickrelease.sweep import OUTPUTS
+    from quickrelease.studies.sweep import OUTPUTS
 
     n = 400 if spacing == "even" else 300
     f = np.linspace(5e5, 3e6, n) if spacing == "even" else np.geomspace(5e5, 3e6, n)

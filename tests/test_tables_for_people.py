@@ -53,7 +53,7 @@ def test_the_checker_finds_what_people_should_not_meet():
 
 def test_the_display_helpers_round_as_results_are_quoted():
     """Hand-written expectations: the value rounded where its standard error (two digits) is, one SI prefix."""
-    from quickrelease.display import estimate_row, interval, key_for, plus_minus, quantity
+    from quickrelease.report.display import estimate_row, interval, key_for, plus_minus, quantity
 
     assert plus_minus(420.023, 0.398, "N") == "420.02 ± 0.40 N"
     assert plus_minus(1.598e6, 3.9e4, "N") == "1598 ± 39 kN"

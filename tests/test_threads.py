@@ -10,13 +10,13 @@ from conftest import UQ_CASE
 from typer.testing import CliRunner
 
 from quickrelease import ParameterError, batch, using_threads
-from quickrelease.case import load_case
+from quickrelease.batch.sampling import random_releases, wide_releases
 from quickrelease.cli import app
-from quickrelease.distributed import on_one_thread
-from quickrelease.planning import release_envelope
-from quickrelease.sampling import random_releases, wide_releases
-from quickrelease.sweep import sweep
-from quickrelease.uq import run_uq
+from quickrelease.io.case import load_case
+from quickrelease.studies.distributed import on_one_thread
+from quickrelease.studies.planning import release_envelope
+from quickrelease.studies.sweep import sweep
+from quickrelease.studies.uq import run_uq
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
 TOP = numba.config.NUMBA_NUM_THREADS
@@ -168,7 +168,7 @@ _RACE_PROBE = """
 import json, sys
 import numba, numpy as np
 from quickrelease import batch
-from quickrelease.sampling import wide_releases
+from quickrelease.batch.sampling import wide_releases
 
 top = numba.config.NUMBA_NUM_THREADS
 assert hasattr(batch, "THREAD_CHUNK")  # the stop-time pool's chunk, read at each call

@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from quickrelease.building_case import load_building
-from quickrelease.case import CaseFileError, load_case
+from quickrelease.building.decay import analyse_decay
 from quickrelease.cli import app
-from quickrelease.decay import analyse_decay
-from quickrelease.records import RecordError
-from quickrelease.timebase import clipped_samples, jitter_misfit, merge_repeated_times, time_base
+from quickrelease.io.building_case import load_building
+from quickrelease.io.case import CaseFileError, load_case
+from quickrelease.io.records import RecordError
+from quickrelease.io.timebase import clipped_samples, jitter_misfit, merge_repeated_times, time_base
 
 runner = CliRunner()
 

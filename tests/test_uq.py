@@ -13,9 +13,9 @@ import pytest
 from conftest import UQ_CASE
 
 from quickrelease import identify_friction
-from quickrelease.case import CaseFileError, load_case
 from quickrelease.errors import QuickReleaseError
-from quickrelease.uq import run_uq, sensitivities
+from quickrelease.io.case import CaseFileError, load_case
+from quickrelease.studies.uq import run_uq, sensitivities
 
 HAS_DASK = importlib.util.find_spec("dask") is not None and importlib.util.find_spec("distributed") is not None
 
@@ -73,7 +73,7 @@ def test_reproducible_and_chunk_independent_of_backend_order(case_path):
 
 def test_percentiles_match_exact_ones(case_path):
     """The histogram percentiles agree with numpy's exact ones within the bin width."""
-    from quickrelease import uq
+    from quickrelease.studies import uq
 
     case = load_case(case_path)
     r = run_uq(case, 40_000, seed=1, chunk=40_000)
@@ -92,7 +92,7 @@ def test_chunked_moments_match_one_shot_numpy(case_path):
     std and correlation numpy computes in one shot on the same 40,000 samples (chunk j draws from
     SeedSequence([seed, j])). Without the between-chunk term the variance is short by the spread of the chunk
     means, ~1e-4 relative here."""
-    from quickrelease import uq
+    from quickrelease.studies import uq
 
     case = load_case(case_path)
     r = run_uq(case, 40_000, seed=5, chunk=10_000)
@@ -186,7 +186,7 @@ def test_line_time_partials_against_mpmath():
     differences at 30 digits."""
     import mpmath
 
-    from quickrelease.uq import _line_time_partials
+    from quickrelease.studies.uq import _line_time_partials
 
     mpmath.mp.dps = 30
     k, m2, L1 = 2 / 3 * 576.78 / 531.69, 531.69, 2.477
@@ -210,7 +210,7 @@ def test_sensitivities_against_mpmath_identification(case_path):
     E_S = P^2 e(alpha0) with e from statics (Eq. 2, tested against Table 3 in test_statics)."""
     import mpmath
 
-    from quickrelease.statics import strain_energy_coefficient
+    from quickrelease.device.statics import strain_energy_coefficient
 
     mpmath.mp.dps = 20
     case = load_case(case_path)

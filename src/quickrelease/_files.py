@@ -88,7 +88,7 @@ def check_output_file(path: str | Path, option: str, overwrite: bool = False) ->
     existing file without ``overwrite`` (the program cannot know it wrote it), a name or path longer than the
     system allows, a folder in the path that is a file, and a place that cannot be written.
     """
-    from .runfolder import OutputError, check_target
+    from .io.runfolder import OutputError, check_target
 
     given = path
     full = check_target(path, "file", option)

@@ -15,14 +15,14 @@ from pathlib import Path
 from typing import Any
 
 from ._threads import check_threads
-from .case import Case
-from .display import Summarised
-from .fit import FitResult, fit_record
-from .identify import Identification, case_friction, identify_friction
-from .planning import PlanResult, plan_case, plan_figures
-from .response import Response
-from .solvers import simulate
-from .statics import StrainEnergy
+from .device.identify import Identification, case_friction, identify_friction
+from .device.response import Response
+from .device.solvers import simulate
+from .device.statics import StrainEnergy
+from .io.case import Case
+from .report.display import Summarised
+from .studies.fit import FitResult, fit_record
+from .studies.planning import PlanResult, plan_case, plan_figures
 
 __all__ = ["CaseResult", "run_case", "write_results", "write_campaign_results", "render_figures", "FIGURES",
            "results_folder", "campaign_folder", "building_folder", "write_building_results", "identified_building"]
@@ -114,8 +114,8 @@ def run_case(case: Case, *, state_diagram: bool = True, plan: bool | None = None
                       simulate(E_S, case.alpha0, F1, F2, method="explicit", dt=case.dt, **common))
     building = None
     if _has_building_record(case):
-        from .building_analysis import analyse_building
-        from .building_case import load_building
+        from .io.building_case import load_building
+        from .studies.building_analysis import analyse_building
 
         building = analyse_building(load_building(case))
     plan = _wants_plan(case, plan)
@@ -187,7 +187,7 @@ def clearance_words(values: dict[str, Any], std_errors: dict[str, float]) -> str
     damping ratio zeta = 0.050009, slider friction F_s = 156.881 kN, mass = 800 t, pushed displacement d0 =
     182.496 mm``; a fitted value rounded where its standard error shows two digits, another to 5 significant
     digits."""
-    from .display import number, same_places
+    from .report.display import number, same_places
 
     parts = []
     for key, (name, param, unit, scale) in _NOTE_VALUES.items():
@@ -210,7 +210,7 @@ def results_folder(case: Case, out: str | Path, *, plan: bool | None = None, fig
                    report: bool = True, data: bool = True, overwrite: bool = False):
     """The :class:`~quickrelease.runfolder.RunFolder` that :func:`write_results` writes a case's results
     through; making it checks ``out`` before the work (pre-flight) and writes nothing."""
-    from .runfolder import RunFolder, case_inputs
+    from .io.runfolder import RunFolder, case_inputs
 
     inputs = {"case": case_inputs(case), "plan": _wants_plan(case, plan), "figures": figures, "report": report,
               "data": data}
@@ -219,7 +219,7 @@ def results_folder(case: Case, out: str | Path, *, plan: bool | None = None, fig
 
 def render_figures(result: CaseResult) -> dict[str, Any]:
     """The figures of a case result as matplotlib Figures, keyed by the stems of :data:`FIGURES`."""
-    from . import plots
+    from .report import plots
 
     figs: dict[str, Any] = {
         "fig13_response": plots.fig13(result.response),
@@ -235,7 +235,7 @@ def render_figures(result: CaseResult) -> dict[str, Any]:
     if result.plan is not None:
         figs.update(plan_figures(result.plan))
     if result.building is not None:
-        from .building_plots import building_figures
+        from .report.building_plots import building_figures
 
         figs.update(building_figures(result.building))
     return figs
@@ -244,7 +244,7 @@ def render_figures(result: CaseResult) -> dict[str, Any]:
 def _svg_text(fig: Any) -> str:
     import matplotlib
 
-    from ._style import STYLE
+    from .report._style import STYLE
 
     buf = io.StringIO()
     with matplotlib.rc_context(STYLE):  # the svg settings (text as text, stable ids) are read at save time
@@ -297,8 +297,8 @@ def write_results(result: CaseResult, out: str | Path, *, figures: bool = True, 
 
 def _write_results_into(result: CaseResult, out: Path, *, figures: bool, report: bool,
                         data: bool) -> dict[str, Path]:
-    from .export import write_csv, write_json, write_netcdf, write_text
-    from .runfolder import provenance
+    from .io.export import write_csv, write_json, write_netcdf, write_text
+    from .io.runfolder import provenance
 
     paths: dict[str, Path] = {}
     prov = provenance(result.case)
@@ -320,7 +320,7 @@ def _write_results_into(result: CaseResult, out: Path, *, figures: bool, report:
                                               attrs={"case": result.case.title}, provenance=prov)
     svgs: dict[str, str] = {}
     if figures or report:
-        from .export import atomic_path
+        from .io.export import atomic_path
 
         figs = render_figures(result)
         pngs = {stem: out / "figures" / f"{stem}.png" for stem in figs} if figures else {}
@@ -328,7 +328,7 @@ def _write_results_into(result: CaseResult, out: Path, *, figures: bool, report:
         def write_pngs() -> None:
             import matplotlib
 
-            from ._style import STYLE
+            from .report._style import STYLE
 
             for stem, path in pngs.items():
                 with atomic_path(path) as tmp, matplotlib.rc_context(STYLE):
@@ -343,7 +343,7 @@ def _write_results_into(result: CaseResult, out: Path, *, figures: bool, report:
             write_pngs()  # no second core, no fork, or the child failed: do it here
         paths.update({f"{stem}.png": path for stem, path in pngs.items()})
     if report:
-        from .report import render_report
+        from .report.html import render_report
 
         paths["report"] = write_text(render_report(result, svgs), out / "report.html")
     return paths
@@ -356,7 +356,7 @@ def building_folder(result_or_data, out: str | Path, *, model: str | None = None
     The fingerprint holds what the analysis depends on: the channels (their samples by SHA-256, not the
     record's path), the mass, the model, the start values and the release time given, and ``compare``.
     """
-    from .runfolder import RunFolder
+    from .io.runfolder import RunFolder
 
     data = result_or_data
     inputs = {"channels": list(data.channels), "mass": data.mass, "model": model or data.model,
@@ -373,12 +373,12 @@ def write_building_results(result, data, out: str | Path, *, model: str | None =
     (``figures/<stem>.png``/``.svg``), ``report.html`` and ``manifest.json``, staged and moved into place as
     :func:`write_results` does; returns the paths by name. ``origin`` (the case) is what the files' provenance
     names (:func:`~quickrelease.runfolder.provenance`; by default the record)."""
-    from .building_plots import building_figures
-    from .export import write_columns, write_dataset, write_json, write_text
-    from .frames import fit_columns, fit_dataset
-    from .plots import save_figure
-    from .report import render_building_report
-    from .runfolder import provenance
+    from .io.export import write_columns, write_dataset, write_json, write_text
+    from .io.frames import fit_columns, fit_dataset
+    from .io.runfolder import provenance
+    from .report.building_plots import building_figures
+    from .report.html import render_building_report
+    from .report.plots import save_figure
 
     prov = provenance(origin if origin is not None else result.source)
     folder = building_folder(data, out, model=model, compare=compare, overwrite=overwrite)
@@ -403,7 +403,7 @@ def campaign_folder(campaign_file: str | Path, out: str | Path, *, overwrite: bo
     an edited record is another run."""
     import tomllib
 
-    from .runfolder import RunFolder, _file_digest
+    from .io.runfolder import RunFolder, _file_digest
 
     path = Path(campaign_file)
     files = {}
@@ -425,16 +425,16 @@ def write_campaign_results(result, out: str | Path, *, overwrite: bool = False) 
     """Write a campaign's results into ``out``: ``campaign.json``, ``figures/campaign_friction.png``/``.svg``
     (a building campaign: ``figures/campaign_building``) and the self-contained ``report.html`` (staged and
     moved into place as :func:`write_results` does); returns the paths by name."""
-    from .export import write_json, write_text
-    from .plots import save_figure
-    from .report import render_campaign_report
-    from .runfolder import provenance
+    from .io.export import write_json, write_text
+    from .io.runfolder import provenance
+    from .report.html import render_campaign_report
+    from .report.plots import save_figure
 
     if getattr(result, "kind", "device") == "building":
-        from .building_campaign import building_campaign_figure as figure
+        from .studies.building_campaign import building_campaign_figure as figure
         stem = "campaign_building"
     else:
-        from .campaign import campaign_figure as figure
+        from .studies.campaign import campaign_figure as figure
         stem = "campaign_friction"
     folder = campaign_folder(result.source, out, overwrite=overwrite)
     with folder.staged() as work:
