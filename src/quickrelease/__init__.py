@@ -39,6 +39,7 @@ from .errors import (
     QuickReleaseError,
     UnitError,
 )
+from .report import display as _display  # noqa: F401  (registers the results' repr and notebook tables)
 from .units import parse_quantity
 
 __all__ = [

@@ -14,7 +14,7 @@ import os
 import stat
 from pathlib import Path
 
-__all__ = ["TOML_MAX_BYTES", "RECORD_MAX_BYTES", "file_kind", "check_input", "read_input", "check_output_file"]
+__all__ = ["TOML_MAX_BYTES", "RECORD_MAX_BYTES", "file_kind", "check_input", "read_input"]
 
 #: The largest TOML file read (case, device, campaign files are a few kB).
 TOML_MAX_BYTES = 16 * 2**20
@@ -77,32 +77,3 @@ def read_input(path: str | Path, what: str, error: type[Exception], limit: int =
     if len(data) > limit:  # grew while read
         raise error(f"{path}: the {what} is over the {_size_words(limit)} read at most")
     return data
-
-
-def check_output_file(path: str | Path, option: str, overwrite: bool = False) -> Path:
-    """Check before the work that the file ``path`` may be written (by a rename of a finished temporary file
-    over it); returns its absolute path.
-
-    Refused (:class:`~quickrelease.runfolder.OutputError`, one line): a device node, FIFO, socket or folder at
-    ``path`` (never replaced, even with ``overwrite``: a rename over a device node removes the device), an
-    existing file without ``overwrite`` (the program cannot know it wrote it), a name or path longer than the
-    system allows, a folder in the path that is a file, and a place that cannot be written.
-    """
-    from .io.runfolder import OutputError, check_target
-
-    given = path
-    full = check_target(path, "file", option)
-    try:
-        st = os.stat(full)  # through a symbolic link: what a write would reach
-    except FileNotFoundError:
-        st = None
-    except OSError as exc:
-        raise OutputError(f"{option} {given}: {exc.strerror or exc}") from None
-    if st is not None:
-        if not stat.S_ISREG(st.st_mode):
-            raise OutputError(f"{option} {given}: is {file_kind(st.st_mode)}, not a regular file; it is never "
-                              f"replaced (choose another {option})")
-        if not overwrite:
-            raise OutputError(f"{option} {given}: the file exists; pass --overwrite to replace it, or choose "
-                              f"another {option}")
-    return full

@@ -288,11 +288,10 @@ def _table(title: str, rows: list[tuple[str, ...]], headers: tuple[str, ...]) ->
 def _check_output_files(targets, overwrite: bool) -> None:
     """Pre-flight of the files a command writes, ``(path or None, option)`` each: refused (one line) before any
     work when a path names a device node, FIFO or folder, or an existing file without --overwrite, or the
-    same file twice (:func:`quickrelease._files.check_output_file`)."""
+    same file twice (:func:`quickrelease.io.runfolder.check_output_file`)."""
     import os
 
-    from ._files import check_output_file
-    from .io.runfolder import OutputError
+    from .io.runfolder import OutputError, check_output_file
 
     seen: dict[str, str] = {}
     for path, option in targets:
@@ -390,7 +389,7 @@ def simulate(
         raise QuickReleaseError("friction is missing: give [friction] in the case file or --f1/--f2 "
                                 "(to identify or fit first, use 'quickrelease run')")
     if not case.has_friction and case.friction_case is not None:
-        from .device.identify import case_friction
+        from .studies.fit import case_friction
 
         F1_case, F2_case, _ = case_friction(case)
         case = case.replace(F1=F1_case, F2=F2_case)

@@ -14,36 +14,19 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from ._results import Summarised
 from ._threads import check_threads
-from .device.identify import Identification, case_friction, identify_friction
+from .device.identify import Identification, identify_friction
 from .device.response import Response
 from .device.solvers import simulate
 from .device.statics import StrainEnergy
 from .io.case import Case
-from .report.display import Summarised
-from .studies.fit import FitResult, fit_record
+from .report.html import FIGURES
+from .studies.fit import FitResult, case_friction, fit_record
 from .studies.planning import PlanResult, plan_case, plan_figures
 
 __all__ = ["CaseResult", "run_case", "write_results", "write_campaign_results", "render_figures", "FIGURES",
            "results_folder", "campaign_folder", "building_folder", "write_building_results", "identified_building"]
-
-#: Figure stems and what they show.
-FIGURES = {
-    "fig13_response": "Fig. 13: position angle, angular velocity, angular acceleration, energy balance",
-    "fig14_displacements": "Fig. 14: longitudinal and transverse displacements and velocities",
-    "fig15_state_diagram": "Fig. 15: state diagram, numerical solutions over the analytic curve (Eq. 10)",
-    "identification": "Stop time along the line of Eq. 13, with the measured t_F and the identified point",
-    "strain_energy": "Strain energy stored before release by term (Eq. 2)",
-    "fit_channels": "Fit to the measured record: each channel measured and fitted, with its residuals",
-    "plan_choices": "Fuse and angle choices: push force at rupture (Eq. 1), the target range outlined",
-    "plan_utilisation": "Member checks at the planned push (Table 3's internal forces)",
-    "plan_envelope": "Release envelope over the friction estimate: stroke, opening, time to stop, peak head velocity",
-    "plan_gap": "Clearance: head retraction, the building's approach and the gap between them",
-    "building_fit": "Building record and fitted isolation model, each channel with its residuals",
-    "building_decay": "Decay envelope with the Coulomb, viscous and combined decay laws",
-    "building_amplitude": "Equivalent period and damping ratio of the building against the amplitude",
-    "building_hysteresis": "Hysteresis loop of the isolators: -m a against the displacement",
-}
 
 
 @dataclass(frozen=True, repr=False)

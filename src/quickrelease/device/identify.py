@@ -16,10 +16,10 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+from .._results import Summarised
 from .._roots import brent
 from .._validate import check_angle, check_positive
 from ..errors import InfeasibleObservationError, ParameterError, QuickReleaseError
-from ..report.display import Summarised
 from ..units import si_scalar
 from . import dynamics
 from ._kernels import feasible_slack
@@ -27,7 +27,7 @@ from .parameters import Device, preset
 from .solvers import FirstIntegral
 from .statics import strain_energy
 
-__all__ = ["Identification", "identify_friction", "stop_time_on_line", "case_friction"]
+__all__ = ["Identification", "identify_friction", "stop_time_on_line"]
 
 
 @dataclass(frozen=True, repr=False)
@@ -242,26 +242,3 @@ def identify_friction(alpha0: float, alpha_final: float, stop_time: float, *,
         mass_factor=c, device=device, stop_time_residual=float(res), feasible_stop_times=feasible,
         push_force=None if push_force is None else float(push_force), iterations=count, boundary=boundary,
     )
-
-
-def case_friction(case) -> tuple[float, float, str]:
-    """F1, F2 of a case file [N] and where they come from.
-
-    In order: ``[friction]`` F1, F2; the friction of the case named by ``[friction] case`` (found the same
-    way); the fit to ``[record]``; the identification from ``[observations]`` (Eq. 11-13).
-    """
-    if case.has_friction:
-        return case.F1 or 0.0, case.F2 or 0.0, "[friction]"
-    if case.friction_case is not None:
-        F1, F2, how = case_friction(case.friction_case)
-        return F1, F2, f"{how} of {case.friction_case.source}"
-    if case.record is not None:
-        from ..studies.fit import fit_record
-
-        fit = fit_record(case)
-        return fit.F1, fit.F2, "fitted to [record]"
-    if case.has_observations:
-        ident = identify_friction(case.alpha0, case.alpha_final, case.stop_time, stored_energy=case.stored_energy,
-                                  device=case.device, mass_model=case.mass_model)
-        return ident.F1, ident.F2, "identified from [observations]"
-    raise QuickReleaseError(f"{case.source}: no friction: give [friction], [observations] or [record]")

@@ -16,8 +16,8 @@ from functools import lru_cache
 from importlib import resources
 from typing import Any
 
+from .._results import Summarised
 from .._roots import brent
-from ..report.display import Summarised
 from ..units import parse_quantity
 from . import dynamics
 from .identify import identify_friction, stop_time_on_line

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from ..report.display import Summarised
+from .._results import Summarised
 from . import dynamics, kinematics
 from .parameters import Device
 
@@ -228,7 +228,7 @@ class Response(Summarised):
             if value is not None:
                 attrs[key] = int(value) if isinstance(value, bool) else value
         if provenance is not None:
-            from ..io.runfolder import provenance_attrs
+            from .._version import provenance_attrs
 
             attrs.update(provenance_attrs(provenance))
         return xr.Dataset(variables, coords=coords, attrs=attrs)

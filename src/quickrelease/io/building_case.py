@@ -40,7 +40,7 @@ if TYPE_CHECKING:
     from .case import BuildingSpec, Case
 
 __all__ = ["BUILDING_CHANNELS", "BuildingData", "load_building", "parse_building_record", "spec_building",
-           "spec_isolation"]
+           "spec_isolation", "pushed_displacement"]
 
 #: Channel name -> (quantity kind, SI unit, description) of the building's record (the table of
 #: :data:`quickrelease.building.RECORD_CHANNELS`).
@@ -203,9 +203,23 @@ def load_building(case: Case) -> BuildingData:
             and case.has_test and case.push_force is not None and not spec.missing_design()):
         # no displacement in the record: d0 from the push force and the design values, one start among the
         # fit's (which searches d0 too)
-        from ..studies.planning import pushed_displacement
-
         start["d0"] = pushed_displacement(case.push_force, spec)
     return BuildingData(model=spec.model, mass=float(spec.mass), isolation=isolation, start=start,
                         d0=spec.displacement, channels=channels, release_time=release_time, notes=notes,
                         source=case.source, superstructure_mass=spec.superstructure_mass, spec=spec, jitter=jitter)
+
+
+def pushed_displacement(push_force: float, building: BuildingSpec) -> float:
+    """The building's displacement under the push, d0 [m]: given, else where the push ``P`` is held by the
+    isolators' friction and restoring force, ``P - F_f = R(d0)``: ``(P - F_f) / k`` with
+    ``k = m (2 pi / T)^2`` (linear, 2dof), and on the bilinear push curve ``(P - F_f) / k1`` up to the
+    yield force, ``d_y + (P - F_f - F_y) / k2`` beyond it (``d_y = F_y / k1``)."""
+    if building.displacement is not None:
+        return building.displacement
+    building.require_design("d0 from the push force (without [building] displacement)")
+    held = max(push_force - building.friction_force, 0.0)
+    if building.model == "bilinear":
+        k1, k2, F_y = building.k1, building.k2, building.yield_force
+        return held / k1 if held <= F_y else F_y / k1 + (held - F_y) / k2
+    k = building.mass * (2.0 * math.pi / building.period) ** 2
+    return held / k

@@ -127,7 +127,7 @@ def write_dataset(ds: Any, path: str | Path, provenance: dict[str, Any] | None =
     """Write an ``xarray.Dataset`` as NetCDF (classic format, as :func:`write_netcdf`) atomically, with the
     ``provenance`` (:func:`quickrelease.runfolder.provenance`) as global attributes."""
     if provenance is not None:
-        from .runfolder import provenance_attrs
+        from .._version import provenance_attrs
 
         ds = ds.assign_attrs(provenance_attrs(provenance))
     with atomic_path(path) as tmp:

@@ -30,6 +30,7 @@ import json
 import math
 import os
 import shutil
+import stat
 import sys
 import tempfile
 from collections.abc import Iterator
@@ -38,10 +39,13 @@ from typing import Any
 
 import numpy as np
 
+from .._files import file_kind
+from .._version import provenance_attrs
 from ..errors import QuickReleaseError
 
 __all__ = ["OutputError", "RunFolder", "canonical", "fingerprint", "case_inputs", "differences", "check_target",
-           "MANIFEST", "output_error", "commit_files", "staging_name", "provenance", "provenance_attrs"]
+           "MANIFEST", "output_error", "commit_files", "staging_name", "provenance", "provenance_attrs",
+           "check_output_file"]
 
 MANIFEST = "manifest.json"
 _FORMAT = "quickrelease-run/1"
@@ -154,16 +158,6 @@ def provenance(origin: Any) -> dict[str, Any]:
         entry = {"name": Path(str(source)).name, "sha256": hashlib.sha256(raw).hexdigest(),
                  "text": raw.decode("utf-8", errors="replace")}
     return {"quickrelease": _version(), "input": entry}
-
-
-def provenance_attrs(prov: dict[str, Any]) -> dict[str, str]:
-    """The provenance as NetCDF global attributes (text only): ``quickrelease_version``, ``input_file``,
-    ``input_sha256`` (the text itself stays in the JSON files and the report)."""
-    attrs = {"quickrelease_version": str(prov["quickrelease"])}
-    if prov.get("input"):
-        attrs["input_file"] = str(prov["input"]["name"])
-        attrs["input_sha256"] = str(prov["input"]["sha256"])
-    return attrs
 
 
 def _flatten(data: Any, prefix: str = "") -> dict[str, Any]:
@@ -565,3 +559,30 @@ def commit_files(pairs: list[tuple[Path, Path]]) -> None:
     """Rename written temporary files into place, in order (each rename atomic)."""
     for tmp, dest in pairs:
         os.replace(tmp, dest)
+
+
+def check_output_file(path: str | Path, option: str, overwrite: bool = False) -> Path:
+    """Check before the work that the file ``path`` may be written (by a rename of a finished temporary file
+    over it); returns its absolute path.
+
+    Refused (:class:`OutputError`, one line): a device node, FIFO, socket or folder at
+    ``path`` (never replaced, even with ``overwrite``: a rename over a device node removes the device), an
+    existing file without ``overwrite`` (the program cannot know it wrote it), a name or path longer than the
+    system allows, a folder in the path that is a file, and a place that cannot be written.
+    """
+    given = path
+    full = check_target(path, "file", option)
+    try:
+        st = os.stat(full)  # through a symbolic link: what a write would reach
+    except FileNotFoundError:
+        st = None
+    except OSError as exc:
+        raise OutputError(f"{option} {given}: {exc.strerror or exc}") from None
+    if st is not None:
+        if not stat.S_ISREG(st.st_mode):
+            raise OutputError(f"{option} {given}: is {file_kind(st.st_mode)}, not a regular file; it is never "
+                              f"replaced (choose another {option})")
+        if not overwrite:
+            raise OutputError(f"{option} {given}: the file exists; pass --overwrite to replace it, or choose "
+                              f"another {option}")
+    return full

@@ -12,6 +12,8 @@ import math
 from collections.abc import Iterable, Mapping
 from typing import Any
 
+from .._results import register_formatters
+
 #: (key suffix, unit as printed, whether SI prefixes k/M/G apply), longest suffix first.
 UNIT_SUFFIXES: tuple[tuple[str, str, bool], ...] = (
     ("_per_s", "/s", False),  # a rate: cases per second (bench)
@@ -341,15 +343,5 @@ def summary_html(name: str, summary: Mapping[str, Any]) -> str:
     return f"<table><caption style=\"text-align:left\"><b>{html.escape(name)}</b></caption>{''.join(rows)}</table>"
 
 
-class Summarised:
-    """Mixin of the result types: a short ``repr`` and a notebook table (``_repr_html_``), both from the
-    type's ``summary()``. Dataclasses using it are declared with ``repr=False`` so this repr is kept."""
-
-    #: Summary keys the repr shows (default: the first five scalar entries).
-    _repr_keys: tuple[str, ...] = ()
-
-    def __repr__(self) -> str:
-        return short_repr(type(self).__name__, self.summary(), self._repr_keys)  # type: ignore[attr-defined]
-
-    def _repr_html_(self) -> str:
-        return summary_html(type(self).__name__, self.summary())  # type: ignore[attr-defined]
+# The result protocol (quickrelease._results) formats reprs and notebook tables with these two.
+register_formatters(short_repr, summary_html)

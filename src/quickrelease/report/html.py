@@ -16,13 +16,33 @@ import math
 import os
 import re
 from collections.abc import Iterable, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ..device.parameters import DEVICE_KEYS
-from ..workflow import FIGURES, CaseResult
 from .display import half_width, key_for, number, plus_minus, same_places, unit_text
 
-__all__ = ["render_report", "render_campaign_report", "render_building_report", "building_section"]
+if TYPE_CHECKING:  # the workflow's result type annotates render_report; the report imports no workflow
+    from ..workflow import CaseResult
+
+#: Figure stems and what they show.
+FIGURES = {
+    "fig13_response": "Fig. 13: position angle, angular velocity, angular acceleration, energy balance",
+    "fig14_displacements": "Fig. 14: longitudinal and transverse displacements and velocities",
+    "fig15_state_diagram": "Fig. 15: state diagram, numerical solutions over the analytic curve (Eq. 10)",
+    "identification": "Stop time along the line of Eq. 13, with the measured t_F and the identified point",
+    "strain_energy": "Strain energy stored before release by term (Eq. 2)",
+    "fit_channels": "Fit to the measured record: each channel measured and fitted, with its residuals",
+    "plan_choices": "Fuse and angle choices: push force at rupture (Eq. 1), the target range outlined",
+    "plan_utilisation": "Member checks at the planned push (Table 3's internal forces)",
+    "plan_envelope": "Release envelope over the friction estimate: stroke, opening, time to stop, peak head velocity",
+    "plan_gap": "Clearance: head retraction, the building's approach and the gap between them",
+    "building_fit": "Building record and fitted isolation model, each channel with its residuals",
+    "building_decay": "Decay envelope with the Coulomb, viscous and combined decay laws",
+    "building_amplitude": "Equivalent period and damping ratio of the building against the amplitude",
+    "building_hysteresis": "Hysteresis loop of the isolators: -m a against the displacement",
+}
+
+__all__ = ["render_report", "render_campaign_report", "render_building_report", "building_section", "FIGURES"]
 
 _CSS = """
 body { font-family: system-ui, -apple-system, "Segoe UI", Roboto, sans-serif; margin: 2rem auto; max-width: 980px;

@@ -24,11 +24,11 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
+from .._results import Summarised
 from ..building.decay import DecayAnalysis, analyse_decay, hysteresis_loop
 from ..building.isolation_fit import BuildingChannel, IsolationFit, compare_models, decay_check, fit_isolation
 from ..errors import ParameterError, QuickReleaseError
 from ..io.export import jsonable
-from ..report.display import Summarised
 
 __all__ = ["BuildingResult", "analyse_building", "MODELS", "physical_estimates"]
 

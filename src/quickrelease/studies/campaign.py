@@ -43,11 +43,11 @@ from typing import Any
 
 import numpy as np
 
+from .._results import Summarised
 from ..device.parameters import read_toml
 from ..errors import QuickReleaseError
 from ..io.case import Case, CaseFileError, case_from_mapping, load_case
 from ..report._style import styled
-from ..report.display import Summarised
 from .fit import FitResult, fit_record, observation_sigma
 
 __all__ = ["CampaignTest", "LinearLaw", "Law", "JointLaw", "CampaignResult", "load_campaign", "run_campaign",

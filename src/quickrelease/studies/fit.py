@@ -30,7 +30,9 @@ from typing import Any
 import numpy as np
 
 from .._lsq import identified_covariance
+from .._results import Summarised
 from ..device import dynamics
+from ..device.identify import identify_friction
 from ..device.parameters import Device
 from ..device.solvers import FirstIntegral
 from ..errors import InfeasibleObservationError, QuickReleaseError
@@ -47,9 +49,9 @@ from ..io.records import (
     release_channels,
     shifted_record,
 )
-from ..report.display import Summarised
 
-__all__ = ["FitResult", "fit_record", "observation_sigma", "CORRELATION_WARNING", "RELATIVE_SE_WARNING"]
+__all__ = ["FitResult", "fit_record", "case_friction", "observation_sigma", "CORRELATION_WARNING",
+           "RELATIVE_SE_WARNING"]
 
 #: |correlation(F1, F2)| above which a poorly determined F1 or F2 is explained as indistinguishable from the other.
 CORRELATION_WARNING = 0.99
@@ -846,3 +848,23 @@ def _warnings(names, est, ses, corr, cond, x, lower, upper, problem) -> list[str
                    "their stated scatter alone and no misfit can show")
     return out
 
+
+def case_friction(case) -> tuple[float, float, str]:
+    """F1, F2 of a case file [N] and where they come from.
+
+    In order: ``[friction]`` F1, F2; the friction of the case named by ``[friction] case`` (found the same
+    way); the fit to ``[record]``; the identification from ``[observations]`` (Eq. 11-13).
+    """
+    if case.has_friction:
+        return case.F1 or 0.0, case.F2 or 0.0, "[friction]"
+    if case.friction_case is not None:
+        F1, F2, how = case_friction(case.friction_case)
+        return F1, F2, f"{how} of {case.friction_case.source}"
+    if case.record is not None:
+        fit = fit_record(case)
+        return fit.F1, fit.F2, "fitted to [record]"
+    if case.has_observations:
+        ident = identify_friction(case.alpha0, case.alpha_final, case.stop_time, stored_energy=case.stored_energy,
+                                  device=case.device, mass_model=case.mass_model)
+        return ident.F1, ident.F2, "identified from [observations]"
+    raise QuickReleaseError(f"{case.source}: no friction: give [friction], [observations] or [record]")

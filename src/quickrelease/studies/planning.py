@@ -19,20 +19,21 @@ from typing import Any
 import numpy as np
 
 from .. import batch
+from .._results import Summarised
 from .._threads import check_threads, using_threads
 from .._validate import check_size
 from ..building.model import FreeVibration, Isolation, free_vibration, pushed_state
 from ..device.dynamics import angular_acceleration
-from ..device.identify import case_friction
 from ..device.kinematics import retraction
 from ..device.parameters import Device
 from ..device.solvers import FirstIntegral
 from ..device.statics import InternalForces, internal_forces, strain_energy
 from ..errors import ParameterError, QuickReleaseError
+from ..io.building_case import pushed_displacement
 from ..io.case import BuildingSpec, Case, Distribution
 from ..report._style import STYLE as _STYLE
 from ..report._style import styled, unit_text
-from ..report.display import Summarised
+from .fit import case_friction
 
 __all__ = [
     "FuseChoice", "FuseTable", "fuse_choices", "MemberCheck", "MemberChecks", "member_checks", "Envelope",
@@ -470,22 +471,6 @@ def building_isolation(building: BuildingSpec) -> Isolation:
     from ..io.building_case import spec_isolation
 
     return spec_isolation(building)
-
-
-def pushed_displacement(push_force: float, building: BuildingSpec) -> float:
-    """The building's displacement under the push, d0 [m]: given, else where the push ``P`` is held by the
-    isolators' friction and restoring force, ``P - F_f = R(d0)``: ``(P - F_f) / k`` with
-    ``k = m (2 pi / T)^2`` (linear, 2dof), and on the bilinear push curve ``(P - F_f) / k1`` up to the
-    yield force, ``d_y + (P - F_f - F_y) / k2`` beyond it (``d_y = F_y / k1``)."""
-    if building.displacement is not None:
-        return building.displacement
-    building.require_design("d0 from the push force (without [building] displacement)")
-    held = max(push_force - building.friction_force, 0.0)
-    if building.model == "bilinear":
-        k1, k2, F_y = building.k1, building.k2, building.yield_force
-        return held / k1 if held <= F_y else F_y / k1 + (held - F_y) / k2
-    k = building.mass * (2.0 * math.pi / building.period) ** 2
-    return held / k
 
 
 #: What :class:`Clearance` says when the gap grows over the whole horizon (no minimum after it opens).

@@ -100,7 +100,7 @@ def parse_grid(text: str) -> tuple[str, np.ndarray]:
 
 
 def _base(case: Case) -> dict[str, float]:
-    from ..device.identify import case_friction
+    from .fit import case_friction
 
     d = case.device
     F1, F2, _ = case_friction(case)
@@ -235,7 +235,7 @@ def sweep(case: Case, grids: dict[str, np.ndarray], *, backend: str = "numpy", o
         block_rows = int(block_rows or max(1, 1_000_000 // max(per_row, 1)))
     folder = None
     if out is not None:  # pre-flight, before the work
-        from .._files import check_output_file
+        from ..io.runfolder import check_output_file
 
         if Path(out).suffix == ".zarr":
             folder = _store_folder(case, grids, out, block_rows if backend == "dask" else None, resume=resume,

@@ -21,11 +21,11 @@ import numpy as np
 
 from .._validate import BYTES_PER_SAMPLE, check_seed, check_size
 from ..building.model import RECORD_CHANNELS
-from ..device.identify import case_friction
 from ..device.solvers import FirstIntegral
 from ..errors import ParameterError, QuickReleaseError
 from ..io.case import Case, FitOptions
 from ..io.records import CHANNELS, DISPLACEMENT_CHANNELS, Channel, ChannelSpec, Record, release_channels
+from .fit import case_friction
 
 __all__ = ["DEFAULT_NOISE", "SyntheticRecord", "synthesize", "predicted_errors", "parse_channel_values", "case_toml",
            "BUILDING_NOISE", "SyntheticBuildingRecord", "synthesize_building", "building_case_toml",
@@ -384,8 +384,8 @@ def predicted_building_errors(synthetic: SyntheticBuildingRecord):
 
 def building_pushed_displacement(case: Case) -> float:
     """The building's pushed displacement d0 [m]: ``[building] displacement``, else from the push force of
-    ``[test]`` (:func:`quickrelease.planning.pushed_displacement`)."""
-    from .planning import pushed_displacement
+    ``[test]`` (:func:`quickrelease.io.building_case.pushed_displacement`)."""
+    from ..io.building_case import pushed_displacement
 
     spec = case.building
     if spec.displacement is not None:

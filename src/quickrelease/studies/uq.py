@@ -23,13 +23,13 @@ from typing import Any
 import numpy as np
 
 from .. import batch
+from .._results import Summarised
 from .._threads import check_threads, refuse_with_dask, using_threads
 from .._validate import check_seed, check_size, check_workers
 from ..device.statics import strain_energy_coefficient
 from ..errors import ParameterError, QuickReleaseError
 from ..io.case import Case
 from ..report._style import STYLE, styled
-from ..report.display import Summarised
 
 __all__ = ["UQResult", "run_uq", "sensitivities", "uq_chunk", "PERCENTILES", "N_BINS"]
 
