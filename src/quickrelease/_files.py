@@ -10,11 +10,12 @@ existing file is replaced only with ``overwrite``.
 
 from __future__ import annotations
 
+import hashlib
 import os
 import stat
 from pathlib import Path
 
-__all__ = ["TOML_MAX_BYTES", "RECORD_MAX_BYTES", "file_kind", "check_input", "read_input"]
+__all__ = ["TOML_MAX_BYTES", "RECORD_MAX_BYTES", "file_kind", "check_input", "read_input", "staging_name"]
 
 #: The largest TOML file read (case, device, campaign files are a few kB).
 TOML_MAX_BYTES = 16 * 2**20
@@ -77,3 +78,31 @@ def read_input(path: str | Path, what: str, error: type[Exception], limit: int =
     if len(data) > limit:  # grew while read
         raise error(f"{path}: the {what} is over the {_size_words(limit)} read at most")
     return data
+
+
+def _name_max(folder: Path) -> int:
+    """The longest file name (bytes) the file system of ``folder`` allows (255 where it cannot say)."""
+    try:
+        return int(os.pathconf(folder, "PC_NAME_MAX"))
+    except (OSError, ValueError, AttributeError):
+        return 255
+
+
+#: Bytes a staging name may add after ``.NAME.``: its tag (``partial-PID``, ``old-PID``) and, for a temporary
+#: file, the random part and ``.part``.
+_TAG_ROOM = 40
+
+
+def staging_name(name: str, tag: str, folder: Path | None = None) -> str:
+    """The hidden name ``.NAME.TAG`` of a staging file or folder beside ``NAME`` (``TAG`` up to 40 bytes with
+    what a temporary file adds). When NAME is too long for that (a legal 240-character NAME), it is cut and a
+    hash of the whole keeps the name unique; the cut does not depend on the tag, so every staging name of one
+    NAME starts alike."""
+    limit = _name_max(folder) if folder is not None else 255
+    raw = os.fsencode(name)
+    if len(raw) + 2 + _TAG_ROOM <= limit:
+        return f".{name}.{tag}"
+    digest = hashlib.sha256(raw).hexdigest()[:16]
+    room = max(limit - len(f".~{digest}.") - _TAG_ROOM, 1)
+    head = raw[:room].decode("utf-8", errors="ignore")
+    return f".{head}~{digest}.{tag}"

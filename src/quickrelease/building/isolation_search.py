@@ -245,8 +245,6 @@ def thin_channels(channels, t_r: float | None = None, samples: int = SEARCH_SAMP
     level) up to ``quiet`` each: a record whose sliders stick after two seconds of sixty would otherwise
     leave a few thinned samples on the motion and the rest weighing the search towards any model that stops
     at the right level."""
-    from .isolation_fit import BuildingChannel
-
     moving_end = -math.inf
     if t_r is not None:
         for ch in channels:
@@ -272,7 +270,7 @@ def thin_channels(channels, t_r: float | None = None, samples: int = SEARCH_SAMP
         keep = np.concatenate(keep)
         if keep.size < 10:
             keep = np.arange(ch.t.size)[:: max(1, ch.t.size // 10)]
-        out.append(BuildingChannel(ch.name, ch.kind, ch.t[keep], ch.values[keep], ch.noise, ch.offset))
+        out.append(type(ch)(ch.name, ch.kind, ch.t[keep], ch.values[keep], ch.noise, ch.offset))  # a BuildingChannel
         n_full += ch.t.size
         n_thin += out[-1].t.size
     return out, n_full / n_thin

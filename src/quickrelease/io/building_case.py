@@ -168,7 +168,7 @@ def load_building(case: Case) -> BuildingData:
         channel with fewer than :data:`MIN_SAMPLES` valid samples; one line naming the file and the column.
     """
     from ..building.isolation_fit import BuildingChannel
-    from .case import CaseFileError
+    from ..errors import CaseFileError
     from .records import RecordError
 
     spec = case.building

@@ -43,7 +43,7 @@ from .._validate import check_size
 from ..device.dynamics import mass_factor
 from ..device.parameters import Device, load_device, preset, read_toml_text
 from ..device.statics import StrainEnergy, strain_energy
-from ..errors import QuickReleaseError
+from ..errors import CaseFileError, QuickReleaseError
 from ..units import parse_quantity
 from .records import RecordSpec, parse_record_spec
 
@@ -212,10 +212,6 @@ class FitOptions:
     """Take the channels' noise levels as exact (no scaling of the covariance by the reduced chi-square)."""
     use_observations: bool = True
     """Use ``[observations]`` given with a scatter as two more data (alpha_F, t_F)."""
-
-
-class CaseFileError(QuickReleaseError):
-    """A case file is malformed or one of its entries is missing, unknown or invalid."""
 
 
 #: Numbers whose valid range is not the default (> 0; an angle in (0, pi/2)).

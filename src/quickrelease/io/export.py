@@ -53,8 +53,8 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     (a rename over it would remove it). The temporary name is hidden and, for a name near the file system's
     limit, shortened (:func:`~quickrelease.runfolder.staging_name`).
     """
-    from .._files import file_kind
-    from .runfolder import OutputError, staging_name
+    from .._files import file_kind, staging_name
+    from ..errors import OutputError
 
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -39,9 +39,9 @@ from typing import Any
 
 import numpy as np
 
-from .._files import file_kind
+from .._files import file_kind, staging_name
 from .._version import provenance_attrs
-from ..errors import QuickReleaseError
+from ..errors import OutputError
 
 __all__ = ["OutputError", "RunFolder", "canonical", "fingerprint", "case_inputs", "differences", "check_target",
            "MANIFEST", "output_error", "commit_files", "staging_name", "provenance", "provenance_attrs",
@@ -49,10 +49,6 @@ __all__ = ["OutputError", "RunFolder", "canonical", "fingerprint", "case_inputs"
 
 MANIFEST = "manifest.json"
 _FORMAT = "quickrelease-run/1"
-
-
-class OutputError(QuickReleaseError):
-    """An output path cannot take the result, or a folder holds something the run must not mix with."""
 
 
 # -- fingerprints -----------------------------------------------------------------------------------------------
@@ -196,36 +192,9 @@ def _version() -> str:
 
 # -- pre-flight -------------------------------------------------------------------------------------------------
 
-def _name_max(folder: Path) -> int:
-    """The longest file name (bytes) the file system of ``folder`` allows (255 where it cannot say)."""
-    try:
-        return int(os.pathconf(folder, "PC_NAME_MAX"))
-    except (OSError, ValueError, AttributeError):
-        return 255
-
 
 #: The longest path (bytes) the system takes (Linux PATH_MAX, with its terminating zero).
 PATH_MAX = 4095
-
-
-#: Bytes a staging name may add after ``.NAME.``: its tag (``partial-PID``, ``old-PID``) and, for a temporary
-#: file, the random part and ``.part``.
-_TAG_ROOM = 40
-
-
-def staging_name(name: str, tag: str, folder: Path | None = None) -> str:
-    """The hidden name ``.NAME.TAG`` of a staging file or folder beside ``NAME`` (``TAG`` up to 40 bytes with
-    what a temporary file adds). When NAME is too long for that (a legal 240-character NAME), it is cut and a
-    hash of the whole keeps the name unique; the cut does not depend on the tag, so every staging name of one
-    NAME starts alike."""
-    limit = _name_max(folder) if folder is not None else 255
-    raw = os.fsencode(name)
-    if len(raw) + 2 + _TAG_ROOM <= limit:
-        return f".{name}.{tag}"
-    digest = hashlib.sha256(raw).hexdigest()[:16]
-    room = max(limit - len(f".~{digest}.") - _TAG_ROOM, 1)
-    head = raw[:room].decode("utf-8", errors="ignore")
-    return f".{head}~{digest}.{tag}"
 
 
 def check_target(out: str | Path, kind: str, option: str = "--out") -> Path:

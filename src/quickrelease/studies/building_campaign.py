@@ -4,7 +4,7 @@ A snap-back campaign releases one building several times from different pushed d
 forces P). Each release is fitted on its own (:func:`quickrelease.isolation_fit.fit_isolation`, with
 standard errors and 95% intervals); then, for each quantity of the isolation system, the law
 ``q = a + b x`` across the campaign is fitted by weighted least squares (the device campaign's machinery,
-:func:`quickrelease.campaign.fit_line`: weights ``1 / SE^2``, the covariance inflated by the reduced
+:func:`quickrelease.studies.campaign.fit_line`: weights ``1 / SE^2``, the covariance inflated by the reduced
 chi-square when the tests scatter more than their standard errors say), with its 95% confidence band and
 a Student t test of ``b = 0`` (does the amplitude matter?). The variable x is the release amplitude
 ``|d0|`` [m] (``displacement``), its logarithm ``ln(|d0| / 1 m)`` (``log_displacement``) or the push force
@@ -74,7 +74,7 @@ from ..building.model import pushed_state
 from ..errors import ParameterError, QuickReleaseError
 from ..io.export import jsonable
 from ..report._style import styled
-from .campaign import LinearLaw, fit_line, iter_tests, law_panel, weights_or_none
+from ._laws import LinearLaw, fit_line, iter_tests, law_panel, weights_or_none
 
 __all__ = ["BuildingRelease", "ReleaseEstimates", "BuildingCampaignResult", "fit_building_campaign",
            "building_campaign_figure", "derived_quantity", "law_standard_error", "BUILDING_VARIABLES", "QUANTITIES",
