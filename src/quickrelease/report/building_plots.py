@@ -1,25 +1,24 @@
-"""Figures of the building's free vibration (:class:`~quickrelease.building_analysis.BuildingResult`).
+"""Figures of the building's free vibration (:class:`~quickrelease.studies.building_analysis.BuildingResult`).
 
-Same conventions as :mod:`quickrelease.plots`: object-oriented matplotlib, fixed margins, dense point clouds
+Same conventions as :mod:`quickrelease.report.plots`: object-oriented matplotlib, fixed margins, dense point clouds
 rasterised (the SVG stays small at 1e5 samples), user text (channel names) drawn without mathtext. The
-``*_data`` functions return the numbers behind a figure, so tests check them without reading pixels.
+figures draw what the result carries (the model curves, the model's decay, the decay envelope: computed once by
+:func:`~quickrelease.studies.building_analysis.analyse_building`); they compute no analysis.
 """
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
 
-from ..building.decay import analyse_decay
 from ..building.isolation_fit import CHANNEL_KINDS
 from ._style import STYLE as _STYLE
 from ._style import panels, styled, unit_text
 from .plots import _COLORS, _channel_axes, _joint_legend, headroom, user_label
 
 __all__ = ["BUILDING_FIGURES", "building_figures", "fit_figure", "decay_figure", "amplitude_figure",
-           "hysteresis_figure", "decay_envelope_data", "model_decay", "off_scale"]
+           "hysteresis_figure", "off_scale"]
 
 #: Figure stems of the building and what they show.
 BUILDING_FIGURES = {
@@ -39,7 +38,7 @@ def building_figures(result) -> dict[str, Any]:
     """The building's figures keyed by the stems of :data:`BUILDING_FIGURES` (the loop only with x and a)."""
     figs = {"building_fit": fit_figure(result)}
     if result.decay is not None:
-        model = model_decay(result)
+        model = result.model_decay
         figs["building_decay"] = decay_figure(result, model)
         figs["building_amplitude"] = amplitude_figure(result, model)
     if result.loop is not None:
@@ -76,11 +75,11 @@ def fit_figure(result, fig=None, ax=None):
             bottom = fig.add_subplot(grid[3 * k + 1], sharex=share)
         raster = ch.t.size > _RASTER
         top.plot(ch.t, ch.values, ".", ms=1.5, color=_COLORS["d"], alpha=0.6, label="record", rasterized=raster)
-        t_fine = np.linspace(float(ch.t[0]), float(ch.t[-1]), 4000)
-        top.plot(t_fine, fit.model_values(ch, t_fine), color=_COLORS["a"], lw=1.0, label=f"{fit.model} model")
+        curve = result.curves[ch.name]  # computed by the analysis (building_analysis.model_curves)
+        top.plot(curve["t"], curve["model"], color=_COLORS["a"], lw=1.0, label=f"{fit.model} model")
         user_label(top, "set_ylabel", f"{ch.name} [{unit}]")
         sigma = fit.noise[ch.name]
-        resid = ch.values - fit.model_values(ch)
+        resid = curve["residual"]
         bottom.axhspan(-2 * sigma, 2 * sigma, color=_COLORS["c"], alpha=0.15, lw=0, label="±2σ (noise)")
         bottom.plot(ch.t, resid, ".", ms=1.2, color=_COLORS["b"], rasterized=raster, label="residual")
         bottom.set_ylabel(f"residual [{unit}]")
@@ -100,56 +99,11 @@ def fit_figure(result, fig=None, ax=None):
     return fig
 
 
-def model_decay(result):
-    """The model-free decay analysis of the fitted model's own displacement (noise-free, from the release)."""
-    fit = result.fit
-    xch = next((c for c in fit.channels if c.kind == "x"), None)
-    if xch is None:
-        return None
-    t = np.linspace(fit.release_time, float(xch.t[-1]), 8000)
-    x = fit.model_values(xch, t) - fit.offsets().get(xch.name, 0.0)
-    try:
-        return analyse_decay(t, x, noise=1e-9 * max(abs(float(x[0])), 1e-12))
-    except ValueError:
-        return None
-
-
-def decay_envelope_data(result) -> dict[str, np.ndarray]:
-    """Numbers behind the decay figure: half-cycle amplitudes H_n of the record (n = 0, 1, ...) and the laws.
-
-    Half-swing amplitudes obey ``H_{n+1} = r H_n - (1 + r) delta`` under the combined law (decay.py (*)), so
-    ``H_n = (H_0 + c) r^n - c``, ``c = (1 + r) delta / (1 - r)``, with r and delta from the combined law
-    fitted to the peaks and ``H_0 + c`` by least squares; the pure laws are least-squares fits of the
-    amplitudes themselves: Coulomb ``H_n = H_0 - 2 delta n`` (a straight line), viscous ``H_n = H_0 r^n``
-    (a straight line in log H).
-    """
-    a = result.decay
-    H = np.asarray(a.amplitude, dtype=float)
-    n = np.arange(H.size, dtype=float)
-    out: dict[str, np.ndarray] = {"n": n, "amplitude": H}
-    if H.size >= 2:
-        out["coulomb"] = np.polyval(np.polyfit(n, H, 1), n)
-        pos = H > 0
-        if np.count_nonzero(pos) >= 2:
-            out["viscous"] = np.exp(np.polyval(np.polyfit(n[pos], np.log(H[pos]), 1), n))
-    law = a.law
-    if law is not None and math.isfinite(law.ratio):
-        r, delta = law.ratio, law.friction_displacement
-        if abs(1.0 - r) > 1e-12:
-            c = (1.0 + r) * delta / (1.0 - r)
-            basis = r**n
-            amp = float(np.sum((H + c) * basis) / np.sum(basis * basis))
-            out["combined"] = amp * basis - c
-        else:
-            out["combined"] = float(np.mean(H + 2.0 * delta * n)) - 2.0 * delta * n
-    return out
-
-
 @styled
 def decay_figure(result, model=False, fig=None, ax=None):
     """Half-cycle amplitudes of the record with the two pure decay laws, the combined law and the model.
     ``ax``: an Axes to draw into. Returns the figure."""
-    data = decay_envelope_data(result)
+    data = result.decay_envelope  # computed by the analysis (building_analysis.decay_envelope)
     fig, ax = panels(5.6, 3.6, fig=fig, ax=ax, left=0.14, bottom=0.14, top=0.88)
     ax.plot(data["n"], 1e3 * data["amplitude"], "o", ms=4, color=_COLORS["d"], label="record (half swing)")
     styles = {"coulomb": ("Coulomb: linear decay", _COLORS["b"], "--"),
@@ -158,7 +112,7 @@ def decay_figure(result, model=False, fig=None, ax=None):
     for key, (label, color, ls) in styles.items():
         if key in data:
             ax.plot(data["n"], 1e3 * data[key], ls, color=color, lw=1.2, label=label)
-    model = model_decay(result) if model is False else model
+    model = result.model_decay if model is False else model
     if model is not None and model.amplitude.size:
         ax.plot(np.arange(model.amplitude.size), 1e3 * model.amplitude, "x", ms=4, color=_COLORS["a"],
                 label=f"fitted {result.fit.model} model")
@@ -187,7 +141,7 @@ def amplitude_figure(result, model=False, fig=None, ax=None):
                                 wspace=0.3)
     left.plot(1e3 * a.amplitude, a.equivalent_period, "o", ms=4, color=_COLORS["d"], label="record")
     right.plot(1e3 * a.damping_amplitude, a.equivalent_damping, "o", ms=4, color=_COLORS["d"], label="record")
-    model = model_decay(result) if model is False else model
+    model = result.model_decay if model is False else model
     if model is not None and model.amplitude.size:
         label = f"fitted {result.fit.model} model"
         left.plot(1e3 * model.amplitude, model.equivalent_period, "x-", ms=4, lw=0.8, color=_COLORS["a"], label=label)

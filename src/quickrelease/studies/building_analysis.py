@@ -61,6 +61,15 @@ class BuildingResult(Summarised):
     """The fit's warnings and those of the cross-checks."""
     notes: tuple[str, ...] = ()
     source: str = ""
+    curves: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)
+    """The fitted model for the figures, per channel name: ``t`` [s] on a fine grid over the channel's span
+    (:data:`_CURVE_POINTS` samples), ``model`` there and ``residual`` (measured - model) at the channel's
+    samples [the channel's SI unit] (:func:`model_curves`)."""
+    model_decay: DecayAnalysis | None = None
+    """The model-free decay analysis of the fitted model's own displacement, noise-free, from the release
+    (:func:`model_decay`; None without a decay analysis of the record or a displacement channel)."""
+    decay_envelope: dict[str, np.ndarray] = field(default_factory=dict)
+    """The numbers behind the decay figure (:func:`decay_envelope`; empty without a decay analysis)."""
 
     @property
     def model(self) -> str:
@@ -254,7 +263,64 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
     loop = _loop(fit, channels, notes)
     return BuildingResult(fit=fit, compared=tuple(compared), comparison=tuple(comparison), decay=decay,
                           decay_check=check, loop=loop, warnings=tuple(warnings), notes=tuple(notes),
-                          source=source)
+                          source=source, curves=model_curves(fit),
+                          model_decay=None if decay is None else model_decay(fit),
+                          decay_envelope={} if decay is None else decay_envelope(decay))
+
+
+def model_curves(fit: IsolationFit) -> dict[str, dict[str, np.ndarray]]:
+    """The fitted model of each channel for the figures: ``t`` [s], :data:`_CURVE_POINTS` samples over the
+    channel's span, ``model`` there, and ``residual`` (measured - model) at the channel's own samples."""
+    curves = {}
+    for ch in fit.channels:
+        t_fine = np.linspace(float(ch.t[0]), float(ch.t[-1]), _CURVE_POINTS)
+        curves[ch.name] = {"t": t_fine, "model": fit.model_values(ch, t_fine),
+                           "residual": ch.values - fit.model_values(ch)}
+    return curves
+
+
+def model_decay(fit: IsolationFit) -> DecayAnalysis | None:
+    """The model-free decay analysis of the fitted model's own displacement (noise-free, from the release)."""
+    xch = next((c for c in fit.channels if c.kind == "x"), None)
+    if xch is None:
+        return None
+    t = np.linspace(fit.release_time, float(xch.t[-1]), 8000)
+    x = fit.model_values(xch, t) - fit.offsets().get(xch.name, 0.0)
+    try:
+        return analyse_decay(t, x, noise=1e-9 * max(abs(float(x[0])), 1e-12))
+    except ValueError:
+        return None
+
+
+def decay_envelope(decay: DecayAnalysis) -> dict[str, np.ndarray]:
+    """Numbers behind the decay figure: half-cycle amplitudes H_n of the record (n = 0, 1, ...) and the laws.
+
+    Half-swing amplitudes obey ``H_{n+1} = r H_n - (1 + r) delta`` under the combined law (decay.py (*)), so
+    ``H_n = (H_0 + c) r^n - c``, ``c = (1 + r) delta / (1 - r)``, with r and delta from the combined law
+    fitted to the peaks and ``H_0 + c`` by least squares; the pure laws are least-squares fits of the
+    amplitudes themselves: Coulomb ``H_n = H_0 - 2 delta n`` (a straight line), viscous ``H_n = H_0 r^n``
+    (a straight line in log H).
+    """
+    a = decay
+    H = np.asarray(a.amplitude, dtype=float)
+    n = np.arange(H.size, dtype=float)
+    out: dict[str, np.ndarray] = {"n": n, "amplitude": H}
+    if H.size >= 2:
+        out["coulomb"] = np.polyval(np.polyfit(n, H, 1), n)
+        pos = H > 0
+        if np.count_nonzero(pos) >= 2:
+            out["viscous"] = np.exp(np.polyval(np.polyfit(n[pos], np.log(H[pos]), 1), n))
+    law = a.law
+    if law is not None and math.isfinite(law.ratio):
+        r, delta = law.ratio, law.friction_displacement
+        if abs(1.0 - r) > 1e-12:
+            c = (1.0 + r) * delta / (1.0 - r)
+            basis = r**n
+            amp = float(np.sum((H + c) * basis) / np.sum(basis * basis))
+            out["combined"] = amp * basis - c
+        else:
+            out["combined"] = float(np.mean(H + 2.0 * delta * n)) - 2.0 * delta * n
+    return out
 
 
 def _fit(channels, mass, model, start, release_time, prefix, superstructure_mass=None, progress=None,
