@@ -1,7 +1,7 @@
 """Optional dependencies are checked once, before any work (issue 11): a command that needs zarr, dask or
 pyarrow and lacks it prints one line naming the package and how to install it, exits 2, and writes nothing.
 
-``sweep --out x.zarr`` without zarr: tests/test_cli_conventions.py. A package is hidden the way Python sees
+``sweep --out x.zarr`` without zarr: tests/cli/test_cli_conventions.py. A package is hidden the way Python sees
 a missing one: ``sys.modules[name] = None`` makes ``find_spec`` and
 ``import`` both fail."""
 

@@ -100,7 +100,7 @@ def _lambda_tolerance(ident, t_F):
 
 
 def test_identification_graded_tier_against_mpmath(wide):
-    """A friction stop of the graded tier (mpmath's identification takes seconds a case; tests/test_batch.py
+    """A friction stop of the graded tier (mpmath's identification takes seconds a case; tests/batch/test_batch.py
     checks the 16-node tier against mpmath, the numpy reference below every tier on the whole sample)."""
     sub, obs = _observations(_take(wide, _picks(wide, 1)[2:3]))
     ident = batch.identify(*obs)
@@ -168,7 +168,7 @@ def test_kernels_loaded_from_the_cache_give_the_bits_of_a_fresh_compile(tmp_path
     second loads. It also failed once in CI on a loaded machine (one process of two gave F1, F2 of ~10% of the cases
     up to 5e-5 apart) while the identification allocated its scratch inside the parallel loop; that layout was later
     found not to race (numba hoists the allocation into each thread's share), so the cause of that failure is not
-    established. Thread races have their own probe in tests/test_threads.py."""
+    established. Thread races have their own probe in tests/batch/test_threads.py."""
     import os
     import subprocess
     import sys

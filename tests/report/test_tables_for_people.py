@@ -1,8 +1,8 @@
 """Tables for people (issue 11): every command's terminal output shows human names, rounded numbers with units,
 no JSON keys (``push_force_N``), no 16-digit floats, no ``None``, no raw exponents (``1.6e+04``).
 
-``bench`` (tests/test_bench.py, on its tiny run), ``demo``, ``run``, ``report`` (tests/test_cli.py) and ``uq``
-(tests/test_uq.py) are checked where their tests already run them."""
+``bench`` (tests/studies/test_bench.py, on its tiny run), ``demo``, ``run``, ``report`` (tests/cli/test_cli.py) and ``uq``
+(tests/studies/test_uq.py) are checked where their tests already run them."""
 
 from pathlib import Path
 

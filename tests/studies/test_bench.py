@@ -108,7 +108,7 @@ def test_weighted_median_weighs_the_strata_by_their_shares():
 
 def test_sensitivity_of_an_ill_conditioned_stop():
     """A stop within ~1e-6 rad of pi/2 with almost no rail friction: one ulp of E_S moves t_F by more than 1e-7
-    (tests/test_batch.py); a typical release by a few ulps."""
+    (tests/batch/test_batch.py); a typical release by a few ulps."""
     hard = (2496.7064827214417, 0.9878228096162034, 2737.145215750118, 0.0005289992104389708, 0.2508887330655966,
             1839.7073266913917, 2.76125386875275)
     assert bench._stop_sensitivity(hard) > 1e-7

@@ -45,7 +45,7 @@ __all__ = ["METHODS", "simulate", "stop_time", "FirstIntegral"]
 
 #: Default tolerances of ``rk``: rtol, and atol as a share of the initial rate alpha_dot0 (for both alpha and
 #: alpha_dot). With these the energy balance |E_K + W_F - E_S| / E_S stays below 2e-9 along the solution over
-#: the whole valid space (max 1.0e-9 over the 1,000 seeded hypothesis cases of tests/test_properties.py, incl.
+#: the whole valid space (max 1.0e-9 over the 1,000 seeded hypothesis cases of tests/device/test_properties.py, incl.
 #: tiny sweeps and stops at pi/2, which checks 2e-9; at rtol 1e-10, atol 1e-12 max(1, alpha_dot0) it reached
 #: 1.5e-8, 4.5% of cases above 1e-9), at the same cost (mean 123 against 131 right-hand side evaluations).
 RK_RTOL = 1e-11
