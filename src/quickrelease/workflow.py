@@ -47,10 +47,10 @@ class CaseResult(Summarised):
     plan: PlanResult | None = None
     """The test plan (when the case has ``[fuse]`` or ``[building]``, or it was asked for)."""
     building: Any = None
-    """The building's analysis (:class:`~quickrelease.building_analysis.BuildingResult`), when the case has a
+    """The building's analysis (:class:`~quickrelease.studies.building_analysis.BuildingResult`), when the case has a
     ``[building.record]``."""
     paper: Any = None
-    """The Table 7 comparison (:class:`~quickrelease.paper.PaperComparison`), for the paper's case (``demo``):
+    """The Table 7 comparison (:class:`~quickrelease.device.paper.PaperComparison`), for the paper's case (``demo``):
     the report shows it, ``table7.json`` holds it."""
 
     def summary(self) -> dict[str, Any]:
@@ -70,7 +70,7 @@ def run_case(case: Case, *, state_diagram: bool = True, plan: bool | None = None
 
     With a ``[record]``, the fitted friction (and E_S, c when estimated) drives the simulation; else with
     observations, the identified friction; a ``[friction]`` table, if also present, is then only
-    reported in the inputs. The test plan (:func:`quickrelease.planning.plan_case`) is made when ``plan``
+    reported in the inputs. The test plan (:func:`quickrelease.studies.planning.plan_case`) is made when ``plan``
     is true, or by default when the case has a ``[fuse]`` or ``[building]`` table. ``threads``: threads of the
     plan's release envelope (1 to ``numba.config.NUMBA_NUM_THREADS``; default all cores), checked first.
     """
@@ -191,7 +191,7 @@ def _wants_plan(case: Case, plan: bool | None) -> bool:
 
 def results_folder(case: Case, out: str | Path, *, plan: bool | None = None, figures: bool = True,
                    report: bool = True, data: bool = True, overwrite: bool = False):
-    """The :class:`~quickrelease.runfolder.RunFolder` that :func:`write_results` writes a case's results
+    """The :class:`~quickrelease.io.runfolder.RunFolder` that :func:`write_results` writes a case's results
     through; making it checks ``out`` before the work (pre-flight) and writes nothing."""
     from .io.runfolder import RunFolder, case_inputs
 
@@ -268,7 +268,7 @@ def write_results(result: CaseResult, out: str | Path, *, figures: bool = True, 
     --json`` keys, when identified), ``timeseries.csv`` and ``timeseries.nc`` (the time histories),
     ``figures/<stem>.png`` and ``.svg`` for each figure, the self-contained ``report.html``, and
     ``manifest.json`` (the fingerprint of the inputs). The whole folder is written beside ``out`` and moved
-    into place at the end (:class:`~quickrelease.runfolder.RunFolder`): a failure leaves the previous
+    into place at the end (:class:`~quickrelease.io.runfolder.RunFolder`): a failure leaves the previous
     result; a folder holding another run's results is refused unless ``overwrite``, and then replaced.
     """
     folder = results_folder(result.case, out, plan=result.plan is not None, figures=figures, report=report,
@@ -334,7 +334,7 @@ def _write_results_into(result: CaseResult, out: Path, *, figures: bool, report:
 
 def building_folder(result_or_data, out: str | Path, *, model: str | None = None, compare: bool = False,
                     overwrite: bool = False):
-    """The :class:`~quickrelease.runfolder.RunFolder` of ``quickrelease building`` (pre-flight: writes nothing).
+    """The :class:`~quickrelease.io.runfolder.RunFolder` of ``quickrelease building`` (pre-flight: writes nothing).
 
     The fingerprint holds what the analysis depends on: the channels (their samples by SHA-256, not the
     record's path), the mass, the model, the start values and the release time given, and ``compare``.
@@ -352,10 +352,10 @@ def write_building_results(result, data, out: str | Path, *, model: str | None =
                            origin: Any = None) -> dict[str, Path]:
     """Write ``quickrelease building``'s results into ``out``: ``summary.json`` (the ``--json`` keys), the
     record, the fitted model and the residuals as a time series (``timeseries.csv``, ``timeseries.nc`` on the
-    time coordinate ``t``: :func:`quickrelease.frames.fit_columns`), the building figures
+    time coordinate ``t``: :func:`quickrelease.io.frames.fit_columns`), the building figures
     (``figures/<stem>.png``/``.svg``), ``report.html`` and ``manifest.json``, staged and moved into place as
     :func:`write_results` does; returns the paths by name. ``origin`` (the case) is what the files' provenance
-    names (:func:`~quickrelease.runfolder.provenance`; by default the record)."""
+    names (:func:`~quickrelease.io.runfolder.provenance`; by default the record)."""
     from .io.export import write_columns, write_dataset, write_json, write_text
     from .io.frames import fit_columns, fit_dataset
     from .io.runfolder import provenance
@@ -380,7 +380,7 @@ def write_building_results(result, data, out: str | Path, *, model: str | None =
 
 
 def campaign_folder(campaign_file: str | Path, out: str | Path, *, overwrite: bool = False):
-    """The :class:`~quickrelease.runfolder.RunFolder` of a campaign's results (pre-flight: writes nothing).
+    """The :class:`~quickrelease.io.runfolder.RunFolder` of a campaign's results (pre-flight: writes nothing).
 
     Its inputs are the campaign file and every file its tests name (``record``, ``case``) by their SHA-256:
     an edited record is another run."""

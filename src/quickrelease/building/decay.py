@@ -898,7 +898,7 @@ def analyse_decay(t, x, release_time: float | None = None, noise: float = 0.0, r
         The unloaded position [m] the zero crossings refer to.
     jitter : float
         Standard deviation of the time stamps' error [s] (e.g.
-        :func:`quickrelease.timebase.time_base`'s); the turning points then rest on the samples the jitter
+        :func:`quickrelease.io.timebase.time_base`'s); the turning points then rest on the samples the jitter
         does not move (:func:`_refine_extremum`).
     start_in_motion : bool
         The record starts mid-swing: its first turning point (:func:`first_turning_point`) is taken as the

@@ -43,8 +43,9 @@ MODELS = ("linear", "bilinear")
 
 #: The channels of the building's record: name -> (quantity kind, SI unit, description). The one table of
 #: them: the keys of :meth:`FreeVibration.channels` and :meth:`TwoDOFVibration.channels`; the record reader
-#: (:data:`quickrelease.building_case.BUILDING_CHANNELS`), the fit (:data:`quickrelease.isolation_fit.CHANNEL_KINDS`)
-#: and synth (:data:`quickrelease.synth.BUILDING_NOISE`, per quantity kind) derive theirs from it.
+#: (:data:`quickrelease.io.building_case.BUILDING_CHANNELS`), the fit
+#: (:data:`quickrelease.building.isolation_fit.CHANNEL_KINDS`) and synth
+#: (:data:`quickrelease.studies.synth.BUILDING_NOISE`, per quantity kind) derive theirs from it.
 RECORD_CHANNELS: dict[str, tuple[str, str, str]] = {
     "x": ("length", "m", "displacement of the isolation layer (e.g. an LVDT)"),
     "v": ("velocity", "m/s", "velocity of the isolation layer"),

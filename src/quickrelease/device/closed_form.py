@@ -1,6 +1,6 @@
-"""The closed-form results of the paper for a device: the public face of :mod:`quickrelease.dynamics`.
+"""The closed-form results of the paper for a device: the public face of :mod:`quickrelease.device.dynamics`.
 
-The physics layer (:mod:`quickrelease.dynamics`) takes the device's numbers (m1, m2, L1, c) as SI floats or
+The physics layer (:mod:`quickrelease.device.dynamics`) takes the device's numbers (m1, m2, L1, c) as SI floats or
 arrays, as the paper's equations do. These are the same functions with the one vocabulary of the rest of the
 API: the device as ``device=`` (the paper's by default), the mass model as ``mass_model=`` (``"distributed"``,
 ``"lumped"`` or a number c), the stored energy as ``stored_energy``. Quantity arguments take SI numbers or
@@ -117,7 +117,7 @@ def final_angle(stored_energy, alpha0, F1, F2, *old, device: Device | None = Non
     device : Device, optional
         The device (L1 enters); the paper's by default.
 
-    See :func:`quickrelease.dynamics.final_angle` for the cancellation-free evaluation.
+    See :func:`quickrelease.device.dynamics.final_angle` for the cancellation-free evaluation.
     """
     (L1,) = _device_numbers("final_angle", old, ("L1",), device, depth=1)
     return dynamics.final_angle(stored_energy, alpha0, F1, F2, L1)

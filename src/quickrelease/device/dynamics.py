@@ -147,7 +147,7 @@ def limit_sweep(alpha):
     ``PIO2_HI - alpha`` is exact by Sterbenz for alpha in [pi/4, pi] (and rounded once, to a result above pi/4,
     below), and ``PIO2_LO`` adds the 6.1e-17 rad by which fl(pi/2) falls short of pi/2. ``HALF_PI - alpha`` alone
     is short by those 6.1e-17 rad: a relative error of 6e-9 of a sweep of 1e-8 rad, and of t_F with it.
-    Pure arithmetic (compiled as is by :mod:`quickrelease._fast`).
+    Pure arithmetic (compiled as is by :mod:`quickrelease.batch._fast`).
     """
     return (PIO2_HI - alpha) + PIO2_LO
 
@@ -166,7 +166,7 @@ def amplitude_terms(A, B):
     The square root of the sum of squares, each input first scaled by a power of two where it is beyond 2^+-500
     (exact: ``2^-600`` above, ``2^600`` below, and the result scaled back), so that 1e300 N neither overflows nor 1e-300
     underflows. Pure arithmetic with no branch and no library call (numpy's ``hypot`` is one): every method computes R
-    with these very operations, and the compiled kernels (:mod:`quickrelease._fast`) vectorise them across cases.
+    with these very operations, and the compiled kernels (:mod:`quickrelease.batch._fast`) vectorise them across cases.
     """
     m = np.maximum(np.abs(A), np.abs(B))
     big = (m > _AMPLITUDE_EDGE) * 1.0
@@ -184,7 +184,7 @@ def one_minus_sin_terms(sin_a, cos_a):
     The textbook ``1 - sin(a)`` is exact by Sterbenz but keeps the rounding of sin(a), half an ulp of 1 (1.1e-16),
     relative to a result that is ``x^2 / 2`` for a = pi/2 - x: 2e-6 of itself at x = 1e-5. cos(a) near pi/2 is
     known to an ulp of itself, so the quotient is too. The mirror image of :func:`stop_cosine_terms` (there
-    ``1 + u`` for u near -1). Pure arithmetic, no branch (compiled as is by :mod:`quickrelease._fast`).
+    ``1 + u`` for u near -1). Pure arithmetic, no branch (compiled as is by :mod:`quickrelease.batch._fast`).
     """
     near = (sin_a >= 0.5) * 1.0  # both branches finite: 1 + sin(a) >= 1
     return near * (cos_a * cos_a / (1.0 + sin_a)) + (1.0 - near) * (1.0 - sin_a)
@@ -195,7 +195,7 @@ def _limit_dissipation(A, B, sin_alpha0, cos_alpha0):
 
     ``A (1 - sin alpha0) + B cos alpha0``, every term >= 0 and each to a few ulps of itself
     (:func:`one_minus_sin_terms`). Pure arithmetic (no trigonometric call), so the compiled kernels
-    (:mod:`quickrelease._fast`) compile this very function: every method rounds W_F(pi/2) the same way.
+    (:mod:`quickrelease.batch._fast`) compile this very function: every method rounds W_F(pi/2) the same way.
     """
     return A * one_minus_sin_terms(sin_alpha0, cos_alpha0) + B * cos_alpha0
 
@@ -240,7 +240,7 @@ def creeps_terms(margin, E_S, A, B):
     least 16.5 tau, up to infinity is consistent with it), and the release is reported as creeping: ``stop_time = inf``,
     ``alpha_final = pi/2`` (the limit), ``stopped_by = "creeps_to_limit"``. Rail friction resolves the
     approach (K ~ B x, finite arrival) once ``B^2 > 2 A rho``; below that it is as if B were 0.
-    Pure arithmetic (compiled as is by :mod:`quickrelease._fast`): the one place this is decided, used by
+    Pure arithmetic (compiled as is by :mod:`quickrelease.batch._fast`): the one place this is decided, used by
     every method next to :func:`limit_margin_terms`.
     """
     rho = MARGIN_RTOL * E_S + (MARGIN_RTOL * E_S - MARGIN_RTOL * margin)  # E_S + W_F(pi/2), without overflow
@@ -291,7 +291,8 @@ def _stop_terms(E_S, A, B, R, sin_alpha0, cos_alpha0):
       ``cu = sin(alpha_F)``, 1.7e-3 for E_S = 0.1 J, alpha0 = 1e-4 rad, F2 = 7255 N), a relative ``eps / cu^2``
       of cu (1.5e-11 there), which moved alpha_F and t_F by 2e-11 to 3e-11.
 
-    Pure arithmetic and one square root (compiled as is by :mod:`quickrelease._fast`, with the functions it calls).
+    Pure arithmetic and one square root (compiled as is by :mod:`quickrelease.batch._fast`, with the functions it
+    calls).
     """
     s = (A * sin_alpha0 - B * cos_alpha0) / R
     cv = (A * cos_alpha0 + B * sin_alpha0) / R
@@ -316,7 +317,7 @@ def sweep_terms(E_S, A, B, R, sin_alpha0, cos_alpha0):
     rounded alpha_F would carry an absolute error of about 1e-16 rad). ``cu`` is that of :func:`_stop_terms`
     (not ``sqrt((1 - u)(1 + u))``, which loses ``eps / cu^2`` of cu when u is near -1 or +1: rail friction with a
     small alpha0, or a stop near pi/2 with little rail friction). Pure arithmetic and one square root and atan2
-    (compiled as is by :mod:`quickrelease._fast`). Meaningful for the friction regime
+    (compiled as is by :mod:`quickrelease.batch._fast`). Meaningful for the friction regime
     (``limit_margin_terms <= 0``); the geometric limit's sweep is ``pi/2 - alpha0`` (:func:`limit_sweep`).
     """
     return np.arctan2(*sweep_sides(*_stop_terms(E_S, A, B, R, sin_alpha0, cos_alpha0)))
@@ -324,8 +325,8 @@ def sweep_terms(E_S, A, B, R, sin_alpha0, cos_alpha0):
 
 def sweep_sides(s, cv, e, u, cu):
     """``(N, D) = (sin(delta), cos(delta))`` of the friction-stop sweep from the terms of :func:`_stop_terms` [-]
-    (see :func:`sweep_terms`: ``delta = atan2(N, D)``). Pure arithmetic (compiled as is by :mod:`quickrelease._fast`,
-    which takes the half-angle sine ``sin(delta / 2)`` from N and D without a call)."""
+    (see :func:`sweep_terms`: ``delta = atan2(N, D)``). Pure arithmetic (compiled as is by
+    :mod:`quickrelease.batch._fast`, which takes the half-angle sine ``sin(delta / 2)`` from N and D without a call)."""
     N = e * (cv + s * (u + s) / (cu + cv))
     D = cu * cv + u * s
     return N, D
@@ -335,7 +336,7 @@ def stop_cosine_terms(E_S, A, B, R, sin_alpha0, cos_alpha0):
     """``cos(alpha_F - phi)`` of a friction stop (Eq. 8) to a few ulps of itself, cu >= 0 [-].
 
     See :func:`_stop_terms` (``1 - u`` from the classifier's margin, ``1 + u`` from ``cv^2 / (1 - s)``).
-    Pure arithmetic, no branch (compiled as is by :mod:`quickrelease._fast`).
+    Pure arithmetic, no branch (compiled as is by :mod:`quickrelease.batch._fast`).
     """
     return _stop_terms(E_S, A, B, R, sin_alpha0, cos_alpha0)[4]
 

@@ -66,7 +66,7 @@ class Identification(Summarised):
     """Function evaluations of the root find."""
     boundary: str | None = None
     """``"F1 = 0"`` or ``"F2 = 0"`` when t_F is an end of the feasible interval (within rounding, see
-    :func:`quickrelease._kernels.feasible_slack`): the solution lies on that boundary of Eq. 13."""
+    :func:`quickrelease.device._kernels.feasible_slack`): the solution lies on that boundary of Eq. 13."""
 
     @property
     def F2_ratio(self) -> float:

@@ -44,7 +44,7 @@ DEVICE_KEYS: dict[str, tuple[str, str]] = {
     "kappa": ("dimensionless", "shear correction factor of E2 [-]"),
 }
 
-#: Optional keys for the member checks of test planning (:mod:`quickrelease.planning`): key -> (quantity
+#: Optional keys for the member checks of test planning (:mod:`quickrelease.studies.planning`): key -> (quantity
 #: kind, description with unit). Where absent, the check that needs it is skipped with a note.
 CHECK_KEYS: dict[str, tuple[str, str]] = {
     "fy": ("pressure", "yield strength of the steel beams E1 and E2, unless fy1 or fy2 is given [Pa]"),

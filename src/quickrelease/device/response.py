@@ -38,7 +38,7 @@ STOP_REASONS = {
     "geometric_limit": "the rhombus became flat (alpha = pi/2) with kinetic energy left",
     "creeps_to_limit": "creeps towards the flat rhombus and never arrives (stop_time = inf, alpha_final = pi/2 "
                        "its limit): no rail friction and E_S = W_F(pi/2) within rounding "
-                       "(quickrelease.dynamics.creeps_terms)",
+                       "(quickrelease.device.dynamics.creeps_terms)",
 }
 
 
@@ -211,7 +211,7 @@ class Response(Summarised):
         """The time histories as an ``xarray.Dataset`` on the time coordinate ``t`` [s], each variable with its
         ``units`` and ``long_name`` (CF conventions), the summary as global attributes: what
         ``quickrelease run`` writes as ``timeseries.nc``. ``ds.alpha.plot()`` plots against time. ``provenance``
-        (:func:`quickrelease.runfolder.provenance`) adds the version, the input file and its SHA-256."""
+        (:func:`quickrelease.io.runfolder.provenance`) adds the version, the input file and its SHA-256."""
         import xarray as xr
 
         from .._version import __version__
@@ -237,7 +237,7 @@ class Response(Summarised):
         """Draw the release: ``"fig13"`` (angle, rate, acceleration, energy balance; four panels), ``"fig14"``
         (displacements and velocities; two) or ``"state"`` (the state diagram, Fig. 15; one). ``fig``: a
         Figure or SubFigure to fill; ``ax``: Axes to draw into instead (as many as the figure has panels).
-        Returns the figure (:mod:`quickrelease.plots`)."""
+        Returns the figure (:mod:`quickrelease.report.plots`)."""
         from ..report import plots
 
         kinds = {"fig13": plots.fig13, "fig14": plots.fig14, "state": plots.fig15}

@@ -9,7 +9,7 @@
 ``rk``
     scipy ``solve_ivp`` (DOP853 by default, or RK45) on the first-order system
     (alpha, alpha_dot) with a terminal event at alpha_dot = 0 (friction stop) or, where the
-    one classifier of the stop (:func:`quickrelease.dynamics.limit_margin_terms`) says the rhombus
+    one classifier of the stop (:func:`quickrelease.device.dynamics.limit_margin_terms`) says the rhombus
     becomes flat first, at alpha = pi/2 (geometric limit). Every method takes ``stopped_by`` from
     that classifier, so they agree on it even for a stop within rounding of pi/2.
 ``energy``
@@ -58,7 +58,7 @@ METHODS = ("energy", "rk", "explicit")
 class FirstIntegral:
     """The energy solution of one release (Eq. 8-10): a scalar view of :class:`_kernels.Releases`.
 
-    See :mod:`quickrelease._kernels` for the regimes (``friction``, ``virtual``, ``free``), the
+    See :mod:`quickrelease.device._kernels` for the regimes (``friction``, ``virtual``, ``free``), the
     substitution that makes the time integrand smooth, and the rule for nearly singular cases.
     Parameters are SI floats; ``c`` is the mass factor.
     """
@@ -242,8 +242,9 @@ def stop_time(stored_energy: float, alpha0: float, F1: float, F2: float, *,
     return FirstIntegral(E_S, alpha0, F1, F2, device.m1, device.m2, device.L1, c).stop_time()
 
 
-#: A creeping release (t_F = inf, :func:`quickrelease.dynamics.creeps_terms`) is returned up to the time where its
-#: kinetic energy has come down to this share of E_S (its speed to about 1e-3 of the initial): ``stats["horizon_s"]``.
+#: A creeping release (t_F = inf, :func:`quickrelease.device.dynamics.creeps_terms`) is returned up to the time
+#: where its kinetic energy has come down to this share of E_S (its speed to about 1e-3 of the initial):
+#: ``stats["horizon_s"]``.
 CREEP_HORIZON = 1e-6
 
 #: Below this a subnormal float has fewer than 43 significant bits (relative spacing above 1e-13).

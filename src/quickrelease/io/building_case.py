@@ -1,7 +1,7 @@
 """The building's part of a case file: ``[building]`` and its free-vibration record ``[building.record]``.
 
 The record of the building after the release is read like the device's record (the grammar of
-:func:`quickrelease.records.parse_record_spec`: a file, a time column, and a table of channels, each with
+:func:`quickrelease.io.records.parse_record_spec`: a file, a time column, and a table of channels, each with
 ``column``, ``unit``, ``noise``, ``offset``, ``scale``, and ``file`` and ``time`` for a channel in a file
 of its own with its own time axis and sampling rate), with the building's channels:
 
@@ -43,27 +43,27 @@ __all__ = ["BUILDING_CHANNELS", "BuildingData", "load_building", "parse_building
            "spec_isolation", "pushed_displacement"]
 
 #: Channel name -> (quantity kind, SI unit, description) of the building's record (the table of
-#: :data:`quickrelease.building.RECORD_CHANNELS`).
+#: :data:`quickrelease.building.model.RECORD_CHANNELS`).
 BUILDING_CHANNELS: dict[str, tuple[str, str, str]] = RECORD_CHANNELS
 #: Fewest valid samples of a channel (a fit needs the rest before the release and the motion after it).
 MIN_SAMPLES = 10
 
 
 def parse_building_record(table: Any, source: str, base: Path) -> RecordSpec:
-    """Validate ``[building.record]`` (the grammar of :func:`quickrelease.records.parse_record_spec`, the
+    """Validate ``[building.record]`` (the grammar of :func:`quickrelease.io.records.parse_record_spec`, the
     channels of :data:`BUILDING_CHANNELS`, an offset on every channel by default)."""
     return parse_record_spec(table, source, base, channels=BUILDING_CHANNELS, offsets=tuple(BUILDING_CHANNELS),
                              section="building.record")
 
 
 def spec_isolation(spec: BuildingSpec) -> Isolation:
-    """The ``[building]`` values as an :class:`~quickrelease.building.Isolation` (SI units).
+    """The ``[building]`` values as an :class:`~quickrelease.building.model.Isolation` (SI units).
 
     ``linear``: ``Isolation.linear(mass, T, zeta, F_s)``; ``bilinear``: ``Isolation.bilinear(mass, k1, k2,
     F_y, zeta, F_s)``; ``2dof``: the isolation layer with the superstructure taken as rigid on it, the whole
     mass on the layer's period T (the rigid-body mode; the superstructure's own mode is left out). Without
     a mass (linear only) a unit mass stands in when the friction is 0 (the motion depends on F_s / m only).
-    Planning's model (:func:`quickrelease.planning.building_isolation`); the 2dof building itself is
+    Planning's model (:func:`quickrelease.studies.planning.building_isolation`); the 2dof building itself is
     :func:`spec_building`'s.
     """
     spec.require_design("the building's model")
@@ -81,7 +81,7 @@ def spec_isolation(spec: BuildingSpec) -> Isolation:
 
 def spec_building(spec: BuildingSpec) -> Isolation | TwoDOF:
     """The ``[building]`` values as the model they name (SI units): :func:`spec_isolation` for ``linear`` and
-    ``bilinear``; for ``2dof`` the :class:`~quickrelease.building.TwoDOF` building, ``TwoDOF(mass, m_s, T,
+    ``bilinear``; for ``2dof`` the :class:`~quickrelease.building.model.TwoDOF` building, ``TwoDOF(mass, m_s, T,
     T_s, zeta, F_s, zeta_s)`` (``mass`` the whole mass on the isolators, ``m_s`` lumped at the roof, T the
     isolation period of the whole mass, T_s the superstructure's fixed-base period). Planning keeps
     :func:`spec_isolation` (the 2dof building rigid on its isolation layer)."""
@@ -107,9 +107,9 @@ class BuildingData:
     """Mass carried by the isolators, the whole building [kg]."""
     isolation: Isolation | TwoDOF | None
     """The ``[building]`` values as a model of :mod:`quickrelease.building` (:func:`spec_building`: an
-    :class:`~quickrelease.building.Isolation`, or for 2dof a :class:`~quickrelease.building.TwoDOF`)."""
+    :class:`~quickrelease.building.model.Isolation`, or for 2dof a :class:`~quickrelease.building.model.TwoDOF`)."""
     start: dict[str, float]
-    """The ``[building]`` values given, as start values in :func:`quickrelease.isolation_fit.fit_isolation`'s
+    """The ``[building]`` values given, as start values in :func:`quickrelease.building.isolation_fit.fit_isolation`'s
     parameter names: period [s] (bilinear: the initial period 2 pi sqrt(m / k1)), stiffness_ratio = k2 / k1,
     yield_force [N], damping_ratio, friction [N], d0 [m]; 2dof also superstructure_period [s] and
     superstructure_damping_ratio."""
@@ -128,7 +128,7 @@ class BuildingData:
     """The parsed ``[building]`` table."""
     jitter: dict[str, float] = field(default_factory=dict)
     """Per channel, how far its time stamps scatter about a uniform clock [s] where the record says so
-    (:func:`quickrelease.timebase.time_base`; for :func:`quickrelease.decay.analyse_decay`'s ``jitter``)."""
+    (:func:`quickrelease.io.timebase.time_base`; for :func:`quickrelease.building.decay.analyse_decay`'s ``jitter``)."""
 
 
 def _start(spec: BuildingSpec) -> dict[str, float]:

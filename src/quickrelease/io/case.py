@@ -146,7 +146,7 @@ class BuildingSpec:
     """2dof: the superstructure's viscous damping ratio [-], in [0, 1)."""
     record: RecordSpec | None = None
     """The building's free-vibration record (``[building.record]``), read by
-    :func:`quickrelease.building_case.load_building`."""
+    :func:`quickrelease.io.building_case.load_building`."""
 
     @property
     def friction_force(self) -> float:
@@ -321,7 +321,7 @@ class Case:
     t_end: float | None = None
     rk_method: str = "DOP853"
     record: RecordSpec | None = None
-    """The measured record to fit (``[record]``), read by :func:`quickrelease.records.load_record`."""
+    """The measured record to fit (``[record]``), read by :func:`quickrelease.io.records.load_record`."""
     fit: FitOptions = field(default_factory=FitOptions)
     """Options of the fit to the record (``[fit]``)."""
     fuse: FuseSpec | None = None
@@ -342,7 +342,7 @@ class Case:
     notes: str = ""
     source: str = "<case>"
     source_text: str | None = field(default=None, repr=False)
-    """The case file's text as read (echoed, with its SHA-256, in every output: :func:`quickrelease.runfolder.
+    """The case file's text as read (echoed, with its SHA-256, in every output: :func:`quickrelease.io.runfolder.
     provenance`); None for a case not read from a file."""
     report: dict[str, str] = field(default_factory=dict)
     """The ``[report]`` table: who ran the test (``operator``, ``organisation``, ``test_id``), for the report's

@@ -49,9 +49,9 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     """Yield a temporary path beside ``path``; on success rename it to ``path``.
 
     On an exception the temporary file is removed and ``path`` is left as it was. Only a regular file is ever
-    replaced: a device node, FIFO or folder at ``path`` raises :class:`~quickrelease.runfolder.OutputError`
+    replaced: a device node, FIFO or folder at ``path`` raises :class:`~quickrelease.io.runfolder.OutputError`
     (a rename over it would remove it). The temporary name is hidden and, for a name near the file system's
-    limit, shortened (:func:`~quickrelease.runfolder.staging_name`).
+    limit, shortened (:func:`~quickrelease.io.runfolder.staging_name`).
     """
     from .._files import file_kind, staging_name
     from ..errors import OutputError
@@ -99,7 +99,7 @@ def write_text(text: str, path: str | Path) -> Path:
 
 def write_json(data: dict[str, Any], path: str | Path, provenance: dict[str, Any] | None = None) -> Path:
     """Write a JSON object atomically (no NaN: JSON has none); with ``provenance``
-    (:func:`quickrelease.runfolder.provenance`) stated under the key ``provenance``."""
+    (:func:`quickrelease.io.runfolder.provenance`) stated under the key ``provenance``."""
     if provenance is not None:
         data = {**data, "provenance": provenance}
     return write_text(json.dumps(data, indent=2, allow_nan=False) + "\n", path)
@@ -125,7 +125,7 @@ def write_columns(columns: dict[str, Any], path: str | Path) -> Path:
 
 def write_dataset(ds: Any, path: str | Path, provenance: dict[str, Any] | None = None) -> Path:
     """Write an ``xarray.Dataset`` as NetCDF (classic format, as :func:`write_netcdf`) atomically, with the
-    ``provenance`` (:func:`quickrelease.runfolder.provenance`) as global attributes."""
+    ``provenance`` (:func:`quickrelease.io.runfolder.provenance`) as global attributes."""
     if provenance is not None:
         from .._version import provenance_attrs
 

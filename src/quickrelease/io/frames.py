@@ -6,10 +6,10 @@ coordinate ``t`` [s] where the result is a time series.
 
 * :func:`fit_columns`, :func:`fit_frame`, :func:`fit_dataset`: a building's record, the fitted model and the
   residuals, channel by channel, on the record's time axis (what ``quickrelease building --out`` writes as
-  ``timeseries.csv`` and ``timeseries.nc``); :meth:`quickrelease.isolation_fit.IsolationFit.to_pandas` and
+  ``timeseries.csv`` and ``timeseries.nc``); :meth:`quickrelease.building.isolation_fit.IsolationFit.to_pandas` and
   ``to_xarray``.
 * :func:`free_vibration_frame`, :func:`free_vibration_dataset`: the building's free vibration
-  (:class:`quickrelease.building.FreeVibration`) sampled in time.
+  (:class:`quickrelease.building.model.FreeVibration`) sampled in time.
 * :func:`summary_frame`, :func:`summary_dataset`: a result's scalar summary (an identification) as one row, or
   as 0-d variables with their units.
 """
@@ -110,7 +110,7 @@ def _motion_columns(motion, t) -> dict[str, np.ndarray]:
 
 
 def free_vibration_frame(motion, t=None):
-    """The building's free vibration (:class:`quickrelease.building.FreeVibration`) as a DataFrame indexed by
+    """The building's free vibration (:class:`quickrelease.building.model.FreeVibration`) as a DataFrame indexed by
     the time since the release ``t_s``: displacement ``x_m``, velocity ``v_m_s``, acceleration ``a_m_s2`` of
     the isolation layer. ``t`` [s]: the instants (default 2001 from the release to 1.1 times the stop time,
     or the horizon when it never stops)."""

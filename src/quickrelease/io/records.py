@@ -119,7 +119,7 @@ def release_channels(names, t, release_time: float, release, window: float = 0.0
                      exact: bool = False) -> dict[str, np.ndarray]:
     """Model values of the channels ``names`` at record times ``t`` for a release at ``release_time``.
 
-    ``release`` is the energy solution of the release (:class:`quickrelease.solvers.FirstIntegral`). The
+    ``release`` is the energy solution of the release (:class:`quickrelease.device.solvers.FirstIntegral`). The
     device rests at alpha0 before the release and at the end angle after the motion; in between the
     state comes from the first integral (Eq. 9-10) and the angular acceleration from the equation of
     motion (Eq. 3/4), which is 0 at rest (friction balances inertia). SI units throughout.
@@ -136,7 +136,7 @@ def release_channels(names, t, release_time: float, release, window: float = 0.0
     Displacement channels are point values.
 
     The state at the times within the motion comes from the release's interpolated state table
-    (:meth:`~quickrelease.solvers.FirstIntegral.state_at_many`: cost linear in the number of times, alpha,
+    (:meth:`~quickrelease.device.solvers.FirstIntegral.state_at_many`: cost linear in the number of times, alpha,
     alpha_dot and alpha_ddot within 1e-9 of their largest values); ``exact=True`` inverts the time map at every time.
     """
     s = np.asarray(t, dtype=float) - release_time
@@ -158,7 +158,7 @@ class ReleaseChannels:
     ``release_channels(names, t, release_time, release, window)[name][rows]`` element by element: the
     choices that depend on the whole axis (whether a channel table is built, the table itself) are made here,
     and each sample is then computed on its own. A caller that walks the axis in slices (the record fit's
-    streamed stages, :mod:`quickrelease.fit`) needs memory of the order of a slice, not of the axis.
+    streamed stages, :mod:`quickrelease.studies.fit`) needs memory of the order of a slice, not of the axis.
 
     Samples whose window lies entirely at rest before the release or after the stop take that rest's
     constant value; samples whose window lies entirely within the motion, where every channel is a smooth
@@ -394,7 +394,7 @@ class RecordSpec:
     """Rows that repeat the time stamp of the row before: ``"merge"`` (one sample, the rows' values
     averaged, said in a note) or ``"refuse"`` (an error naming the row)."""
     clipped: str = "exclude"
-    """Clipped samples (:func:`quickrelease.timebase.clipped_samples`): ``"exclude"`` (left out like missing
+    """Clipped samples (:func:`quickrelease.io.timebase.clipped_samples`): ``"exclude"`` (left out like missing
     samples, said in a note) or ``"keep"``."""
 
 
@@ -540,10 +540,10 @@ class Channel:
     own_axis: np.ndarray | None = None
     """The channel's own time axis [s] (a file with its own time column and rate); None: the record's."""
     clipped: int = 0
-    """Clipped samples left out (:func:`quickrelease.timebase.clipped_samples`)."""
+    """Clipped samples left out (:func:`quickrelease.io.timebase.clipped_samples`)."""
     jitter: float = 0.0
     """How far the channel's time stamps scatter about a uniform clock [s]
-    (:func:`quickrelease.timebase.time_base`)."""
+    (:func:`quickrelease.io.timebase.time_base`)."""
 
     def axis(self, record_t: np.ndarray) -> np.ndarray:
         """The time axis :attr:`index` refers to: the channel's own, else the record's ``record_t`` [s]."""

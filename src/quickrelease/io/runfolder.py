@@ -134,7 +134,7 @@ def provenance(origin: Any) -> dict[str, Any]:
     every file a command writes (JSON under the key ``provenance``, NetCDF global attributes through
     :func:`provenance_attrs`, the report's header).
 
-    ``origin`` is a :class:`~quickrelease.case.Case` (its file's text as read by ``load_case``), a result with a
+    ``origin`` is a :class:`~quickrelease.io.case.Case` (its file's text as read by ``load_case``), a result with a
     ``source`` (a campaign), or a path. Nothing here depends on the time or the folder the file lies in, so a
     resumed run writes the same bytes as an uninterrupted one. ``input`` is None for inputs not read from a file
     (a case built in Python).

@@ -1,6 +1,6 @@
 """The time base and the samples of a real record: repeated stamps, jitter and bursts, clipped samples.
 
-Pure functions on arrays (SI units), called by :func:`quickrelease.records.load_record` (which words their
+Pure functions on arrays (SI units), called by :func:`quickrelease.io.records.load_record` (which words their
 findings as notes) and usable on their own:
 
 - :func:`merge_repeated_times`: rows that share a time stamp become one sample, their values averaged;

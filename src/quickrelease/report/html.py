@@ -91,7 +91,7 @@ def _estimate(value: float, se: float | None, ci: Sequence[float | None] | None,
         -> tuple[str, str, str]:
     """(estimate, standard error, interval) cells of one estimate, times ``scale`` (the unit printed beside
     them), all rounded to one decimal place: where the error (else the interval's half-width) shows two
-    significant digits (:func:`quickrelease.display.same_places`)."""
+    significant digits (:func:`quickrelease.report.display.same_places`)."""
     ends = None if ci is None or any(b is None for b in ci) else [float(b) * scale for b in ci]
     err = None if se is None or not math.isfinite(se) or se <= 0 else float(se) * scale
     width = err if err is not None else half_width(ends)
@@ -186,7 +186,7 @@ def _signoff(info: dict[str, str] | None, prov: dict[str, Any]) -> str:
 
 
 def _paper_section(cmp) -> str:
-    """Table 7 of the paper beside ours (:class:`~quickrelease.paper.PaperComparison`)."""
+    """Table 7 of the paper beside ours (:class:`~quickrelease.device.paper.PaperComparison`)."""
     table = _html_table(("quantity", "paper", "quickrelease", "note"),
                         [tuple(_e(c) for c in row) for row in cmp.rows()], num=(1, 2))
     return ("<h2 id=\"table7\">The paper and quickrelease (Table 7)</h2>" + table +
@@ -349,7 +349,7 @@ _ENGINEERING = {"period_s": ("period T", "s", 1.0), "k1_N_m": ("initial stiffnes
 
 def building_section(result, svgs: dict[str, str]) -> str:
     """The building's free vibration: model, estimates with 95% intervals, model comparison, the decay
-    cross-check, warnings and the four figures (:mod:`quickrelease.building_plots`)."""
+    cross-check, warnings and the four figures (:mod:`quickrelease.report.building_plots`)."""
     from ..building.isolation_fit import CHANNEL_KINDS
     from .building_plots import BUILDING_FIGURES
 

@@ -237,7 +237,7 @@ def fit_figure(result, fig=None, ax=None):
     """Measured and fitted channels of a fit to a record, each with its residuals (the band shaded is +-2 sigma,
     sigma the channel's noise level: about 95% of the residuals of a good fit lie inside it).
 
-    ``result`` is a :class:`quickrelease.fit.FitResult` with a record. ``ax``: two Axes per channel to draw
+    ``result`` is a :class:`quickrelease.studies.fit.FitResult` with a record. ``ax``: two Axes per channel to draw
     into (the channel, then its residuals, channel after channel). Returns the figure.
     """
     from ..io.records import CHANNELS

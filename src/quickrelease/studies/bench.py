@@ -28,9 +28,9 @@ over-weighted, in the strata of :data:`sampling.WIDE_STRATA`):
   the case is well conditioned, else a backward error of at most 4 input ulps.
 * ``uq`` with 1e8 samples on a LocalCluster of two Dask workers: wall time and peak memory of the whole process
   tree (skipped with ``quick``).
-* Where a CUDA GPU is available to CuPy (:func:`quickrelease._gpu.gpu_available`), the GPU backend
-  (:mod:`quickrelease._gpu`): throughput of the stop time and of the identification on both samples (on the device,
-  the arrays already there, and end to end from host arrays), the device named, and the most relative difference
+* Where a CUDA GPU is available to CuPy (:func:`quickrelease.batch._gpu.gpu_available`), the GPU backend
+  (:mod:`quickrelease.batch._gpu`): throughput of the stop time and of the identification on both samples (on the
+  device, the arrays already there, and end to end from host arrays), the device named, and the most relative difference
   from the CPU kernels on the same cases (t_F, alpha_F; F1* and the feasible ends; lambda = F1/F1* over its
   tolerance, 1e-13 plus its rounding floor ``8 eps t_F / (t_hi - t_lo)``). JSON key ``gpu``: None without a GPU
   (one line says so).

@@ -1,15 +1,15 @@
 """The building's free vibration analysed as a whole: fit, model comparison, decay and hysteresis (SI units).
 
-:func:`analyse_building` takes the records of the isolation layer (a :class:`~quickrelease.building_case.
+:func:`analyse_building` takes the records of the isolation layer (a :class:`~quickrelease.io.building_case.
 BuildingData` loaded from a case file, or channels and a mass) and calls what exists:
 
-- :func:`quickrelease.isolation_fit.fit_isolation` for the chosen model (estimates, intervals, AIC/BIC,
+- :func:`quickrelease.building.isolation_fit.fit_isolation` for the chosen model (estimates, intervals, AIC/BIC,
   residual whiteness), and with ``compare`` for the other models too, ranked by
-  :func:`~quickrelease.isolation_fit.compare_models`;
-- :func:`quickrelease.decay.analyse_decay` on the displacement channel (offset of the fit removed) and
-  :func:`~quickrelease.isolation_fit.decay_check`: the model-free decay beside the fit (the combined
+  :func:`~quickrelease.building.isolation_fit.compare_models`;
+- :func:`quickrelease.building.decay.analyse_decay` on the displacement channel (offset of the fit removed) and
+  :func:`~quickrelease.building.isolation_fit.decay_check`: the model-free decay beside the fit (the combined
   decrement law is exact for the linear model; a bilinear spring follows no decay law);
-- :func:`quickrelease.decay.hysteresis_loop`: the isolators' force ``-m a`` against ``x``, the acceleration
+- :func:`quickrelease.building.decay.hysteresis_loop`: the isolators' force ``-m a`` against ``x``, the acceleration
   interpolated (linearly) onto the displacement channel's times when the two have their own time axes.
 
 :meth:`BuildingResult.summary` is the JSON of ``quickrelease building --json``.
@@ -48,11 +48,11 @@ class BuildingResult(Summarised):
     compared: tuple[IsolationFit, ...] = ()
     """Fits of every model compared (the chosen one included); empty without ``compare``."""
     comparison: tuple[dict[str, Any], ...] = ()
-    """:func:`~quickrelease.isolation_fit.compare_models` rows, best (lowest BIC) first."""
+    """:func:`~quickrelease.building.isolation_fit.compare_models` rows, best (lowest BIC) first."""
     decay: DecayAnalysis | None = None
     """The model-free decay of the displacement channel (None without one)."""
     decay_check: dict[str, Any] = field(default_factory=dict)
-    """:func:`~quickrelease.isolation_fit.decay_check` of the fit."""
+    """:func:`~quickrelease.building.isolation_fit.decay_check` of the fit."""
     loop: dict[str, np.ndarray] | None = None
     """Hysteresis loop: at the displacement channel's times ``t`` [s] after the release, ``x`` [m] and
     ``force`` [N] measured (the acceleration interpolated onto ``t``), and the model's ``model_x``,
@@ -175,7 +175,7 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
     Parameters
     ----------
     data : BuildingData, optional
-        From :func:`quickrelease.building_case.load_building`: model, mass, start values, release time,
+        From :func:`quickrelease.io.building_case.load_building`: model, mass, start values, release time,
         channels, notes and source. Or give ``channels`` and ``mass`` (and optionally the rest) directly.
     model : {"linear", "bilinear", "2dof"}, optional
         The model to fit (default: the data's, else linear).
@@ -184,9 +184,9 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
     compare : bool
         Also fit the other models and rank them by AIC/BIC and residual whiteness.
     progress : callable, optional
-        Called with a line saying what runs (see :func:`quickrelease.isolation_fit.fit_isolation`).
+        Called with a line saying what runs (see :func:`quickrelease.building.isolation_fit.fit_isolation`).
     global_search : bool
-        The fit's global stage (:func:`quickrelease.isolation_fit.fit_isolation`; default True).
+        The fit's global stage (:func:`quickrelease.building.isolation_fit.fit_isolation`; default True).
 
     Raises
     ------

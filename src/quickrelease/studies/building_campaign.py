@@ -1,7 +1,7 @@
 """Campaigns of releases of one building: the isolation system against the release amplitude.
 
 A snap-back campaign releases one building several times from different pushed displacements d0 (or push
-forces P). Each release is fitted on its own (:func:`quickrelease.isolation_fit.fit_isolation`, with
+forces P). Each release is fitted on its own (:func:`quickrelease.building.isolation_fit.fit_isolation`, with
 standard errors and 95% intervals); then, for each quantity of the isolation system, the law
 ``q = a + b x`` across the campaign is fitted by weighted least squares (the device campaign's machinery,
 :func:`quickrelease.studies.campaign.fit_line`: weights ``1 / SE^2``, the covariance inflated by the reduced
@@ -14,7 +14,7 @@ Quantities (per release, from the fitted model, SI):
 
 - ``period``: the linear model's period ``T = 2 pi sqrt(m / k)`` (the bilinear model's: of k1) [s];
 - ``secant_period``: ``2 pi sqrt(m / k_sec)``, ``k_sec = R(d0) / d0`` the bearings' secant stiffness at the
-  pushed state (:func:`quickrelease.building.pushed_state`; the sliders' friction is left out of it and
+  pushed state (:func:`quickrelease.building.model.pushed_state`; the sliders' friction is left out of it and
   counted in the damping) [s]; equals ``period`` for the linear model;
 - ``damping_ratio``: the viscous damping ratio zeta [-] (bilinear: referred to k1);
 - ``friction``: the sliders' friction F_s [N];
@@ -23,7 +23,7 @@ Quantities (per release, from the fitted model, SI):
   (viscous, Coulomb and hysteretic loops; f_p = F_y (1 - k2 / k1), d_y = F_y / k1, the last term only
   beyond d_y); for the linear model ``zeta_eq = zeta + 2 F_s / (pi k |d0|)``;
 - bilinear also ``stiffness_ratio`` k2 / k1 [-] and ``yield_force`` F_y [N];
-- 2dof (:class:`quickrelease.building.TwoDOF`, each release fitted with the superstructure's mass at the roof
+- 2dof (:class:`quickrelease.building.model.TwoDOF`, each release fitted with the superstructure's mass at the roof
   given): ``period``, ``damping_ratio`` and ``friction`` are the isolation layer's (T of the whole mass on the
   isolators), with laws as for the linear model, ``secant_period`` and ``equivalent_damping_ratio`` those of
   the isolation layer under the whole mass (the linear model's formulas; the superstructure's own damping is
@@ -47,7 +47,7 @@ covariance). The laws weight each release by ``1 / sigma^2``, where sigma is the
   then equals the profile's rise where the law passes through that end), and sigma is their mean,
   ``(hi - lo) / (2 t)`` for an interval within the bounds (not the Jacobian's standard error: that is the
   curvature at the estimate, which the profile says is not the likelihood's width); a side cut by the
-  parameter's bound (:data:`quickrelease.isolation_fit.PARAMETER_BOUNDS`:
+  parameter's bound (:data:`quickrelease.building.isolation_fit.PARAMETER_BOUNDS`:
   friction 0, damping 0) says nothing of the likelihood and is left out, so a friction at its bound 0 with
   interval ``[0, hi]`` has ``sigma = (hi - est) / t``, not the half-width (which would halve sigma and
   give that release four times its weight). With both sides cut the half-width stands (the record does not

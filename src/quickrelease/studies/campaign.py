@@ -3,7 +3,7 @@
 The paper closes: "It may be interesting to see in future experiments how the friction forces are
 influenced by the amplitude of the applied load and by the initial configuration angle." A campaign
 file lists several tests of one device (different P and alpha0); each test is fitted to its record
-(:func:`quickrelease.fit.fit_record`, with standard errors), or identified from its stop observations
+(:func:`quickrelease.studies.fit.fit_record`, with standard errors), or identified from its stop observations
 (with standard errors when they are given with a scatter). Then for each friction force and each
 variable x (the push force P, the angle alpha0, or E_S) the linear law ``F = a + b x`` is fitted by
 weighted least squares (weights 1/SE^2 when every test has a standard error), with its 95% confidence
@@ -255,8 +255,8 @@ def run_campaign(path: str | Path):
 
     A campaign file with a ``[building]`` table is a campaign of releases of one building: its releases
     are fitted and the laws in the amplitude returned as a
-    :class:`~quickrelease.building_campaign.BuildingCampaignResult`
-    (:func:`quickrelease.building_campaign.run_building_campaign`); else a :class:`CampaignResult`.
+    :class:`~quickrelease.studies.building_campaign.BuildingCampaignResult`
+    (:func:`quickrelease.studies.building_campaign.run_building_campaign`); else a :class:`CampaignResult`.
 
     Raises
     ------

@@ -2,7 +2,7 @@
 
 The paper identified F1 and F2 from two numbers (alpha_F, t_F) and remarks that measuring displacements
 and accelerations on the device would have made the identification "much more reliable". Given a record
-(:mod:`quickrelease.records`), :func:`fit_record` estimates F1 and F2, and optionally E_S, the mass factor
+(:mod:`quickrelease.io.records`), :func:`fit_record` estimates F1 and F2, and optionally E_S, the mass factor
 c, the release instant and a constant offset per channel, by minimizing
 
     sum over channels and samples of ((model + offset - measured) / sigma_channel)^2
@@ -11,7 +11,7 @@ c, the release instant and a constant offset per channel, by minimizing
 their standard deviations) with scipy's bounded ``least_squares`` (friction >= 0). The model is the energy
 solution (Eq. 9-10) at the sample times, at rest before the release and after the stop; within the motion
 each channel is interpolated from a table built per parameter vector and checked to 1e-11 of the channel's
-range (:mod:`quickrelease.records`), so a model evaluation costs time linear in the record. The noise level
+range (:mod:`quickrelease.io.records`), so a model evaluation costs time linear in the record. The noise level
 sigma of each channel is given in the case file or estimated from the record's pre-release segment (the
 device at rest).
 

@@ -6,7 +6,7 @@ device gets out of the way of the building springing back. :func:`plan_case` ans
 file with the optional tables ``[fuse]``, ``[building]`` and ``[plan]``.
 
 Conventions. Eq. 1 is applied with Table 3's angle: the fuse carries ``S = P tan(alpha0)``, so a fuse of
-strength S releases at ``P = S / tan(alpha0)`` (see :mod:`quickrelease.statics` for why). Forces and
+strength S releases at ``P = S / tan(alpha0)`` (see :mod:`quickrelease.device.statics` for why). Forces and
 stresses are magnitudes; the bars E1 are compressed.
 """
 
@@ -347,7 +347,7 @@ class FrictionSamples:
     F2: np.ndarray
     """Rail friction of each sample [N]."""
     nominal: tuple[float, float]
-    """(F1, F2) of :func:`quickrelease.identify.case_friction` [N]."""
+    """(F1, F2) of :func:`quickrelease.device.identify.case_friction` [N]."""
     description: str
     """Where they come from."""
     dropped_share: float = 0.0
@@ -361,7 +361,7 @@ def friction_samples(case: Case, n: int, seed: int = 0) -> FrictionSamples:
       (a Gaussian copula for uniform marginals); draws below 0 are set to 0.
     * ``[friction] case`` naming a case with observations that carry a scatter: each draw of its observations
       identified (Eq. 11-13, the batch kernel); infeasible draws are dropped.
-    * otherwise the single friction pair of :func:`quickrelease.identify.case_friction`.
+    * otherwise the single friction pair of :func:`quickrelease.device.identify.case_friction`.
 
     """
     F1_nom, F2_nom, how = case_friction(case)
@@ -439,7 +439,7 @@ def building_motion(t, d0: float, period: float, damping_ratio: float = 0.0, fri
 
     Single degree of freedom, ``x_ddot + 2 zeta omega x_dot + omega^2 x = -a_f sign(x_dot)`` with
     ``omega = 2 pi / T`` and ``a_f`` the Coulomb friction of sliding isolators over the mass; x is positive in
-    the push direction. The motion is :func:`quickrelease.building.free_vibration` of the linear isolation
+    the push direction. The motion is :func:`quickrelease.building.model.free_vibration` of the linear isolation
     (exact closed form half-cycle by half-cycle, sticking for good at a turning point where
     ``omega^2 |x| <= a_f``), for a unit mass: only ``a_f = F_s / m`` enters.
     """
@@ -467,7 +467,7 @@ def building_isolation(building: BuildingSpec) -> Isolation:
     model the isolation layer with the superstructure taken as rigid on it (the whole mass on the layer's
     period: the superstructure's own mode is left out of the clearance check). Without a mass (linear) the
     motion needs no friction (``a_f = F_s / m``): a unit mass stands in when the friction is 0
-    (:func:`quickrelease.building_case.spec_isolation`)."""
+    (:func:`quickrelease.io.building_case.spec_isolation`)."""
     from ..io.building_case import spec_isolation
 
     return spec_isolation(building)
@@ -553,7 +553,7 @@ def clearance(release: FirstIntegral, building: BuildingSpec, d0: float, n: int 
     At the rupture the head and the building are in contact (gap 0). The head retracts by u(t) (Table 4;
     the device's centre stays put, both heads retract symmetrically, and the jack's ram does not follow
     within the second or so of the release); the building springs back from d0 (the exact closed form of
-    :func:`quickrelease.building.free_vibration`, :func:`building_isolation`). The gap opens at once
+    :func:`quickrelease.building.model.free_vibration`, :func:`building_isolation`). The gap opens at once
     (``u_dot0 > 0`` while the building starts from rest); the minimum gap is taken after the gap's first
     maximum, when the building catches up, over ``max(1.5 t_F, one period, the building's first return)``
     (a bilinear isolation pushed past its yield returns on its soft branch, later than its initial period

@@ -9,7 +9,7 @@ Backends: ``numpy`` computes the grid in memory; ``dask`` computes it in blocks 
 dimension on a Dask cluster, writing each finished block into a Zarr store (xarray region writes, then
 a marker file per block), so memory stays bounded by the block and ``resume`` skips finished blocks.
 
-Outputs never lie (:mod:`quickrelease.runfolder`): a NetCDF file is written under a temporary name and
+Outputs never lie (:mod:`quickrelease.io.runfolder`): a NetCDF file is written under a temporary name and
 renamed when complete; a Zarr store is built in ``.NAME.partial`` beside ``out`` (its ``manifest.json``
 holds the fingerprint of the case, the grids, the block size and the package version) and moved into
 place only when every block is in, so a killed sweep leaves nothing at ``out`` that opens as a result.
@@ -168,7 +168,7 @@ def _dataset(case: Case, grids: dict[str, np.ndarray], data: dict[str, np.ndarra
 
 def _check_optional(out: str | Path | None, backend: str) -> None:
     """The optional packages the output and the backend need, checked before any work
-    (:func:`quickrelease.distributed.check_optional`)."""
+    (:func:`quickrelease.studies.distributed.check_optional`)."""
     from .distributed import check_optional
 
     check_optional(backend=backend, files=() if out is None else (out,))
@@ -269,7 +269,7 @@ def _quiet_zarr():
 
 def _store_folder(case: Case, grids: dict[str, np.ndarray], out, block_rows: int | None, *, resume: bool,
                   overwrite: bool):
-    """The :class:`~quickrelease.runfolder.RunFolder` of a Zarr store: its fingerprint covers the case, the
+    """The :class:`~quickrelease.io.runfolder.RunFolder` of a Zarr store: its fingerprint covers the case, the
     grids (names, order, values), the block size (dask) and the package version."""
     from ..io.runfolder import RunFolder, case_inputs
 

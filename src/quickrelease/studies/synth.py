@@ -101,7 +101,7 @@ class SyntheticRecord(_Synthetic):
     """F1, F2 [N], energy [J], mass_factor, alpha0, release_time, stop_time [s], alpha_final [rad]."""
 
     def record(self, *, noise_free: bool = False) -> Record:
-        """The record as :func:`quickrelease.fit.fit_record` takes it (noise levels given, offsets estimated
+        """The record as :func:`quickrelease.studies.fit.fit_record` takes it (noise levels given, offsets estimated
         on displacement channels), missing samples left out (noise-free: the model values on the samples the
         record has)."""
         channels = {}
@@ -168,7 +168,7 @@ def synthesize(case: Case, channels: list[str] | tuple[str, ...], *, rate: float
     case : Case
         Device, E_S, alpha0, mass model, and friction (``[friction]`` or ``[observations]``).
     channels : list of str
-        Channels of :data:`quickrelease.records.CHANNELS`.
+        Channels of :data:`quickrelease.io.records.CHANNELS`.
     rate : float
         Sampling rate [Hz].
     noise : dict, optional
@@ -230,7 +230,7 @@ def synthesize(case: Case, channels: list[str] | tuple[str, ...], *, rate: float
 def predicted_errors(case: Case, synthetic: SyntheticRecord, options: FitOptions | None = None) -> dict[str, Any]:
     """Standard errors a fit to such a record would have: the covariance at the truth (Cramer-Rao bound).
 
-    The fit of :func:`quickrelease.fit.fit_record` to the noise-free record, with the synthetic noise
+    The fit of :func:`quickrelease.studies.fit.fit_record` to the noise-free record, with the synthetic noise
     levels as exact weights: ``sqrt(diag((J^T J)^-1))`` at the true parameters.
 
     Returns
@@ -256,7 +256,7 @@ def predicted_errors(case: Case, synthetic: SyntheticRecord, options: FitOptions
 def parse_channel_values(items: list[str] | tuple[str, ...], what: str,
                          channels: dict[str, tuple[str, str, str]] | None = None) -> dict[str, float]:
     """``["u=0.5 mm", "a_head=0.05 m/s^2,v=1mm"]`` -> {channel: SI value}; units per the channel's kind
-    (``channels``: the device's :data:`~quickrelease.records.CHANNELS` unless given, e.g. the building's)."""
+    (``channels``: the device's :data:`~quickrelease.io.records.CHANNELS` unless given, e.g. the building's)."""
     from ..units import parse_quantity
 
     channels = CHANNELS if channels is None else channels
@@ -317,7 +317,7 @@ def case_toml(case: Case, record_table: str, title: str) -> str:
 #: (0.05 mm), a velocity transducer (1 mm/s), an accelerometer (2 mg).
 BUILDING_NOISE_BY_KIND = {"length": 0.05e-3, "velocity": 1e-3, "acceleration": 0.002 * 9.80665}
 #: Default noise standard deviations of the building's channels [SI] (on the isolation layer and at the roof),
-#: by the kind of each channel of :data:`quickrelease.building.RECORD_CHANNELS`.
+#: by the kind of each channel of :data:`quickrelease.building.model.RECORD_CHANNELS`.
 BUILDING_NOISE = {name: BUILDING_NOISE_BY_KIND[kind] for name, (kind, _, _) in RECORD_CHANNELS.items()}
 
 
@@ -334,7 +334,7 @@ class SyntheticBuildingRecord(_Synthetic):
     _SECTION: ClassVar[str] = "building.record"
 
     def building_channels(self, *, noise_free: bool = False) -> list:
-        """The record as :func:`quickrelease.isolation_fit.fit_isolation` takes it (noise levels given, an
+        """The record as :func:`quickrelease.building.isolation_fit.fit_isolation` takes it (noise levels given, an
         offset on every channel), missing samples left out (noise-free: the model values on the samples the
         record has)."""
         from ..building.isolation_fit import BuildingChannel
@@ -347,7 +347,7 @@ class SyntheticBuildingRecord(_Synthetic):
         return out
 
     def fit_parameters(self) -> dict[str, float]:
-        """The truth in :func:`quickrelease.isolation_fit.fit_isolation`'s parameter names (SI): period
+        """The truth in :func:`quickrelease.building.isolation_fit.fit_isolation`'s parameter names (SI): period
         (bilinear: the initial period 2 pi sqrt(m / k1)), damping_ratio, friction, bilinear stiffness_ratio =
         k2 / k1 and yield_force, 2dof superstructure_period and superstructure_damping_ratio, d0, release_time
         and offset_<channel>."""
@@ -366,13 +366,13 @@ class SyntheticBuildingRecord(_Synthetic):
 def predicted_building_errors(synthetic: SyntheticBuildingRecord):
     """Standard errors a fit to such a record of the building would have: the Cramer-Rao bound at the truth.
 
-    :func:`quickrelease.isolation_fit.predicted_isolation_errors` on the record's channels (its sample times,
+    :func:`quickrelease.building.isolation_fit.predicted_isolation_errors` on the record's channels (its sample times,
     missing samples left out, and its noise levels as the known weights, an offset on every channel) at the
     true parameters of the synthetic record's model: ``(J^T W J)^-1`` with W = 1 / noise^2.
 
     Returns
     -------
-    quickrelease.isolation_fit.IsolationPrecision
+    quickrelease.building.isolation_fit.IsolationPrecision
     """
     from ..building.isolation_fit import predicted_isolation_errors
 
@@ -403,8 +403,8 @@ def synthesize_building(case: Case, channels: list[str] | tuple[str, ...], *, ra
     """A synthetic record of the building's free vibration after the release, from ``[building]`` (the truth).
 
     The isolation layer rests at the pushed displacement d0 until ``release_time``, then vibrates freely:
-    the exact closed form of :func:`quickrelease.building.free_vibration` (linear or bilinear isolation,
-    viscous damping, Coulomb sliders, sticking; or the 2dof building, :class:`~quickrelease.building.TwoDOF`),
+    the exact closed form of :func:`quickrelease.building.model.free_vibration` (linear or bilinear isolation,
+    viscous damping, Coulomb sliders, sticking; or the 2dof building, :class:`~quickrelease.building.model.TwoDOF`),
     sampled at the record's instants (point values). The channels x, v, a are the isolation layer's (the
     base), x_roof, v_roof, a_roof the roof's: the 2dof building's superstructure mass, for the rigid
     superstructure of linear and bilinear the layer's. Each channel gets a constant offset and Gaussian noise;
@@ -416,7 +416,7 @@ def synthesize_building(case: Case, channels: list[str] | tuple[str, ...], *, ra
         With ``[building]`` (model linear, bilinear or 2dof) and d0 (``displacement``, or a ``[test]``
         force).
     channels : list of str
-        Channels of :data:`quickrelease.building_case.BUILDING_CHANNELS`.
+        Channels of :data:`quickrelease.io.building_case.BUILDING_CHANNELS`.
     rate : float
         Sampling rate [Hz].
     noise : dict, optional

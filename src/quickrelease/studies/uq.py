@@ -329,7 +329,7 @@ def run_uq(case: Case, samples: int, *, seed: int = 0, chunk: int = DEFAULT_CHUN
         ``pip install 'quickrelease[gpu]'``; the percentiles agree with the numpy backend's to the histogram's
         resolution, the identified values to 1e-13 of F1*, F2* where the observation is well conditioned).
     out : path, optional
-        Folder of the run (a :class:`quickrelease.runfolder.RunFolder`): ``manifest.json`` (the
+        Folder of the run (a :class:`quickrelease.io.runfolder.RunFolder`): ``manifest.json`` (the
         fingerprint of the case, seed, samples and chunk size), ``chunks/`` (one aggregate file per finished
         chunk, written atomically, each carrying the fingerprint), ``uq.json`` (the result) and
         ``uq_corner.png``/``.svg`` (with ``figures``). The run works in ``.NAME.partial`` beside ``out`` and
