@@ -7,7 +7,7 @@ Run: python benchmarks/bench_batch.py [--quick]   (the same as: quickrelease ben
 import json
 import sys
 
-from quickrelease.bench import run_bench
+from quickrelease.studies.bench import run_bench
 
 if __name__ == "__main__":
     result = run_bench(quick="--quick" in sys.argv, log=lambda line: print(line, file=sys.stderr))

@@ -36,8 +36,8 @@ from scipy.optimize import least_squares
 sys.path.insert(0, str(Path(__file__).parent.parent / "tests"))
 from building_reference import reference  # noqa: E402
 
-import quickrelease.isolation_fit as IF  # noqa: E402
-from quickrelease.isolation_fit import BuildingChannel, fit_isolation  # noqa: E402
+import quickrelease.building.isolation_fit as IF  # noqa: E402
+from quickrelease.building.isolation_fit import BuildingChannel, fit_isolation  # noqa: E402
 
 M = 4.0e5  # kg
 RATE, PRE, DURATION, RELEASE = 200.0, 2.0, 60.0, 2.137

@@ -69,8 +69,8 @@ def records() -> dict[str, dict[str, tuple[np.ndarray, np.ndarray]]]:
 
 def run(data_file: str, repeat: int) -> dict:
     """Time the fits of the records in ``data_file`` with the package on sys.path (this one or a baseline's)."""
-    from quickrelease.building_analysis import analyse_building
-    from quickrelease.isolation_fit import BuildingChannel, fit_isolation
+    from quickrelease.building.isolation_fit import BuildingChannel, fit_isolation
+    from quickrelease.studies.building_analysis import analyse_building
 
     data = np.load(data_file)
     recs: dict[str, dict] = {}

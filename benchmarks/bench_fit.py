@@ -17,11 +17,11 @@ from pathlib import Path
 import numpy as np
 from common import best_of, solve_ivp_release
 
-from quickrelease.case import load_case
-from quickrelease.fit import fit_record
-from quickrelease.records import load_record, release_channels
-from quickrelease.solvers import FirstIntegral
-from quickrelease.synth import predicted_errors, synthesize
+from quickrelease.device.solvers import FirstIntegral
+from quickrelease.io.case import load_case
+from quickrelease.io.records import load_record, release_channels
+from quickrelease.studies.fit import fit_record
+from quickrelease.studies.synth import predicted_errors, synthesize
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
 F1, F2, E_S, ALPHA0, RELEASE = 419.85, 804.57, 2900.0, 0.2, 0.62

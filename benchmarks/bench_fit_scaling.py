@@ -26,11 +26,11 @@ import sys
 import time
 from pathlib import Path
 
-from quickrelease.case import load_case
-from quickrelease.fit import fit_record
-from quickrelease.records import release_channels
-from quickrelease.solvers import FirstIntegral
-from quickrelease.synth import synthesize
+from quickrelease.device.solvers import FirstIntegral
+from quickrelease.io.case import load_case
+from quickrelease.io.records import release_channels
+from quickrelease.studies.fit import fit_record
+from quickrelease.studies.synth import synthesize
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
 
@@ -50,7 +50,7 @@ def peak_rss() -> float:
 
 
 def make_record(case, n: int, duration: float):
-    import quickrelease.synth as synth
+    import quickrelease.studies.synth as synth
 
     synth.check_size = lambda *args, **kwargs: None  # see the module docstring
     return synthesize(case, ["u", "v", "a_head"], rate=n / duration, duration=duration, seed=1).record()

@@ -1,4 +1,4 @@
-"""The GPU path's kernels (:mod:`quickrelease._gpu`) against the compiled CPU kernels, in the same run.
+"""The GPU path's kernels (:mod:`quickrelease.batch._gpu`) against the compiled CPU kernels, in the same run.
 
 The xp kernels (stop time, identification, release envelope) are written once against an array module. Here they
 run with ``xp = numpy`` on one core of this machine (the GPU code on the CPU: for reference only, it is not how they
@@ -46,8 +46,9 @@ def _inputs(cases):
 def measure(n: int, repeat: int, seed: int = 0) -> dict:
     import numba
 
-    from quickrelease import _gpu, batch
-    from quickrelease.sampling import random_releases, wide_releases
+    from quickrelease import batch
+    from quickrelease.batch import _gpu
+    from quickrelease.batch.sampling import random_releases, wide_releases
 
     numba.set_num_threads(1)
     if hasattr(os, "sched_setaffinity"):

@@ -10,7 +10,7 @@ the speed-up over one thread (wall time) and whether the results are bit-identic
 * stop time: :func:`quickrelease.batch.stop_time` on every case of each sample;
 * identification: :func:`quickrelease.batch.identify` on the friction stops of each sample (alpha_F and t_F from
   the current kernels), the same observations for both;
-* accuracy (current kernels): against mpmath (:mod:`quickrelease.reference`) on ``--accuracy`` cases of each
+* accuracy (current kernels): against mpmath (:mod:`quickrelease.device.reference`) on ``--accuracy`` cases of each
   sample (stratified for the wide one): relative error of t_F; error of F1 and F2 relative to F1*, F2*.
 
 Run: PYTHONPATH=src python benchmarks/bench_kernels.py [--n 200000] [--baseline main] [--threads 2] [--accuracy 40]
@@ -41,7 +41,7 @@ def _log(*args):
 def _samples(n: int, seed: int) -> dict[str, np.ndarray]:
     """Both samples' cases and the identification observations of their friction stops (flat arrays)."""
     from quickrelease import batch
-    from quickrelease.sampling import random_releases, wide_releases
+    from quickrelease.batch.sampling import random_releases, wide_releases
 
     out = {}
     for name, draw in (("bench", random_releases), ("wide", wide_releases)):
@@ -116,8 +116,8 @@ def worker(path: str, repeat: int, threads: int) -> dict:
 def accuracy(data, n: int) -> dict:
     """Errors of the current kernels against mpmath on n cases of each sample (the wide one stratified)."""
     from quickrelease import batch
-    from quickrelease.reference import identify_mp, stop_time_mp
-    from quickrelease.sampling import wide_releases
+    from quickrelease.batch.sampling import wide_releases
+    from quickrelease.device.reference import identify_mp, stop_time_mp
 
     out = {}
     for name in ("bench", "wide"):

@@ -17,9 +17,9 @@ from pathlib import Path
 from common import best_of, solve_ivp_release
 
 from quickrelease import batch
-from quickrelease.case import load_case
-from quickrelease.planning import clearance, friction_samples, plan_case, pushed_displacement
-from quickrelease.solvers import FirstIntegral
+from quickrelease.device.solvers import FirstIntegral
+from quickrelease.io.case import load_case
+from quickrelease.studies.planning import clearance, friction_samples, plan_case, pushed_displacement
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 from common import best_of, solve_ivp_release
 
 from quickrelease import simulate, stop_time
-from quickrelease.identify import identify_friction
+from quickrelease.device.identify import identify_friction
 
 CASE = dict(E_S=2900.0, alpha0=0.2, F1=419.85, F2=804.57)
 

@@ -1,4 +1,4 @@
-"""Regenerate the synthetic records of the examples (examples/records/*.csv) with quickrelease.synth.
+"""Regenerate the synthetic records of the examples (examples/records/*.csv) with quickrelease.studies.synth.
 
     python examples/make_records.py
 
@@ -18,13 +18,13 @@
   weight, d0 = 182.5 mm), released 2.05 s after the records start, 60 s long. The isolation layer's
   displacement (an LVDT: 0.05 mm noise, +0.8 mm offset, 0.1 % missing samples) in mm at 200 Hz; the base
   acceleration (an accelerometer on another logger: 0.002 g0 noise, +0.004 g0 offset) in g0 at 100 Hz with
-  its own time column. Made with ``quickrelease.synth.synthesize_building`` (``quickrelease synth
+  its own time column. Made with ``quickrelease.studies.synth.synthesize_building`` (``quickrelease synth
   building.toml --building``), the units converted here.
 * ``building_R*.csv`` (for ``building_campaign.toml``): five releases of one isolated building (650 t,
   linear rubber bearings of period 2.0 s, viscous damping ratio 3 %, sliders) pushed to d0 = 6 to 18 cm:
   the isolation layer's displacement (LVDT, mm, 0.2 mm noise, a +2 mm zero) and the base acceleration
   (m/s^2, 0.02 m/s^2 noise, a 0.01 m/s^2 zero) at 100 Hz for 20 s, released about 2 s in
-  (:func:`quickrelease.building.free_vibration`). The sliders' friction of these synthetic releases grows
+  (:func:`quickrelease.building.model.free_vibration`). The sliders' friction of these synthetic releases grows
   with the amplitude by a law chosen for the demonstration, F_s = 40 kN + 150 kN/m |d0|;
   ``quickrelease campaign building_campaign.toml`` finds it, and no amplitude effect on T or zeta.
 """
@@ -32,9 +32,9 @@
 import math
 from pathlib import Path
 
-from quickrelease.case import load_case
-from quickrelease.statics import strain_energy
-from quickrelease.synth import synthesize, synthesize_building
+from quickrelease.device.statics import strain_energy
+from quickrelease.io.case import load_case
+from quickrelease.studies.synth import synthesize, synthesize_building
 
 HERE = Path(__file__).parent
 RECORDS = HERE / "records"
@@ -79,7 +79,7 @@ def building_record(d0: float, friction: float, release: float, seed: int, path:
     """Write one release's record (t_s, x_mm, a_m_s2) and return the push force that held it [N]."""
     import numpy as np
 
-    from quickrelease.building import Isolation, free_vibration, pushed_state
+    from quickrelease.building.model import Isolation, free_vibration, pushed_state
 
     iso = Isolation.linear(BUILDING["mass"], BUILDING["period"], BUILDING["damping_ratio"], friction)
     rng = np.random.default_rng(seed)

@@ -1,8 +1,19 @@
+"""Fixtures shared by every test folder (tests/<subpackage>/ mirrors src/quickrelease/<subpackage>/).
+
+The helpers beside this file (``building_reference``, ``quality``) are imported by tests in the subfolders:
+this folder goes on ``sys.path`` first.
+"""
+
+import sys
 from functools import cache
+from pathlib import Path
 
 import pytest
 
 from quickrelease import preset
+
+if str(Path(__file__).resolve().parent) not in sys.path:
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 #: matplotlib's settings when the session started: what every test, and every fixture of any scope, must leave.
 _RC_BASELINE: dict = {}

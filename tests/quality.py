@@ -15,7 +15,7 @@ import re
 from collections import Counter
 from html.parser import HTMLParser
 
-from quickrelease._style import FONT_SIZES
+from quickrelease.report._style import FONT_SIZES
 
 VOID = {"area", "base", "br", "col", "embed", "hr", "img", "input", "link", "meta", "source", "track", "wbr"}
 

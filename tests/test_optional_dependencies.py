@@ -1,7 +1,7 @@
 """Optional dependencies are checked once, before any work (issue 11): a command that needs zarr, dask or
 pyarrow and lacks it prints one line naming the package and how to install it, exits 2, and writes nothing.
 
-``sweep --out x.zarr`` without zarr: tests/test_cli_conventions.py. A package is hidden the way Python sees
+``sweep --out x.zarr`` without zarr: tests/cli/test_cli_conventions.py. A package is hidden the way Python sees
 a missing one: ``sys.modules[name] = None`` makes ``find_spec`` and
 ``import`` both fail."""
 
@@ -13,7 +13,7 @@ from typer.testing import CliRunner
 
 from quickrelease import QuickReleaseError
 from quickrelease.cli import app
-from quickrelease.distributed import check_optional
+from quickrelease.studies.distributed import check_optional
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
 runner = CliRunner()
@@ -74,7 +74,7 @@ def test_campaign_checks_every_test_before_the_first_fit(monkeypatch, tmp_path):
     (tmp_path / "records").symlink_to(EXAMPLES / "records")
     path = tmp_path / "campaign.toml"
     path.write_text(text, encoding="utf-8")
-    import quickrelease.campaign as campaign
+    import quickrelease.studies.campaign as campaign
 
     monkeypatch.setattr(campaign, "_identify_test", lambda *a: pytest.fail("a test was fitted before the check"))
     r = runner.invoke(app, ["campaign", str(path)])

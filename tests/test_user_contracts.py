@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from quickrelease import batch
-from quickrelease.building import Isolation, free_vibration, pushed_state
+from quickrelease.building.model import Isolation, free_vibration, pushed_state
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -105,7 +105,7 @@ def _building_record(seed: int, noise: float | None):
     displacement with 0.2 mm noise and a 1 s quiet segment before the release at 0.5 s."""
     from building_reference import reference
 
-    from quickrelease.isolation_fit import BuildingChannel
+    from quickrelease.building.isolation_fit import BuildingChannel
 
     m, T, zeta, Fs, d0 = 4.0e5, 2.0, 0.05, 1.2e4, 0.15
     k = m * (2 * math.pi / T) ** 2
@@ -119,7 +119,7 @@ def test_building_fit_aic_bic_are_their_definitions():
     """AIC = chi2 + 2 p and BIC = chi2 + p ln n with the noise given (chi2 recomputed here from the fitted
     model's residuals), p counted here: period, damping ratio, friction, d0, release time and the sensor's
     offset (6); n the samples (700)."""
-    from quickrelease.isolation_fit import fit_isolation
+    from quickrelease.building.isolation_fit import fit_isolation
 
     m, channels = _building_record(3, noise=2e-4)
     fit = fit_isolation(channels, m, "linear")
@@ -136,7 +136,7 @@ def test_building_fit_aic_bic_are_their_definitions():
 def test_building_fit_aic_bic_with_the_noise_from_the_residuals():
     """No noise level known: the chi-square is scaled by its reduced value, chi2 / (chi2 / (n - p)) = n - p, so
     AIC = n - p + 2 p = n + p and BIC = n - p + p ln n, whatever the residuals."""
-    from quickrelease.isolation_fit import BuildingChannel, fit_isolation
+    from quickrelease.building.isolation_fit import BuildingChannel, fit_isolation
 
     m, channels = _building_record(4, noise=None)
     ch = channels[0]
@@ -157,8 +157,8 @@ def test_uq_percentiles_of_both_frictions_match_exact_ones(tmp_path):
     median by 1.8%, hundreds of bins."""
     from conftest import UQ_CASE
 
-    from quickrelease import uq
-    from quickrelease.case import load_case
+    from quickrelease.io.case import load_case
+    from quickrelease.studies import uq
 
     path = tmp_path / "uq.toml"
     path.write_text(UQ_CASE)
@@ -202,8 +202,8 @@ def test_plan_defaults_used_by_a_case_that_omits_them(tmp_path):
     """A case without [plan], without [fuse] target, tolerance, diameters or angles and without the building's
     displacement: 20,000 friction samples drawn with seed 0 (F1 and F2 independent normals, drawn here), the
     target P +- 5%, the device's own fuse at the case's angle, and d0 = (P - F_f) / k with k = m (2 pi / T)^2."""
-    from quickrelease.case import load_case
-    from quickrelease.planning import plan_case, pushed_displacement
+    from quickrelease.io.case import load_case
+    from quickrelease.studies.planning import plan_case, pushed_displacement
 
     path = tmp_path / "plan.toml"
     path.write_text(PLAN_CASE)
@@ -277,7 +277,7 @@ def _netcdf_attributes(path: Path) -> dict[str, tuple[str, str]]:
 
 def test_timeseries_netcdf_units_and_long_names(tmp_path):
     from quickrelease import simulate
-    from quickrelease.export import write_netcdf
+    from quickrelease.io.export import write_netcdf
 
     r = simulate(2900.0, 0.2, 419.85, 804.57, method="energy")
     path = write_netcdf(r, tmp_path / "timeseries.nc")
@@ -285,8 +285,8 @@ def test_timeseries_netcdf_units_and_long_names(tmp_path):
 
 
 def test_sweep_netcdf_units_and_long_names(tmp_path):
-    from quickrelease.case import load_case
-    from quickrelease.sweep import sweep
+    from quickrelease.io.case import load_case
+    from quickrelease.studies.sweep import sweep
 
     case = load_case(ROOT / "examples" / "paper.toml")
     sweep(case, {"F1": np.array([300.0, 420.0]), "alpha0": np.array([0.19, 0.2, 0.21])},
@@ -309,8 +309,8 @@ def _cells(page: str, row_start: str) -> list[str]:
 
 def _hand_made_fit():
     """A linear fit with round numbers chosen here: F_s = 12,010 N +- 31 N, d0 = 0.15 m +- 0.2 mm, ..."""
-    from quickrelease.building_analysis import BuildingResult
-    from quickrelease.isolation_fit import BuildingChannel, IsolationFit
+    from quickrelease.building.isolation_fit import BuildingChannel, IsolationFit
+    from quickrelease.studies.building_analysis import BuildingResult
 
     names = ("period", "damping_ratio", "friction", "d0", "release_time", "offset_lvdt")
     est = {"period": 2.0, "damping_ratio": 0.05, "friction": 12010.0, "d0": 0.15, "release_time": 0.5,
@@ -331,7 +331,7 @@ def _hand_made_fit():
 def test_building_report_tables_scale_values_and_standard_errors_to_their_units():
     """Every fitted parameter's row: estimate, standard error and interval in the unit printed beside them
     (F_s in kN: 12.01 +- 0.031, never 12.01 kN +- 31; d0 in mm: 150 +- 0.20)."""
-    from quickrelease.report import building_section
+    from quickrelease.report.html import building_section
 
     page = building_section(_hand_made_fit(), {})
     expected = {  # name: (estimate, standard error, interval, unit), by hand

@@ -10,7 +10,7 @@ significant digits are compared to 12 (their last digits depend on the platform'
     python tools/console_outputs.py --check              # every page; exit 1 and a diff where one is stale
     python tools/console_outputs.py --write docs/guide/uq.md
 
-``tests/test_console_outputs.py`` runs the check (the slow commands with ``QUICKRELEASE_SLOW=1``).
+``tests/cli/test_console_outputs.py`` runs the check (the slow commands with ``QUICKRELEASE_SLOW=1``).
 """
 
 from __future__ import annotations

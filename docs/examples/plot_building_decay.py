@@ -12,7 +12,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from quickrelease import Isolation, free_vibration
-from quickrelease.decay import analyse_decay
+from quickrelease.building.decay import analyse_decay
 
 mass = 4.0e5  # kg
 iso = Isolation.linear(mass=mass, period=2.0, damping_ratio=0.04, friction=1.2e4)  # kg, s, -, N

@@ -10,7 +10,7 @@ F2 = 805 N (a law chosen for the demonstration, not a measurement).
 
 from pathlib import Path
 
-from quickrelease.campaign import campaign_figure, run_campaign
+from quickrelease.studies.campaign import campaign_figure, run_campaign
 
 # the case files of the repository's examples/ folder (the gallery runs this script in docs/examples/)
 EXAMPLES = next((d / "examples" for d in (Path.cwd(), *Path.cwd().parents)

@@ -10,9 +10,9 @@ F1 = 419.85 N and F2 = 804.57 N.
 
 from pathlib import Path
 
-from quickrelease import plots
-from quickrelease.case import load_case
-from quickrelease.fit import fit_record
+from quickrelease.io.case import load_case
+from quickrelease.report import plots
+from quickrelease.studies.fit import fit_record
 
 # the case files of the repository's examples/ folder (the gallery runs this script in docs/examples/)
 EXAMPLES = next((d / "examples" for d in (Path.cwd(), *Path.cwd().parents)

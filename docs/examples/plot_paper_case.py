@@ -11,8 +11,8 @@ solutions over the analytic curve of Eq. 10).
 
 from pathlib import Path
 
-from quickrelease import plots
-from quickrelease.case import load_case
+from quickrelease.io.case import load_case
+from quickrelease.report import plots
 from quickrelease.workflow import run_case
 
 # the case files of the repository's examples/ folder (the gallery runs this script in docs/examples/)

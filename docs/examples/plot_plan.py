@@ -9,8 +9,8 @@ springing back.
 
 from pathlib import Path
 
-from quickrelease.case import load_case
-from quickrelease.planning import choices_figure, gap_figure, plan_case
+from quickrelease.io.case import load_case
+from quickrelease.studies.planning import choices_figure, gap_figure, plan_case
 
 # the case files of the repository's examples/ folder (the gallery runs this script in docs/examples/)
 EXAMPLES = next((d / "examples" for d in (Path.cwd(), *Path.cwd().parents)

@@ -12,8 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from quickrelease.case import load_case
-from quickrelease.sweep import heatmap_figure, sweep
+from quickrelease.io.case import load_case
+from quickrelease.studies.sweep import heatmap_figure, sweep
 
 # the case files of the repository's examples/ folder (the gallery runs this script in docs/examples/)
 EXAMPLES = next((d / "examples" for d in (Path.cwd(), *Path.cwd().parents)

@@ -10,10 +10,14 @@ Table 7). SI units throughout.
 
 from __future__ import annotations
 
-from . import building, closed_form, decay, dynamics, kinematics, statics
+from . import building
 from ._threads import using_threads
-from .building import FreeVibration, Isolation, TwoDOF, free_vibration
-from .closed_form import (
+from ._version import __version__
+from .building import decay
+from .building.isolation_fit import BuildingChannel, IsolationFit, compare_models, fit_isolation
+from .building.model import FreeVibration, Isolation, TwoDOF, free_vibration
+from .device import closed_form, dynamics, kinematics, statics
+from .device.closed_form import (
     angular_acceleration,
     dissipated_energy,
     final_angle,
@@ -22,8 +26,12 @@ from .closed_form import (
     kinetic_energy,
     reaches_geometric_limit,
 )
-from .device import DEVICE_KEYS, Device, load_device, preset, preset_names
-from .dynamics import MASS_MODELS, mass_factor
+from .device.dynamics import MASS_MODELS, mass_factor
+from .device.identify import Identification, identify_friction, stop_time_on_line
+from .device.parameters import DEVICE_KEYS, Device, load_device, preset, preset_names
+from .device.response import STOP_REASONS, Response
+from .device.solvers import METHODS, simulate, stop_time
+from .device.statics import InternalForces, StrainEnergy, fuse_force, internal_forces, push_force, strain_energy
 from .errors import (
     DeviceFileError,
     InfeasibleObservationError,
@@ -31,25 +39,8 @@ from .errors import (
     QuickReleaseError,
     UnitError,
 )
-from .identify import Identification, identify_friction, stop_time_on_line
-from .isolation_fit import BuildingChannel, IsolationFit, compare_models, fit_isolation
-from .response import STOP_REASONS, Response
-from .solvers import METHODS, simulate, stop_time
-from .statics import InternalForces, StrainEnergy, fuse_force, internal_forces, push_force, strain_energy
+from .report import display as _display  # noqa: F401  (registers the results' repr and notebook tables)
 from .units import parse_quantity
-
-
-def _package_version() -> str:
-    from importlib.metadata import PackageNotFoundError, version
-
-    try:
-        return version("quickrelease")
-    except PackageNotFoundError:  # running from a source tree
-        return "0.0.0+unknown"
-
-
-__version__ = _package_version()
-del _package_version
 
 __all__ = [
     "DEVICE_KEYS", "Device", "load_device", "preset", "preset_names",

@@ -10,11 +10,12 @@ existing file is replaced only with ``overwrite``.
 
 from __future__ import annotations
 
+import hashlib
 import os
 import stat
 from pathlib import Path
 
-__all__ = ["TOML_MAX_BYTES", "RECORD_MAX_BYTES", "file_kind", "check_input", "read_input", "check_output_file"]
+__all__ = ["TOML_MAX_BYTES", "RECORD_MAX_BYTES", "file_kind", "check_input", "read_input", "staging_name"]
 
 #: The largest TOML file read (case, device, campaign files are a few kB).
 TOML_MAX_BYTES = 16 * 2**20
@@ -79,30 +80,29 @@ def read_input(path: str | Path, what: str, error: type[Exception], limit: int =
     return data
 
 
-def check_output_file(path: str | Path, option: str, overwrite: bool = False) -> Path:
-    """Check before the work that the file ``path`` may be written (by a rename of a finished temporary file
-    over it); returns its absolute path.
-
-    Refused (:class:`~quickrelease.runfolder.OutputError`, one line): a device node, FIFO, socket or folder at
-    ``path`` (never replaced, even with ``overwrite``: a rename over a device node removes the device), an
-    existing file without ``overwrite`` (the program cannot know it wrote it), a name or path longer than the
-    system allows, a folder in the path that is a file, and a place that cannot be written.
-    """
-    from .runfolder import OutputError, check_target
-
-    given = path
-    full = check_target(path, "file", option)
+def _name_max(folder: Path) -> int:
+    """The longest file name (bytes) the file system of ``folder`` allows (255 where it cannot say)."""
     try:
-        st = os.stat(full)  # through a symbolic link: what a write would reach
-    except FileNotFoundError:
-        st = None
-    except OSError as exc:
-        raise OutputError(f"{option} {given}: {exc.strerror or exc}") from None
-    if st is not None:
-        if not stat.S_ISREG(st.st_mode):
-            raise OutputError(f"{option} {given}: is {file_kind(st.st_mode)}, not a regular file; it is never "
-                              f"replaced (choose another {option})")
-        if not overwrite:
-            raise OutputError(f"{option} {given}: the file exists; pass --overwrite to replace it, or choose "
-                              f"another {option}")
-    return full
+        return int(os.pathconf(folder, "PC_NAME_MAX"))
+    except (OSError, ValueError, AttributeError):
+        return 255
+
+
+#: Bytes a staging name may add after ``.NAME.``: its tag (``partial-PID``, ``old-PID``) and, for a temporary
+#: file, the random part and ``.part``.
+_TAG_ROOM = 40
+
+
+def staging_name(name: str, tag: str, folder: Path | None = None) -> str:
+    """The hidden name ``.NAME.TAG`` of a staging file or folder beside ``NAME`` (``TAG`` up to 40 bytes with
+    what a temporary file adds). When NAME is too long for that (a legal 240-character NAME), it is cut and a
+    hash of the whole keeps the name unique; the cut does not depend on the tag, so every staging name of one
+    NAME starts alike."""
+    limit = _name_max(folder) if folder is not None else 255
+    raw = os.fsencode(name)
+    if len(raw) + 2 + _TAG_ROOM <= limit:
+        return f".{name}.{tag}"
+    digest = hashlib.sha256(raw).hexdigest()[:16]
+    room = max(limit - len(f".~{digest}.") - _TAG_ROOM, 1)
+    head = raw[:room].decode("utf-8", errors="ignore")
+    return f".{head}~{digest}.{tag}"

@@ -1,7 +1,7 @@
 """The time map of one release, t(w), as a piecewise Chebyshev series, and its inverse w(t).
 
 The energy solution (Eq. 9-10) gives time as an integral over the angle; after the substitution of
-:mod:`quickrelease._kernels` the integrand ``f(w) = dt/dw`` is smooth on ``w in [0, 1]`` (w = 1 at
+:mod:`quickrelease.device._kernels` the integrand ``f(w) = dt/dw`` is smooth on ``w in [0, 1]`` (w = 1 at
 release, w = 0 at the end of the motion) and ``t(w) = int_w^1 f(s) ds``. Interpolating f at Chebyshev
 points and integrating the series term by term gives t(w) to rounding error everywhere at once, so the
 state at any set of times costs a few Newton steps on a polynomial instead of a quadrature per time.

@@ -120,7 +120,7 @@ app = typer.Typer(
 
 def _version_callback(value: bool) -> None:
     if value:
-        from . import __version__
+        from ._version import __version__
 
         typer.echo(f"quickrelease {__version__}")
         raise typer.Exit()
@@ -181,7 +181,7 @@ def _guard(func: Callable[..., Any]) -> Callable[..., Any]:
 def _os_error_line(exc: OSError) -> str:
     """One line for an OSError that reached the command: a file named when the error names one, else the
     standard output (which is then closed, so that the exit does not try to write to it again)."""
-    from .runfolder import _reason, _short_path
+    from .io.runfolder import _reason, _short_path
 
     if exc.filename is not None:
         return f"{_short_path(exc.filename)}: {_reason(exc)}"
@@ -197,14 +197,14 @@ def _os_error_line(exc: OSError) -> str:
 
 
 def _device(path: Path | None):
-    from .device import load_device, preset
+    from .device.parameters import load_device, preset
 
     return preset("paper") if path is None else load_device(path)
 
 
 def _energy(device, force: str | None, energy: str | None, alpha0: float) -> tuple[float, float | None]:
     """E_S from --energy, or from --force by Eq. 2; returns (E_S, P or None)."""
-    from .statics import strain_energy
+    from .device.statics import strain_energy
     from .units import parse_quantity
 
     if (force is None) == (energy is None):
@@ -218,8 +218,8 @@ def _energy(device, force: str | None, energy: str | None, alpha0: float) -> tup
 def _check_case_optional(case) -> None:
     """The optional packages the case's record files need (``.parquet``: pyarrow, ...), checked before any
     work: one line, exit 2."""
-    from .distributed import check_optional
-    from .records import record_files
+    from .io.records import record_files
+    from .studies.distributed import check_optional
 
     building = getattr(case, "building", None)
     check_optional(files=record_files(case.record) + record_files(getattr(building, "record", None)))
@@ -267,7 +267,7 @@ def _progress_lines(what: str):
 def _print_json(data: dict[str, Any]) -> None:
     """One JSON object on stdout; NaN and infinities (a sweep whose every point is out of range) as null, so
     the output is valid JSON."""
-    from .export import jsonable
+    from .io.export import jsonable
 
     typer.echo(json.dumps(jsonable(data), indent=2, allow_nan=False))
 
@@ -288,11 +288,10 @@ def _table(title: str, rows: list[tuple[str, ...]], headers: tuple[str, ...]) ->
 def _check_output_files(targets, overwrite: bool) -> None:
     """Pre-flight of the files a command writes, ``(path or None, option)`` each: refused (one line) before any
     work when a path names a device node, FIFO or folder, or an existing file without --overwrite, or the
-    same file twice (:func:`quickrelease._files.check_output_file`)."""
+    same file twice (:func:`quickrelease.io.runfolder.check_output_file`)."""
     import os
 
-    from ._files import check_output_file
-    from .runfolder import OutputError
+    from .io.runfolder import OutputError, check_output_file
 
     seen: dict[str, str] = {}
     for path, option in targets:
@@ -323,7 +322,7 @@ def _case_with_flags(case_file: Path | None, device: Path | None, force: str | N
                      alpha0: str | None, mass_model: str | None, **extra: Any):
     """A Case from the file (if any) with the command-line flags applied on top."""
     from ._validate import check_angle
-    from .case import Case, load_case
+    from .io.case import Case, load_case
     from .units import parse_quantity
 
     case = load_case(case_file) if case_file is not None else None
@@ -377,7 +376,7 @@ def simulate(
     as_json: JsonOpt = False,
 ) -> None:
     """Simulate the release after the fuse breaks; print the stop time, final angle and peaks."""
-    from .solvers import simulate as run
+    from .device.solvers import simulate as run
     from .units import parse_quantity
 
     F1 = None if f1 is None else parse_quantity(f1, "force", "--f1")
@@ -390,7 +389,7 @@ def simulate(
         raise QuickReleaseError("friction is missing: give [friction] in the case file or --f1/--f2 "
                                 "(to identify or fit first, use 'quickrelease run')")
     if not case.has_friction and case.friction_case is not None:
-        from .identify import case_friction
+        from .studies.fit import case_friction
 
         F1_case, F2_case, _ = case_friction(case)
         case = case.replace(F1=F1_case, F2=F2_case)
@@ -403,8 +402,8 @@ def simulate(
                 _echo(f"note: {flag} not given: {name} = 0 N (frictionless)", err=True)
     summary = response.summary()
     if out is not None:
-        from .export import write_csv, write_json, write_netcdf
-        from .runfolder import provenance
+        from .io.export import write_csv, write_json, write_netcdf
+        from .io.runfolder import provenance
 
         prov = provenance(case)
         {".csv": lambda: write_csv(response, out), ".nc": lambda: write_netcdf(response, out, provenance=prov),
@@ -412,11 +411,11 @@ def simulate(
     if as_json:
         _print_json(summary if out is None else {**summary, "files": [str(out)]})
         return
-    from .response import STOP_REASONS
+    from .device.response import STOP_REASONS
 
     words = {"stopped_by": f"{response.stopped_by}: {STOP_REASONS[response.stopped_by]}",
              "stop_time_s": "inf (never arrives)"} if response.stopped_by == "creeps_to_limit" else {}
-    from .display import label, value_text
+    from .report.display import label, value_text
 
     _table("Release", [(label(k), words.get(k, value_text(k, v))) for k, v in summary.items()], ("quantity", "value"))
     if out is not None:
@@ -439,7 +438,7 @@ def identify(
     as_json: JsonOpt = False,
 ) -> None:
     """Identify the friction forces F1, F2 from a test (Eq. 11-13, Table 7)."""
-    from .identify import identify_friction
+    from .device.identify import identify_friction
     from .units import parse_quantity
 
     _one_file(out, (".json",), overwrite)
@@ -453,14 +452,14 @@ def identify(
                                device=case.device, mass_model=case.mass_model)
     summary = {**result.summary(), "push_force_N": case.push_force}  # the P that stored E_S, when given
     if out is not None:
-        from .export import write_json
-        from .runfolder import provenance
+        from .io.export import write_json
+        from .io.runfolder import provenance
 
         write_json(summary, out, provenance(case))
     if as_json:
         _print_json(summary if out is None else {**summary, "files": [str(out)]})
         return
-    from .display import quantity_rows
+    from .report.display import quantity_rows
 
     _table("Identified friction (Eq. 11-13)", quantity_rows(summary), ("quantity", "value"))
     if out is not None:
@@ -473,7 +472,7 @@ OverwriteOpt = Annotated[bool, typer.Option("--overwrite", help="Replace an outp
 
 def _written(paths: dict[str, Path], out: Path) -> list[Path]:
     """Every file a folder command wrote into ``out``: its results and the folder's ``manifest.json``."""
-    from .runfolder import MANIFEST
+    from .io.runfolder import MANIFEST
 
     files = list(paths.values())
     manifest = Path(out) / MANIFEST
@@ -494,7 +493,7 @@ def _one_file(out: Path | None, suffixes: tuple[str, ...], overwrite: bool) -> P
     file already there unless ``--overwrite``."""
     if out is None:
         return None
-    from .runfolder import check_target
+    from .io.runfolder import check_target
 
     if out.suffix.lower() not in suffixes:
         raise QuickReleaseError(f"--out {out}: expected a file name ending in {' or '.join(suffixes)}")
@@ -513,7 +512,7 @@ def run_command(
     as_json: JsonOpt = False,
 ) -> None:
     """Do what the case file asks (identify if observed, then simulate) and write all results into --out."""
-    from .case import load_case
+    from .io.case import load_case
     from .workflow import results_folder, run_case, write_results
 
     case = load_case(case_file)
@@ -530,7 +529,7 @@ def run_command(
         _print_json({"release": result.summary(), "identification": result.identification_summary(), **extra,
                      "files": files})
         return
-    from .display import label, quantity_rows, value_text
+    from .report.display import label, quantity_rows, value_text
 
     rows = quantity_rows(result.summary())
     if result.identification is not None:
@@ -570,7 +569,7 @@ def report(
     as_json: JsonOpt = False,
 ) -> None:
     """Write the self-contained HTML report of a case (figures embedded) as --out/report.html."""
-    from .case import load_case
+    from .io.case import load_case
     from .workflow import results_folder, run_case, write_results
 
     case = load_case(case_file)
@@ -601,9 +600,9 @@ def demo(
     from dataclasses import replace
     from importlib import resources
 
-    from .case import load_case
-    from .device import preset
-    from .paper import reproduce_table7
+    from .device.paper import reproduce_table7
+    from .device.parameters import preset
+    from .io.case import load_case
     from .workflow import results_folder, run_case, write_results
 
     mass_model = "distributed"
@@ -649,8 +648,8 @@ def uq(
     as_json: JsonOpt = False,
 ) -> None:
     """Uncertainty of the identified F1, F2 from the scatter of the observations (Monte Carlo)."""
-    from .case import load_case
-    from .uq import run_uq
+    from .io.case import load_case
+    from .studies.uq import run_uq
 
     _check_threads(threads, backend)
     case = load_case(case_file)
@@ -660,7 +659,7 @@ def uq(
     if as_json:
         _print_json(result.summary())
         return
-    from .display import key_for, number, quantity
+    from .report.display import key_for, number, quantity
 
     rows = [(key_for(k)[0], v) for k, v in result.inputs.items()]
     _table("Uncertain inputs", rows, ("input", "distribution"))
@@ -705,17 +704,17 @@ def sweep_command(
     as_json: JsonOpt = False,
 ) -> None:
     """Release envelope (t_F, alpha_F, u_F, v_F, peak velocities) over a grid of inputs."""
-    from .case import load_case
-    from .plots import save_figure
-    from .runfolder import provenance
-    from .sweep import heatmap_figure, parse_grid, sweep
+    from .io.case import load_case
+    from .io.runfolder import provenance
+    from .report.plots import save_figure
+    from .studies.sweep import heatmap_figure, parse_grid, sweep
 
     _check_threads(threads, backend)
     out = _file_option(file, out_old, "sweep")
     grids = _grids(grid, parse_grid)
     stem = out.name.rsplit(".", 1)[0] + "_heatmaps"
     if out.suffix in (".nc", ".zarr"):  # the figures beside it: companions of the file, checked alike
-        from .runfolder import check_target
+        from .io.runfolder import check_target
 
         check_target(out, "file" if out.suffix == ".nc" else "folder", "--out")
         _check_output_files(((out.parent / f"{stem}.{fmt}", "--out") for fmt in ("png", "svg")),
@@ -739,7 +738,7 @@ def sweep_command(
     if as_json:
         _print_json(summary)
         return
-    from .display import quantity_rows
+    from .report.display import quantity_rows
 
     rows = quantity_rows(summary, skip=("dims", "provenance", "figures"))
     rows.append(("figures", ", ".join(summary["figures"])))
@@ -772,9 +771,9 @@ def synth(
     import os
 
     out = _file_option(file, out_old, "synth")
-    from .case import load_case
-    from .export import write_text
-    from .synth import case_toml, parse_channel_values, predicted_errors, synthesize
+    from .io.case import load_case
+    from .io.export import write_text
+    from .studies.synth import case_toml, parse_channel_values, predicted_errors, synthesize
     from .units import parse_quantity
 
     _check_output_files(((out, "--out"), (case_out, "--case-out")), overwrite)
@@ -803,7 +802,7 @@ def synth(
     if as_json:
         _print_json(summary)
         return
-    from .display import key_for, quantity
+    from .report.display import key_for, quantity
 
     t = syn.truth
     _echo(f"Wrote {out} ({syn.t.size} rows at {syn.rate:g} Hz, channels {', '.join(names)}); friction "
@@ -832,9 +831,9 @@ def _synth_building(case, channels: str | None, rate: str | None, noise: list[st
     import math
     import os
 
-    from .building_case import BUILDING_CHANNELS
-    from .export import write_text
-    from .synth import building_case_toml, parse_channel_values, predicted_building_errors, synthesize_building
+    from .io.building_case import BUILDING_CHANNELS
+    from .io.export import write_text
+    from .studies.synth import building_case_toml, parse_channel_values, predicted_building_errors, synthesize_building
     from .units import parse_quantity
 
     if case.building is None:
@@ -860,7 +859,7 @@ def _synth_building(case, channels: str | None, rate: str | None, noise: list[st
     if as_json:
         _print_json(summary)
         return
-    from .display import key_for, quantity, split_key
+    from .report.display import key_for, quantity, split_key
 
     t = syn.truth
     stop = "still moving at the end" if t["stop_time_s"] is None else f"sticks {quantity(t['stop_time_s'], 's')} later"
@@ -895,8 +894,8 @@ def fit_command(
     as_json: JsonOpt = False,
 ) -> None:
     """Fit F1 and F2 (with 95% intervals) to a measured record by weighted least squares."""
-    from .case import load_case
-    from .fit import fit_record
+    from .io.case import load_case
+    from .studies.fit import fit_record
 
     case = load_case(case_file)
     _check_case_optional(case)
@@ -910,15 +909,15 @@ def fit_command(
             fit = result.fit
             paths = write_results(result, out, overwrite=overwrite) if out is not None else {}
     else:
-        from .runfolder import RunFolder, case_inputs
+        from .io.runfolder import RunFolder, case_inputs
 
         folder = RunFolder(out, "fit", {"case": case_inputs(case)}, overwrite=overwrite) if out is not None else None
         with _busy("fitting the record"):
             fit = fit_record(case)
         paths = {}
         if folder is not None:
-            from .export import write_json
-            from .runfolder import provenance
+            from .io.export import write_json
+            from .io.runfolder import provenance
 
             with folder.staged() as work:
                 paths = {"fit": folder.final(write_json(fit.summary(), work / "fit.json", provenance(case)))}
@@ -926,8 +925,8 @@ def fit_command(
     if as_json:
         _print_json(summary)
         return
-    from .display import estimate_row, quantity
-    from .records import CHANNELS
+    from .io.records import CHANNELS
+    from .report.display import estimate_row, quantity
 
     units = {f"offset_{n}": unit for n, (_, unit, _) in CHANNELS.items()}
     rows = [estimate_row(name, fit.estimates[name], fit.std_errors[name], fit.ci95[name], units.get(name))
@@ -961,9 +960,9 @@ def building_command(
     as_json: JsonOpt = False,
 ) -> None:
     """Identify the building's isolation system (period or k1/k2/F_y, damping, friction) from its free vibration."""
-    from .building_analysis import MODELS, analyse_building
-    from .building_case import load_building
-    from .case import load_case
+    from .io.building_case import load_building
+    from .io.case import load_case
+    from .studies.building_analysis import MODELS, analyse_building
 
     if model is not None and model not in MODELS:
         raise ParameterError("--model", model, ", ".join(MODELS))
@@ -996,8 +995,8 @@ def building_command(
 
 def _building_tables(result, summary: dict[str, Any], title: str) -> None:
     """The building's estimates, channels, comparison and decay cross-check as tables; notes and warnings."""
-    from .building import RECORD_CHANNELS
-    from .display import estimate_row, key_for, number, quantity, split_key
+    from .building.model import RECORD_CHANNELS
+    from .report.display import estimate_row, key_for, number, quantity, split_key
 
     fit = result.fit
     rows = []
@@ -1049,7 +1048,7 @@ def campaign(
 ) -> None:
     """Friction of every test of a campaign, and its laws in the load and the angle (F = a + b x); or, for a
     campaign file with [building], the isolation system of every release and its laws in the amplitude."""
-    from .campaign import VARIABLES, run_campaign
+    from .studies.campaign import VARIABLES, run_campaign
     from .workflow import campaign_folder, write_campaign_results
 
     if out is not None:
@@ -1068,7 +1067,7 @@ def campaign(
             _listing(paths, out)
         return
 
-    from .display import number, plus_minus, quantity
+    from .report.display import number, plus_minus, quantity
 
     _table(f"{result.title}: friction per test", [
         (t.name, quantity(t.case.push_force, "N"), quantity(t.case.alpha0, "rad"), plus_minus(t.F1, t.F1_se, "N"),
@@ -1095,8 +1094,8 @@ def campaign(
 
 def _building_campaign_tables(result) -> None:
     """The tables of a building campaign: each release's estimates, then the laws in the amplitude."""
-    from .building_campaign import BUILDING_VARIABLES, QUANTITIES
-    from .display import number, plus_minus
+    from .report.display import number, plus_minus
+    from .studies.building_campaign import BUILDING_VARIABLES, QUANTITIES
 
     qs = result.columns  # the quantities with laws, then those reported per release (2dof: T_s, zeta_s)
     rows = []
@@ -1138,7 +1137,7 @@ def plan(
     as_json: JsonOpt = False,
 ) -> None:
     """Plan a test: fuse and angle, member checks, release envelope, clearance with the building."""
-    from .case import load_case
+    from .io.case import load_case
     from .workflow import results_folder, run_case, write_results
 
     _check_threads(threads)
@@ -1153,7 +1152,7 @@ def plan(
     if as_json:
         _print_json(summary)
         return
-    from .display import number, plus_minus, quantity
+    from .report.display import number, plus_minus, quantity
 
     _echo(f"{result.case.title}: P = {quantity(plan_result.push_force, 'N')} at alpha0 = "
           f"{quantity(plan_result.alpha0, 'rad')}, E_S = {quantity(plan_result.stored_energy, 'J')}")
@@ -1173,10 +1172,10 @@ def plan(
          "-" if c.capacity is None else number(c.capacity / (1e6 if c.unit == 'Pa' else 1e3), 4),
          "MPa" if c.unit == "Pa" else "kN", "skipped" if c.utilisation is None else f"{c.utilisation:.3f}")
         for c in m.checks], ("member", "check", "demand", "capacity", "unit", "utilisation"))
-    from .planning import ENVELOPE_QUANTITIES
+    from .studies.planning import ENVELOPE_QUANTITIES
 
     env = plan_result.envelope
-    from .display import unit_text
+    from .report.display import unit_text
 
     _table(f"Release envelope: {env.friction} ({env.samples:,} sample(s))", [
         (label, unit_text(unit), number(env.nominal[k], 4), number(env.ranges[k]["p5"], 4),
@@ -1210,13 +1209,13 @@ def bench(
     as_json: JsonOpt = False,
 ) -> None:
     """Benchmarks on the bench and the wide sample: kernel throughput on one core and on all, vs scipy (same run), accuracy vs mpmath (the error, and the backward error in input ulps: the error over the case's 1-ulp condition number), and whether the targets are met (speed per core; accuracy: median <= 1e-12, every case <= max(1e-10, 4 x its 1-ulp condition number))."""
-    from .bench import run_bench
+    from .studies.bench import run_bench
 
     _check_threads(threads)
     _one_file(out, (".json",), overwrite)
     result = run_bench(quick=quick, threads=threads, log=lambda line: _echo(line, err=True))
     if out is not None:
-        from .export import write_json
+        from .io.export import write_json
 
         write_json(result, out)
     if as_json:

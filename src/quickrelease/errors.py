@@ -14,6 +14,8 @@ __all__ = [
     "DeviceFileError",
     "UnitError",
     "InfeasibleObservationError",
+    "OutputError",
+    "CaseFileError",
 ]
 
 
@@ -77,3 +79,11 @@ class InfeasibleObservationError(QuickReleaseError):
             f"t_F = {stop_time:.6g} s is outside the feasible interval "
             f"[t_F(F1 = 0), t_F(F1 = F1*)] = [{lo:.6g}, {hi:.6g}] s"
         )
+
+
+class OutputError(QuickReleaseError):
+    """An output path cannot take the result, or a folder holds something the run must not mix with."""
+
+
+class CaseFileError(QuickReleaseError):
+    """A case file is malformed or one of its entries is missing, unknown or invalid."""

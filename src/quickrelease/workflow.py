@@ -14,36 +14,19 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from ._results import Summarised
 from ._threads import check_threads
-from .case import Case
-from .display import Summarised
-from .fit import FitResult, fit_record
-from .identify import Identification, case_friction, identify_friction
-from .planning import PlanResult, plan_case, plan_figures
-from .response import Response
-from .solvers import simulate
-from .statics import StrainEnergy
+from .device.identify import Identification, identify_friction
+from .device.response import Response
+from .device.solvers import simulate
+from .device.statics import StrainEnergy
+from .io.case import Case
+from .report.html import FIGURES
+from .studies.fit import FitResult, case_friction, fit_record
+from .studies.planning import PlanResult, plan_case, plan_figures
 
 __all__ = ["CaseResult", "run_case", "write_results", "write_campaign_results", "render_figures", "FIGURES",
            "results_folder", "campaign_folder", "building_folder", "write_building_results", "identified_building"]
-
-#: Figure stems and what they show.
-FIGURES = {
-    "fig13_response": "Fig. 13: position angle, angular velocity, angular acceleration, energy balance",
-    "fig14_displacements": "Fig. 14: longitudinal and transverse displacements and velocities",
-    "fig15_state_diagram": "Fig. 15: state diagram, numerical solutions over the analytic curve (Eq. 10)",
-    "identification": "Stop time along the line of Eq. 13, with the measured t_F and the identified point",
-    "strain_energy": "Strain energy stored before release by term (Eq. 2)",
-    "fit_channels": "Fit to the measured record: each channel measured and fitted, with its residuals",
-    "plan_choices": "Fuse and angle choices: push force at rupture (Eq. 1), the target range outlined",
-    "plan_utilisation": "Member checks at the planned push (Table 3's internal forces)",
-    "plan_envelope": "Release envelope over the friction estimate: stroke, opening, time to stop, peak head velocity",
-    "plan_gap": "Clearance: head retraction, the building's approach and the gap between them",
-    "building_fit": "Building record and fitted isolation model, each channel with its residuals",
-    "building_decay": "Decay envelope with the Coulomb, viscous and combined decay laws",
-    "building_amplitude": "Equivalent period and damping ratio of the building against the amplitude",
-    "building_hysteresis": "Hysteresis loop of the isolators: -m a against the displacement",
-}
 
 
 @dataclass(frozen=True, repr=False)
@@ -64,10 +47,10 @@ class CaseResult(Summarised):
     plan: PlanResult | None = None
     """The test plan (when the case has ``[fuse]`` or ``[building]``, or it was asked for)."""
     building: Any = None
-    """The building's analysis (:class:`~quickrelease.building_analysis.BuildingResult`), when the case has a
+    """The building's analysis (:class:`~quickrelease.studies.building_analysis.BuildingResult`), when the case has a
     ``[building.record]``."""
     paper: Any = None
-    """The Table 7 comparison (:class:`~quickrelease.paper.PaperComparison`), for the paper's case (``demo``):
+    """The Table 7 comparison (:class:`~quickrelease.device.paper.PaperComparison`), for the paper's case (``demo``):
     the report shows it, ``table7.json`` holds it."""
 
     def summary(self) -> dict[str, Any]:
@@ -87,7 +70,7 @@ def run_case(case: Case, *, state_diagram: bool = True, plan: bool | None = None
 
     With a ``[record]``, the fitted friction (and E_S, c when estimated) drives the simulation; else with
     observations, the identified friction; a ``[friction]`` table, if also present, is then only
-    reported in the inputs. The test plan (:func:`quickrelease.planning.plan_case`) is made when ``plan``
+    reported in the inputs. The test plan (:func:`quickrelease.studies.planning.plan_case`) is made when ``plan``
     is true, or by default when the case has a ``[fuse]`` or ``[building]`` table. ``threads``: threads of the
     plan's release envelope (1 to ``numba.config.NUMBA_NUM_THREADS``; default all cores), checked first.
     """
@@ -114,8 +97,8 @@ def run_case(case: Case, *, state_diagram: bool = True, plan: bool | None = None
                       simulate(E_S, case.alpha0, F1, F2, method="explicit", dt=case.dt, **common))
     building = None
     if _has_building_record(case):
-        from .building_analysis import analyse_building
-        from .building_case import load_building
+        from .io.building_case import load_building
+        from .studies.building_analysis import analyse_building
 
         building = analyse_building(load_building(case))
     plan = _wants_plan(case, plan)
@@ -187,7 +170,7 @@ def clearance_words(values: dict[str, Any], std_errors: dict[str, float]) -> str
     damping ratio zeta = 0.050009, slider friction F_s = 156.881 kN, mass = 800 t, pushed displacement d0 =
     182.496 mm``; a fitted value rounded where its standard error shows two digits, another to 5 significant
     digits."""
-    from .display import number, same_places
+    from .report.display import number, same_places
 
     parts = []
     for key, (name, param, unit, scale) in _NOTE_VALUES.items():
@@ -208,9 +191,9 @@ def _wants_plan(case: Case, plan: bool | None) -> bool:
 
 def results_folder(case: Case, out: str | Path, *, plan: bool | None = None, figures: bool = True,
                    report: bool = True, data: bool = True, overwrite: bool = False):
-    """The :class:`~quickrelease.runfolder.RunFolder` that :func:`write_results` writes a case's results
+    """The :class:`~quickrelease.io.runfolder.RunFolder` that :func:`write_results` writes a case's results
     through; making it checks ``out`` before the work (pre-flight) and writes nothing."""
-    from .runfolder import RunFolder, case_inputs
+    from .io.runfolder import RunFolder, case_inputs
 
     inputs = {"case": case_inputs(case), "plan": _wants_plan(case, plan), "figures": figures, "report": report,
               "data": data}
@@ -219,7 +202,7 @@ def results_folder(case: Case, out: str | Path, *, plan: bool | None = None, fig
 
 def render_figures(result: CaseResult) -> dict[str, Any]:
     """The figures of a case result as matplotlib Figures, keyed by the stems of :data:`FIGURES`."""
-    from . import plots
+    from .report import plots
 
     figs: dict[str, Any] = {
         "fig13_response": plots.fig13(result.response),
@@ -235,7 +218,7 @@ def render_figures(result: CaseResult) -> dict[str, Any]:
     if result.plan is not None:
         figs.update(plan_figures(result.plan))
     if result.building is not None:
-        from .building_plots import building_figures
+        from .report.building_plots import building_figures
 
         figs.update(building_figures(result.building))
     return figs
@@ -244,7 +227,7 @@ def render_figures(result: CaseResult) -> dict[str, Any]:
 def _svg_text(fig: Any) -> str:
     import matplotlib
 
-    from ._style import STYLE
+    from .report._style import STYLE
 
     buf = io.StringIO()
     with matplotlib.rc_context(STYLE):  # the svg settings (text as text, stable ids) are read at save time
@@ -285,7 +268,7 @@ def write_results(result: CaseResult, out: str | Path, *, figures: bool = True, 
     --json`` keys, when identified), ``timeseries.csv`` and ``timeseries.nc`` (the time histories),
     ``figures/<stem>.png`` and ``.svg`` for each figure, the self-contained ``report.html``, and
     ``manifest.json`` (the fingerprint of the inputs). The whole folder is written beside ``out`` and moved
-    into place at the end (:class:`~quickrelease.runfolder.RunFolder`): a failure leaves the previous
+    into place at the end (:class:`~quickrelease.io.runfolder.RunFolder`): a failure leaves the previous
     result; a folder holding another run's results is refused unless ``overwrite``, and then replaced.
     """
     folder = results_folder(result.case, out, plan=result.plan is not None, figures=figures, report=report,
@@ -297,8 +280,8 @@ def write_results(result: CaseResult, out: str | Path, *, figures: bool = True, 
 
 def _write_results_into(result: CaseResult, out: Path, *, figures: bool, report: bool,
                         data: bool) -> dict[str, Path]:
-    from .export import write_csv, write_json, write_netcdf, write_text
-    from .runfolder import provenance
+    from .io.export import write_csv, write_json, write_netcdf, write_text
+    from .io.runfolder import provenance
 
     paths: dict[str, Path] = {}
     prov = provenance(result.case)
@@ -320,7 +303,7 @@ def _write_results_into(result: CaseResult, out: Path, *, figures: bool, report:
                                               attrs={"case": result.case.title}, provenance=prov)
     svgs: dict[str, str] = {}
     if figures or report:
-        from .export import atomic_path
+        from .io.export import atomic_path
 
         figs = render_figures(result)
         pngs = {stem: out / "figures" / f"{stem}.png" for stem in figs} if figures else {}
@@ -328,7 +311,7 @@ def _write_results_into(result: CaseResult, out: Path, *, figures: bool, report:
         def write_pngs() -> None:
             import matplotlib
 
-            from ._style import STYLE
+            from .report._style import STYLE
 
             for stem, path in pngs.items():
                 with atomic_path(path) as tmp, matplotlib.rc_context(STYLE):
@@ -343,7 +326,7 @@ def _write_results_into(result: CaseResult, out: Path, *, figures: bool, report:
             write_pngs()  # no second core, no fork, or the child failed: do it here
         paths.update({f"{stem}.png": path for stem, path in pngs.items()})
     if report:
-        from .report import render_report
+        from .report.html import render_report
 
         paths["report"] = write_text(render_report(result, svgs), out / "report.html")
     return paths
@@ -351,12 +334,12 @@ def _write_results_into(result: CaseResult, out: Path, *, figures: bool, report:
 
 def building_folder(result_or_data, out: str | Path, *, model: str | None = None, compare: bool = False,
                     overwrite: bool = False):
-    """The :class:`~quickrelease.runfolder.RunFolder` of ``quickrelease building`` (pre-flight: writes nothing).
+    """The :class:`~quickrelease.io.runfolder.RunFolder` of ``quickrelease building`` (pre-flight: writes nothing).
 
     The fingerprint holds what the analysis depends on: the channels (their samples by SHA-256, not the
     record's path), the mass, the model, the start values and the release time given, and ``compare``.
     """
-    from .runfolder import RunFolder
+    from .io.runfolder import RunFolder
 
     data = result_or_data
     inputs = {"channels": list(data.channels), "mass": data.mass, "model": model or data.model,
@@ -369,16 +352,16 @@ def write_building_results(result, data, out: str | Path, *, model: str | None =
                            origin: Any = None) -> dict[str, Path]:
     """Write ``quickrelease building``'s results into ``out``: ``summary.json`` (the ``--json`` keys), the
     record, the fitted model and the residuals as a time series (``timeseries.csv``, ``timeseries.nc`` on the
-    time coordinate ``t``: :func:`quickrelease.frames.fit_columns`), the building figures
+    time coordinate ``t``: :func:`quickrelease.io.frames.fit_columns`), the building figures
     (``figures/<stem>.png``/``.svg``), ``report.html`` and ``manifest.json``, staged and moved into place as
     :func:`write_results` does; returns the paths by name. ``origin`` (the case) is what the files' provenance
-    names (:func:`~quickrelease.runfolder.provenance`; by default the record)."""
-    from .building_plots import building_figures
-    from .export import write_columns, write_dataset, write_json, write_text
-    from .frames import fit_columns, fit_dataset
-    from .plots import save_figure
-    from .report import render_building_report
-    from .runfolder import provenance
+    names (:func:`~quickrelease.io.runfolder.provenance`; by default the record)."""
+    from .io.export import write_columns, write_dataset, write_json, write_text
+    from .io.frames import fit_columns, fit_dataset
+    from .io.runfolder import provenance
+    from .report.building_plots import building_figures
+    from .report.html import render_building_report
+    from .report.plots import save_figure
 
     prov = provenance(origin if origin is not None else result.source)
     folder = building_folder(data, out, model=model, compare=compare, overwrite=overwrite)
@@ -397,13 +380,13 @@ def write_building_results(result, data, out: str | Path, *, model: str | None =
 
 
 def campaign_folder(campaign_file: str | Path, out: str | Path, *, overwrite: bool = False):
-    """The :class:`~quickrelease.runfolder.RunFolder` of a campaign's results (pre-flight: writes nothing).
+    """The :class:`~quickrelease.io.runfolder.RunFolder` of a campaign's results (pre-flight: writes nothing).
 
     Its inputs are the campaign file and every file its tests name (``record``, ``case``) by their SHA-256:
     an edited record is another run."""
     import tomllib
 
-    from .runfolder import RunFolder, _file_digest
+    from .io.runfolder import RunFolder, _file_digest
 
     path = Path(campaign_file)
     files = {}
@@ -425,16 +408,16 @@ def write_campaign_results(result, out: str | Path, *, overwrite: bool = False) 
     """Write a campaign's results into ``out``: ``campaign.json``, ``figures/campaign_friction.png``/``.svg``
     (a building campaign: ``figures/campaign_building``) and the self-contained ``report.html`` (staged and
     moved into place as :func:`write_results` does); returns the paths by name."""
-    from .export import write_json, write_text
-    from .plots import save_figure
-    from .report import render_campaign_report
-    from .runfolder import provenance
+    from .io.export import write_json, write_text
+    from .io.runfolder import provenance
+    from .report.html import render_campaign_report
+    from .report.plots import save_figure
 
     if getattr(result, "kind", "device") == "building":
-        from .building_campaign import building_campaign_figure as figure
+        from .studies.building_campaign import building_campaign_figure as figure
         stem = "campaign_building"
     else:
-        from .campaign import campaign_figure as figure
+        from .studies.campaign import campaign_figure as figure
         stem = "campaign_friction"
     folder = campaign_folder(result.source, out, overwrite=overwrite)
     with folder.staged() as work:

@@ -1,0 +1,33 @@
+"""The building: the isolated building on its isolation layer, its free vibration, and its identification.
+
+Modules, one question each:
+
+- :mod:`~quickrelease.building.model`: the isolation models (linear, bilinear, two degrees of freedom) and
+  their event-exact free vibration from the pushed state (``Isolation``, ``TwoDOF``, ``FreeVibration``,
+  ``TwoDOFVibration``, ``free_vibration``, ``free_vibration_2dof``, ``pushed_state``, ``MODELS``,
+  ``RECORD_CHANNELS``);
+- :mod:`~quickrelease.building.decay`: the decay of the free vibration (turning points, decrement laws,
+  hysteresis loop; ``analyse_decay``);
+- :mod:`~quickrelease.building.isolation_fit`: the isolation system fitted to records (``fit_isolation``,
+  ``compare_models``, ``IsolationFit``, ``BuildingChannel``); ``isolation_search``: its global start search.
+
+The building's physics imports no files, tables, figures, studies or command line (the import-linter contract
+in ``pyproject.toml``). The package re-exports :mod:`~quickrelease.building.model`.
+"""
+
+from __future__ import annotations
+
+from .model import (
+    MODELS,
+    RECORD_CHANNELS,
+    FreeVibration,
+    Isolation,
+    TwoDOF,
+    TwoDOFVibration,
+    free_vibration,
+    free_vibration_2dof,
+    pushed_state,
+)
+
+__all__ = ["Isolation", "FreeVibration", "free_vibration", "pushed_state", "MODELS", "TwoDOF", "TwoDOFVibration",
+           "free_vibration_2dof", "RECORD_CHANNELS"]

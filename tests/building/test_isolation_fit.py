@@ -1,0 +1,111 @@
+"""The isolation-system fit (isolation_fit.py) on records made by an independent simulation (solve_ivp with
+events, tests/building_reference.py): displacement and acceleration channels on their own time axes, with
+sensor zeros, noise, a pre-release segment and an unknown release instant."""
+
+import math
+
+import numpy as np
+import pytest
+from building_reference import reference
+
+from quickrelease.building.isolation_fit import BuildingChannel, compare_models, decay_check, fit_isolation, ljung_box
+from quickrelease.errors import ParameterError
+
+M = 4.0e5
+
+
+def _record(k1, k2, fp, c, Fs, d0, seed, t_release=0.731, duration=12.0):
+    rng = np.random.default_rng(seed)
+    tx = np.arange(-2.0, duration, 1 / 100)  # LVDT at 100 Hz
+    ta = np.arange(-2.0, duration, 1 / 200) + 0.0013  # accelerometer at 200 Hz on its own clock
+    x = reference(M, k1, k2, fp, c, Fs, d0, tx - t_release)[0]
+    a = reference(M, k1, k2, fp, c, Fs, d0, ta - t_release, with_rates=True)[0][2]
+    return [BuildingChannel("lvdt", "x", tx, x + 0.004 + rng.normal(0, 2e-4, x.size)),
+            BuildingChannel("acc", "a", ta, a + 0.01 + rng.normal(0, 0.02, a.size))]
+
+
+def _within(fit, truth, z=4.0):
+    for name, value in truth.items():
+        assert abs(fit.estimates[name] - value) < z * fit.std_errors[name], (name, fit.estimates[name], value,
+                                                                             fit.std_errors[name])
+
+
+def test_linear_isolation_recovered_with_calibrated_errors():
+    """Six records: every estimate within 4.5 standard errors, and the pooled z-scores of the 42 estimates
+    have an RMS near 1 (a chi-square with 42 degrees of freedom: RMS in [0.7, 1.35] with probability above
+    0.99), so standard errors twice or half their size are caught."""
+    T, zeta, Fs, d0 = 2.0, 0.04, 1.2e4, 0.15
+    k = M * (2 * math.pi / T) ** 2
+    truth = {"period": T, "damping_ratio": zeta, "friction": Fs, "d0": d0, "release_time": 0.731,
+             "offset_lvdt": 0.004, "offset_acc": 0.01}
+    z = []
+    for seed in range(1, 7):
+        channels = _record(k, k, math.inf, 2 * zeta * math.sqrt(k * M), Fs, d0, seed, duration=9.0)
+        fit = fit_isolation(channels, M, "linear")
+        assert fit.noise_source == {"lvdt": "pre-release segment", "acc": "pre-release segment"}
+        assert 0.8 < fit.chi2_reduced < 1.25 and not fit.warnings
+        _within(fit, truth, 4.5)
+        z += [(fit.estimates[n] - v) / fit.std_errors[n] for n, v in truth.items()]
+        lo, hi = fit.ci95["friction"]
+        assert lo < fit.estimates["friction"] < hi and fit.interval_method["friction"] == "jacobian"
+        if seed == 1:  # the model-free decay agrees with the fit (the combined law is exact for this model)
+            check = decay_check(fit)
+            assert [r["parameter"] for r in check["rows"]] == ["period", "damping_ratio", "friction"]
+            assert all(abs(r["difference_in_se"]) < 10 for r in check["rows"]), check["rows"]
+            assert abs(check["rows"][0]["decay"] - T) < 0.01 * T
+    rms = float(np.sqrt(np.mean(np.square(z))))
+    assert 0.7 < rms < 1.35, rms
+    assert fit.isolation().period == pytest.approx(fit.estimates["period"], rel=1e-12)
+
+
+def test_no_friction_gives_a_profile_interval_from_zero():
+    """F_s = 0 sits at its bound: the interval is the profile likelihood's, from 0 to a finite upper end."""
+    T, zeta, d0 = 2.0, 0.05, 0.15
+    k = M * (2 * math.pi / T) ** 2
+    channels = _record(k, k, math.inf, 2 * zeta * math.sqrt(k * M), 0.0, d0, 3, duration=8.0)
+    fit = fit_isolation(channels, M, "linear", fixed={"release_time": 0.731})
+    assert fit.interval_method["friction"] == "profile"
+    lo, hi = fit.ci95["friction"]
+    assert lo == 0.0 and 0.0 < hi < 0.01 * k * d0
+    _within(fit, {"period": T, "damping_ratio": zeta})
+
+
+def test_bilinear_from_design_values_and_model_choice():
+    k1, k2, Fy, zeta, Fs, d0 = 4.0e7, 4.0e6, 8.0e4, 0.03, 8.0e3, 0.2
+    T1 = 2 * math.pi * math.sqrt(M / k1)
+    channels = _record(k1, k2, Fy * (1 - k2 / k1), 2 * zeta * math.sqrt(k1 * M), Fs, d0, 3, duration=10.0)
+    design = {"period": 1.15 * T1, "damping_ratio": 0.05, "friction": 0.7 * Fs, "stiffness_ratio": 0.13,
+              "yield_force": 0.8 * Fy}
+    bilinear = fit_isolation(channels, M, "bilinear", start=design, profile=False)
+    _within(bilinear, {"period": T1, "damping_ratio": zeta, "friction": Fs, "stiffness_ratio": k2 / k1,
+                       "yield_force": Fy, "d0": d0})
+    linear = fit_isolation(channels, M, "linear", profile=False)
+    table = compare_models([linear, bilinear])
+    assert table[0]["model"] == "bilinear" and table[1]["delta_bic"] > 100
+    assert any("does not support" in w for w in linear.warnings)
+    assert "no decay law" in decay_check(bilinear)["notes"][0]
+
+
+def test_ljung_box_white_and_coloured():
+    rng = np.random.default_rng(0)
+    white = rng.normal(size=4000)
+    coloured = np.convolve(white, np.ones(5) / 5, mode="same")
+    assert ljung_box(white) > 0.01
+    assert ljung_box(coloured) < 1e-10
+
+
+def test_bad_input():
+    t = np.linspace(0, 1, 50)
+    with pytest.raises(ParameterError, match="kind"):
+        BuildingChannel("x", "displacement", t, t)
+    with pytest.raises(ParameterError, match="noise"):
+        BuildingChannel("x", "x", t, t, noise=-1.0)
+    with pytest.raises(ParameterError, match="finite"):
+        BuildingChannel("x", "x", t, np.where(t > 0.5, np.inf, 0.0))
+    ch = BuildingChannel("x", "x", t, np.cos(t))
+    with pytest.raises(ParameterError, match="model"):
+        fit_isolation([ch], M, "trilinear")
+    with pytest.raises(ParameterError, match="mass"):
+        fit_isolation([ch], float("nan"))
+    with pytest.raises(ParameterError, match="fixed"):
+        fit_isolation([ch], M, fixed={"stiffness": 1.0}, release_time=0.5)
