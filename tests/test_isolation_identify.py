@@ -51,6 +51,7 @@ def _never_yielding():
                                 start={"stiffness_ratio": 0.5, "yield_force": 10.0 * K * D0})
 
 
+@pytest.mark.slow
 def test_a_record_that_never_yields_has_many_equal_minima():
     """A linear record fitted with the bilinear model: springs that never yield, and springs that yield at any
     force up to the largest reached, describe it alike. The fit's certificate must say so: minima within delta

@@ -35,6 +35,8 @@ from quickrelease import _kernels, batch
 from quickrelease.reference import stop_time_mp
 from quickrelease.sampling import random_releases
 
+pytestmark = pytest.mark.slow  # the default run skips it; `-m slow` or CI runs it
+
 KEYS = ("E_S", "alpha0", "F1", "F2", "c", "m1", "m2", "L1")
 BOUND = 1e-12
 
@@ -98,6 +100,7 @@ def bench_sample():
             "err": np.abs(got.stop_time / ref - 1.0)}
 
 
+@pytest.mark.slow
 def test_every_tier_within_its_bound_on_100k_bench_cases(bench_sample):
     s = bench_sample
     got, err, tier = s["got"], s["err"], s["tier"]

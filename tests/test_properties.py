@@ -11,12 +11,15 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 import quickrelease as qr
 from quickrelease import batch, dynamics
 from quickrelease._kernels import feasible_slack
+
+pytestmark = pytest.mark.slow  # the default run skips it; `-m slow` or CI runs it
 
 PAPER = qr.preset("paper")
 HALF_PI = 0.5 * math.pi
