@@ -207,6 +207,7 @@ def test_bilinear_that_never_yields_is_named_in_a_warning(yield_force, warned):
         assert warnings[0].startswith("yield_force:") and "never yields" in warnings[0] and "k2" in warnings[0]
 
 
+@pytest.mark.slow
 def test_whole_test_run_uses_the_identified_building_for_the_clearance(tmp_path):
     """A case with the device part and a building record: run identifies the building, and the clearance
     check uses it (period 2 s, d0 = 0.15 m from the record, not the assumed 2.3 s and 0.17 m), saying so."""

@@ -218,6 +218,7 @@ FULL_DISK_COMMANDS = {
 FILES_WRITTEN = {"run": 8, "uq": 3, "sweep-nc": 3, "synth": 2}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("command", list(FULL_DISK_COMMANDS))
 @pytest.mark.parametrize("draw", range(3))
 def test_a_full_disk_at_a_seeded_write_leaves_the_whole_result_or_nothing(tmp_path, monkeypatch, command, draw):

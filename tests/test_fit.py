@@ -438,6 +438,7 @@ def test_fit_example_json_keys_and_truth():
     assert data["release_time_s"] == pytest.approx(0.62, abs=2e-4)
 
 
+@pytest.mark.slow
 def test_synth_then_fit_on_the_command_line(tmp_path):
     rec, case = tmp_path / "rec.csv", tmp_path / "fit_case.toml"
     result = runner.invoke(app, ["synth", str(EXAMPLES / "paper.toml"), "--channels", "u,v", "--rate", "200 Hz",

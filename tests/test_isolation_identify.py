@@ -97,6 +97,7 @@ def test_tables_and_report_say_not_identified(capsys):
     assert html.count("not identified") >= 2  # the engineering table and the table of every parameter
 
 
+@pytest.mark.slow
 def test_device_fit_writes_a_parameter_it_cannot_see_as_null(monkeypatch):
     """The device's record fit (fit.py) takes the same covariance: a parameter marked unidentified (here the last
     offset, by a wrapper) gets SE inf, a warning, null in ``fit --json`` (written with allow_nan=False) and

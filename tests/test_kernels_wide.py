@@ -47,6 +47,7 @@ def _picks(cases, per_class: int) -> np.ndarray:
     return np.concatenate(out)
 
 
+@pytest.mark.slow
 def test_every_tier_against_mpmath(wide):
     sub = _take(wide, _picks(wide, 3))
     got = batch.stop_time(*(sub[key] for key in KEYS))
