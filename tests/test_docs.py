@@ -174,6 +174,7 @@ def test_a_gallery_script_outside_a_clone_says_what_it_needs(script, tmp_path, m
     assert found["EXAMPLES"] == ROOT / "examples"
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not os.environ.get("QUICKRELEASE_SLOW"), reason="runs every documented command: slow")
 @pytest.mark.parametrize("where, line", [(w, c) for w, c, full in COMMAND_LINES if full])
 def test_documented_command_runs(where, line, tmp_path):

@@ -354,6 +354,7 @@ def test_building_report_tables_scale_values_and_standard_errors_to_their_units(
 
 # -- 18. run --json: the files it lists are the files it wrote ---------------------------------------------------
 
+@pytest.mark.slow
 def test_run_json_lists_the_files_written_and_they_exist(tmp_path):
     from typer.testing import CliRunner
 

@@ -25,6 +25,7 @@ def _rk(cases, i, F1=None, F2=None):
                     cases["F2"][i] if F2 is None else F2, device=dev, mass_model=cases["c"][i], method="rk")
 
 
+@pytest.mark.slow
 def test_agrees_with_rk_on_200_of_10000_cases(cases):
     """t_F, alpha_F and the stop's kind against the rk solver on every 50th case (41 of them reach pi/2); the
     rk tolerances put its t_F within ~4e-10 of the truth (mpmath below checks the kernels to 1e-12)."""

@@ -269,6 +269,7 @@ def wide():
     return cases
 
 
+@pytest.mark.slow
 def test_stop_time_against_mpmath_every_tier(wide):
     pick = _picks(wide, 50 if SLOW else 3)
     sub = {key: v[pick] for key, v in wide.items()}
@@ -283,6 +284,7 @@ def test_stop_time_against_mpmath_every_tier(wide):
         assert abs(aF[i] - ref_aF) <= 4.0 * EPS * ref_aF + 1e-13 * (ref_aF - args[1]), i
 
 
+@pytest.mark.slow
 def test_identification_against_mpmath(wide):
     cpu = batch.stop_time(*(wide[key] for key in KEYS))
     friction = np.nonzero(cpu.stopped_by == 0)[0]

@@ -36,6 +36,8 @@ from quickrelease.batch.sampling import random_releases
 from quickrelease.device import _kernels
 from quickrelease.device.reference import stop_time_mp
 
+pytestmark = pytest.mark.slow  # the default run skips it; `-m slow` or CI runs it
+
 KEYS = ("E_S", "alpha0", "F1", "F2", "c", "m1", "m2", "L1")
 BOUND = 1e-12
 
@@ -99,6 +101,7 @@ def bench_sample():
             "err": np.abs(got.stop_time / ref - 1.0)}
 
 
+@pytest.mark.slow
 def test_every_tier_within_its_bound_on_100k_bench_cases(bench_sample):
     s = bench_sample
     got, err, tier = s["got"], s["err"], s["tier"]

@@ -48,6 +48,7 @@ def _picks(cases, per_class: int) -> np.ndarray:
     return np.concatenate(out)
 
 
+@pytest.mark.slow
 def test_every_tier_against_mpmath(wide):
     sub = _take(wide, _picks(wide, 3))
     got = batch.stop_time(*(sub[key] for key in KEYS))
@@ -161,6 +162,7 @@ np.save(sys.argv[1], np.concatenate(out))
 """
 
 
+@pytest.mark.slow
 def test_kernels_loaded_from_the_cache_give_the_bits_of_a_fresh_compile(tmp_path):
     """A Dask worker and a resumed run load the kernels from numba's cache; the process that filled the cache compiled
     them. Both must give the same bits (with fastmath "contract" they did not: 46k of 400k results differed by ulps,

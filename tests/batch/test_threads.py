@@ -195,6 +195,7 @@ print(json.dumps({"threads": top, "cases": len(cases[0]), "friction_stops": int(
 """
 
 
+@pytest.mark.slow
 def test_parallel_kernels_free_of_races_on_oversubscribed_threads():
     """Threads sharing scratch memory give wrong bits only when one is preempted mid-case, which a quiet machine with
     as many threads as cores rarely does. Here 16 threads on the machine's cores (the OS preempts them mid-block),

@@ -94,7 +94,7 @@ def test_undamped_frictionless_modes_by_hand():
     np.testing.assert_allclose(fv.roof_state(t)[0], xs, rtol=0, atol=1e-11 * d0)
 
 
-@pytest.mark.parametrize("ms, Ts, tol", [(1e-8 * M, 0.5, 1e-8), (0.7 * M, 1e-3, 1e-4)])
+@pytest.mark.parametrize("ms, Ts, tol", [(1e-8 * M, 0.5, 1e-8), pytest.param(0.7 * M, 1e-3, 1e-4, marks=pytest.mark.slow)])
 def test_rigid_limits(ms, Ts, tol):
     """m_s -> 0 or T_s -> 0: the base follows the rigid model's closed form (deviations of order
     m_s / m, and of T_s / T for a stiff storey: where the base turns, the roof's ringing makes the sliders
@@ -134,6 +134,7 @@ def test_held_at_release_and_bad_input():
         free_vibration(TwoDOF(M, 0.5 * M, 2.0, 0.5, friction=1.0), 0.0)
 
 
+@pytest.mark.slow
 def test_matrix_exponential_fallback(monkeypatch):
     """Where the eigenvectors are ill-conditioned (near a critically damped mode) a piece is evaluated
     by the matrix exponential instead: forced here, it must still match the reference."""

@@ -7,9 +7,12 @@ warning is given."""
 import math
 
 import numpy as np
+import pytest
 from building_reference import reference
 
 from quickrelease.building.isolation_fit import BuildingChannel, decay_check, fit_isolation
+
+pytestmark = pytest.mark.slow  # the default run skips it; `-m slow` or CI runs it
 
 M, T, ZETA, FS, D0 = 1.0e6, 2.9285, 0.092, 70.7e3, 0.2
 

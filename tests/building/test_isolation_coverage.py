@@ -92,6 +92,7 @@ def test_round_trip_linear():
     assert fit.converged and not fit.warnings
 
 
+@pytest.mark.slow
 def test_round_trip_bilinear_from_design_values_and_model_choice():
     """Rubber bearings k1 = 40 MN/m, k2 = 4 MN/m, F_y = 80 kN with sliders: from design values 20-30% off,
     period and stiffness ratio within 1%, damping, friction and yield force within 5%; the comparison
@@ -112,6 +113,7 @@ def test_round_trip_bilinear_from_design_values_and_model_choice():
     assert table[0]["model"] == "bilinear" and min(r["delta_aic"] for r in table[1:]) > 10
 
 
+@pytest.mark.slow
 def test_coverage_linear_coulomb():
     """Over the seeds the 95% intervals hold the truth for every parameter in the binomial band; pooled
     over the parameters at least 92% (an interval of 90% sold as 95% covers ~90%); the z-scores of the
@@ -127,6 +129,7 @@ def test_coverage_linear_coulomb():
         assert lo < rms < hi, (name, rms, (lo, hi))
 
 
+@pytest.mark.slow
 def test_coverage_without_friction():
     """Friction truly 0, at its bound: the profile interval starts at 0 and holds the truth in the
     binomial band (a boundary: the likelihood ratio at 0 exceeds the quantile in ~2.5% of seeds)."""
@@ -140,6 +143,7 @@ def test_coverage_without_friction():
     assert all(lo <= c <= hi for c in covered.values()), (covered, (lo, hi))
 
 
+@pytest.mark.slow
 def test_coverage_with_noise_from_the_residuals():
     """A record that starts at the release (no quiet segment): the noise levels come from the residuals
     and the covariance is scaled by the reduced chi-square; the intervals keep their coverage and the
@@ -159,6 +163,7 @@ def test_coverage_with_noise_from_the_residuals():
         assert lo < rms < hi, (name, rms, (lo, hi))
 
 
+@pytest.mark.slow
 def test_model_choice_on_linear_records_prefers_linear():
     """On linear + Coulomb records the bilinear model (two more parameters) does not win by AIC in more
     than 10% of the seeds (measured: 47 of 50 seeds, and 19 of the first 20; the CI's 10 seeds hold one that
@@ -177,6 +182,7 @@ def test_model_choice_on_linear_records_prefers_linear():
     assert prefers_linear >= 0.9 * n, (prefers_linear, n)
 
 
+@pytest.mark.slow
 def test_decay_cross_check_recovers_friction_and_damping():
     """The model-free decay (combined decrement law) holds the true friction and damping ratio within its
     own 95% intervals in most seeds, and agrees with the fit within a few combined standard errors."""

@@ -42,13 +42,14 @@ def _covers(fit, name, truth):
 
 
 @pytest.fixture(scope="module")
-def drifting_fits():
+def drifting_fits():  # two fits with the global stage: the tests that use it are slow
     t, x, a = _record(DRIFT)
     plain = fit_isolation([BuildingChannel("x", "x", t, x), BuildingChannel("a", "a", t, a)], M)
     drifting = fit_isolation([BuildingChannel("x", "x", t, x, drift=True), BuildingChannel("a", "a", t, a)], M)
     return plain, drifting
 
 
+@pytest.mark.slow
 def test_a_drifting_zero_is_fitted_and_the_building_comes_back(drifting_fits):
     plain, fit = drifting_fits
     assert "drift_x" in fit.names and "drift_x" not in plain.names
@@ -79,6 +80,7 @@ def test_a_steady_zero_fitted_with_a_drift_finds_none():
     assert _covers(fit, "period", T) and _covers(fit, "friction", FS)
 
 
+@pytest.mark.slow
 def test_the_case_file_reads_drift_for_the_building_only(tmp_path):
     t, x, a = _record(DRIFT)
     np.savetxt(tmp_path / "rec.csv", np.column_stack([t, 1e3 * x, a]), delimiter=",", header="t_s,x_mm,a",

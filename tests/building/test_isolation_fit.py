@@ -30,6 +30,7 @@ def _within(fit, truth, z=4.0):
                                                                              fit.std_errors[name])
 
 
+@pytest.mark.slow
 def test_linear_isolation_recovered_with_calibrated_errors():
     """Six records: every estimate within 4.5 standard errors, and the pooled z-scores of the 42 estimates
     have an RMS near 1 (a chi-square with 42 degrees of freedom: RMS in [0.7, 1.35] with probability above
@@ -70,6 +71,7 @@ def test_no_friction_gives_a_profile_interval_from_zero():
     _within(fit, {"period": T, "damping_ratio": zeta})
 
 
+@pytest.mark.slow
 def test_bilinear_from_design_values_and_model_choice():
     k1, k2, Fy, zeta, Fs, d0 = 4.0e7, 4.0e6, 8.0e4, 0.03, 8.0e3, 0.2
     T1 = 2 * math.pi * math.sqrt(M / k1)

@@ -14,6 +14,7 @@ from quickrelease.errors import ParameterError
 M, RATIO, G = 4.0e5, 0.75, 9.80665
 
 
+@pytest.mark.slow
 def test_flexible_building_fitted_back_and_preferred_over_linear():
     T, zeta, Fs, Ts, zs, d0, t_r = 2.0, 0.04, 0.02 * M * G, 0.5, 0.03, 0.15, 0.731
     b = TwoDOF(M, RATIO * M, T, Ts, zeta, Fs, zs)
@@ -48,6 +49,7 @@ def test_2dof_needs_the_superstructure_mass():
 
 
 
+@pytest.mark.slow
 def test_rigid_building_prefers_the_linear_model_and_the_2dof_fit_says_why(monkeypatch):
     """The rigid limit of the 2-DOF building (T_s -> 0: the independent solve_ivp of the rigid layer, whose
     roof moves with it): the record does not resolve a superstructure. compare_models must prefer the linear

@@ -4,6 +4,7 @@ independent event-located solve_ivp of tests/building_reference.py (never the fi
 import math
 
 import numpy as np
+import pytest
 from building_reference import reference
 
 import quickrelease.building.isolation_fit as isolation_fit
@@ -22,6 +23,7 @@ def _lvdt(rate, seed=1, pre=1.5, duration=6.0):
     return [BuildingChannel("lvdt", "x", t, x + np.random.default_rng(seed).normal(0.0, 2e-4, t.size))]
 
 
+@pytest.mark.slow
 def test_evaluations_and_estimates_do_not_depend_on_the_sampling_rate(monkeypatch):
     """A displacement leaves its rest quadratically, so the detected release lags the true one by a time
     (here about 50 ms: 157 samples at 3200 Hz), not by a count of samples. The fit's search for the release

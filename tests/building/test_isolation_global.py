@@ -4,7 +4,7 @@ event-located solve_ivp of tests/building_reference.py (never the fit's own mode
 Every fit must land within delta chi-square 1 of a fit started at the truth, from design values 20, 30 and 50%
 off or none, with the channels x + a, x alone and a alone; the certificate must say when a second basin is as
 good as the best (an aliased record, where two periods give the same samples). The ordinary run takes a few
-records per class; QUICKRELEASE_SLOW=1 runs the whole matrix.
+records per class (tests marked slow: CI runs them); QUICKRELEASE_SLOW=1 runs the whole matrix.
 """
 
 import math
@@ -92,6 +92,7 @@ LINEAR_SLOW = [(s, w, o) for s in range(6) for w in ("xa", "x", "a") for o in (0
                if (s, w, o) not in LINEAR_CASES]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed, which, off", LINEAR_CASES + (LINEAR_SLOW if SLOW else []))
 def test_linear_fit_reaches_the_truth_started_minimum(seed, which, off):
     """From design values far off, or none, and with any channel subset: within delta chi-square 1 of the
@@ -116,6 +117,7 @@ BILINEAR_SLOW = [pytest.param(s, w, o, marks=pytest.mark.xfail(reason="d0, zero 
                  for s in range(4) for w in ("xa", "x") for o in (0.2, 0.3, None) if (s, w, o) not in BILINEAR_CASES]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed, which, off", BILINEAR_CASES + (BILINEAR_SLOW if SLOW else []))
 def test_bilinear_fit_reaches_the_truth_started_minimum(seed, which, off):
     truth = _bilinear_truth(seed)
@@ -158,6 +160,7 @@ def _aliased_channels():
     return [BuildingChannel("lvdt", "x", t, x + rng.normal(0, 2e-3, t.size), noise=2e-3, offset=False)]
 
 
+@pytest.mark.slow
 def test_certificate_reports_two_nearly_equal_basins():
     """The aliased record has two minima (T = 2 s and T = 3.33 s) within a few units of chi-square: the fit
     must not claim a confirmed global minimum, must list both, and its 95% interval of the period must cover
@@ -246,6 +249,7 @@ def test_same_basin_counts_standard_errors():
     assert not same_basin({"period": 1.0}, {"period": 0.65}, {"period": 0.1})
 
 
+@pytest.mark.slow
 def test_a_record_that_never_stops_gets_a_clear_answer():
     """An undamped, frictionless layer (the analytic cosine) over the whole record: the fit says so (damping
     and friction at their lower bound 0, their profile intervals from 0) instead of raising from a root
@@ -259,6 +263,7 @@ def test_a_record_that_never_stops_gets_a_clear_answer():
     assert fit.ci95["friction"][0] == 0.0 and fit.interval_method["friction"] == "profile"
 
 
+@pytest.mark.slow
 def test_a_record_that_starts_mid_swing():
     """A record caught mid-swing (no quiet segment: it starts 0.3 of a period after the release): the fit
     takes the first turning point as a release from rest (exact for the linear layer with Coulomb sliders:

@@ -51,6 +51,7 @@ def _never_yielding():
                                 start={"stiffness_ratio": 0.5, "yield_force": 10.0 * K * D0})
 
 
+@pytest.mark.slow
 def test_a_record_that_never_yields_has_many_equal_minima():
     """A linear record fitted with the bilinear model: springs that never yield, and springs that yield at any
     force up to the largest reached, describe it alike. The fit's certificate must say so: minima within delta
@@ -96,6 +97,7 @@ def test_tables_and_report_say_not_identified(capsys):
     assert html.count("not identified") >= 2  # the engineering table and the table of every parameter
 
 
+@pytest.mark.slow
 def test_device_fit_writes_a_parameter_it_cannot_see_as_null(monkeypatch):
     """The device's record fit (fit.py) takes the same covariance: a parameter marked unidentified (here the last
     offset, by a wrapper) gets SE inf, a warning, null in ``fit --json`` (written with allow_nan=False) and

@@ -11,6 +11,8 @@ from test_isolation_coverage import D0, FS, RELEASE, C, K, M
 
 from quickrelease.building.isolation_fit import BuildingChannel, _detect_release, _quiet_noise, fit_isolation
 
+pytestmark = pytest.mark.slow  # the default run skips it; `-m slow` or CI runs it
+
 NOISE = 2e-4  # m
 
 

@@ -39,6 +39,7 @@ def _record(seed: int, spikes: int):
     return t, x, a, t[ix], t[ia]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [0, 1])
 def test_planted_spikes_are_excluded_and_the_rest_fitted_honestly(seed):
     t, x, a, tx, ta = _record(seed, 30)
@@ -65,6 +66,7 @@ def test_a_clean_record_keeps_every_sample():
     assert fit.chi2 == plain.chi2 and fit.estimates == plain.estimates
 
 
+@pytest.mark.slow
 def test_the_case_file_asks_for_it(tmp_path):
     t, x, a, tx, ta = _record(3, 12)
     np.savetxt(tmp_path / "rec.csv", np.column_stack([t, x, a]), delimiter=",", header="t,x,a", comments="",

@@ -65,6 +65,7 @@ def _hard_linear_record(seed):
         {"period": 2.0, "damping_ratio": zeta, "friction": Fs, "d0": d0}
 
 
+@pytest.mark.slow
 def test_multi_start_keeps_the_best_not_the_first():
     """A designer's start that leaves the sliders out (friction 0, the dissipation all viscous, zeta 0.12)
     leads the hard record into a wrong count of half-cycles; the decay's own start, tried beside it, finds the
@@ -89,6 +90,7 @@ def _bilinear_record(k1, k2, Fy, zeta, Fs, d0, seed, duration=6.0, t_release=0.7
             BuildingChannel("acc", "a", ta, a + 0.01 + rng.normal(0.0, 0.02, a.size))]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("k1, k2, Fy, zeta, Fs, d0, seed", [
     (4.0e7, 4.0e6, 8.0e4, 0.03, 8.0e3, 0.20, 1),  # the round-trip building of test_isolation_fit
     pytest.param(2.5e7, 2.5e6, 5.0e4, 0.02, 1.2e4, 0.18, 2, marks=SLOW),  # softer, sliders a fifth of Q
@@ -113,6 +115,7 @@ def test_bilinear_fit_without_start_values(k1, k2, Fy, zeta, Fs, d0, seed):
         assert fit.chi2 <= best.chi2 + 1.0, (fit.chi2, best.chi2)
 
 
+@pytest.mark.slow
 def test_polish_leaves_a_nearby_minimum():
     """The hard linear record (sliders of 1% of the weight: the acceleration jumps by 10 noise levels at each
     reversal), noise seed 0: the multi-start alone stops in a nearby minimum, chi-square 2945.4 against

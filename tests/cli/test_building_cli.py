@@ -184,6 +184,7 @@ def test_building_2dof_without_the_superstructure_mass_is_one_line(tmp_path):
     assert not out.exists()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("yield_force, warned", [(5.0 * K * D0, True), (0.3 * K * D0, False)])
 def test_bilinear_that_never_yields_is_named_in_a_warning(yield_force, warned):
     """A bilinear spring whose yield force is never reached after the release moves as a linear one: the record
@@ -206,6 +207,7 @@ def test_bilinear_that_never_yields_is_named_in_a_warning(yield_force, warned):
         assert warnings[0].startswith("yield_force:") and "never yields" in warnings[0] and "k2" in warnings[0]
 
 
+@pytest.mark.slow
 def test_whole_test_run_uses_the_identified_building_for_the_clearance(tmp_path):
     """A case with the device part and a building record: run identifies the building, and the clearance
     check uses it (period 2 s, d0 = 0.15 m from the record, not the assumed 2.3 s and 0.17 m), saying so."""
@@ -263,6 +265,7 @@ def test_covariance_of_a_jacobian_with_columns_of_very_different_scales():
     assert np.allclose(cov, exact, rtol=1e-9, atol=1e-12 * np.abs(exact).max())
 
 
+@pytest.mark.slow
 def test_building_2dof_command_fits_a_flexible_building(tmp_path):
     """A record of a flexible building (base LVDT in mm at 100 Hz, roof accelerometer in g0 at 200 Hz on its own
     clock; made by the independent 2-DOF solve_ivp of tests/building_reference.py) through

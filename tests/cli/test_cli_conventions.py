@@ -149,6 +149,7 @@ def test_every_command_writes_with_out(tmp_path):
     assert r.exit_code == 0 and (tmp_path / "b.csv").is_file() and "--file is now --out" in r.stderr
 
 
+@pytest.mark.slow
 def test_long_commands_show_a_spinner_on_a_terminal_only(tmp_path):
     """On a terminal, a long command says what it is doing on stderr; its results (stdout) stay clean."""
     import os

@@ -33,6 +33,8 @@ from typer.testing import CliRunner
 
 from quickrelease.cli import app
 
+pytestmark = pytest.mark.slow  # the default run skips it; `-m slow` or CI runs it
+
 #: The click command of the app, built once: Typer rebuilds it on every ``CliRunner.invoke`` (about 0.1 s,
 #: most of the time of a refused value).
 COMMAND = typer.main.get_command(app)

@@ -2,8 +2,8 @@
 ``$ quickrelease ...`` command with an output under it is run as written from a folder laid out as the repository's
 root, at 80 columns, and compared with the page. ``python tools/console_outputs.py --write`` regenerates them.
 
-The quick commands (simulate, identify: seconds) run always; the rest (a run, a fit, a plan, campaigns, a sweep,
-a million-sample uq: minutes together) with ``QUICKRELEASE_SLOW=1``.
+The quick commands (simulate, identify: seconds) run with the tests marked slow (CI); the rest (a run, a fit, a
+plan, campaigns, a sweep, a million-sample uq: minutes together) with ``QUICKRELEASE_SLOW=1``.
 """
 
 from __future__ import annotations
@@ -28,6 +28,7 @@ def test_the_docs_show_console_outputs():
     assert len(SHOWN) >= 10 and sum(s.command.startswith(QUICK) for s in SHOWN) >= 4
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("shown", SHOWN, ids=[s.where for s in SHOWN])
 def test_documented_console_output_is_current(shown):
     if not shown.command.startswith(QUICK) and not os.environ.get("QUICKRELEASE_SLOW"):
@@ -49,6 +50,7 @@ def test_the_comparison_reads_excerpts_and_platform_digits():
     assert not m("F_s 40.138 ± 0.1 kN", "F_s 40.14 ± 0.10 kN")
 
 
+@pytest.mark.slow
 def test_the_check_sees_a_stale_output_and_write_replaces_it(tmp_path, monkeypatch):
     """A page whose shown output is stale: the check reports it (exit 1), --write puts today's output in its place
     and leaves the rest of the page as it was, and the check then passes."""

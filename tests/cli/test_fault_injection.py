@@ -90,6 +90,7 @@ def _whole_new_result(now):
             and json.loads(now["manifest.json"])["complete"] is True)
 
 
+@pytest.mark.slow
 def test_killed_run_leaves_the_previous_complete_result(tmp_path):
     out = tmp_path / "out"
     push = load_case(EXAMPLES / "larger_push.toml")
@@ -116,6 +117,7 @@ def test_killed_run_leaves_the_previous_complete_result(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"], outcomes
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("suffix", [".nc", pytest.param(".zarr", marks=pytest.mark.skipif(not HAS_ZARR,
                                                                                           reason="no zarr"))])
 def test_killed_numpy_sweep_leaves_nothing_or_a_complete_file(tmp_path, suffix):
@@ -141,6 +143,7 @@ def test_killed_numpy_sweep_leaves_nothing_or_a_complete_file(tmp_path, suffix):
                                  r"\.s_heatmaps\.(png|svg)\.\w+\.part"])
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not HAS_DASK, reason="dask/distributed/zarr not installed")
 def test_killed_dask_sweep_resumes_to_the_identical_store(tmp_path):
     import xarray as xr
@@ -177,6 +180,7 @@ def test_killed_dask_sweep_resumes_to_the_identical_store(tmp_path):
     assert not staging.exists()
 
 
+@pytest.mark.slow
 def test_killed_uq_resumes_to_the_identical_result(tmp_path):
     case_path = tmp_path / "uq.toml"
     case_path.write_text(UQ_CASE)
@@ -214,6 +218,7 @@ FULL_DISK_COMMANDS = {
 FILES_WRITTEN = {"run": 8, "uq": 3, "sweep-nc": 3, "synth": 2}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("command", list(FULL_DISK_COMMANDS))
 @pytest.mark.parametrize("draw", range(3))
 def test_a_full_disk_at_a_seeded_write_leaves_the_whole_result_or_nothing(tmp_path, monkeypatch, command, draw):
@@ -275,6 +280,7 @@ def test_a_full_disk_at_a_seeded_write_leaves_the_whole_result_or_nothing(tmp_pa
             assert command == "sweep-nc" and ds.sizes["F1"] == 3 and np.isfinite(ds.stop_time.values).all()
 
 
+@pytest.mark.slow
 def test_json_to_a_closed_standard_output_is_one_line_after_a_whole_result(tmp_path):
     """--json into a pipe whose reader has gone: the files are whole (written before the JSON), then one line."""
     proc = subprocess.Popen(_cmd("synth", EXAMPLES / "paper.toml", "--channels", "u", "--rate", "200 Hz", "--out",

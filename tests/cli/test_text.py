@@ -65,6 +65,7 @@ def _svg_ok(path: Path) -> str:
     return text
 
 
+@pytest.mark.slow
 def test_run_and_report_carry_the_title(tmp_path):
     xr = pytest.importorskip("xarray")
     case = _case(tmp_path, NAME)

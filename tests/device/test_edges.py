@@ -69,6 +69,7 @@ def _item12_cases(n=24, seed=12):
     return out
 
 
+@pytest.mark.slow
 def test_item12_geometric_limit_small_mass_factor_batch_and_energy_to_1e10():
     cases = _item12_cases()
     E, a0, F1, F2, c = (np.array(v) for v in zip(*cases, strict=True))
@@ -82,6 +83,7 @@ def test_item12_geometric_limit_small_mass_factor_batch_and_energy_to_1e10():
         assert abs(t_single / float(t_ref) - 1) < 1e-10, case
 
 
+@pytest.mark.slow
 def test_item12_small_mass_factor_friction_stop_too():
     rng = np.random.default_rng(121)
     for _ in range(12):
@@ -145,6 +147,7 @@ def _backward_band(E, a0, F1, F2, m1, m2, L1, c=2 / 3):
     return min(ts) * (1 - 1e-10), max(ts) * (1 + 1e-10)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", _boundary_cases())
 def test_item16_every_method_agrees_on_stopped_by_and_t_F_at_the_boundary(case):
     E, a0, F1, F2, m1, m2, L1 = case
@@ -169,6 +172,7 @@ def test_item16_every_method_agrees_on_stopped_by_and_t_F_at_the_boundary(case):
     assert runs["explicit"].stats["scheme_end"] in ("friction", "geometric_limit")
 
 
+@pytest.mark.slow
 def test_item16_clear_of_the_boundary_the_classification_is_the_exact_one():
     """Where |E_S - W_F(pi/2)| is well above rounding, stopped_by is the sign of the 30-digit margin."""
     rng = np.random.default_rng(16)
@@ -340,6 +344,7 @@ def _creep_mp(E_S, alpha0, F1, dps=50):
         return margin, rho, t_of(rho), t_of(margin), t0
 
 
+@pytest.mark.slow
 def test_item18_creep_rule_justified_at_50_digits():
     """Why a margin within rho of 0 (F2 = 0) is reported as creeping: at 50 digits the float inputs' exact margin
     is inside the band (-3.7e-16 J, 21% of rho = 4 eps (E_S + W_F(pi/2)) = 1.8e-15 J), every t_F the band allows is

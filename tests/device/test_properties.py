@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
@@ -18,6 +19,8 @@ import quickrelease as qr
 from quickrelease import batch
 from quickrelease.device import dynamics
 from quickrelease.device._kernels import feasible_slack
+
+pytestmark = pytest.mark.slow  # the default run skips it; `-m slow` or CI runs it
 
 PAPER = qr.preset("paper")
 HALF_PI = 0.5 * math.pi

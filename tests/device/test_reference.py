@@ -77,6 +77,7 @@ def _independent_lambda(alpha0, aF, tF, E_S, k, m2, L1, dps=45):
                                tol=mpmath.mpf(10) ** -60, verify=False)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["typical", "one force near zero"])
 def test_identify_mp_against_a_bracketed_root_of_the_integral_in_alpha(name):
     E_S, alpha0, F1, F2, k, m2, L1 = next(c for n, c in _cases(1, friction_stop=True) if n == name)

@@ -70,6 +70,7 @@ def _one_by_one(c):
     return t, aF, N, D, code
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("source", ["bench", "wide", "edges"])
 def test_block_kernel_is_the_one_case_loop_bit_for_bit(source):
     if source == "bench":
@@ -160,6 +161,7 @@ def test_huge_friction_stops_at_once_as_constant_deceleration(F):
     assert float(st.stop_time) == pytest.approx(t, rel=1e-14) and float(st.alpha_final) == a0
 
 
+@pytest.mark.slow
 def test_cases_out_of_range_come_back_nan_and_leave_the_others_alone():
     """E_S not positive and finite, or friction whose work overflows (2 F1 L1 = inf), is out of range: t_F and
     alpha_F NaN, chunk by chunk on the threads (``batch._screened_chunk``), the valid cases beside them as alone."""

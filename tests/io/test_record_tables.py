@@ -49,6 +49,7 @@ def window_reference(fi, name, s, window):
     return value
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind", sorted(CASES))
 def test_window_accelerations_at_50_khz_match_quad(kind):
     """A 50 kHz record (~60,000 samples): every acceleration sample within 1e-12 of the channel's range of the

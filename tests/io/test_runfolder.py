@@ -139,6 +139,7 @@ def test_uq_unfinished_run_needs_resume_or_overwrite(case_path, tmp_path, spy, u
     assert json.loads((out / "uq.json").read_bytes()) == json.loads(uninterrupted)
 
 
+@pytest.mark.slow
 def test_truncated_chunk_is_named_and_recomputed(case_path, tmp_path, spy, uninterrupted):
     out = tmp_path / "part"
     staging = _interrupted(case_path, out, spy, after=3)
@@ -176,6 +177,7 @@ def test_chunk_of_another_run_is_recomputed(case_path, tmp_path, spy, uninterrup
     assert (out / "uq.json").read_bytes() == uninterrupted
 
 
+@pytest.mark.slow
 def test_corrupt_manifest_is_named_and_the_run_resumed(case_path, tmp_path, spy, uninterrupted):
     out = tmp_path / "part"
     staging = _interrupted(case_path, out, spy)

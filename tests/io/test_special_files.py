@@ -185,6 +185,7 @@ def test_a_fifo_as_input_is_refused_at_once(work, role):
     assert "special: not a regular file (a FIFO)" in line, line
 
 
+@pytest.mark.slow
 @needs_root
 def test_a_device_that_never_ends_as_a_record_is_refused_at_once(work):
     """A character device with the zero device's numbers (made here) as the record: one line, exit 2 (a
@@ -341,6 +342,7 @@ def test_a_write_error_without_a_file_name_names_the_file(work, monkeypatch):
     assert sorted(p.name for p in work.iterdir() if p.name.startswith((".", "r."))) == []
 
 
+@pytest.mark.slow
 def test_json_to_a_closed_pipe_is_one_line(work):
     p = subprocess.Popen([sys.executable, "-m", "quickrelease.cli", *SYNTH, "--out", "r.csv", "--json"], cwd=work,
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
@@ -351,6 +353,7 @@ def test_json_to_a_closed_pipe_is_one_line(work):
     assert p.returncode == 2 and len(lines) == 1 and "broken pipe" in lines[0], err
 
 
+@pytest.mark.slow
 @needs_root
 def test_json_to_a_full_device_is_one_line(work):
     _node(work / "full", "full")  # the full device's numbers (1:7), made here
@@ -380,6 +383,7 @@ def test_a_full_standard_output_in_process_is_one_line(work, monkeypatch):
 
 # -- item 6 ------------------------------------------------------------------------------------------------------
 
+@pytest.mark.slow
 def test_sweep_json_with_every_point_out_of_range_is_valid_json(work):
     """Pushes of 1e300 N store an E_S beyond the floats: every point flagged, its outputs NaN; the JSON has null."""
     shutil.copy(EXAMPLES / "larger_push.toml", work / "push.toml")

@@ -12,6 +12,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 HERE = Path(__file__).resolve().parents[1]  # tests/
 
 _PLANTED = '''
@@ -34,6 +36,7 @@ def test_after_it():
 '''
 
 
+@pytest.mark.slow
 def test_the_guard_catches_a_leaking_fixture_of_any_scope(tmp_path):
     """One planted module per scope, in one pytest process: each is reported (failed or errored), and a module
     without fixtures is not."""

@@ -34,6 +34,7 @@ def test_out_and_its_default_in_every_help(command, default):
     assert "--out" in line and default in line, command
 
 
+@pytest.mark.slow
 def test_report_json_lists_what_it_wrote(tmp_path):
     out = tmp_path / "r"
     r = runner.invoke(app, ["report", str(EXAMPLES / "paper.toml"), "--out", str(out), "--json"])
@@ -46,6 +47,7 @@ def test_report_json_lists_what_it_wrote(tmp_path):
     assert r.exit_code == 0 and r.stdout.startswith(f"Wrote 2 files to {tmp_path / 'r2'}/: report.html")
 
 
+@pytest.mark.slow
 def test_run_counts_every_file_it_wrote(tmp_path):
     out = tmp_path / "run"
     r = runner.invoke(app, ["run", str(EXAMPLES / "paper.toml"), "--out", str(out)])
@@ -72,6 +74,7 @@ DEMO_KEYS = [
 ]
 
 
+@pytest.mark.slow
 def test_demo_json_keys_carry_their_units(tmp_path):
     out = tmp_path / "demo"
     r = runner.invoke(app, ["demo", "--out", str(out), "--json"])

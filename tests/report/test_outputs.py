@@ -177,6 +177,7 @@ def _chromium():
     return None
 
 
+@pytest.mark.slow
 def test_report_renders_in_headless_chromium(paper_run, tmp_path):
     browser = _chromium()
     if browser is None:

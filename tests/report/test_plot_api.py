@@ -207,6 +207,7 @@ def test_study_figures_draw_into_the_users_axes():
     assert corner_figure(u, ax=mine.subplots(2, 2)) is mine and len(mine.axes) == 4
 
 
+@pytest.mark.slow
 def test_campaign_figures_draw_into_the_users_axes():
     from quickrelease.studies.building_campaign import building_campaign_figure
     from quickrelease.studies.campaign import campaign_figure, run_campaign

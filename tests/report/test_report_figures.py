@@ -28,6 +28,7 @@ def whole_test(tmp_path_factory):
     return result, out, paths
 
 
+@pytest.mark.slow
 def test_one_friction_value_draws_no_histogram_and_no_unchecked_member_chart(whole_test):
     result, out, paths = whole_test
     assert result.plan.envelope.samples == 1
@@ -43,6 +44,7 @@ def test_one_friction_value_draws_no_histogram_and_no_unchecked_member_chart(who
     assert "<th>5%</th>" not in page.split("<h3>Release envelope</h3>", 1)[1].split("<h3>", 1)[0]
 
 
+@pytest.mark.slow
 def test_a_figure_function_refuses_what_it_cannot_draw(whole_test):
     result, _, _ = whole_test
     with pytest.raises(QuickReleaseError, match="1 friction sample"):
@@ -79,6 +81,7 @@ def test_fig13_legends_cover_no_curve():
                                                                   "$E_K + W_F$", "$E_S$"]
 
 
+@pytest.mark.slow
 def test_the_whole_tests_figures_have_no_legend_over_a_curve(whole_test):
     from quickrelease.report.building_plots import building_figures
     from quickrelease.report.plots import fig14, fig15
@@ -90,6 +93,7 @@ def test_the_whole_tests_figures_have_no_legend_over_a_curve(whole_test):
         assert overlap_faults(func(result.response)) == [], func.__name__
 
 
+@pytest.mark.slow
 def test_period_axis_is_not_squashed_by_one_point_and_its_label_is_mathtext(whole_test):
     from quickrelease.report.building_plots import amplitude_figure, off_scale
 
@@ -110,6 +114,7 @@ def test_period_axis_is_not_squashed_by_one_point_and_its_label_is_mathtext(whol
     assert off_scale([2.0, 4.9], [1.5, 2.5]).tolist() == [False, False]
 
 
+@pytest.mark.slow
 def test_the_clearance_note_has_units(whole_test):
     result, _, _ = whole_test
     note = next(n for n in result.plan.notes if n.startswith("clearance checked with"))

@@ -32,7 +32,7 @@ COMMANDS = {
 }
 
 
-@pytest.mark.parametrize("name", list(COMMANDS))
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n == "building-campaign" else n for n in COMMANDS])
 def test_every_command_prints_tables_for_people(name, tmp_path):
     args = [str(a).replace("{tmp}", str(tmp_path)) for a in COMMANDS[name]]
     r = runner.invoke(app, args)

@@ -273,6 +273,7 @@ def test_stop_sensitivities_one_per_input_and_exact_in_m2():
     assert s[5] == pytest.approx(0.5 * (np.nextafter(531.69, np.inf) - 531.69) / 531.69, rel=1e-9, abs=0)
 
 
+@pytest.mark.slow
 def test_identify_sensitivities_agree_with_solving_again():
     """The first-order change of (F1, F2) per input against mpmath's identification solved again with that input one
     ulp up: on a typical case (every input; lambda and F1*, F2* move by a few 1e-16 alike) and on a nearly immediate

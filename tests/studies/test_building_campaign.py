@@ -62,6 +62,7 @@ def growing():
                      ("displacement", "log_displacement"))
 
 
+@pytest.mark.slow
 def test_linear_coulomb_building_shows_no_amplitude_effect(constant):
     truth = {"period": T, "damping_ratio": ZETA, "friction": 2.0e4}
     for q, value in truth.items():
@@ -84,6 +85,7 @@ def test_linear_coulomb_building_shows_no_amplitude_effect(constant):
                                               ("equivalent_damping_ratio", "force")]
 
 
+@pytest.mark.slow
 def test_friction_that_grows_with_the_amplitude_is_found(growing):
     law = growing.laws[("friction", "displacement")]
     assert law.significant and law.p_value < 1e-4
@@ -105,6 +107,7 @@ def _hand_wls(x, y, se):
     return beta, cov, red
 
 
+@pytest.mark.slow
 def test_laws_against_a_hand_weighted_least_squares(constant, growing):
     for result in (constant, growing):
         for (q, v), law in result.laws.items():
@@ -124,6 +127,7 @@ def test_laws_against_a_hand_weighted_least_squares(constant, growing):
             assert (lo, hi) == pytest.approx((mean - half, mean + half), rel=1e-8)
 
 
+@pytest.mark.slow
 def test_a_release_with_friction_at_its_bound_weighs_by_its_profile_interval():
     """Friction F_s = 250 kN/m (|d0| - 5 cm): the first release has none, its fit puts F_s at the bound 0 with
     the profile-likelihood interval [0, hi]. The law's weight of that release is 1 / sigma^2 with
@@ -231,6 +235,7 @@ def test_equivalent_damping_and_secant_period_against_a_loop_integration():
     assert derived_quantity("secant_period", "linear", M, lin) == pytest.approx(T, rel=1e-12)
 
 
+@pytest.mark.slow
 def test_summary_is_json_and_the_figure_draws(constant):
     data = constant.summary()
     text = json.dumps(data, allow_nan=False)
@@ -281,6 +286,7 @@ def test_a_sensor_zero_does_not_send_the_fit_to_a_wrong_count_of_half_cycles():
 
 # -- the campaign file and the command ----------------------------------------------------------------------------
 
+@pytest.mark.slow
 def test_campaign_command_on_the_shipped_example(tmp_path):
     """examples/building_campaign.toml: records made with F_s = 40 kN + 150 kN/m |d0|, T = 2.0 s, zeta = 3 %
     (examples/make_records.py): the law of F_s is found, none of T or zeta."""
@@ -384,6 +390,7 @@ def test_a_roof_channel_of_a_rigid_building_is_fitted_as_the_layer():
         assert abs(fit.estimates[name] - value) < 4 * fit.std_errors[name], (name, fit.estimates[name])
 
 
+@pytest.mark.slow
 def test_a_release_in_a_local_minimum_is_refitted_from_the_others(monkeypatch):
     """A release whose first fit misfits its record (here: the first fits of R0 and R2 held at a friction of
     1 kN against the true 20 kN, as a fit caught in a local minimum would be: many times the noise away) is
@@ -434,6 +441,7 @@ def _two_dof_record(path, d0, seed, t_release=0.3):
                fmt="%.10g")
 
 
+@pytest.mark.slow
 def test_2dof_campaign_of_a_flexible_building(tmp_path, capsys, monkeypatch):
     """A campaign with [building] model = "2dof": each release is fitted with the 2-DOF model and the
     superstructure mass of [building]; the laws of T, zeta and F_s hold the truth (no amplitude effect, made

@@ -57,6 +57,7 @@ def _case(tmp_path, text, name="case.toml"):
     return load_case(path, require_test=False)
 
 
+@pytest.mark.slow
 def test_prediction_matches_the_spread_of_fits_over_noisy_records(tmp_path):
     """30 independent records of a linear + Coulomb building (x and v, different noise levels and offsets, the
     release between samples), each fitted with the noise levels given; the spread of the estimates about the

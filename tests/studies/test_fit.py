@@ -194,6 +194,7 @@ def test_round_trip_through_a_csv_file_within_one_percent(paper, paper_motion, t
     assert lost > 0 and sum(fit.samples.values()) == 3 * t.size - lost
 
 
+@pytest.mark.slow
 def test_coverage_of_the_95_percent_intervals(paper, paper_motion):
     """The 95% intervals of fits to 100 instrument records (made independently of the fit's channel model:
     see instrument_channels) cover the truth.
@@ -232,6 +233,7 @@ def test_coverage_of_the_95_percent_intervals(paper, paper_motion):
     assert 460 <= hits, hits
 
 
+@pytest.mark.slow
 def test_predicted_errors_are_the_fit_errors_at_the_truth(paper):
     syn = realistic(paper, seed=0, release_time=0.4011)
     pred = predicted_errors(paper, syn)
@@ -245,6 +247,7 @@ def test_predicted_errors_are_the_fit_errors_at_the_truth(paper):
     assert figure_faults(fit_figure(fit)) == []
 
 
+@pytest.mark.slow
 def test_energy_and_mass_factor_can_be_estimated(paper):
     case = paper.replace(mass_model=0.7, stored_energy=3100.0)  # the truth the record is made with
     syn = realistic(case, seed=5)
@@ -435,6 +438,7 @@ def test_fit_example_json_keys_and_truth():
     assert data["release_time_s"] == pytest.approx(0.62, abs=2e-4)
 
 
+@pytest.mark.slow
 def test_synth_then_fit_on_the_command_line(tmp_path):
     rec, case = tmp_path / "rec.csv", tmp_path / "fit_case.toml"
     result = runner.invoke(app, ["synth", str(EXAMPLES / "paper.toml"), "--channels", "u,v", "--rate", "200 Hz",
@@ -541,6 +545,7 @@ def test_a_channel_in_its_own_file_at_its_own_rate(paper, tmp_path):
         load_case(bad)
 
 
+@pytest.mark.slow
 def test_iterations_from_a_poor_start_do_not_grow_with_the_sampling_rate(paper, monkeypatch):
     """Issue 9 item 11: a start 10% off in F1 and F2 and 3 ms off in the release put the model's stop tens of
     ms (hundreds of samples) from the record's; the acceleration's jump at the stop, spread over +-Delta,

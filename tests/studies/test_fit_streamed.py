@@ -95,6 +95,7 @@ def test_chunks_in_a_coarse_stage(problem):
         prob.smooth(0.0)
 
 
+@pytest.mark.slow
 def test_streamed_fit_is_where_the_dense_fit_ends(paper, problem, monkeypatch):
     """A whole fit with every stage streamed (chunks of 1,000 rows), then the dense solver (every residual,
     least_squares' own Jacobian) started at its estimates: it stays there (within 1e-5 standard errors), and
@@ -122,6 +123,7 @@ def test_streamed_fit_is_where_the_dense_fit_ends(paper, problem, monkeypatch):
         assert got.std_errors[n] == pytest.approx(se[i], rel=1e-5)
 
 
+@pytest.mark.slow
 def test_memory_of_a_streamed_jacobian_does_not_grow_with_the_rows(paper):
     """Peak memory allocated while forming the compressed system (chunks of 4,096 rows, the residuals and
     Jacobian of three channels and five parameters): the same for 1e5 and 2e5 rows, and a small part of the

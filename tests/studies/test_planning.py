@@ -253,6 +253,7 @@ def test_gap_at_small_times_follows_its_series():
 
 # -- the whole plan, the command line, bad input -------------------------------------------------------------------
 
+@pytest.mark.slow
 def test_plan_example_json_and_outputs(tmp_path):
     result = runner.invoke(app, ["plan", str(EXAMPLES / "plan.toml"), "--json", "--out", str(tmp_path)])
     assert result.exit_code == 0, result.output

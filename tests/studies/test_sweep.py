@@ -93,6 +93,7 @@ def _mtimes(store, block_rows, blocks):
     return out
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not HAS_DASK, reason="dask/zarr not installed")
 def test_dask_blocks_resume_and_match_numpy(tmp_path):
     import json

@@ -112,6 +112,7 @@ def _uq_cmd(case_path, out, backend, samples=2_000_000, chunk=50_000):
             str(chunk), "--seed", "7", "--backend", backend, "--out", str(out), "--json"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("backend", ["numpy", pytest.param("dask", marks=pytest.mark.skipif(
     not HAS_DASK, reason="dask not installed"))])
 def test_interrupted_run_resumes_to_the_same_file(case_path, tmp_path, backend):
@@ -139,6 +140,7 @@ def test_interrupted_run_resumes_to_the_same_file(case_path, tmp_path, backend):
     assert json.loads((full / "uq.json").read_text())["samples"] == 2_000_000
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not HAS_DASK, reason="dask not installed")
 def test_dask_and_numpy_backends_agree_exactly(case_path, tmp_path):
     a = run_uq(load_case(case_path), 100_000, seed=2, chunk=25_000, out=tmp_path / "a")
@@ -180,6 +182,7 @@ def _mp_stop_time(a0, aF, F1, F2, k, m2, L1):
     return mpmath.quad(lambda a: mpmath.sqrt(m2 * L1**2 * (k + mpmath.sin(a) ** 2) / rest(a)), [a0, aF])
 
 
+@pytest.mark.slow
 def test_line_time_partials_against_mpmath():
     """The stop time and its four partials (differentiated under the integral sign, Gauss-Legendre) against an
     independent reference: mpmath's tanh-sinh quadrature of Eq. 10 in alpha, differentiated by central
@@ -204,6 +207,7 @@ def test_line_time_partials_against_mpmath():
             assert got[name] == pytest.approx(float(ref), rel=1e-9, abs=1e-15), (a0, name)
 
 
+@pytest.mark.slow
 def test_sensitivities_against_mpmath_identification(case_path):
     """dF1/dx and dF2/dx against an independent chain: (F1, F2) re-identified by mpmath (Eq. 8 for F2 given F1,
     a secant root of the tanh-sinh Eq. 10 for F1) at inputs moved by +-h, central differences (relative step 1e-5: truncation ~1e-10) at 20 digits.
