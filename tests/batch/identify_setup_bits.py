@@ -19,10 +19,10 @@ from __future__ import annotations
 import sys
 
 import numpy as np
-from quickrelease.studies.bench import _observations, _sample
 
 from quickrelease import batch
 from quickrelease.batch import _gpu
+from quickrelease.studies.bench import _observations, _sample
 
 #: Cases of each sample (the bench's default seed, 0) and of the numpy reference (slower: a subset).
 N_CASES = 100_000

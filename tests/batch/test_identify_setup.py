@@ -27,11 +27,11 @@ import types
 
 import numpy as np
 import pytest
-from quickrelease.device.reference import line_time_mpf
 
 from quickrelease import batch
 from quickrelease.batch import _fast, _gpu, _identify_setup
 from quickrelease.batch._identify_setup import identify_setup
+from quickrelease.device.reference import line_time_mpf
 
 mpmath = pytest.importorskip("mpmath")
 

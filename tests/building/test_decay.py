@@ -192,8 +192,9 @@ def test_the_stick_is_found_when_the_rests_largest_noise_sample_is_near_the_end(
 def test_noise_estimate_smooths_as_scipys_savitzky_golay(n):
     """estimate_noise's own cubic Savitzky-Golay smoothing (numpy, to spare the fit scipy.signal's import)
     against scipy.signal.savgol_filter (mode "interp", edges included) and the formula of its docstring."""
-    from quickrelease.building.decay import estimate_noise
     from scipy.signal import savgol_coeffs, savgol_filter
+
+    from quickrelease.building.decay import estimate_noise
 
     rng = np.random.default_rng(n)
     t = np.arange(n) / 200.0

@@ -15,7 +15,6 @@ from conftest import mp_identify
 from quickrelease import simulate
 from quickrelease.io.case import load_case
 from quickrelease.io.export import atomic_path, read_csv, read_netcdf, write_csv, write_json, write_netcdf
-from quickrelease.report import plots
 from quickrelease.workflow import FIGURES, run_case, write_results
 
 EXAMPLES = Path(__file__).parents[2] / "examples"
@@ -121,18 +120,21 @@ def test_fig15_points_lie_on_the_analytic_curve(paper_run):
     result, _, _ = paper_run
     rk, explicit = result.state_responses
     assert rk.method == "rk" and explicit.method == "explicit"
-    data = plots.state_diagram_data(rk)
+    data = rk.state_diagram()
     assert np.max(data["distance"]) < 1e-6
     away = data["alpha_dot_analytic"] > 0.05 * rk.alpha_dot0
     assert np.max(np.abs(data["alpha_dot"] - data["alpha_dot_analytic"])[away]) < 1e-6
     # the paper's Table 6 scheme at dt = 0.1 ms: first order, within 1e-5
-    assert np.max(plots.state_diagram_data(explicit)["distance"]) < 1e-5
+    assert np.max(explicit.state_diagram()["distance"]) < 1e-5
+    # the analytic curve under the states: Eq. 10 from alpha0 (where it starts at the release rate) to alpha_F
+    assert data["curve_alpha"][0] == rk.alpha0 and data["curve_alpha"][-1] == rk.alpha_final
+    assert data["curve_alpha_dot"][0] == pytest.approx(rk.alpha_dot0, rel=1e-9)
 
 
 def test_identification_figure_data(paper_run):
     result, _, _ = paper_run
     ident = result.identification
-    data = plots.identification_curve_data(ident)
+    data = ident.line_curve()
     t = data["stop_time"]
     assert np.all(np.diff(t) < 0)  # t_F falls as F2/F2* rises
     assert t[0] == pytest.approx(ident.feasible_stop_times[1], rel=1e-13)

@@ -54,8 +54,9 @@ def _refresh_stale_cache(kernels, stamp: str | None = None) -> bool:
     """Drop the cached kernels of this file when the modules they inline have changed; True when it did.
 
     numba stamps a cached function with its own source file only (its mtime and size in older releases, a
-    sha256 of its content since 0.6x), and the kernels here inline functions of :mod:`quickrelease.device.dynamics`,
-    :mod:`quickrelease.device._kernels` and :mod:`quickrelease.batch._identify_setup`: after an edit or a checkout that changes
+    sha256 of its content since 0.6x), and the kernels here inline functions of
+    :mod:`quickrelease.device.dynamics`, :mod:`quickrelease.device._kernels` and
+    :mod:`quickrelease.batch._identify_setup`: after an edit or a checkout that changes
     those alone, the cached kernels would keep the old formulas (a stale kernel once made batch and simulate differ
     by an ulp, and another reported a release as creeping that the numpy path stopped by friction; without the
     setup's file in the stamp, a planted error in it left the compiled identification passing its tests while the
@@ -347,8 +348,8 @@ def _jit_vector(fn, **calls):
     return njit(cache=True, nogil=True, error_model="numpy", inline="always")(fn)
 
 
-#: ``np`` as the functions of :mod:`quickrelease.device.dynamics` compiled by :func:`_jit_vector` see it: numpy, its square
-#: root the vectorisable :func:`_sqrt` (same rounding).
+#: ``np`` as the functions of :mod:`quickrelease.device.dynamics` compiled by :func:`_jit_vector` see it: numpy,
+#: its square root the vectorisable :func:`_sqrt` (same rounding).
 _VECTOR_NP = types.ModuleType("numpy_vector")
 _VECTOR_NP.sqrt = _sqrt
 _VECTOR_NP.maximum = np.maximum

@@ -2,11 +2,13 @@
 
 The stop time (Eq. 8-10), the release envelope (Table 4, Eq. 6) and the identification on the line of Eq. 13 of
 :mod:`quickrelease.batch`, with the formulas, node rules, tier criteria and graded panels of the compiled CPU kernels
-(:mod:`quickrelease.batch._fast`, from :mod:`quickrelease.device._kernels`), vectorised across cases instead of looped over them:
+(:mod:`quickrelease.batch._fast`, from :mod:`quickrelease.device._kernels`), vectorised across cases instead of
+looped over them:
 
 * Only what numpy and CuPy share: ``xp.sin``, ``cos``, ``sqrt``, ``arctan2``, ``log``, ``ceil``, ``where``,
   ``minimum``, ``maximum``, ``abs``, boolean masks and integer gathers, arithmetic. The pure functions of
-  :mod:`quickrelease.device.dynamics` that the setup calls (``amplitude_terms``, ``limit_margin_terms``, ``creeps_terms``,
+  :mod:`quickrelease.device.dynamics` that the setup calls (``amplitude_terms``, ``limit_margin_terms``,
+  ``creeps_terms``,
   ``limit_sweep``, ``_stop_terms``, ``sweep_sides``) and ``_kernels.feasible_slack`` are arithmetic and numpy
   ufuncs (``np.sqrt``, ``np.maximum``, ``np.abs``, ``np.cos``), which CuPy arrays take through
   ``__array_ufunc__``: they are called as they are, one definition of the classifier and of Eq. 8 for every backend

@@ -15,7 +15,8 @@ points. Its objective is the chi-square of a thinned record (at most :data:`SEAR
 channel), the release instant held at its detected value, the pushed displacement at its record value
 (searched as a factor where no displacement channel gives it), and each channel's offset profiled out in
 closed form (the weighted mean of data minus model). The fit polishes the best point of each run, beside
-the record's own starts and the design values, by least squares (:func:`quickrelease.building.isolation_fit.fit_isolation`).
+the record's own starts and the design values, by least squares
+(:func:`quickrelease.building.isolation_fit.fit_isolation`).
 
 :func:`certificate` then says how many of those independent starts reached the best minimum and how far
 the next distinct minimum lies above it: the honest statement of whether the global minimum was found.

@@ -99,6 +99,18 @@ class Identification(Summarised):
             "device": self.device.name,
         }
 
+    def line_curve(self, points: int = 41) -> dict[str, Any]:
+        """The numbers behind the identification figure: the stop time along the line of Eq. 13,
+        ``F1 = F1* (1 - F2/F2*)``, at ``points`` ratios F2/F2* from 0 to 1 (``F2_ratio`` [-], ``F1``, ``F2`` [N],
+        ``stop_time`` [s], :func:`stop_time_on_line`)."""
+        import numpy as np
+
+        ratio = np.linspace(0.0, 1.0, points)
+        F1 = self.F1_max * (1.0 - ratio)
+        t = np.array([stop_time_on_line(f, self.stored_energy, self.alpha0, self.alpha_final, device=self.device,
+                                        mass_model=self.mass_factor) for f in F1])
+        return {"F2_ratio": ratio, "F1": F1, "F2": self.F2_max * ratio, "stop_time": t}
+
     def to_pandas(self):
         """The identification as a one-row DataFrame, columns keyed with their units as in
         :meth:`summary` (``F1_N``, ..., the feasible interval as ``feasible_stop_time_min_s`` and ``_max_s``)."""

@@ -153,6 +153,34 @@ class Response(Summarised):
         """``(E_K + W_F - E_S) / E_S`` along the solution (0 for an exact solution) [-]."""
         return (self.kinetic_energy + self.dissipated_energy - self.stored_energy) / self.stored_energy
 
+    def state_diagram(self, points: int = 400) -> dict[str, np.ndarray]:
+        """The numbers behind Fig. 15: the solution's states, Eq. 10 at them, and its distance from Eq. 10.
+
+        ``alpha``, ``alpha_dot`` [rad, rad/s]: the numerical states up to the stop; ``alpha_dot_analytic``:
+        Eq. 10, ``sqrt((E_S - W_F(alpha)) / M(alpha))``, at the same angles; ``energy_residual`` [J]:
+        ``|F|`` with ``F(alpha, alpha_dot) = M(alpha) alpha_dot^2 + W_F(alpha) - E_S`` (Eq. 9, ``E_K + W_F -
+        E_S``), whose zero level is the curve (relative to E_S, the distance printed on Fig. 15; unlike the
+        vertical gap it stays meaningful near the stop, where the curve is vertical); ``distance``: that
+        residual turned into a distance in the state plane, to first order ``|F| / |grad F|`` (rad and rad/s
+        taken together: a check, not a quantity with one unit); ``curve_alpha``, ``curve_alpha_dot``: Eq. 10
+        on ``points`` angles from alpha0 to alpha_F (the analytic curve drawn under the states)."""
+        d = self.device
+        moving = self.t <= self.stop_time
+        alpha, alpha_dot = self.alpha[moving], self.alpha_dot[moving]
+        W = dynamics.dissipated_energy(alpha, self.alpha0, self.F1, self.F2, d.L1)
+        M = dynamics.generalized_mass(alpha, d.m1, d.m2, d.L1, self.mass_factor)
+        analytic = np.sqrt(np.maximum(self.stored_energy - W, 0.0) / M)
+        F = M * alpha_dot**2 + W - self.stored_energy
+        dM = d.m2 * d.L1**2 * np.sin(2.0 * alpha)
+        dW = 2.0 * self.F1 * d.L1 * np.cos(alpha) + 4.0 * self.F2 * d.L1 * np.sin(alpha)
+        grad = np.hypot(dM * alpha_dot**2 + dW, 2.0 * M * alpha_dot)
+        fine = np.linspace(self.alpha0, self.alpha_final, points)
+        W_fine = dynamics.dissipated_energy(fine, self.alpha0, self.F1, self.F2, d.L1)
+        M_fine = dynamics.generalized_mass(fine, d.m1, d.m2, d.L1, self.mass_factor)
+        return {"alpha": alpha, "alpha_dot": alpha_dot, "alpha_dot_analytic": analytic,
+                "energy_residual": np.abs(F), "distance": np.abs(F) / grad, "curve_alpha": fine,
+                "curve_alpha_dot": np.sqrt(np.maximum(self.stored_energy - W_fine, 0.0) / M_fine)}
+
     # -- summaries ---------------------------------------------------------------
     def summary(self) -> dict[str, Any]:
         """The release in numbers, with units in the key names (JSON-ready): the keys and values

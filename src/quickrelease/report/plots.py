@@ -13,15 +13,14 @@ from typing import Any
 
 import numpy as np
 
-from ..device import dynamics
-from ..device.identify import Identification, stop_time_on_line
+from ..device.identify import Identification
 from ..device.response import Response
 from ..device.statics import StrainEnergy
 from ._style import COLORS, STYLE, figure, panels, styled, unit_text
 
 __all__ = [
     "fig13", "fig14", "fig15", "identification_figure", "strain_energy_figure", "fit_figure", "save_figure",
-    "state_diagram_data", "identification_curve_data", "user_text", "user_label",
+    "user_text", "user_label",
 ]
 
 _STYLE, _COLORS, _figure = STYLE, COLORS, figure  # the names the figure modules import
@@ -117,51 +116,23 @@ def fig14(response: Response, fig=None, ax=None):
     return fig
 
 
-def state_diagram_data(response: Response) -> dict[str, np.ndarray]:
-    """Numbers behind Fig. 15: the numerical (alpha, alpha_dot), Eq. 10 at the same alpha, and the distance.
-
-    ``energy_residual`` [J] is ``|F|`` with ``F(alpha, alpha_dot) = M(alpha) alpha_dot^2 + W_F(alpha) - E_S``
-    (Eq. 9, ``E_K + W_F - E_S``), whose zero level is the curve: the distance printed on Fig. 15, relative to
-    E_S (``energy_residual / E_S``, dimensionless). Unlike the vertical gap it stays meaningful near the stop,
-    where the curve is vertical. ``distance`` is the same residual turned into a distance in the state plane,
-    to first order ``|F| / |grad F|`` (rad and rad/s taken together: a check, not a quantity with one unit).
-    """
-    r = response
-    d = r.device
-    moving = r.t <= r.stop_time
-    alpha, alpha_dot = r.alpha[moving], r.alpha_dot[moving]
-    W = dynamics.dissipated_energy(alpha, r.alpha0, r.F1, r.F2, d.L1)
-    M = dynamics.generalized_mass(alpha, d.m1, d.m2, d.L1, r.mass_factor)
-    analytic = np.sqrt(np.maximum(r.stored_energy - W, 0.0) / M)
-    F = M * alpha_dot**2 + W - r.stored_energy
-    dM = d.m2 * d.L1**2 * np.sin(2.0 * alpha)
-    dW = 2.0 * r.F1 * d.L1 * np.cos(alpha) + 4.0 * r.F2 * d.L1 * np.sin(alpha)
-    grad = np.hypot(dM * alpha_dot**2 + dW, 2.0 * M * alpha_dot)
-    return {"alpha": alpha, "alpha_dot": alpha_dot, "alpha_dot_analytic": analytic,
-            "energy_residual": np.abs(F), "distance": np.abs(F) / grad}
-
-
 @styled
 def fig15(responses: Response | list[Response], n_markers: int = 40, fig=None, ax=None):
     """Fig. 15: state diagram, numerical solutions (markers) with the analytic curve of Eq. 10 (a line drawn
     on top of them, so that it stays visible where the markers lie on it).
 
     Each response's legend entry gives its largest distance from the curve, as the energy residual relative
-    to the stored energy, ``max |E_K + W_F - E_S| / E_S`` (dimensionless; see :func:`state_diagram_data`).
+    to the stored energy, ``max |E_K + W_F - E_S| / E_S`` (dimensionless; see
+    :meth:`quickrelease.device.response.Response.state_diagram`, which computes what this draws).
     ``ax``: an Axes to draw into. Returns the figure.
     """
     responses = [responses] if isinstance(responses, Response) else list(responses)
-    r = responses[0]
-    d = r.device
     fig, ax = panels(4.6, 3.4, fig=fig, ax=ax, left=0.14, bottom=0.14)
-    fine = np.linspace(r.alpha0, r.alpha_final, 400)
-    W = dynamics.dissipated_energy(fine, r.alpha0, r.F1, r.F2, d.L1)
-    M = dynamics.generalized_mass(fine, d.m1, d.m2, d.L1, r.mass_factor)
-    ax.plot(fine, np.sqrt(np.maximum(r.stored_energy - W, 0.0) / M), color="black", lw=0.9, zorder=3,
+    diagrams = [resp.state_diagram() for resp in responses]  # computed by the response (device.response)
+    ax.plot(diagrams[0]["curve_alpha"], diagrams[0]["curve_alpha_dot"], color="black", lw=0.9, zorder=3,
             label="analytic, Eq. 10")
     markers = [("o", _COLORS["b"]), ("x", _COLORS["a"]), ("s", _COLORS["c"])]
-    for k, resp in enumerate(responses):
-        data = state_diagram_data(resp)
+    for k, (resp, data) in enumerate(zip(responses, diagrams, strict=True)):
         step = max(1, data["alpha"].size // n_markers)
         name = {"rk": f"Runge-Kutta ({resp.stats.get('rk_method', 'DOP853')})",
                 "explicit": f"Table 6, dt = {1e3 * resp.stats.get('dt', 0.0):g} ms",
@@ -179,23 +150,11 @@ def fig15(responses: Response | list[Response], n_markers: int = 40, fig=None, a
     return fig
 
 
-def identification_curve_data(ident: Identification, n: int = 41) -> dict[str, np.ndarray]:
-    """Numbers behind the identification figure: t_F along Eq. 13 for F2/F2* from 0 to 1."""
-    ratio = np.linspace(0.0, 1.0, n)
-    F1 = ident.F1_max * (1.0 - ratio)
-    t = np.array([
-        stop_time_on_line(f, ident.stored_energy, ident.alpha0, ident.alpha_final, device=ident.device,
-                          mass_model=ident.mass_factor)
-        for f in F1
-    ])
-    return {"F2_ratio": ratio, "F1": F1, "F2": ident.F2_max * ratio, "stop_time": t}
-
-
 @styled
 def identification_figure(ident: Identification, fig=None, ax=None):
     """Stop time along the line of Eq. 13, with the measured t_F and the identified point. ``ax``: an Axes
     to draw into. Returns the figure."""
-    data = identification_curve_data(ident)
+    data = ident.line_curve()  # computed by the identification (device.identify)
     fig, ax = panels(4.6, 3.4, fig=fig, ax=ax, left=0.14, bottom=0.15)
     ax.plot(data["F2_ratio"], data["stop_time"], color=_COLORS["a"], label="model $t_F$ on Eq. 13")
     ax.axhline(ident.stop_time, color=_COLORS["d"], ls="--", lw=0.9, label=f"measured $t_F$ = {ident.stop_time:g} s")
