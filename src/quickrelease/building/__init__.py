@@ -9,7 +9,9 @@ Modules, one question each:
 - :mod:`~quickrelease.building.decay`: the decay of the free vibration (turning points, decrement laws,
   hysteresis loop; ``analyse_decay``);
 - :mod:`~quickrelease.building.isolation_fit`: the isolation system fitted to records (``fit_isolation``,
-  ``compare_models``, ``IsolationFit``, ``BuildingChannel``); ``isolation_search``: its global start search.
+  ``compare_models``, ``IsolationFit``, ``BuildingChannel``); ``isolation_search``: its global start search;
+- :mod:`~quickrelease.building.effective`: the quantities engineers report per cycle of an isolator's loop
+  (keff, EDC, beta_eff, Qd, Kd, Teff, mu; ``loop_cycles``, ``CycleProperties``).
 
 The building's physics imports no files, tables, figures, studies or command line (the import-linter contract
 in ``pyproject.toml``). The package re-exports :mod:`~quickrelease.building.model`.
