@@ -96,3 +96,31 @@ def test_bad_loops_are_one_line():
     with pytest.raises(ParameterError, match="non-finite"):
         loop_cycles([0, 1, 2], [0, math.nan, 0], [0, 1, 0])
     assert loop_cycles([0, 1, 2, 3], [0, 1, 2, 3], [0, 1, 2, 3]) == ()  # no turning point: no cycle
+
+
+def test_the_building_analysis_reports_the_fitted_isolators_cycles():
+    """analyse_building on an independent record of a linear isolator on sliders (no dampers): per cycle of
+    the fitted model's loop after the first (which starts at the release, on the unloading branch), keff =
+    k + F_s / D and Kd = k, Qd = F_s (the truth's, within the fit's interval scale); the JSON's `effective`
+    and top-level `Qd_N`, `Kd_N_m`."""
+    from quickrelease.building.isolation_fit import BuildingChannel
+    from quickrelease.studies.building_analysis import analyse_building
+
+    M, T, Fs, d0 = 8e5, 2.5, 0.006 * 8e5 * G0, 0.15
+    k = M * (2 * math.pi / T) ** 2
+    t = np.arange(0.0, 40.0, 1.0 / 200.0)
+    (x, _, a), _ = reference(M, k, k, math.inf, 0.0, Fs, d0, t - 2.0, with_rates=True)
+    rng = np.random.default_rng(11)
+    channels = [BuildingChannel("x", "x", t, x + rng.normal(0, 1e-4, t.size)),
+                BuildingChannel("a", "a", t, a + rng.normal(0, 0.01, t.size))]
+    result = analyse_building(channels=channels, mass=M, global_search=False)
+    summary = result.summary()
+    assert summary["Qd_N"] == pytest.approx(Fs, rel=0.01) and summary["Kd_N_m"] == pytest.approx(k, rel=1e-3)
+    cycles = summary["effective"]
+    assert len(cycles) >= 3
+    assert {"amplitude_m", "keff_N_m", "edc_J", "beta_eff", "teff_s"} <= set(cycles[0])
+    for c in cycles[1:]:
+        assert c["keff_N_m"] == pytest.approx(k + Fs / c["amplitude_m"], rel=0.01)
+        assert c["kd_N_m"] == pytest.approx(k, rel=0.01)
+        assert c["qd_N"] == pytest.approx(Fs, rel=0.02)
+        assert c["teff_s"] == pytest.approx(2 * math.pi * math.sqrt(M / c["keff_N_m"]), rel=1e-12)

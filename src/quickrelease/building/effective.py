@@ -115,11 +115,16 @@ def _branch_crossing(x: np.ndarray, f: np.ndarray, direction: float) -> float:
     return float(f[i] + w * (f[i + 1] - f[i]))
 
 
-def _loading_slope(x: np.ndarray, f: np.ndarray, amplitude: float) -> float:
-    """Least-squares slope of F on x over the loading samples (x moving away from 0) beyond amplitude / 2."""
+def _loading_slope(x: np.ndarray, f: np.ndarray, amplitude: float, guard: int = 2) -> float:
+    """Least-squares slope of F on x over the loading samples (x moving away from 0) beyond amplitude / 2,
+    leaving out ``guard`` samples either side of each extreme (a slider's force may have flipped at the
+    sample of the extreme already)."""
     dx = np.diff(x)
     xm = x[1:]
-    loading = (np.sign(dx) == np.sign(xm)) & (np.abs(xm) > 0.5 * amplitude)
+    near = np.zeros(xm.size, dtype=bool)
+    for i in (int(np.argmax(x)), int(np.argmin(x))):
+        near[max(i - 1 - guard, 0):i + guard] = True  # xm[j] is x[j + 1]
+    loading = (np.sign(dx) == np.sign(xm)) & (np.abs(xm) > 0.5 * amplitude) & ~near
     xs, fs = xm[loading], f[1:][loading]
     if xs.size < 4 or np.ptp(xs) == 0.0:
         return math.nan
@@ -130,7 +135,8 @@ def _loading_slope(x: np.ndarray, f: np.ndarray, amplitude: float) -> float:
     return float(coef[0])
 
 
-def loop_cycles(t, x, force, mass: float | None = None, neighbourhood: int = 2) -> tuple[CycleProperties, ...]:
+def loop_cycles(t, x, force, mass: float | None = None, neighbourhood: int = 2,
+                turns=None) -> tuple[CycleProperties, ...]:
     """The engineering quantities of every whole cycle of the loop ``(x, force)`` sampled at times t (see the
     module docstring for each definition and its source).
 
@@ -142,6 +148,10 @@ def loop_cycles(t, x, force, mass: float | None = None, neighbourhood: int = 2) 
         The mass on the isolators [kg]: gives Teff and mu.
     neighbourhood : int
         Samples either side of a displacement's extreme where the extreme force is taken (F+ and F-).
+    turns : array_like of int, optional
+        The samples of the turning points, increasing (e.g. the release from rest, the reversals and the
+        stop of a free decay, which the increments alone do not show at the record's ends); default
+        :func:`cycle_turns`.
 
     Returns
     -------
@@ -158,7 +168,9 @@ def loop_cycles(t, x, force, mass: float | None = None, neighbourhood: int = 2) 
         raise ParameterError("x", "non-finite samples", "finite values")
     if mass is not None and not (math.isfinite(float(mass)) and float(mass) > 0.0):
         raise ParameterError("mass", mass, "(0, inf)", "kg")
-    turns = cycle_turns(x)
+    turns = cycle_turns(x) if turns is None else np.asarray(turns, dtype=int)
+    if turns.size and (np.any(np.diff(turns) <= 0) or turns[0] < 0 or turns[-1] >= x.size):
+        raise ParameterError("turns", f"{turns.size} indices", f"increasing sample indices in [0, {x.size - 1}]")
     out = []
     for k in range(turns.size - 2):
         i0, i1 = int(turns[k]), int(turns[k + 2])
@@ -181,7 +193,7 @@ def loop_cycles(t, x, force, mass: float | None = None, neighbourhood: int = 2) 
         edc = path + 0.5 * (_turning_force(f, i0) + _turning_force(f, i1)) * (xs[0] - xs[-1])
         beta = edc / (2.0 * math.pi * keff * D * D) if keff > 0.0 else math.nan
         qd = 0.5 * (_branch_crossing(xs, fs, 1.0) - _branch_crossing(xs, fs, -1.0))
-        kd = _loading_slope(xs, fs, D)
+        kd = _loading_slope(xs, fs, D, neighbourhood)
         teff = mu = math.nan
         if mass is not None:
             m = float(mass)

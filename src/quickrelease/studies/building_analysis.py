@@ -26,6 +26,7 @@ from scipy import stats
 
 from .._results import Summarised
 from ..building.decay import DecayAnalysis, analyse_decay, hysteresis_loop
+from ..building.effective import CycleProperties, loop_cycles
 from ..building.isolation_fit import (
     BuildingChannel,
     IsolationFit,
@@ -34,6 +35,7 @@ from ..building.isolation_fit import (
     drop_excluded,
     fit_isolation,
 )
+from ..building.model import free_vibration
 from ..errors import ParameterError, QuickReleaseError
 from ..io.export import jsonable
 
@@ -77,6 +79,9 @@ class BuildingResult(Summarised):
     (:func:`model_decay`; None without a decay analysis of the record or a displacement channel)."""
     decay_envelope: dict[str, np.ndarray] = field(default_factory=dict)
     """The numbers behind the decay figure (:func:`decay_envelope`; empty without a decay analysis)."""
+    effective: tuple[CycleProperties, ...] = ()
+    """The engineering quantities per cycle of the fitted model's loop along the record's decay (keff, EDC,
+    beta_eff, Qd, Kd, Teff, mu: :func:`effective_cycles`); empty for the 2dof model."""
 
     @property
     def model(self) -> str:
@@ -96,8 +101,43 @@ class BuildingResult(Summarised):
                     "notes": list(self.notes), "comparison": [jsonable(r) for r in self.comparison],
                     "decay_check": jsonable({k: v for k, v in self.decay_check.items() if k != "analysis"}),
                     "decay": None if self.decay is None else jsonable(self.decay.summary(self.fit.mass)),
+                    "effective": [jsonable(c.summary()) for c in self.effective],
+                    **characteristic_strength(self.fit),
                     "fit": jsonable(self.fit.summary())})
         return out
+
+
+def effective_cycles(fit: IsolationFit, points_per_period: int = 2000) -> tuple[CycleProperties, ...]:
+    """The engineering quantities per cycle (:func:`quickrelease.building.effective.loop_cycles`) of the fitted
+    model's own loop, the isolators' total force ``-m x_ddot`` against x, from the release until the sliders
+    hold the building (or over the record's span), ``points_per_period`` samples a period: the cycles of the
+    record as the identified isolator runs them, free of the record's noise. Empty for ``2dof`` (its base
+    force is not the isolators' alone)."""
+    if fit.model == "2dof":
+        return ()
+    iso = fit.isolation()
+    span = max(float(np.max(c.t)) for c in fit.channels) - fit.release_time if fit.channels else 0.0
+    horizon = span if span > 0.0 else 20.0 * iso.period
+    fv = free_vibration(iso, fit.parameters["d0"], t_end=horizon)
+    end = min(fv.stop_time, horizon) if math.isfinite(fv.stop_time) else horizon
+    t = np.linspace(0.0, end, max(int(points_per_period * end / iso.period), 16) + 1)
+    x, _, a = fv.state(t)
+    # the turning points: the release from rest, the reversals, and the stop where the sliders hold
+    turns = [0] + [int(i) for i in np.searchsorted(t, fv.reversal_times[1:]) if 0 < i < t.size - 1]
+    if math.isfinite(fv.stop_time) and fv.stop_time <= horizon and turns[-1] != t.size - 1:
+        turns.append(t.size - 1)
+    return loop_cycles(t + fit.release_time, x, -fit.mass * a, mass=fit.mass, turns=sorted(set(turns)))
+
+
+def characteristic_strength(fit: IsolationFit) -> dict[str, float]:
+    """The model's characteristic strength ``Qd_N`` (the loading branches' force at x = 0: the sliders' F_s,
+    plus ``F_y (1 - k2/k1)`` for the bilinear rubber) and post-yield stiffness ``Kd_N_m`` (k, or k2), where the
+    model has them (not for 2dof)."""
+    if fit.model == "2dof":
+        return {}
+    iso = fit.isolation()
+    qd = float(iso.friction) + (iso.plastic_yield if fit.model == "bilinear" else 0.0)
+    return {"Qd_N": qd, "Kd_N_m": float(iso.k2)}
 
 
 def physical_estimates(fit: IsolationFit) -> dict[str, Any]:
@@ -279,8 +319,10 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
         notes += [n for n in check.get("notes", []) if n not in notes]
         warnings += [w for w in check.get("warnings", []) if w not in warnings]
     loop = _loop(fit, channels, notes)
+    effective = effective_cycles(fit) if fit.model != "2dof" else ()
     return BuildingResult(fit=fit, compared=tuple(compared), comparison=tuple(comparison), decay=decay,
                           decay_check=check, loop=loop, warnings=tuple(warnings), notes=tuple(notes),
+                          effective=effective,
                           source=source, curves=model_curves(fit),
                           model_decay=None if decay is None else model_decay(fit),
                           decay_envelope={} if decay is None else decay_envelope(decay))
