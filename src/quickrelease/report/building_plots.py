@@ -15,7 +15,7 @@ import numpy as np
 from ..building.isolation_fit import CHANNEL_KINDS
 from ._style import STYLE as _STYLE
 from ._style import panels, styled, unit_text
-from .plots import _COLORS, _channel_axes, _joint_legend, headroom, user_label
+from .plots import _COLORS, _joint_legend, headroom, record_panels, user_label
 
 __all__ = ["BUILDING_FIGURES", "building_figures", "fit_figure", "decay_figure", "amplitude_figure",
            "hysteresis_figure", "off_scale"]
@@ -57,12 +57,8 @@ def fit_figure(result, fig=None, ax=None):
     fit = result.fit
     channels = list(fit.channels)
     n = len(channels)
-    height = 1.0 + 2.4 * n
-    fig, given = _channel_axes(7.0, height, n, fig, ax, left=0.12, right=0.98, bottom=0.5 / height,
-                               top=1.0 - 0.55 / height)
+    fig, given, grid = record_panels(n, 2.4, fig, ax, left=0.12)
     titled = given is None
-    grid = None if given is not None else \
-        fig.add_gridspec(3 * n - 1, 1, height_ratios=([3, 1.2, 0.5] * n)[:-1], hspace=0.1)
     share = None
     bottom = None
     for k, ch in enumerate(channels):

@@ -203,12 +203,8 @@ def fit_figure(result, fig=None, ax=None):
 
     names = list(result.record.channels)
     n = len(names)
-    height = 1.0 + 2.6 * n
-    fig, given = _channel_axes(7.0, height, n, fig, ax, left=0.11, right=0.98, bottom=0.5 / height,
-                               top=1.0 - 0.55 / height)
+    fig, given, grid = record_panels(n, 2.6, fig, ax, left=0.11)
     titled = given is None
-    grid = None if given is not None else \
-        fig.add_gridspec(3 * n - 1, 1, height_ratios=([3, 1.2, 0.5] * n)[:-1], hspace=0.1)
     t_fine, curves = result.model_curves()
     share = None
     t_rel = result.release_time
@@ -244,6 +240,18 @@ def fit_figure(result, fig=None, ax=None):
         fig.suptitle(f"Fit to the record: $F_1$ = {result.F1:.1f} ± {result.std_errors['F1']:.2g} N, "
                      f"$F_2$ = {result.F2:.1f} ± {result.std_errors['F2']:.2g} N")
     return fig
+
+
+def record_panels(n: int, per_channel: float, fig, ax, left: float):
+    """The layout of a record figure of ``n`` channels, each a panel of the channel over a panel of its
+    residuals (7 in wide, ``per_channel`` in of height each): (fig, the user's axes or None, the grid to add
+    the panels to or None where the user gave the axes)."""
+    height = 1.0 + per_channel * n
+    fig, given = _channel_axes(7.0, height, n, fig, ax, left=left, right=0.98, bottom=0.5 / height,
+                               top=1.0 - 0.55 / height)
+    grid = None if given is not None else \
+        fig.add_gridspec(3 * n - 1, 1, height_ratios=([3, 1.2, 0.5] * n)[:-1], hspace=0.1)
+    return fig, given, grid
 
 
 def _channel_axes(width: float, height: float, n: int, fig, ax, **margins):
