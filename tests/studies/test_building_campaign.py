@@ -364,6 +364,20 @@ def test_bad_building_campaigns_are_one_line_exit_2(tmp_path, text, fragment):
     assert "Traceback" not in r.output and not out.exists()
 
 
+def test_the_campaign_records_say_whether_spikes_are_excluded(tmp_path):
+    """[building.record] spikes = "exclude" reaches every release's fit (it was read and then ignored)."""
+    import tomllib
+
+    from quickrelease.studies.building_campaign import load_building_campaign
+
+    rows = "\n".join(f"{i * 0.01:.2f},{60.0 if i < 100 else 0.0}" for i in range(400))
+    (tmp_path / "a.csv").write_text("t_s,x_mm\n" + rows + "\n", encoding="utf-8")
+    for spikes, expected in (("", False), ('spikes = "exclude"\n', True)):
+        text = _GOOD.replace('time = "t_s"\n', 'time = "t_s"\n' + spikes) + "".join(_test(n, "a.csv") for n in "ABC")
+        releases = load_building_campaign(tmp_path / "c.toml", tomllib.loads(text))[6]
+        assert [r.exclude_spikes for r in releases] == [expected] * 3
+
+
 def test_an_edited_record_is_another_campaign_run(tmp_path):
     """The campaign folder's fingerprint holds the records the tests name, not only the campaign file."""
     from quickrelease.workflow import campaign_folder

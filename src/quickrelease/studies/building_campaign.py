@@ -127,6 +127,8 @@ class BuildingRelease:
     """The push force P [N] (needed for laws in ``force``)."""
     release_time: float | None = None
     """Start value of the release instant [s, record time]; None: detected."""
+    exclude_spikes: bool = False
+    """Leave out the samples the fit's residuals show as spikes (``[building.record] spikes = "exclude"``)."""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "channels", tuple(self.channels))
@@ -281,7 +283,7 @@ CAMPAIGN_WORKERS = max(1, min(os.cpu_count() or 1, 8))
 def _fit_one(r, mass: float, model: str, start, superstructure_mass):
     try:
         return fit_isolation(r.channels, mass, model, release_time=r.release_time, start=start, fixed=_fixed(r),
-                             superstructure_mass=superstructure_mass)
+                             superstructure_mass=superstructure_mass, exclude_spikes=r.exclude_spikes)
     except QuickReleaseError as exc:
         raise type(exc)(f"release {r.name}: {exc}") from None
 
@@ -316,7 +318,8 @@ def _restart_misfits(releases, fits: list[IsolationFit], mass: float, model: str
             start = {n: other.estimates[n] for n in _FITTED if n in other.estimates}
             try:
                 trial = fit_isolation(r.channels, mass, model, release_time=r.release_time, start=start,
-                                      fixed=_fixed(r), superstructure_mass=superstructure_mass)
+                                      fixed=_fixed(r), superstructure_mass=superstructure_mass,
+                                      exclude_spikes=r.exclude_spikes)
             except QuickReleaseError:
                 continue
             if trial.chi2 < fits[i].chi2:
@@ -611,7 +614,7 @@ def load_building_campaign(path, data: dict[str, Any]) -> tuple[str, str, tuple[
         if not loaded.channels:
             raise CaseFileError(f"{where}: [building.record.channels] maps no channel")
         releases.append(BuildingRelease(name, loaded.channels, d0=loaded.d0, force=force,
-                                        release_time=loaded.release_time))
+                                        release_time=loaded.release_time, exclude_spikes=loaded.exclude_spikes))
         start = {k: v for k, v in loaded.start.items() if k != "d0"}  # d0: each release's own, from its record
         mass, superstructure_mass = loaded.mass, loaded.superstructure_mass
     if len(releases) < 3:
