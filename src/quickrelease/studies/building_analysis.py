@@ -319,7 +319,7 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
         notes += [n for n in check.get("notes", []) if n not in notes]
         warnings += [w for w in check.get("warnings", []) if w not in warnings]
     loop = _loop(fit, channels, notes)
-    effective = effective_cycles(fit) if fit.model != "2dof" else ()
+    effective = effective_cycles(fit)
     return BuildingResult(fit=fit, compared=tuple(compared), comparison=tuple(comparison), decay=decay,
                           decay_check=check, loop=loop, warnings=tuple(warnings), notes=tuple(notes),
                           effective=effective,
