@@ -175,9 +175,12 @@ class IsolationFit:
         """Every parameter of the fitted model: the estimates and those held fixed."""
         return {**self.fixed, **self.estimates}
 
-    def isolation(self) -> Isolation | TwoDOF:
-        """The fitted isolation layer (the :class:`~quickrelease.building.TwoDOF` building for ``2dof``)."""
-        return _isolation(self.model, self.mass, self.parameters, self.superstructure_mass)
+    def isolation(self, parameters: dict[str, float] | None = None) -> Isolation | TwoDOF:
+        """The fitted isolation layer (the :class:`~quickrelease.building.TwoDOF` building for ``2dof``); with
+        ``parameters`` (a dict of fit parameters by name, e.g. a draw from the estimates' covariance), the
+        same model at those values, the missing ones taken from the fit."""
+        p = self.parameters if parameters is None else {**self.parameters, **parameters}
+        return _isolation(self.model, self.mass, p, self.superstructure_mass)
 
     @property
     def release_time(self) -> float:
