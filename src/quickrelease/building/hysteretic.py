@@ -141,6 +141,14 @@ class Pendulum:
     def k2(self) -> float:
         return self.stiffness
 
+    @property
+    def damping_ratio(self) -> float:
+        """The viscous damper's ratio referred to the stiffness of ``period``, ``c / (2 sqrt(k m))`` [-] (nan
+        with a power-law damper)."""
+        if self.damping_exponent != 1.0:
+            return math.nan
+        return self.damping / (2.0 * math.sqrt(self.k2 * self.mass))
+
     def vector(self) -> np.ndarray:
         """The integrator's parameter vector (:mod:`quickrelease.building._ode`)."""
         P = np.zeros(_ode.NP)
@@ -159,7 +167,7 @@ class Pendulum:
         return {"model": "pendulum", "mass_kg": self.mass, "radius_m": self.radius, "period_s": self.period,
                 "stiffness_N_m": self.stiffness, "friction_slow": self.friction_slow,
                 "friction_fast": float(self.friction_fast), "rate_s_m": self.rate, "friction_N": self.friction,
-                "damping_coefficient": self.damping, "damping_exponent": self.damping_exponent}
+                **_damper(self)}
 
 
 @dataclass(frozen=True)
@@ -207,6 +215,14 @@ class BoucWen:
         return float(self.post_yield_stiffness)
 
     @property
+    def damping_ratio(self) -> float:
+        """The viscous damper's ratio referred to the stiffness of ``period``, ``c / (2 sqrt(k m))`` [-] (nan
+        with a power-law damper)."""
+        if self.damping_exponent != 1.0:
+            return math.nan
+        return self.damping / (2.0 * math.sqrt(self.k2 * self.mass))
+
+    @property
     def period(self) -> float:
         """The post-yield period 2 pi sqrt(m / Kd) [s]."""
         return 2.0 * math.pi * math.sqrt(self.mass / self.post_yield_stiffness)
@@ -238,8 +254,13 @@ class BoucWen:
     def summary(self) -> dict[str, Any]:
         return {"model": "boucwen", "mass_kg": self.mass, "Kd_N_m": self.k2, "Qd_N": self.characteristic_strength,
                 "dy_m": self.yield_displacement, "shape": self.shape, "initial_stiffness_N_m": self.stiffness,
-                "period_s": self.period, "friction_N": self.friction, "damping_coefficient": self.damping,
-                "damping_exponent": self.damping_exponent}
+                "period_s": self.period, "friction_N": self.friction, **_damper(self)}
+
+
+def _damper(system) -> dict[str, float]:
+    if system.damping_exponent == 1.0:
+        return {"damping_ratio": system.damping_ratio, "damping_N_s_m": system.damping}
+    return {"damping_coefficient": system.damping, "damping_exponent": system.damping_exponent}
 
 
 def _works(ys: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

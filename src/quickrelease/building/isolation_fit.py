@@ -1614,12 +1614,13 @@ def predicted_isolation_errors(channels, mass: float, model: str, parameters: di
     if not channels:
         raise ParameterError("channels", "none", "at least one channel of the isolation layer")
     if model not in FIT_MODELS:
-        raise ParameterError("model", model, "'linear', 'bilinear' or '2dof'")
+        raise ParameterError("model", model, ", ".join(f"'{m}'" for m in FIT_MODELS))
+    damping = "power" if "damping_exponent" in parameters else "viscous"
     for ch in channels:
         if ch.noise is None:
             raise ParameterError(f"{ch.name}.noise", None, "given (the noise weights the information)",
                                  CHANNEL_KINDS[ch.kind])
-    all_names = _parameter_names(model, channels)
+    all_names = _parameter_names(model, channels, damping)
     values = {n: 0.0 for n in all_names if n.startswith(("offset_", "drift_"))}
     values.update({n: float(v) for n, v in parameters.items() if n in all_names})
     missing = [n for n in all_names if n not in values]

@@ -199,15 +199,21 @@ def _damping_ratio(value: float) -> float:
     return value
 
 
-def pushed_state(isolation: Isolation, d0: float) -> tuple[float, float, float]:
+def pushed_state(isolation: Isolation | Pendulum | BoucWen, d0: float) -> tuple[float, float, float]:
     """The state at the release after a monotonic push from 0 to d0 [m], at rest.
 
-    Returns ``(z0, R0, P)``: the plastic element's force z0 [N] (0 for the linear model), the restoring
-    force R0 = k2 d0 + z0 [N] and the push force that held it, P = R0 + F_s sign(d0) [N].
+    Returns ``(z0, R0, P)``: the plastic element's force z0 [N] (0 for the linear model; the Bouc-Wen
+    element's z0 [-]), the restoring force R0 = k2 d0 + z0 [N] (W d0 / R for the pendulum, Kd d0 + Qd z0
+    for Bouc-Wen) and the push force that held it, P = R0 + F_s sign(d0) [N] (F_s = mu_slow W for the
+    pendulum).
     """
     d0 = float(d0)
     if not math.isfinite(d0) or d0 == 0.0:
         raise ParameterError("d0", d0, "finite and non-zero", "m")
+    if isinstance(isolation, Pendulum | BoucWen):  # W d0 / R; Kd d0 + Qd z0 on the monotonic push curve
+        z0 = isolation.pushed(d0)
+        R0 = isolation.k2 * d0 + (isolation.characteristic_strength * z0 if isinstance(isolation, BoucWen) else 0.0)
+        return z0, R0, R0 + math.copysign(isolation.friction, d0)
     if isolation.model == "linear":
         z0 = 0.0
     else:
