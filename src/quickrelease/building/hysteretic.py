@@ -40,7 +40,7 @@ SHAPE_RANGE = (0.5, 25.0)
 #: The damper's exponent alpha's range (fluid viscous dampers: 0.1 to 2).
 EXPONENT_RANGE = (0.05, 2.0)
 #: Steps of the monotonic push of a Bouc-Wen element, a yield displacement per this many (and n times more).
-PUSH_STEPS = 8
+PUSH_STEPS = 4
 #: Most steps one free vibration may take.
 MAX_STEPS = 20_000_000
 
@@ -317,8 +317,19 @@ class HystereticVibration:
     def state(self, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Displacement [m], velocity [m/s] and acceleration [m/s^2] at times t [s] (the value after an instant
         where the acceleration jumps; before the release at rest at d0)."""
-        ys, acc = self._evaluate(t)
-        return ys[..., 0], ys[..., 1], acc
+        t = np.asarray(t, dtype=float)
+        flat = np.ascontiguousarray(t.ravel())
+        if flat.size > 1 and not np.all(flat[1:] >= flat[:-1]):  # any order: through the sorted times
+            order = np.argsort(flat, kind="stable")
+            out = np.empty((3, flat.size))
+            out[:, order] = self._motion(flat[order])
+        else:
+            out = self._motion(flat)
+        return out[0].reshape(t.shape), out[1].reshape(t.shape), out[2].reshape(t.shape)
+
+    def _motion(self, t: np.ndarray) -> np.ndarray:
+        gt, gy, gd, gf, n = self._grid
+        return _ode.motion(self._P, gt, gy, gd, gf, n, self.stop_time, self._push, t)
 
     def channels(self, t) -> dict[str, np.ndarray]:
         """Every channel of the building's record at times t [s] (the roof moves with the rigid layer)."""

@@ -423,8 +423,8 @@ def synthesize_building(case: Case, channels: list[str] | tuple[str, ...], *, ra
     Parameters
     ----------
     case : Case
-        With ``[building]`` (model linear, bilinear or 2dof) and d0 (``displacement``, or a ``[test]``
-        force).
+        With ``[building]`` (model linear, bilinear, 2dof, pendulum or boucwen) and d0 (``displacement``, or a
+        ``[test]`` force).
     channels : list of str
         Channels of :data:`quickrelease.io.building_case.BUILDING_CHANNELS`.
     rate : float
