@@ -77,6 +77,34 @@ def building(tmp_path_factory):
     return result, page, path, stop, (tx, x), (ta, a)
 
 
+@pytest.fixture(scope="module")
+def device():
+    """(result, report text) of examples/fit.toml: the device's fit to a 500 Hz record of u, v and a_head."""
+    from quickrelease.io.case import load_case
+    from quickrelease.report.html import render_report
+    from quickrelease.report.plots import fit_figure as device_fit_figure
+    from quickrelease.workflow import run_case
+
+    result = run_case(load_case(ROOT / "examples" / "fit.toml"))
+    buf = io.StringIO()
+    device_fit_figure(result.fit).savefig(buf, format="svg")
+    return result, render_report(result, {"fit_channels": buf.getvalue()})
+
+
+def test_the_device_fit_zooms_with_every_sample_and_the_stop(device):
+    result, page = device
+    data = _data(page, "fit_channels")
+    columns = np.genfromtxt(ROOT / "examples" / "records" / "paper_500Hz.csv", delimiter=",", skip_header=1)
+    assert [(c["name"], c["unit"]) for c in data["channels"]] == [("u", "m"), ("v", "m"), ("a_head", "m/s²")]
+    for k, ch in enumerate(data["channels"]):
+        kept = np.isfinite(columns[:, 1 + k])  # the record's empty cells are no samples
+        assert np.array_equal(_decode(ch["values"]), columns[kept, 1 + k].astype("<f4")), ch["name"]
+        assert np.max(np.abs(_times(ch["t"]) - columns[kept, 0])) < 1e-6  # jittered clock: float32 offsets
+    marks = {m["label"]: m["t"] for m in data["markers"]}
+    assert marks["stop t_F"] - marks["release"] == pytest.approx(1.05, abs=0.01)  # Table 7's stop time
+    assert page.count("<script>/*! uPlot") == 1
+
+
 def test_every_sample_is_in_the_page(building):
     result, page, _, _, (tx, x), (ta, a) = building
     data = _data(page, "building_fit")
@@ -193,23 +221,25 @@ window.addEventListener("error", function (e) { __errors.push(String(e.message))
 (function () { var ce = console.error; console.error = function () {
   __errors.push(Array.prototype.join.call(arguments, " ")); ce.apply(console, arguments); }; })();</script>"""
 
-#: Put last in <body>: drive the figure through uPlot's API and the pointer, write what happened into the page.
+#: Put last in <body>: drive the figure ``FIGURE`` through uPlot's API and the pointer, write what happened into
+#: the page. The zoom: the fifth tenth of the record, on the first panel.
 _PROBE = """<script>(function () {
 function out(o) { var e = document.createElement("pre"); e.id = "probe-" + "out"; e.textContent = JSON.stringify(o);
   document.body.appendChild(e); }
 function xs(f) { return f.charts.map(function (u) { return [u.scales.x.min, u.scales.x.max]; }); }
 function later(fn) { setTimeout(fn, 30); }
-var o = {errors: __errors};
+var o = {errors: __errors}, id = "FIGURE";
 try {
-  var f = window.quickreleaseZoom.building_fit;
-  o.canvases = document.querySelectorAll("#building_fit-zoom canvas").length;
-  o.figureClass = document.getElementById("building_fit").className;
-  o.svgShown = getComputedStyle(document.querySelector("#building_fit > svg")).display;
+  var f = window.quickreleaseZoom[id];
+  o.canvases = document.querySelectorAll("#" + id + "-zoom canvas").length;
+  o.figureClass = document.getElementById(id).className;
+  o.svgShown = getComputedStyle(document.querySelector("#" + id + " > svg")).display;
   o.full = xs(f); o.yFull = f.charts[0].scales.y.max - f.charts[0].scales.y.min;
-  f.charts[0].setScale("x", {min: 3.5, max: 4.5});  // uPlot's API, on the first panel only
+  var a = f.full.min, span = f.full.max - f.full.min;
+  f.charts[0].setScale("x", {min: a + 0.4 * span, max: a + 0.5 * span});  // uPlot's API, on the first panel only
   later(function () {
     o.zoomed = xs(f); o.yZoomed = f.charts[0].scales.y.max - f.charts[0].scales.y.min;
-    var over = f.charts[3].over, r = over.getBoundingClientRect();
+    var last = f.charts[f.charts.length - 1], over = last.over, r = over.getBoundingClientRect();
     over.dispatchEvent(new MouseEvent("mousedown", {bubbles: true, shiftKey: true, button: 0,
                                                     clientX: r.left + r.width / 2, clientY: r.top + 5}));
     document.dispatchEvent(new MouseEvent("mousemove", {bubbles: true, clientX: r.left + r.width / 4,
@@ -217,7 +247,7 @@ try {
     document.dispatchEvent(new MouseEvent("mouseup", {bubbles: true, clientX: r.left + r.width / 4}));
     later(function () {
       o.panned = xs(f);
-      over = f.charts[2].over; r = over.getBoundingClientRect();
+      over = f.charts[1].over; r = over.getBoundingClientRect();
       over.dispatchEvent(new WheelEvent("wheel", {bubbles: true, cancelable: true, shiftKey: true, deltaY: -100,
                                                   clientX: r.left + r.width / 2, clientY: r.top + 5}));
       later(function () {
@@ -238,15 +268,15 @@ def _chromium():
     return None
 
 
-def _in_chromium(page: str, folder: Path) -> dict:
-    """Open ``page`` (with the probes) in headless Chromium; what the probe wrote."""
+def _in_chromium(page: str, figure: str, folder: Path) -> dict:
+    """Open ``page`` (with the probes, on its figure ``figure``) in headless Chromium; what the probe wrote."""
     browser = _chromium()
     if browser is None:
         if os.environ.get("CI"):
             pytest.fail("chromium is not installed; .ci/run installs it")
         pytest.skip("chromium not installed (apt-get install chromium)")
     probed = folder / "probed.html"
-    probed.write_text(page.replace("<head>", "<head>" + _CATCH, 1).replace("</body>", _PROBE + "</body>", 1),
+    probed.write_text(page.replace("<head>", "<head>" + _CATCH, 1).replace("</body>", _PROBE.replace("FIGURE", figure) + "</body>", 1),
                       encoding="utf-8")
     cmd = [browser, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
            "--disable-background-networking", "--disable-component-update", "--disable-sync",
@@ -258,20 +288,26 @@ def _in_chromium(page: str, folder: Path) -> dict:
     return json.loads(found.group(1).replace("&lt;", "<").replace("&gt;", ">").replace("&amp;", "&"))
 
 
-def test_the_figure_zooms_pans_and_resets_in_headless_chromium(building, tmp_path):
-    _, page, _, _, (tx, _), (ta, _) = building
-    o = _in_chromium(page, tmp_path)
+@pytest.mark.parametrize(("case", "figure", "channels"), [("building", "building_fit", 2), ("device", "fit_channels", 3)])
+def test_the_figure_zooms_pans_and_resets_in_headless_chromium(case, figure, channels, request, tmp_path):
+    page = request.getfixturevalue(case)[1]
+    o = _in_chromium(page, figure, tmp_path)
     assert o["errors"] == []
-    assert o["canvases"] == 4  # two channels, each a panel and its residuals
+    assert o["canvases"] == 2 * channels  # each channel a panel and its residuals
     assert o["figureClass"] == "qr-live" and o["svgShown"] == "none"  # drawn: the static figure steps aside
-    t0, t1 = min(tx[0], ta[0]), max(tx[-1], ta[-1])
-    assert np.allclose(o["full"], [[t0, t1]] * 4, rtol=0, atol=1e-9)
+    data = _data(page, figure)
+    ends = [f(_times(c[key])) for c in data["channels"] for key in ("t", "model_t") for f in (np.min, np.max)]
+    t0, t1 = min(ends), max(ends)
+    assert np.allclose(o["full"], [[t0, t1]] * 2 * channels, rtol=0, atol=1e-9)
     # the first panel zoomed through uPlot's API: every panel follows; its y axis fits the samples in view
-    assert np.allclose(o["zoomed"], [[3.5, 4.5]] * 4, rtol=0, atol=1e-9) and o["yZoomed"] < 0.5 * o["yFull"]
-    # Shift + drag a quarter of the width to the left on the last panel: the time axis moves 0.25 s later
-    (lo, hi), = set(map(tuple, o["panned"]))
-    assert lo == pytest.approx(3.75, abs=0.01) and hi == pytest.approx(4.75, abs=0.01)
-    # Shift + wheel up in the middle: a 0.75 times narrower window about its centre, on every panel
+    span = t1 - t0
+    lo, hi = t0 + 0.4 * span, t0 + 0.5 * span
+    assert np.allclose(o["zoomed"], [[lo, hi]] * 2 * channels, rtol=0, atol=1e-9) and o["yZoomed"] < 0.9 * o["yFull"]
+    # Shift + drag a quarter of the width to the left on the last panel: the time axis moves a quarter later
+    assert np.allclose(o["panned"], [[lo + 0.025 * span, hi + 0.025 * span]] * 2 * channels, rtol=0,
+                       atol=0.002 * span)
+    # Shift + wheel up in the middle of the second panel: a 0.75 times narrower window about its centre
     (lo2, hi2), = set(map(tuple, o["wheeled"]))
-    assert hi2 - lo2 == pytest.approx(0.75, rel=1e-6) and (lo2 + hi2) / 2 == pytest.approx((lo + hi) / 2, abs=0.01)
+    assert hi2 - lo2 == pytest.approx(0.075 * span, rel=1e-6)
+    assert (lo2 + hi2) / 2 == pytest.approx((lo + hi) / 2 + 0.025 * span, abs=0.002 * span)
     assert o["reset"] == o["full"]  # a double click: the whole record, everywhere

@@ -130,7 +130,7 @@
                  bind: {dblclick: function () { return function (e) { if (e.button === 0) reset(); }; }}},
         legend: {live: true},
         axes: [{label: last ? spec.xlabel : null, labelSize: last ? 20 : 0, size: 36},
-               {label: ylabel, size: 78, labelSize: 20, labelFont: "bold 11px system-ui, sans-serif",
+               {label: ylabel, size: 78, labelSize: 20, labelFont: "bold 11px system-ui, sans-serif", space: 20,
                 values: function (u, vals) { return vals.map(fmt); }}],
         series: [{label: "t [s]", value: function (u, v) { return v == null ? "\u2013" : v.toFixed(3); }}]
           .concat(series),
