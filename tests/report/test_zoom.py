@@ -235,6 +235,7 @@ try {
   o.figureClass = document.getElementById(id).className;
   o.svgShown = getComputedStyle(document.querySelector("#" + id + " > svg")).display;
   o.full = xs(f); o.yFull = f.charts[0].scales.y.max - f.charts[0].scales.y.min;
+  o.residualData = f.charts[1].data;  // the first channel's residuals as the page decoded them
   var a = f.full.min, span = f.full.max - f.full.min;
   f.charts[0].setScale("x", {min: a + 0.4 * span, max: a + 0.5 * span});  // uPlot's API, on the first panel only
   later(function () {
@@ -248,12 +249,17 @@ try {
     later(function () {
       o.panned = xs(f);
       over = f.charts[1].over; r = over.getBoundingClientRect();
-      over.dispatchEvent(new WheelEvent("wheel", {bubbles: true, cancelable: true, shiftKey: true, deltaY: -100,
+      over.dispatchEvent(new WheelEvent("wheel", {bubbles: true, cancelable: true, deltaY: -100,
                                                   clientX: r.left + r.width / 2, clientY: r.top + 5}));
       later(function () {
-        o.wheeled = xs(f);
-        f.charts[1].over.dispatchEvent(new MouseEvent("dblclick", {bubbles: true, button: 0}));
-        later(function () { o.reset = xs(f); out(o); });
+        o.plainWheel = xs(f);  // a wheel without Shift scrolls the page, not the figure
+        over.dispatchEvent(new WheelEvent("wheel", {bubbles: true, cancelable: true, shiftKey: true, deltaY: -100,
+                                                    clientX: r.left + r.width / 2, clientY: r.top + 5}));
+        later(function () {
+          o.wheeled = xs(f);
+          f.charts[1].over.dispatchEvent(new MouseEvent("dblclick", {bubbles: true, button: 0}));
+          later(function () { o.reset = xs(f); out(o); });
+        });
       });
     });
   });
@@ -299,6 +305,9 @@ def test_the_figure_zooms_pans_and_resets_in_headless_chromium(case, figure, cha
     ends = [f(_times(c[key])) for c in data["channels"] for key in ("t", "model_t") for f in (np.min, np.max)]
     t0, t1 = min(ends), max(ends)
     assert np.allclose(o["full"], [[t0, t1]] * 2 * channels, rtol=0, atol=1e-9)
+    first = data["channels"][0]  # decoded in the page as here: every time and residual of the first channel
+    assert np.allclose(o["residualData"][0], _times(first["t"]), rtol=0, atol=1e-9)
+    assert np.array_equal(np.array(o["residualData"][1], dtype="<f4"), _decode(first["residual"]))
     # the first panel zoomed through uPlot's API: every panel follows; its y axis fits the samples in view
     span = t1 - t0
     lo, hi = t0 + 0.4 * span, t0 + 0.5 * span
@@ -306,6 +315,7 @@ def test_the_figure_zooms_pans_and_resets_in_headless_chromium(case, figure, cha
     # Shift + drag a quarter of the width to the left on the last panel: the time axis moves a quarter later
     assert np.allclose(o["panned"], [[lo + 0.025 * span, hi + 0.025 * span]] * 2 * channels, rtol=0,
                        atol=0.002 * span)
+    assert o["plainWheel"] == o["panned"]
     # Shift + wheel up in the middle of the second panel: a 0.75 times narrower window about its centre
     (lo2, hi2), = set(map(tuple, o["wheeled"]))
     assert hi2 - lo2 == pytest.approx(0.075 * span, rel=1e-6)
