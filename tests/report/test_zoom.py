@@ -237,6 +237,14 @@ try {
   o.full = xs(f); o.yFull = f.charts[0].scales.y.max - f.charts[0].scales.y.min;
   o.residualData = f.charts[1].data;  // the first channel's residuals as the page decoded them
   var a = f.full.min, span = f.full.max - f.full.min;
+  var box = f.charts[0].over, b = box.getBoundingClientRect();  // drag a box over the middle half of the first panel
+  function mouse(type, x) { return new MouseEvent(type, {bubbles: true, button: 0, clientX: b.left + x * b.width,
+                                                         clientY: b.top + 10, movementX: 1}); }  // moved: a drag
+  box.dispatchEvent(mouse("mouseenter", 0.25)); box.dispatchEvent(mouse("mousedown", 0.25));
+  later(function () { box.dispatchEvent(mouse("mousemove", 0.75)); });
+  setTimeout(function () { box.dispatchEvent(mouse("mouseup", 0.75)); }, 60);
+  setTimeout(function () {
+  o.dragged = xs(f);
   f.charts[0].setScale("x", {min: a + 0.4 * span, max: a + 0.5 * span});  // uPlot's API, on the first panel only
   later(function () {
     o.zoomed = xs(f); o.yZoomed = f.charts[0].scales.y.max - f.charts[0].scales.y.min;
@@ -263,6 +271,7 @@ try {
       });
     });
   });
+  }, 90);
 } catch (err) { o.errors.push("probe: " + err); out(o); }
 })();</script>"""
 
@@ -308,8 +317,11 @@ def test_the_figure_zooms_pans_and_resets_in_headless_chromium(case, figure, cha
     first = data["channels"][0]  # decoded in the page as here: every time and residual of the first channel
     assert np.allclose(o["residualData"][0], _times(first["t"]), rtol=0, atol=1e-9)
     assert np.array_equal(np.array(o["residualData"][1], dtype="<f4"), _decode(first["residual"]))
-    # the first panel zoomed through uPlot's API: every panel follows; its y axis fits the samples in view
     span = t1 - t0
+    # a box dragged over the middle half of the first panel: every panel shows that half
+    assert np.allclose(o["dragged"], [[t0 + 0.25 * span, t0 + 0.75 * span]] * 2 * channels, rtol=0,
+                       atol=0.003 * span)
+    # the first panel zoomed through uPlot's API: every panel follows; its y axis fits the samples in view
     lo, hi = t0 + 0.4 * span, t0 + 0.5 * span
     assert np.allclose(o["zoomed"], [[lo, hi]] * 2 * channels, rtol=0, atol=1e-9) and o["yZoomed"] < 0.9 * o["yFull"]
     # Shift + drag a quarter of the width to the left on the last panel: the time axis moves a quarter later
