@@ -173,7 +173,7 @@ def test_the_static_figure_stays_for_print_and_without_javascript(building):
 def test_a_page_without_a_record_figure_carries_no_script():
     from quickrelease.report.html import _page
 
-    page = _page("t", ["<p>no record</p>"])
+    page = _page("t", ["<p>no record, a note naming data-qr-zoom=&quot;x&quot;</p>"])
     assert "<script" not in page and "uPlot" not in page
 
 

@@ -60,7 +60,7 @@ def zoom_assets(body: str) -> tuple[str, str]:
     """(style, scripts) the page needs for the zoomable figures in ``body``: uPlot's stylesheet and ours as CSS
     text for the page's ``<style>``, and ``<script>`` elements (uPlot, then the driver, :file:`zoom.js`) to put
     at the end of ``<body>``; two empty strings where ``body`` holds no zoomable figure (nothing inlined)."""
-    if ZOOM_MARK not in body:
+    if f'{ZOOM_MARK}="' not in body:  # the attribute, not user text naming it (its quotes escaped)
         return "", ""
     licence = "/*! uPlot v1.6.32, (c) 2022 Leon Sorokin, MIT licence (quickrelease/report/vendor/uplot/LICENSE) */"
     scripts = f"<script>{licence}\n{_vendored('uPlot.iife.min.js')}</script>\n<script>{_driver()}</script>"
