@@ -1,6 +1,7 @@
 """A self-contained HTML report of a case: inputs, strain energy, identification, release, figures.
 
-One file, no network fetches: figures are embedded as inline SVG and the style is inline.
+One file, no network fetches: figures are embedded as inline SVG and the style is inline; the record figures
+also zoom in the page (:mod:`quickrelease.report.zoom`: the vendored uPlot and the data inlined).
 Every piece of user-provided text (title, notes, names) is escaped. It reads as a test report: the date,
 the package version and the input file (name, SHA-256, its text in a collapsible block) at the top, a table
 of contents, and a sign-off block naming who ran the test (the case file's ``[report]`` table) at the end.
@@ -20,6 +21,7 @@ from typing import TYPE_CHECKING, Any
 
 from ..device.parameters import DEVICE_KEYS
 from .display import half_width, key_for, number, plus_minus, same_places, unit_text
+from .zoom import building_fit_zoom, device_fit_zoom, zoom_assets
 
 if TYPE_CHECKING:  # the workflow's result type annotates render_report; the report imports no workflow
     from ..workflow import CaseResult
@@ -328,7 +330,7 @@ def _fit_section(fit, svgs: dict[str, str]) -> str:
         parts.append(f"<p class=\"flag\">Warning: {_e(text)}</p>")
     for text in fit.notes:
         parts.append(f"<p class=\"meta\">{_e(text)}</p>")
-    parts.append(_figure(svgs, "fit_channels"))
+    parts.append(_figure(svgs, "fit_channels", zoom=lambda: device_fit_zoom(fit)))
     return "\n".join(parts)
 
 
@@ -431,7 +433,8 @@ def building_section(result, svgs: dict[str, str]) -> str:
     for text in result.notes:
         parts.append(f"<p class=\"meta\">{_e(text)}</p>")
     for stem, caption in BUILDING_FIGURES.items():
-        parts.append(_figure(svgs, stem, caption))
+        parts.append(_figure(svgs, stem, caption,
+                             zoom=(lambda: building_fit_zoom(result)) if stem == "building_fit" else None))
     return "\n".join(parts)
 
 
@@ -530,10 +533,13 @@ def _plan_section(plan, svgs: dict[str, str]) -> str:
     return "\n".join(parts)
 
 
-def _figure(svgs: dict[str, str], stem: str, caption: str | None = None) -> str:
+def _figure(svgs: dict[str, str], stem: str, caption: str | None = None, zoom: Any = None) -> str:
+    """The figure ``stem`` (its SVG from ``svgs``; nothing where it has none) with its caption; ``zoom``: a
+    function giving its zoomable twin's HTML (:mod:`quickrelease.report.zoom`), drawn in its place on screen."""
     if stem not in svgs:
         return ""
-    return (f"<figure id=\"{stem}\">{_svg_inline(svgs[stem], stem)}"
+    live = "" if zoom is None else zoom()
+    return (f"<figure id=\"{stem}\">{_svg_inline(svgs[stem], stem)}{live}"
             f"<figcaption>{_e(caption or FIGURES[stem])}</figcaption></figure>")
 
 
@@ -569,10 +575,11 @@ def _contents(body: str) -> str:
 
 def _page(title: str, parts: list[str]) -> str:
     body = _contents("\n".join(p for p in parts if p))
+    css, scripts = zoom_assets(body)  # uPlot inlined once, where a figure zooms
     return (f"<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
             f"<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
-            f"<title>{_e(title)} – quickrelease report</title><style>{_CSS}</style></head>\n"
-            f"<body>\n{body}\n</body></html>\n")
+            f"<title>{_e(title)} – quickrelease report</title><style>{_CSS}{css}</style></head>\n"
+            f"<body>\n{body}\n{scripts}</body></html>\n")
 
 
 def render_campaign_report(result, svgs: dict[str, str]) -> str:
