@@ -953,7 +953,8 @@ def fit_command(
 @_guard
 def building_command(
     case_file: Annotated[Path, typer.Argument(help="Case file with [building] and [building.record].")],
-    model: Annotated[Literal["linear", "bilinear", "2dof"] | None, typer.Option("--model", help="Isolation model (default: the case's [building] model).")] = None,
+    model: Annotated[Literal["linear", "bilinear", "2dof", "pendulum", "boucwen"] | None, typer.Option("--model", help="Isolation model (default: the case's [building] model): linear or bilinear rubber with sliders, 2dof (a flexible superstructure), pendulum (curved surface sliders, Constantinou's mu(v)), boucwen (lead-rubber, high-damping rubber).")] = None,
+    damping: Annotated[Literal["viscous", "power"] | None, typer.Option("--damping", help="The damper's law (default: the case's [building] damping): viscous, or power (a fluid viscous damper, C |v|^alpha).")] = None,
     compare: Annotated[bool, typer.Option("--compare", help="Also fit the other models; rank them by AIC/BIC and residual whiteness.")] = False,
     out: Annotated[Path | None, typer.Option("--out", "-o", show_default=False, help="Also write summary.json, the record, model and residuals (timeseries.csv, .nc), the figures and report.html into this folder (default: none, print only).")] = None,
     overwrite: OverwriteOpt = False,
@@ -977,7 +978,7 @@ def building_command(
 
         building_folder(data, out, model=model, compare=compare, overwrite=overwrite)  # pre-flight
     with _busy(f"fitting the {model or data.model} isolation model") as step:
-        result = analyse_building(data, model=model, compare=compare, progress=step)
+        result = analyse_building(data, model=model, compare=compare, progress=step, damping=damping)
     paths = {}
     if out is not None:
         from .workflow import write_building_results
@@ -1000,7 +1001,9 @@ def _building_tables(result, summary: dict[str, Any], title: str) -> None:
 
     fit = result.fit
     rows = []
-    for key in ("period_s", "k1_N_m", "k2_N_m", "Fy_N", "damping_ratio", "friction_N"):
+    for key in ("period_s", "radius_m", "k1_N_m", "k2_N_m", "Fy_N", "Kd_N_m", "Qd_N", "dy_m", "shape",
+                "friction_slow", "friction_fast", "rate_s_m", "damping_ratio", "damping_coefficient",
+                "damping_exponent", "friction_N"):
         if summary.get(key) is not None:
             name, unit, _ = split_key(key)
             human, value, _, interval = estimate_row(name, summary[key], None, summary.get(f"{key}_ci95"), unit)

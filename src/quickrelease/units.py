@@ -40,6 +40,7 @@ DIMENSIONS: dict[str, tuple[str, str]] = {
     "angular_velocity": ("rad/s", "1 / [time]"),
     "angular_acceleration": ("rad/s^2", "1 / [time] ** 2"),
     "stiffness": ("N/m", "[mass] / [time] ** 2"),
+    "slowness": ("s/m", "[time] / [length]"),
 }
 
 
@@ -60,6 +61,7 @@ _FAST_UNITS: dict[str, tuple[str, float]] = {
     "m/s": ("velocity", 1.0), "m/s^2": ("acceleration", 1.0),
     "rad/s": ("angular_velocity", 1.0), "rad/s^2": ("angular_acceleration", 1.0),
     "N/m": ("stiffness", 1.0), "kN/m": ("stiffness", 1e3), "MN/m": ("stiffness", 1e6),
+    "s/m": ("slowness", 1.0),
 }
 
 

@@ -108,7 +108,7 @@ BAD_BUILDING = [
     (TWO_DOF.replace('"500 t"', '"700 t"'), r"superstructure_mass = '700 t': expected a mass in \(0, \[building\] "
                                            r"mass\)"),
     (LINEAR.replace('model', 'x') + 'model = "trilinear"\n', r"\[building\] model = 'trilinear': expected 'linear', "
-                                                             r"'bilinear' or '2dof'"),
+                                                             r"'bilinear', '2dof', 'pendulum' or 'boucwen'"),
     (LINEAR + "[building.record]\nfile = 'r.csv'\ntime = 't'\n[building.record.channels]\nu = 'u_m'\n",
      r"\[building.record\] channels.u: unknown channel 'u'; valid: x, v, a, x_roof, v_roof, a_roof"),
     (LINEAR + "[building.record]\nfile = 'r.csv'\ntime = 't'\n[building.record.channels]\n"

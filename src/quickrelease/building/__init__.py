@@ -6,6 +6,9 @@ Modules, one question each:
   their event-exact free vibration from the pushed state (``Isolation``, ``TwoDOF``, ``FreeVibration``,
   ``TwoDOFVibration``, ``free_vibration``, ``free_vibration_2dof``, ``pushed_state``, ``MODELS``,
   ``RECORD_CHANNELS``);
+- :mod:`~quickrelease.building.hysteretic`: the isolation systems without a closed form, friction pendulum
+  (Constantinou's mu(v)), Bouc-Wen bearings (lead-rubber, high-damping rubber) and power-law dampers
+  (``Pendulum``, ``BoucWen``, ``HystereticVibration``), integrated by the event-located scheme of ``_ode``;
 - :mod:`~quickrelease.building.decay`: the decay of the free vibration (turning points, decrement laws,
   hysteresis loop; ``analyse_decay``);
 - :mod:`~quickrelease.building.isolation_fit`: the isolation system fitted to records (``fit_isolation``,
@@ -19,6 +22,7 @@ in ``pyproject.toml``). The package re-exports :mod:`~quickrelease.building.mode
 
 from __future__ import annotations
 
+from .hysteretic import GRAVITY, BoucWen, HystereticVibration, Pendulum
 from .model import (
     MODELS,
     RECORD_CHANNELS,
@@ -32,4 +36,4 @@ from .model import (
 )
 
 __all__ = ["Isolation", "FreeVibration", "free_vibration", "pushed_state", "MODELS", "TwoDOF", "TwoDOFVibration",
-           "free_vibration_2dof", "RECORD_CHANNELS"]
+           "free_vibration_2dof", "RECORD_CHANNELS", "Pendulum", "BoucWen", "HystereticVibration", "GRAVITY"]

@@ -45,6 +45,7 @@ from scipy.optimize import brentq, least_squares
 
 from .._lsq import identified_covariance, jacobian_covariance
 from ..errors import ParameterError, QuickReleaseError
+from .hysteretic import EXPONENT_RANGE, GRAVITY, SHAPE_RANGE, BoucWen, Pendulum
 from .isolation_search import (
     COMPETING_DELTA_CHI2,
     SEARCH_EVALUATIONS,
@@ -58,7 +59,7 @@ from .isolation_search import (
     search_box,
     thin_channels,
 )
-from .model import RECORD_CHANNELS, Isolation, TwoDOF, free_vibration
+from .model import RECORD_CHANNELS, Isolation, TwoDOF, _damping_ratio, free_vibration
 
 __all__ = ["BuildingChannel", "IsolationFit", "fit_isolation", "compare_models", "decay_check", "ljung_box",
            "CHANNEL_KINDS", "IsolationPrecision", "predicted_isolation_errors"]
@@ -67,12 +68,17 @@ __all__ = ["BuildingChannel", "IsolationFit", "fit_isolation", "compare_models",
 #: models the roof moves with the layer), and their SI units (from :data:`quickrelease.building.RECORD_CHANNELS`).
 CHANNEL_KINDS = {name: unit for name, (_, unit, _) in RECORD_CHANNELS.items()}
 _UNITS = {"period": "s", "damping_ratio": "-", "friction": "N", "stiffness_ratio": "-", "yield_force": "N",
-          "superstructure_period": "s", "superstructure_damping_ratio": "-", "d0": "m", "release_time": "s"}
+          "superstructure_period": "s", "superstructure_damping_ratio": "-", "d0": "m", "release_time": "s",
+          "friction_slow": "-", "friction_fast": "-", "rate": "s/m", "characteristic_strength": "N",
+          "yield_displacement": "m", "shape": "-", "damping_coefficient": "N (s/m)^alpha", "damping_exponent": "-"}
 #: The decrement laws whose fits give the start values (the linear model's; the other laws of
 #: :mod:`quickrelease.building.decay` cost 0.3 s more on a 60 s record and give no start).
 START_LAWS = ("viscous", "coulomb", "combined")
 #: Models :func:`fit_isolation` fits.
-FIT_MODELS = ("linear", "bilinear", "2dof")
+FIT_MODELS = ("linear", "bilinear", "2dof", "pendulum", "boucwen")
+#: The damper's laws: ``viscous`` (c x_dot, its damping ratio fitted) and ``power`` (C |x_dot|^alpha sign(x_dot),
+#: a fluid viscous damper's: damping_coefficient C and damping_exponent alpha fitted).
+DAMPING_LAWS = ("viscous", "power")
 #: Relative standard error above which the profile-likelihood interval replaces the Jacobian's.
 PROFILE_RELATIVE_SE = 0.3
 #: Condition number of the correlation matrix above which the fit is reported as ill-conditioned.
@@ -160,6 +166,8 @@ class IsolationFit:
     """t_0 of the drifts [s, record time]: a channel's zero is ``offset + drift (t - t_0)``."""
     excluded: dict[str, tuple[float, ...]] = field(default_factory=dict)
     """Samples excluded as spikes (``exclude_spikes=True``): their times per channel [s, record time]."""
+    damping: str = "viscous"
+    """The damper's law: ``viscous`` (damping_ratio) or ``power`` (damping_coefficient, damping_exponent)."""
     search: SearchCertificate | None = field(default=None, repr=False)
     """The multi-start's certificate (:class:`quickrelease.building.isolation_search.SearchCertificate`): the starts,
     how many reached the best minimum, the distinct minima and the next-best's delta chi-square."""
@@ -212,7 +220,7 @@ class IsolationFit:
         iso = self.isolation()
         corr = {f"{a}:{b}": float(self.correlation[i, j]) for i, a in enumerate(self.names)
                 for j, b in enumerate(self.names) if j > i}
-        return {"model": self.model, "mass_kg": self.mass, "isolation": iso.summary(),
+        return {"model": self.model, "damping": self.damping, "mass_kg": self.mass, "isolation": iso.summary(),
                 "estimates": self.estimates, "fixed": self.fixed, "std_errors": self.std_errors,
                 "ci95": {k: list(v) for k, v in self.ci95.items()}, "interval_method": self.interval_method,
                 "units": {n: _unit(n, self.channels) for n in self.names},
@@ -258,15 +266,27 @@ def _unit(name: str, channels) -> str:
 
 
 def _isolation(model: str, mass: float, p: dict[str, float], superstructure_mass: float | None = None) \
-        -> Isolation | TwoDOF:
-    if model == "linear":
-        return Isolation.linear(mass, p["period"], p["damping_ratio"], p["friction"])
+        -> Isolation | TwoDOF | Pendulum | BoucWen:
+    """The model at the fit's parameters ``p``; the damper is the power law where ``p`` holds a
+    ``damping_exponent``, else viscous with ``damping_ratio`` referred to the stiffness of ``period``
+    (``m (2 pi / T)^2``: k, k1, W / R, Kd)."""
+    k = mass * (2.0 * math.pi / p["period"]) ** 2
+    if "damping_exponent" in p:
+        c, alpha = p["damping_coefficient"], p["damping_exponent"]
+    else:
+        c, alpha = 2.0 * _damping_ratio(p["damping_ratio"]) * math.sqrt(k * mass), 1.0
     if model == "2dof":
         return TwoDOF(mass, superstructure_mass, p["period"], p["superstructure_period"], p["damping_ratio"],
                       p["friction"], p["superstructure_damping_ratio"])
-    k1 = mass * (2.0 * math.pi / p["period"]) ** 2
-    return Isolation.bilinear(mass, k1, p["stiffness_ratio"] * k1, p["yield_force"], p["damping_ratio"],
-                              p["friction"])
+    if model == "pendulum":
+        return Pendulum(mass, GRAVITY * (p["period"] / (2.0 * math.pi)) ** 2, p["friction_slow"],
+                        p["friction_fast"], p["rate"], c, alpha)
+    if model == "boucwen":
+        return BoucWen(mass, k, p["characteristic_strength"], p["yield_displacement"], p["shape"], c, alpha,
+                       p["friction"])
+    if model == "linear":
+        return Isolation(mass, k, c, p["friction"], damping_exponent=alpha)
+    return Isolation(mass, k, c, p["friction"], p["stiffness_ratio"] * k, p["yield_force"], damping_exponent=alpha)
 
 
 def _channel_model(iso: Isolation | TwoDOF, d0: float, t_r: float, kind: str, t: np.ndarray, t_last: float) \
@@ -363,6 +383,18 @@ def _start(model: str, mass: float, channels: list[BuildingChannel], t_r: float,
             pass
     if model == "bilinear":
         start.update(_bilinear_start(mass, xch, t_r, noise, start, channels, analysis))
+    if model == "boucwen":  # the bilinear start's loop: Kd = k2, Qd = f_p, dy = F_y / k1
+        b = _bilinear_start(mass, xch, t_r, noise, start, channels, analysis)
+        k1 = mass * (2.0 * math.pi / b["period"]) ** 2
+        k2, fy = b["stiffness_ratio"] * k1, b["yield_force"]
+        zeta = b.get("damping_ratio", start["damping_ratio"])
+        start.update(period=2.0 * math.pi * math.sqrt(mass / k2), characteristic_strength=fy * (1.0 - k2 / k1),
+                     yield_displacement=fy / k1, shape=2.0, friction=b["friction"],
+                     damping_ratio=float(np.clip(zeta * math.sqrt(k1 / k2), 0.002, 0.5)))
+    if model == "pendulum":  # the decay's Coulomb share as the friction coefficient, spread about it
+        mu = start.pop("friction") / (mass * GRAVITY)
+        start.update(friction_slow=0.8 * mu, friction_fast=1.2 * mu, rate=20.0,
+                     damping_ratio=min(start["damping_ratio"], 0.02))
     if model == "2dof":
         start.update(_two_dof_start(mass, superstructure_mass, channels, t_r, start))
     return start
@@ -465,21 +497,27 @@ def _first_peak(xch: BuildingChannel, t_r: float, period: float, d0: float) -> f
 PARAMETER_BOUNDS = {"period": (1e-3, 1e3), "damping_ratio": (0.0, 0.95), "friction": (0.0, math.inf),
                     "stiffness_ratio": (1e-4, 0.9999), "yield_force": (0.0, math.inf),
                     "superstructure_period": (SUPERSTRUCTURE_PERIOD_MIN, 1e3),
-                    "superstructure_damping_ratio": (0.0, 0.95)}
+                    "superstructure_damping_ratio": (0.0, 0.95), "friction_slow": (0.0, 1.0),
+                    "friction_fast": (0.0, 1.0), "rate": (0.0, 1e3), "characteristic_strength": (0.0, math.inf),
+                    "yield_displacement": (1e-6, 10.0), "shape": SHAPE_RANGE, "damping_coefficient": (0.0, math.inf),
+                    "damping_exponent": EXPONENT_RANGE}
 
 
-def _physical_names(model: str) -> list[str]:
-    """The physical parameters of a model (in the fit's order)."""
-    return ["period", "damping_ratio", "friction"] + {
+def _physical_names(model: str, damping: str = "viscous") -> list[str]:
+    """The physical parameters of a model with its damper's law (in the fit's order)."""
+    damper = ["damping_ratio"] if damping == "viscous" else ["damping_coefficient", "damping_exponent"]
+    friction = ["friction_slow", "friction_fast", "rate"] if model == "pendulum" else ["friction"]
+    return ["period"] + damper + friction + {
         "bilinear": ["stiffness_ratio", "yield_force"],
+        "boucwen": ["characteristic_strength", "yield_displacement", "shape"],
         "2dof": ["superstructure_period", "superstructure_damping_ratio"]}.get(model, [])
 
 
-def _parameter_names(model: str, channels) -> list[str]:
+def _parameter_names(model: str, channels, damping: str = "viscous") -> list[str]:
     """Every parameter of a fit of ``model`` to ``channels``: the physical ones, d0, the release time, an
     offset per channel that has one and a drift per channel that has one."""
-    return (_physical_names(model) + ["d0", "release_time"] + [f"offset_{c.name}" for c in channels if c.offset]
-            + [f"drift_{c.name}" for c in channels if c.drift])
+    return (_physical_names(model, damping) + ["d0", "release_time"]
+            + [f"offset_{c.name}" for c in channels if c.offset] + [f"drift_{c.name}" for c in channels if c.drift])
 
 
 def _bounds(channels, t_r0: float, period: float = 0.0) -> tuple[dict[str, float], dict[str, float]]:
@@ -710,7 +748,8 @@ def _d0_from_motion(channels, t_r: float, mass: float) -> float:
 
 
 def _initial_values(model: str, mass: float, channels, t_r0: float, fixed: dict[str, float],
-                    noise: dict[str, float], superstructure_mass: float | None, d0_start: float | None = None):
+                    noise: dict[str, float], superstructure_mass: float | None, d0_start: float | None = None,
+                    damping: str = "viscous"):
     """The start of the fit from the record: the pushed displacement d0 (the displacement channel's median
     before the release, or the fixed one), each channel's offset (its median before the release; 0 for a
     displacement), the model's parameters from the decay analysis or the hysteresis loop (:func:`_start`),
@@ -738,6 +777,11 @@ def _initial_values(model: str, mass: float, channels, t_r0: float, fixed: dict[
         raise ParameterError("d0", d0, "a non-zero pushed displacement (give a displacement channel, "
                              "[building] displacement or fixed d0)", "m")
     p0 = _start(model, mass, channels, t_r0, d0, noise, superstructure_mass)
+    if damping == "power":  # the viscous start's force at a typical velocity (half the first cycle's largest)
+        zeta = p0.pop("damping_ratio")
+        k = mass * (2.0 * math.pi / p0["period"]) ** 2
+        v_ref = math.pi * abs(d0) / p0["period"]
+        p0.update(damping_coefficient=2.0 * zeta * math.sqrt(k * mass) * math.sqrt(v_ref), damping_exponent=0.5)
     rest = p0.pop("rest", None)
     friction_se = p0.pop("friction_se", None)  # of the bilinear loop's F_s: the spread of its multi-start
     p0.update(d0=d0, release_time=t_r0)
@@ -813,7 +857,7 @@ FULL_SOLVES, FULL_SOLVE_DELTA = 3, 100.0
 
 def _compared(names: list[str], model: str) -> list[str]:
     """The parameters by which two minima are told apart: the physical ones and d0, where free."""
-    return [n for n in names if n in _physical_names(model) or n == "d0"]
+    return [n for n in names if n in PARAMETER_BOUNDS or n == "d0"]  # every model's physical ones
 
 
 def _basin_errors(J, names: list[str], compare: list[str], chi2: float, dof: int) -> dict[str, float]:
@@ -925,7 +969,8 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
                   fit_release_time: bool = True, start: dict[str, float] | None = None,
                   fixed: dict[str, float] | None = None, profile: bool | None = None,
                   superstructure_mass: float | None = None, tolerance: float = 1e-12, global_search: bool = True,
-                  seed: int = 0, progress=None, exclude_spikes: bool = False) -> IsolationFit:
+                  seed: int = 0, progress=None, exclude_spikes: bool = False, damping: str = "viscous") \
+        -> IsolationFit:
     """Fit the isolation system (:mod:`quickrelease.building`) to records of the isolation layer.
 
     Parameters
@@ -996,7 +1041,7 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
 
     kwargs = dict(release_time=release_time, fit_release_time=fit_release_time, start=start, fixed=fixed,
                   profile=profile, superstructure_mass=superstructure_mass, tolerance=tolerance,
-                  global_search=global_search, seed=seed, progress=progress)
+                  global_search=global_search, seed=seed, progress=progress, damping=damping)
     with threadpool_limits(1, user_api="blas"):  # thin Jacobians: BLAS threads cost more than they give
         fit = _fit_isolation(channels, mass, model, **kwargs)
         if not exclude_spikes:
@@ -1068,12 +1113,17 @@ def _spikes(fit: IsolationFit, channels) -> dict[str, tuple[float, ...]]:
 
 
 def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_release_time, start, fixed, profile,
-                   superstructure_mass, tolerance, global_search, seed, progress=None) -> IsolationFit:
+                   superstructure_mass, tolerance, global_search, seed, progress=None,
+                   damping: str = "viscous") -> IsolationFit:
     channels = list(channels)
     if not channels:
         raise ParameterError("channels", "none", "at least one channel of the isolation layer")
     if model not in FIT_MODELS:
-        raise ParameterError("model", model, "'linear', 'bilinear' or '2dof'")
+        raise ParameterError("model", model, ", ".join(f"'{m}'" for m in FIT_MODELS))
+    if damping not in DAMPING_LAWS:
+        raise ParameterError("damping", damping, "'viscous' or 'power'")
+    if damping == "power" and model == "2dof":
+        raise ParameterError("damping", damping, "'viscous' for model = '2dof'")
     mass = float(mass)
     if not (math.isfinite(mass) and mass > 0):
         raise ParameterError("mass", mass, "(0, inf)", "kg")
@@ -1099,11 +1149,11 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
     if model != "2dof":
         _check_decays(channels)
     p0, xch, d0, friction_se = _initial_values(model, mass, channels, t_r0, fixed, noise, superstructure_mass,
-                                               (start or {}).get("d0"))
+                                               (start or {}).get("d0"), damping)
     from_decay = dict(p0)  # the start of the model-free decay analysis, before the caller's start values
     p0.update(start or {})
-    physical = _physical_names(model)
-    all_names = _parameter_names(model, channels)
+    physical = _physical_names(model, damping)
+    all_names = _parameter_names(model, channels, damping)
     unknown = sorted(set(fixed) - set(all_names))
     if unknown:
         raise ParameterError("fixed", unknown[0], ", ".join(all_names))
@@ -1152,15 +1202,15 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
             # search in the phases of other releases (the polish reaches the fit's whole range)
             reach = max(20.0 * misfit.dt, 0.06 * (hint if hint is not None else values["period"]))
             release = (max(lower["release_time"], t_r0 - reach), min(upper["release_time"], t_r0 + 2.0 * misfit.dt))
-        box = search_box(model, hint, search_d0, release)
+        box = search_box(model, hint, search_d0, release, damping)
         found, evaluations = global_candidates(model, mass, thin_misfit, box, record_values, record_values["d0"],
                                                runs=SEARCH_RUNS[model] + search_d0,
                                                evaluations=SEARCH_EVALUATIONS[model] * (1 + search_d0),
-                                               seed=seed, fixed=fixed, progress=progress)
+                                               seed=seed, fixed=fixed, progress=progress, damping=damping)
         named += [(c["origin"], c["parameters"]) for c in found]
     res, groups = _multistart(named, names, values, solve, thin_misfit, model, factor, progress)
     res = _requiet(res, channels, noise, source, sig, names, values, solve, t_r0)
-    if model in ("linear", "bilinear"):
+    if model != "2dof":
         res = _polish(res, names, values, solve, misfit.residuals, lower, upper, misfit.dt)
         if not any(c.kind in ("x", "x_roof") for c in channels):  # no smooth channel: the steps rule the misfit
             res = _step_search(res, names, values, solve, misfit.residuals, lower, upper, seed)
@@ -1261,7 +1311,8 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
                         chi2_reduced=chi2_red, absolute_sigma=absolute, aic=aic, bic=bic, whiteness_p=white,
                         converged=bool(res.success), nfev=int(res.nfev), warnings=tuple(warnings),
                         channels=tuple(channels), superstructure_mass=superstructure_mass,
-                        fixed={n: float(values[n]) for n in fixed}, search=cert, drift_origin=misfit.drift_origin)
+                        fixed={n: float(values[n]) for n in fixed}, search=cert, drift_origin=misfit.drift_origin,
+                        damping=damping)
 
 
 #: The chi-square drop a polish restart must reach to replace the fit (:func:`_polish`).
@@ -1563,12 +1614,13 @@ def predicted_isolation_errors(channels, mass: float, model: str, parameters: di
     if not channels:
         raise ParameterError("channels", "none", "at least one channel of the isolation layer")
     if model not in FIT_MODELS:
-        raise ParameterError("model", model, "'linear', 'bilinear' or '2dof'")
+        raise ParameterError("model", model, ", ".join(f"'{m}'" for m in FIT_MODELS))
+    damping = "power" if "damping_exponent" in parameters else "viscous"
     for ch in channels:
         if ch.noise is None:
             raise ParameterError(f"{ch.name}.noise", None, "given (the noise weights the information)",
                                  CHANNEL_KINDS[ch.kind])
-    all_names = _parameter_names(model, channels)
+    all_names = _parameter_names(model, channels, damping)
     values = {n: 0.0 for n in all_names if n.startswith(("offset_", "drift_"))}
     values.update({n: float(v) for n, v in parameters.items() if n in all_names})
     missing = [n for n in all_names if n not in values]
@@ -1604,7 +1656,7 @@ def predicted_isolation_errors(channels, mass: float, model: str, parameters: di
         warnings.append(f"ill-conditioned (condition number of the correlations {cond:.2g}): some combination of "
                         "parameters is not determined by such a record")
     for n, s_ in zip(names, se, strict=True):
-        if (n in _physical_names(model) and n not in unseen and values[n] != 0
+        if (n in PARAMETER_BOUNDS and n not in unseen and values[n] != 0
                 and s_ / abs(values[n]) > PROFILE_RELATIVE_SE):
             warnings.append(f"{n} would be poorly determined (standard error {100 * s_ / abs(values[n]):.3g}% of the "
                             "truth)")

@@ -37,9 +37,9 @@ __all__ = ["SearchBox", "search_box", "thin_channels", "profiled_chi2", "global_
 #: Samples a channel at most in the global stage (the record thinned by an integer step).
 SEARCH_SAMPLES = 1200
 #: Independent CMA-ES runs of the global stage, per model.
-SEARCH_RUNS = {"linear": 3, "bilinear": 4, "2dof": 3}
+SEARCH_RUNS = {"linear": 3, "bilinear": 4, "2dof": 3, "pendulum": 3, "boucwen": 4}
 #: Objective evaluations per CMA-ES run at most, per model.
-SEARCH_EVALUATIONS = {"linear": 500, "bilinear": 700, "2dof": 300}
+SEARCH_EVALUATIONS = {"linear": 500, "bilinear": 700, "2dof": 300, "pendulum": 500, "boucwen": 700}
 #: Two minima are the same basin where every searched parameter lies within this many standard errors.
 SAME_BASIN_SE = 3.0
 #: The certificate calls a second basin competing when its chi-square lies within this of the best.
@@ -156,7 +156,7 @@ def record_period(channels, t_r: float) -> float | None:
 
 
 def search_box(model: str, period_hint: float | None, search_d0: bool,
-               release: tuple[float, float] | None = None) -> SearchBox:
+               release: tuple[float, float] | None = None, damping: str = "viscous") -> SearchBox:
     """The global stage's box for ``model``: period (log) within a factor around ``period_hint`` (the
     record's apparent period; 0.2-20 s without one; bilinear: the initial period T1 from a quarter to 1.5
     times it, since the soft branch lengthens the apparent period), damping ratio [0, 0.4], the sliders'
@@ -167,10 +167,19 @@ def search_box(model: str, period_hint: float | None, search_d0: bool,
     estimate (0.85-1.15 where the displacement's level before the release gives it, the sensor's zero
     unknown; log 0.5-2 where no displacement gives d0, ``search_d0``); and the release instant
     within ``release`` (the record's first departure lags it; where a jump of the acceleration at the
-    release falls between other samples than the data's, one sample's misfit outweighs the rest)."""
+    release falls between other samples than the data's, one sample's misfit outweighs the rest).
+
+    pendulum: the friction share is mu_slow's (W mu_slow over W |d0| / R), with mu_fast / mu_slow (log, 1-5)
+    and Constantinou's rate (log, 1-300 s/m); boucwen: its period is Kd's (0.7 to 4 times the apparent
+    period, which the initial stiffness shortens), Qd over Kd |d0| ``strength_share`` (log, 0.02-2), dy over
+    d0 ``yield_share`` (log, 0.003-0.5) and the shape n (log, 0.7-8). The power-law damper (``damping =
+    "power"``): the damping ratio is that of the viscous damper giving the same force at the velocity
+    ``pi |d0| / T``, beside the exponent alpha (0.15-1.9)."""
     if period_hint is not None and math.isfinite(period_hint) and period_hint > 0:
         if model == "bilinear":
             t_lo, t_hi = 0.25 * period_hint, 1.5 * period_hint
+        elif model == "boucwen":
+            t_lo, t_hi = 0.7 * period_hint, 4.0 * period_hint
         else:
             t_lo, t_hi = 0.5 * period_hint, 2.0 * period_hint
     else:
@@ -184,6 +193,21 @@ def search_box(model: str, period_hint: float | None, search_d0: bool,
         lower += [0.01, 0.01]
         upper += [0.6, 1.5]
         scale += ["log", "log"]
+    if model == "pendulum":
+        names += ["fast_ratio", "rate"]
+        lower += [1.0, 1.0]
+        upper += [5.0, 300.0]
+        scale += ["log", "log"]
+    if model == "boucwen":
+        names += ["strength_share", "yield_share", "shape"]
+        lower += [0.02, 0.003, 0.7]
+        upper += [2.0, 0.5, 8.0]
+        scale += ["log", "log", "log"]
+    if damping == "power":
+        names.append("damping_exponent")
+        lower.append(0.15)
+        upper.append(1.9)
+        scale.append("linear")
     if model == "2dof":  # a storey stiffer than 4% of the isolation period moves with the layer (and its free
         # vibration, stepped at a fraction of T_s through every stick, costs the most to evaluate)
         names += ["superstructure_period", "superstructure_damping_ratio"]
@@ -202,9 +226,13 @@ def search_box(model: str, period_hint: float | None, search_d0: bool,
     return SearchBox(tuple(names), tuple(lower), tuple(upper), tuple(scale))
 
 
-def box_parameters(model: str, mass: float, box_values: dict[str, float], d0: float) -> dict[str, float]:
+def box_parameters(model: str, mass: float, box_values: dict[str, float], d0: float,
+                   damping: str = "viscous") -> dict[str, float]:
     """The searched quantities as the fit's parameters [SI]: F_s = share times the push force (linear,
-    2dof: k |d0|; bilinear: k2 |d0| + f_p, f_p = F_y (1 - k2 / k1)), F_y = yield share times k1 |d0|."""
+    2dof: k |d0|; bilinear: k2 |d0| + f_p, f_p = F_y (1 - k2 / k1); boucwen: Kd |d0| + Qd), F_y = yield share
+    times k1 |d0|; pendulum: mu_slow = share times |d0| / R, mu_fast = mu_slow times ``fast_ratio``; boucwen:
+    Qd = ``strength_share`` Kd |d0|, dy = ``yield_share`` |d0|; power-law damper: C = 2 zeta sqrt(k m)
+    v^(1 - alpha), v = pi |d0| / T."""
     p = dict(box_values)
     d0 = d0 * p.pop("d0_factor", 1.0)
     k = mass * (2.0 * math.pi / p["period"]) ** 2
@@ -214,27 +242,55 @@ def box_parameters(model: str, mass: float, box_values: dict[str, float], d0: fl
         fy = p.pop("yield_share") * k * abs(d0)
         p["yield_force"] = fy
         push = r * k * abs(d0) + fy * (1.0 - r) if fy < k * abs(d0) else k * abs(d0)
+    elif model == "boucwen":
+        qd = p.pop("strength_share") * k * abs(d0)
+        p["characteristic_strength"] = qd
+        p["yield_displacement"] = p.pop("yield_share") * abs(d0)
+        push = k * abs(d0) + qd
     else:
         push = k * abs(d0)
-    p["friction"] = share * push
+    if model == "pendulum":
+        weight = mass * 9.80665
+        p["friction_slow"] = share * push / weight
+        p["friction_fast"] = p["friction_slow"] * p.pop("fast_ratio")
+    else:
+        p["friction"] = share * push
+    if damping == "power":
+        zeta = p.pop("damping_ratio")
+        v_ref = math.pi * abs(d0) / p["period"]
+        p["damping_coefficient"] = 2.0 * zeta * math.sqrt(k * mass) * v_ref ** (1.0 - p["damping_exponent"])
     p["d0"] = d0
     return p
 
 
-def box_values(model: str, mass: float, params: dict[str, float], d0_estimate: float, search_d0: bool) \
-        -> dict[str, float]:
+def box_values(model: str, mass: float, params: dict[str, float], d0_estimate: float, search_d0: bool,
+               damping: str = "viscous") -> dict[str, float]:
     """The inverse of :func:`box_parameters` (a start's parameters as the box's quantities)."""
     d0 = params.get("d0", d0_estimate)
     k = mass * (2.0 * math.pi / params["period"]) ** 2
     out = {n: params[n] for n in ("period", "damping_ratio", "stiffness_ratio", "superstructure_period",
-                                  "superstructure_damping_ratio", "release_time") if n in params}
+                                  "superstructure_damping_ratio", "release_time", "rate", "shape",
+                                  "damping_exponent") if n in params}
     if model == "bilinear":
         r, fy = params["stiffness_ratio"], params["yield_force"]
         out["yield_share"] = fy / (k * abs(d0))
         push = r * k * abs(d0) + fy * (1.0 - r) if fy < k * abs(d0) else k * abs(d0)
+    elif model == "boucwen":
+        qd = params["characteristic_strength"]
+        out["strength_share"] = qd / (k * abs(d0))
+        out["yield_share"] = params["yield_displacement"] / abs(d0)
+        push = k * abs(d0) + qd
     else:
         push = k * abs(d0)
-    out["friction_share"] = params.get("friction", 0.0) / push
+    if model == "pendulum":
+        out["friction_share"] = params["friction_slow"] * mass * 9.80665 / push
+        out["fast_ratio"] = params["friction_fast"] / params["friction_slow"] if params["friction_slow"] > 0 else 1.0
+    else:
+        out["friction_share"] = params.get("friction", 0.0) / push
+    if damping == "power":
+        v_ref = math.pi * abs(d0) / params["period"]
+        out["damping_ratio"] = (params["damping_coefficient"] / (2.0 * math.sqrt(k * mass))
+                                / v_ref ** (1.0 - params["damping_exponent"]))
     out["d0_factor"] = d0 / d0_estimate
     return out
 
@@ -309,7 +365,7 @@ def profiled_chi2(misfit, params: dict[str, float]) -> float:
 
 def global_candidates(model: str, mass: float, misfit, box: SearchBox, base: dict[str, float], d0: float, *,
                       runs: int, evaluations: int, seed: int = 0, fixed: dict[str, float] | None = None,
-                      progress=None) \
+                      progress=None, damping: str = "viscous") \
         -> tuple[list[dict[str, Any]], int]:
     """Independent CMA-ES runs over ``box`` (unit-cube coordinates, bounds [0, 1]) of the profiled chi-square
     of the thinned record, each from a seeded uniform random point with step 0.3. Returns each run's best
@@ -323,7 +379,7 @@ def global_candidates(model: str, mass: float, misfit, box: SearchBox, base: dic
     def objective(u) -> float:
         nonlocal spent
         spent += 1
-        p = {**base, **box_parameters(model, mass, box.to_values(u), d0), **fixed}
+        p = {**base, **box_parameters(model, mass, box.to_values(u), d0, damping), **fixed}
         return profiled_chi2(misfit, p)
 
     for run in range(runs):
@@ -332,7 +388,7 @@ def global_candidates(model: str, mass: float, misfit, box: SearchBox, base: dic
         run_seed = int(rng.integers(1, 2**31 - 1))
         x0 = np.random.default_rng(run_seed).uniform(0.1, 0.9, len(box.names))
         u, f, _ = cma_es(objective, x0, 0.3, evaluations, run_seed)
-        p = {**base, **box_parameters(model, mass, box.to_values(u), d0), **fixed}
+        p = {**base, **box_parameters(model, mass, box.to_values(u), d0, damping), **fixed}
         out.append({"chi2": float(f), "parameters": p, "origin": f"global search {run + 1}"})
     return out, spent
 

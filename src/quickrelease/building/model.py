@@ -35,6 +35,8 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..errors import ParameterError
+from . import _ode
+from .hysteretic import BoucWen, HystereticVibration, Pendulum, damping_exponent, hysteretic_vibration
 
 __all__ = ["Isolation", "FreeVibration", "free_vibration", "pushed_state", "MODELS", "TwoDOF", "TwoDOFVibration",
            "free_vibration_2dof", "RECORD_CHANNELS"]
@@ -93,8 +95,12 @@ class Isolation:
     """Post-yield stiffness k2 [N/m] of the bilinear model, in (0, k1); None for the linear model."""
     yield_force: float | None = None
     """Yield force F_y [N] of the bilinear model (at d_y = F_y / k1); None for the linear model."""
+    damping_exponent: float = 1.0
+    """The damper's exponent alpha [-]: 1 is the viscous damper ``c x_dot``; otherwise a fluid viscous damper's
+    power law ``C |x_dot|^alpha sign(x_dot)``, ``damping`` being C [N (s/m)^alpha]."""
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "damping_exponent", damping_exponent(self.damping_exponent))
         _finite_positive("mass", self.mass, "kg")
         _finite_positive("stiffness", self.stiffness, "N/m")
         _finite_nonnegative("damping", self.damping, "N s/m")
@@ -140,8 +146,22 @@ class Isolation:
 
     @property
     def damping_ratio(self) -> float:
-        """Viscous damping ratio referred to the (initial) stiffness, ``c / (2 sqrt(k1 m))`` [-]."""
+        """Viscous damping ratio referred to the (initial) stiffness, ``c / (2 sqrt(k1 m))`` [-] (nan with a
+        power-law damper)."""
+        if self.damping_exponent != 1.0:
+            return math.nan
         return self.damping / (2.0 * math.sqrt(self.stiffness * self.mass))
+
+    def vector(self) -> np.ndarray:
+        """The parameter vector of the event-located integrator (:mod:`quickrelease.building._ode`), which
+        solves it with a power-law damper."""
+        P = np.zeros(_ode.NP)
+        P[_ode.M], P[_ode.K] = self.mass, self.k2
+        if self.model == "bilinear":
+            P[_ode.HKIND], P[_ode.KP], P[_ode.FP] = _ode.H_PLASTIC, self.stiffness - self.k2, self.plastic_yield
+        P[_ode.FSLOW] = P[_ode.FFAST] = self.friction
+        P[_ode.C], P[_ode.ALPHA] = self.damping, self.damping_exponent
+        return P
 
     @property
     def k2(self) -> float:
@@ -166,6 +186,9 @@ class Isolation:
             out.update(k1_N_m=self.stiffness, k2_N_m=self.k2, Fy_N=float(self.yield_force))
         else:
             out["stiffness_N_m"] = self.stiffness
+        if self.damping_exponent != 1.0:
+            out.update(damping_coefficient=self.damping, damping_exponent=self.damping_exponent)
+            del out["damping_ratio"], out["damping_N_s_m"]
         return out
 
 
@@ -176,15 +199,21 @@ def _damping_ratio(value: float) -> float:
     return value
 
 
-def pushed_state(isolation: Isolation, d0: float) -> tuple[float, float, float]:
+def pushed_state(isolation: Isolation | Pendulum | BoucWen, d0: float) -> tuple[float, float, float]:
     """The state at the release after a monotonic push from 0 to d0 [m], at rest.
 
-    Returns ``(z0, R0, P)``: the plastic element's force z0 [N] (0 for the linear model), the restoring
-    force R0 = k2 d0 + z0 [N] and the push force that held it, P = R0 + F_s sign(d0) [N].
+    Returns ``(z0, R0, P)``: the plastic element's force z0 [N] (0 for the linear model; the Bouc-Wen
+    element's z0 [-]), the restoring force R0 = k2 d0 + z0 [N] (W d0 / R for the pendulum, Kd d0 + Qd z0
+    for Bouc-Wen) and the push force that held it, P = R0 + F_s sign(d0) [N] (F_s = mu_slow W for the
+    pendulum).
     """
     d0 = float(d0)
     if not math.isfinite(d0) or d0 == 0.0:
         raise ParameterError("d0", d0, "finite and non-zero", "m")
+    if isinstance(isolation, Pendulum | BoucWen):  # W d0 / R; Kd d0 + Qd z0 on the monotonic push curve
+        z0 = isolation.pushed(d0)
+        R0 = isolation.k2 * d0 + (isolation.characteristic_strength * z0 if isinstance(isolation, BoucWen) else 0.0)
+        return z0, R0, R0 + math.copysign(isolation.friction, d0)
     if isolation.model == "linear":
         z0 = 0.0
     else:
@@ -429,7 +458,8 @@ def _motion_summary(building, motion) -> dict[str, Any]:
             "first_peak_m": float(peaks[1]) if peaks.size > 1 else None}
 
 
-def free_vibration(isolation: Isolation, d0: float, t_end: float | None = None) -> FreeVibration:
+def free_vibration(isolation: Isolation | Pendulum | BoucWen, d0: float, t_end: float | None = None) \
+        -> FreeVibration | HystereticVibration:
     """The building's free vibration after the release from the pushed displacement d0 [m], at rest.
 
     Parameters
@@ -449,6 +479,16 @@ def free_vibration(isolation: Isolation, d0: float, t_end: float | None = None) 
     """
     if isinstance(isolation, TwoDOF):
         return free_vibration_2dof(isolation, d0, t_end)
+    if isinstance(isolation, Pendulum) and isolation.constant_friction and isolation.damping_exponent == 1.0:
+        # linear + Coulomb exactly, k = W / R, F_s = mu W: its closed form (the result's isolation is that)
+        p = isolation
+        return free_vibration(Isolation(p.mass, p.stiffness, p.damping, p.friction), d0, t_end)
+    if isinstance(isolation, Pendulum | BoucWen) or isolation.damping_exponent != 1.0:
+        d0 = float(d0)
+        if not math.isfinite(d0) or d0 == 0.0:
+            raise ParameterError("d0", d0, "finite and non-zero", "m")
+        z0 = pushed_state(isolation, d0)[0] if isinstance(isolation, Isolation) else isolation.pushed(d0)
+        return hysteretic_vibration(isolation, isolation.vector(), z0, d0, t_end)
     iso = isolation
     d0 = float(d0)
     z0, R0, _ = pushed_state(iso, d0)

@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ..building.hysteretic import GRAVITY, BoucWen, Pendulum
 from ..building.model import RECORD_CHANNELS, Isolation, TwoDOF
 from ..errors import ParameterError, QuickReleaseError
 from .records import RecordSpec, load_record, parse_record_spec
@@ -58,7 +59,7 @@ def parse_building_record(table: Any, source: str, base: Path) -> RecordSpec:
                              section="building.record", drifts=True)
 
 
-def spec_isolation(spec: BuildingSpec) -> Isolation:
+def spec_isolation(spec: BuildingSpec) -> Isolation | Pendulum | BoucWen:
     """The ``[building]`` values as an :class:`~quickrelease.building.model.Isolation` (SI units).
 
     ``linear``: ``Isolation.linear(mass, T, zeta, F_s)``; ``bilinear``: ``Isolation.bilinear(mass, k1, k2,
@@ -76,8 +77,29 @@ def spec_isolation(spec: BuildingSpec) -> Isolation:
             raise ParameterError("[building] mass", None, "given with the isolators' friction (the motion depends "
                                  "on friction / mass)", "kg")
         mass = 1.0
+    if spec.model == "pendulum":
+        k = mass * GRAVITY / spec.radius
+    elif spec.model == "boucwen":
+        k = spec.post_yield_stiffness
+    elif spec.model == "bilinear":
+        k = spec.k1
+    else:
+        k = mass * (2.0 * math.pi / spec.period) ** 2
+    if spec.damping == "power":
+        c, alpha = spec.damping_coefficient, spec.damping_exponent
+    else:  # the damping ratio refers to the stiffness named above (k, k1, W / R, Kd)
+        c, alpha = 2.0 * spec.damping_ratio * math.sqrt(k * mass), 1.0
+    if spec.model == "pendulum":
+        return Pendulum(mass, spec.radius, spec.friction_slow or 0.0, spec.friction_fast, spec.rate or 0.0, c, alpha)
+    if spec.model == "boucwen":
+        return BoucWen(mass, spec.post_yield_stiffness, spec.characteristic_strength, spec.yield_displacement,
+                       spec.shape if spec.shape is not None else 1.0, c, alpha, friction)
     if spec.model == "bilinear":
+        if alpha != 1.0:
+            return Isolation(mass, spec.k1, c, friction, spec.k2, spec.yield_force, damping_exponent=alpha)
         return Isolation.bilinear(mass, spec.k1, spec.k2, spec.yield_force, spec.damping_ratio, friction)
+    if alpha != 1.0:
+        return Isolation(mass, k, c, friction, damping_exponent=alpha)
     return Isolation.linear(mass, spec.period, spec.damping_ratio, friction)
 
 
@@ -104,7 +126,7 @@ class BuildingData:
     """The building of a case: its ``[building]`` values and its record (SI units)."""
 
     model: str
-    """``"linear"``, ``"bilinear"`` or ``"2dof"``."""
+    """``"linear"``, ``"bilinear"``, ``"2dof"``, ``"pendulum"`` or ``"boucwen"``."""
     mass: float
     """Mass carried by the isolators, the whole building [kg]."""
     isolation: Isolation | TwoDOF | None
@@ -144,11 +166,29 @@ def _start(spec: BuildingSpec) -> dict[str, float]:
                 start["stiffness_ratio"] = spec.k2 / spec.k1
         if spec.yield_force is not None:
             start["yield_force"] = spec.yield_force
+    elif spec.model == "pendulum":
+        if spec.radius is not None:
+            start["period"] = 2.0 * math.pi * math.sqrt(spec.radius / GRAVITY)
+        if spec.friction_slow is not None:
+            start["friction_slow"] = spec.friction_slow
+            start["friction_fast"] = spec.friction_fast if spec.friction_fast is not None else spec.friction_slow
+        if spec.rate is not None:
+            start["rate"] = spec.rate
+    elif spec.model == "boucwen":
+        if spec.post_yield_stiffness is not None:
+            start["period"] = 2.0 * math.pi * math.sqrt(spec.mass / spec.post_yield_stiffness)
+        for key in ("characteristic_strength", "yield_displacement", "shape"):
+            if getattr(spec, key) is not None:
+                start[key] = getattr(spec, key)
     elif spec.period is not None:
         start["period"] = spec.period
-    if spec.damping_ratio > 0.0:
+    if spec.damping == "power":
+        for key in ("damping_coefficient", "damping_exponent"):
+            if getattr(spec, key) is not None:
+                start[key] = getattr(spec, key)
+    elif spec.damping_ratio > 0.0:
         start["damping_ratio"] = spec.damping_ratio
-    if spec.friction is not None or spec.friction_coefficient is not None:
+    if spec.model != "pendulum" and (spec.friction is not None or spec.friction_coefficient is not None):
         start["friction"] = spec.friction_force
     if spec.displacement is not None:
         start["d0"] = spec.displacement
@@ -227,5 +267,17 @@ def pushed_displacement(push_force: float, building: BuildingSpec) -> float:
     if building.model == "bilinear":
         k1, k2, F_y = building.k1, building.k2, building.yield_force
         return held / k1 if held <= F_y else F_y / k1 + (held - F_y) / k2
+    if building.model == "pendulum":  # the weight's restoring force W d0 / R holds P less mu_slow W
+        weight = building.mass * GRAVITY
+        return max(push_force - (building.friction_slow or 0.0) * weight, 0.0) * building.radius / weight
+    if building.model == "boucwen":  # Kd d0 + Qd z(d0) = P - F_s on the monotonic push curve
+        from scipy.optimize import brentq
+
+        iso = spec_isolation(building)
+        if held <= 0.0:
+            return 0.0
+        hi = held / iso.k2
+        return brentq(lambda d: iso.k2 * d + iso.characteristic_strength * iso.pushed(d) - held, 1e-12, hi,
+                      xtol=1e-15, rtol=1e-13)
     k = building.mass * (2.0 * math.pi / building.period) ** 2
     return held / k

@@ -104,7 +104,9 @@ class FuseSpec:
 
 
 #: Models of the isolated building (``[building] model``).
-BUILDING_MODELS = ("linear", "bilinear", "2dof")
+BUILDING_MODELS = ("linear", "bilinear", "2dof", "pendulum", "boucwen")
+#: The damper's laws of ``[building] damping``.
+DAMPING_LAWS = ("viscous", "power")
 
 
 @dataclass(frozen=True)
@@ -144,6 +146,28 @@ class BuildingSpec:
     """2dof: the superstructure's fixed-base period [s]."""
     superstructure_damping_ratio: float | None = None
     """2dof: the superstructure's viscous damping ratio [-], in [0, 1)."""
+    damping: str = "viscous"
+    """The damper's law: ``"viscous"`` (damping_ratio) or ``"power"`` (damping_coefficient, damping_exponent)."""
+    damping_coefficient: float | None = None
+    """power: C [N (s/m)^alpha], the damper's force at 1 m/s."""
+    damping_exponent: float | None = None
+    """power: alpha [-]."""
+    radius: float | None = None
+    """pendulum: the sliding surface's radius R [m]."""
+    friction_slow: float | None = None
+    """pendulum: mu_slow [-] (or friction_coefficient: constant friction)."""
+    friction_fast: float | None = None
+    """pendulum: mu_fast [-] (default: mu_slow)."""
+    rate: float | None = None
+    """pendulum: Constantinou's rate a [s/m] (default 0: constant friction)."""
+    post_yield_stiffness: float | None = None
+    """boucwen: Kd [N/m]."""
+    characteristic_strength: float | None = None
+    """boucwen: Qd [N]."""
+    yield_displacement: float | None = None
+    """boucwen: dy [m]."""
+    shape: float | None = None
+    """boucwen: n [-] (default 1)."""
     record: RecordSpec | None = None
     """The building's free-vibration record (``[building.record]``), read by
     :func:`quickrelease.io.building_case.load_building`."""
@@ -171,7 +195,10 @@ class BuildingSpec:
         """The design values of the model that are not given (``[building]`` keys): a fit of the record needs
         none of them, ``synth``, planning and the clearance check need all."""
         keys = {"linear": ("period",), "bilinear": ("k1", "k2", "yield_force"),
-                "2dof": ("period", "superstructure_period")}[self.model]
+                "2dof": ("period", "superstructure_period"), "pendulum": ("radius",),
+                "boucwen": ("post_yield_stiffness", "characteristic_strength", "yield_displacement")}[self.model]
+        if self.damping == "power":
+            keys = (*keys, "damping_coefficient", "damping_exponent")
         return [k for k in keys if getattr(self, k) is None]
 
     def require_design(self, purpose: str) -> None:
@@ -224,6 +251,12 @@ _VALID = {
     ("building", "friction"): lambda x: x >= 0.0,
     ("building", "friction_coefficient"): lambda x: x >= 0.0,
     ("building", "superstructure_damping_ratio"): lambda x: 0.0 <= x < 1.0,
+    ("building", "damping_coefficient"): lambda x: x >= 0.0,
+    ("building", "damping_exponent"): lambda x: 0.05 <= x <= 2.0,
+    ("building", "friction_slow"): lambda x: 0.0 <= x <= 1.0,
+    ("building", "friction_fast"): lambda x: 0.0 <= x <= 1.0,
+    ("building", "rate"): lambda x: x >= 0.0,
+    ("building", "shape"): lambda x: 0.5 <= x <= 25.0,
 }
 
 #: section -> key -> (quantity kind or type, what is expected)
@@ -250,7 +283,18 @@ CASE_SCHEMA: dict[str, dict[str, tuple[str, str]]] = {
         "tolerance": ("dimensionless", "a fraction in (0, 1), e.g. 0.05"),
     },
     "building": {
-        "model": ("building_model", "'linear', 'bilinear' or '2dof'"),
+        "model": ("building_model", "'linear', 'bilinear', '2dof', 'pendulum' or 'boucwen'"),
+        "damping": ("damping_law", "'viscous' (damping_ratio) or 'power' (damping_coefficient, damping_exponent)"),
+        "damping_coefficient": ("force", "the power-law damper's force at 1 m/s, C [N (s/m)^alpha], e.g. '400 kN'"),
+        "damping_exponent": ("dimensionless", "the power-law damper's exponent alpha in [0.05, 2], e.g. 0.3"),
+        "radius": ("length", "the friction pendulum's radius of curvature R, e.g. '2.5 m'"),
+        "friction_slow": ("dimensionless", "the pendulum's friction coefficient at low velocity >= 0, e.g. 0.03"),
+        "friction_fast": ("dimensionless", "the pendulum's friction coefficient at high velocity >= 0, e.g. 0.07"),
+        "rate": ("slowness", "Constantinou's rate a of mu(v) >= 0, e.g. '30 s/m'"),
+        "post_yield_stiffness": ("stiffness", "the Bouc-Wen bearings' post-yield stiffness Kd, e.g. '5 MN/m'"),
+        "characteristic_strength": ("force", "the Bouc-Wen bearings' characteristic strength Qd, e.g. '300 kN'"),
+        "yield_displacement": ("length", "the Bouc-Wen bearings' yield displacement dy, e.g. '10 mm'"),
+        "shape": ("dimensionless", "the Bouc-Wen shape exponent n in [0.5, 25], e.g. 1.0"),
         "period": ("time", "a positive period, e.g. '2.5 s'"),
         "damping_ratio": ("dimensionless", "a damping ratio in [0, 1), e.g. 0.1"),
         "mass": ("mass", "a positive mass, e.g. '1500 t'"),
@@ -442,6 +486,10 @@ def _entry(source: str, section: str, key: str, value: Any) -> Any:
         return value
     if kind == "building_model":
         if value not in BUILDING_MODELS:
+            raise _fail(source, where, value, expected)
+        return value
+    if kind == "damping_law":
+        if value not in DAMPING_LAWS:
             raise _fail(source, where, value, expected)
         return value
     if kind == "rk_method":
@@ -676,6 +724,8 @@ _MODEL_KEYS = {
     "linear": ("period",),
     "bilinear": ("k1", "k2", "yield_force"),
     "2dof": ("period", "superstructure_mass", "superstructure_period", "superstructure_damping_ratio"),
+    "pendulum": ("radius", "friction_slow", "friction_fast", "rate"),
+    "boucwen": ("post_yield_stiffness", "characteristic_strength", "yield_displacement", "shape"),
 }
 #: Keys that only some models take.
 _MODEL_ONLY = {key for keys in _MODEL_KEYS.values() for key in keys}
@@ -709,6 +759,23 @@ def _building(values: dict[str, Any], table: Any, source: str, base: Path) -> Bu
         raise _fail(source, f"[building] {key}", table[key], f"a building's mass in [{BUILDING_MASS_RANGE[0]:g}, "
                     f"{BUILDING_MASS_RANGE[1]:g}] kg (its stiffness and damping are products with the mass: "
                     "outside this range they underflow or overflow)")
+    damping = values.get("building.damping", "viscous")
+    for key in ("damping_coefficient", "damping_exponent"):
+        if key in given and damping != "power":
+            raise CaseFileError(f"{source}: [building] {key} = {table[key]!r} with damping = {damping!r}: {key} "
+                                "belongs to damping = 'power' (the viscous damper takes damping_ratio)")
+    if damping == "power" and "damping_ratio" in given:
+        raise CaseFileError(f"{source}: [building] damping_ratio = {table['damping_ratio']!r} with damping = "
+                            "'power': the power-law damper takes damping_coefficient and damping_exponent")
+    if damping == "power" and model == "2dof":
+        raise CaseFileError(f"{source}: [building] damping = 'power' with model = '2dof': the 2dof model's "
+                            "dampers are viscous")
+    if model == "pendulum" and "friction" in given:
+        raise CaseFileError(f"{source}: [building] friction = {table['friction']!r} with model = 'pendulum': give "
+                            "friction_coefficient (constant) or friction_slow, friction_fast and rate")
+    if model == "pendulum" and "friction_coefficient" in given and given & {"friction_slow", "friction_fast"}:
+        raise CaseFileError(f"{source}: [building] friction_coefficient and friction_slow/friction_fast: give one "
+                            "(a constant coefficient, or Constantinou's law)")
     if "building.friction" in values and "building.friction_coefficient" in values:
         raise CaseFileError(f"{source}: [building] friction and friction_coefficient: give one of the two")
     if "building.friction_coefficient" in values and mass is None:
@@ -742,4 +809,13 @@ def _building(values: dict[str, Any], table: Any, source: str, base: Path) -> Bu
                         superstructure_period=values.get("building.superstructure_period"),
                         superstructure_damping_ratio=values.get("building.superstructure_damping_ratio",
                                                                 None if model != "2dof" else 0.0),
-                        record=record)
+                        damping=damping, damping_coefficient=values.get("building.damping_coefficient"),
+                        damping_exponent=values.get("building.damping_exponent"),
+                        radius=values.get("building.radius"),
+                        friction_slow=values.get("building.friction_slow", values.get("building.friction_coefficient")
+                                                 if model == "pendulum" else None),
+                        friction_fast=values.get("building.friction_fast"), rate=values.get("building.rate"),
+                        post_yield_stiffness=values.get("building.post_yield_stiffness"),
+                        characteristic_strength=values.get("building.characteristic_strength"),
+                        yield_displacement=values.get("building.yield_displacement"),
+                        shape=values.get("building.shape"), record=record)

@@ -23,6 +23,7 @@ UNIT_SUFFIXES: tuple[tuple[str, str, bool], ...] = (
     ("_m_s", "m/s", False),
     ("_N_m", "N/m", True),
     ("_N_s_m", "N·s/m", True),
+    ("_s_m", "s/m", False),  # a slowness: Constantinou's rate of the friction pendulum
     ("_rad", "rad", False),
     ("_deg", "°", False),
     ("_kg", "kg", False),

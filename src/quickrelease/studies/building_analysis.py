@@ -42,7 +42,7 @@ from ..io.export import jsonable
 __all__ = ["BuildingResult", "analyse_building", "MODELS", "physical_estimates"]
 
 #: The models of the isolation layer the command knows (``2dof`` where the fit supports it).
-MODELS = ("linear", "bilinear", "2dof")
+MODELS = ("linear", "bilinear", "2dof", "pendulum", "boucwen")
 
 #: Samples of the model curves in the figures (per channel).
 _CURVE_POINTS = 4000
@@ -136,6 +136,10 @@ def characteristic_strength(fit: IsolationFit) -> dict[str, float]:
     if fit.model == "2dof":
         return {}
     iso = fit.isolation()
+    if fit.model == "pendulum":  # the loading branch's force at x = 0 at vanishing velocity: mu_slow W
+        return {"Qd_N": float(iso.friction), "Kd_N_m": float(iso.stiffness)}
+    if fit.model == "boucwen":
+        return {"Qd_N": float(iso.friction + iso.characteristic_strength), "Kd_N_m": float(iso.k2)}
     qd = float(iso.friction) + (iso.plastic_yield if fit.model == "bilinear" else 0.0)
     return {"Qd_N": qd, "Kd_N_m": float(iso.k2)}
 
@@ -179,10 +183,31 @@ def physical_estimates(fit: IsolationFit) -> dict[str, Any]:
             out["not_identified"].append("k2_N_m")
         out["k2_N_m_ci95"] = k2_ci
         put("Fy_N", "yield_force", float(iso.yield_force))
+    elif model == "pendulum":
+        put("period_s", "period", float(iso.period))
+        out["radius_m"] = float(iso.radius)  # R = g (T / 2 pi)^2, increasing in T: its interval the image of T's
+        out["radius_m_ci95"] = (None if "period" not in ci or "period" in blind
+                                else [9.80665 * (v / (2.0 * math.pi)) ** 2 for v in ci["period"]])
+        for name in ("friction_slow", "friction_fast", "rate"):
+            put(name if name != "rate" else "rate_s_m", name, float(getattr(iso, name)))
+    elif model == "boucwen":
+        put("period_s", "period", float(iso.period))
+        out["Kd_N_m"] = float(iso.k2)  # Kd = m (2 pi / T)^2, decreasing in T
+        out["Kd_N_m_ci95"] = (None if "period" not in ci or "period" in blind
+                              else sorted(fit.mass * (2.0 * math.pi / v) ** 2 if v > 0 else math.inf
+                                          for v in ci["period"]))
+        put("Qd_N", "characteristic_strength", float(iso.characteristic_strength))
+        put("dy_m", "yield_displacement", float(iso.yield_displacement))
+        put("shape", "shape", float(iso.shape))
     else:
         put("period_s", "period", float(iso.period))
-    put("damping_ratio", "damping_ratio", float(iso.damping_ratio))
-    put("friction_N", "friction", float(iso.friction))
+    if fit.damping == "power":
+        put("damping_coefficient", "damping_coefficient", float(iso.damping))
+        put("damping_exponent", "damping_exponent", float(iso.damping_exponent))
+    else:
+        put("damping_ratio", "damping_ratio", float(est.get("damping_ratio", fit.parameters.get("damping_ratio"))))
+    if model != "pendulum":
+        put("friction_N", "friction", float(iso.friction))
     out["interval_method"] = dict(fit.interval_method)
     return {k: jsonable(v) for k, v in out.items()}
 
@@ -217,7 +242,8 @@ COMPARE_TOLERANCE = 1e-7
 def analyse_building(data: Any = None, *, channels=None, mass: float | None = None, model: str | None = None,
                      start: dict[str, float] | None = None, release_time: float | None = None,
                      compare: bool = False, source: str = "", superstructure_mass: float | None = None,
-                     progress=None, global_search: bool = True, exclude_spikes: bool | None = None) -> BuildingResult:
+                     progress=None, global_search: bool = True, exclude_spikes: bool | None = None,
+                     damping: str | None = None) -> BuildingResult:
     """Fit the isolation model to the building's record and cross-check it (see the module docstring).
 
     Parameters
@@ -225,8 +251,10 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
     data : BuildingData, optional
         From :func:`quickrelease.io.building_case.load_building`: model, mass, start values, release time,
         channels, notes and source. Or give ``channels`` and ``mass`` (and optionally the rest) directly.
-    model : {"linear", "bilinear", "2dof"}, optional
+    model : {"linear", "bilinear", "2dof", "pendulum", "boucwen"}, optional
         The model to fit (default: the data's, else linear).
+    damping : {"viscous", "power"}, optional
+        The damper's law (default: the data's ``[building] damping``, else viscous).
     superstructure_mass : float, optional
         The roof mass m_s [kg] of the ``2dof`` model (default: the data's ``[building] superstructure_mass``).
     compare : bool
@@ -258,7 +286,10 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
             superstructure_mass = getattr(data, "superstructure_mass", None)
         if exclude_spikes is None:
             exclude_spikes = bool(getattr(data, "exclude_spikes", False))
+        if damping is None and getattr(data, "spec", None) is not None:
+            damping = data.spec.damping
     exclude_spikes = bool(exclude_spikes)
+    damping = damping or "viscous"
     model = model or "linear"
     if model not in MODELS:
         raise ParameterError("model", model, ", ".join(MODELS))
@@ -267,7 +298,7 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
         raise ParameterError("mass", None, "(0, inf), the mass carried by the isolators", "kg")
     prefix = f"{source}: " if source else ""
     fit = _fit(channels, mass, model, start, release_time, prefix, superstructure_mass, progress, global_search,
-               exclude_spikes)
+               exclude_spikes, damping)
     _check_long_enough(fit, prefix)
     if fit.excluded:  # the decay analysis, the loop and the other models see what the fit saw
         channels = drop_excluded(channels, fit.excluded)
@@ -384,11 +415,11 @@ def decay_envelope(decay: DecayAnalysis) -> dict[str, np.ndarray]:
 
 
 def _fit(channels, mass, model, start, release_time, prefix, superstructure_mass=None, progress=None,
-         global_search=True, exclude_spikes=False) -> IsolationFit:
+         global_search=True, exclude_spikes=False, damping="viscous") -> IsolationFit:
     try:
         return fit_isolation(channels, mass, model, release_time=release_time, start=start or None,
                              superstructure_mass=superstructure_mass if model == "2dof" else None, progress=progress,
-                             global_search=global_search, exclude_spikes=exclude_spikes)
+                             global_search=global_search, exclude_spikes=exclude_spikes, damping=damping)
     except ParameterError:
         raise
     except QuickReleaseError as exc:  # e.g. no release found: name the record

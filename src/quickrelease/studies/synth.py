@@ -352,7 +352,17 @@ class SyntheticBuildingRecord(_Synthetic):
         k2 / k1 and yield_force, 2dof superstructure_period and superstructure_damping_ratio, d0, release_time
         and offset_<channel>."""
         t = self.truth
-        p = {"period": t["period_s"], "damping_ratio": t["damping_ratio"], "friction": t["friction_N"]}
+        p = {"period": t["period_s"]}
+        if "damping_exponent" in t:
+            p.update(damping_coefficient=t["damping_coefficient"], damping_exponent=t["damping_exponent"])
+        else:
+            p["damping_ratio"] = t["damping_ratio"]
+        if t["model"] == "pendulum":
+            p.update(friction_slow=t["friction_slow"], friction_fast=t["friction_fast"], rate=t["rate_s_m"])
+        else:
+            p["friction"] = t["friction_N"]
+        if t["model"] == "boucwen":
+            p.update(characteristic_strength=t["Qd_N"], yield_displacement=t["dy_m"], shape=t["shape"])
         if t["model"] == "bilinear":
             p.update(stiffness_ratio=t["k2_N_m"] / t["k1_N_m"], yield_force=t["Fy_N"])
         if t["model"] == "2dof":
@@ -413,8 +423,8 @@ def synthesize_building(case: Case, channels: list[str] | tuple[str, ...], *, ra
     Parameters
     ----------
     case : Case
-        With ``[building]`` (model linear, bilinear or 2dof) and d0 (``displacement``, or a ``[test]``
-        force).
+        With ``[building]`` (model linear, bilinear, 2dof, pendulum or boucwen) and d0 (``displacement``, or a
+        ``[test]`` force).
     channels : list of str
         Channels of :data:`quickrelease.io.building_case.BUILDING_CHANNELS`.
     rate : float
@@ -513,12 +523,24 @@ def building_case_toml(case: Case, synthetic: SyntheticBuildingRecord, record_ta
         lines.append(f'mass = "{t["mass_kg"]!r} kg"')
     if t["model"] == "bilinear":
         lines += [f'k1 = "{t["k1_N_m"]!r} N/m"', f'k2 = "{t["k2_N_m"]!r} N/m"', f'yield_force = "{t["Fy_N"]!r} N"']
+    elif t["model"] == "pendulum":
+        lines += [f'radius = "{t["radius_m"]!r} m"', f"friction_slow = {t['friction_slow']!r}",
+                  f"friction_fast = {t['friction_fast']!r}", f'rate = "{t["rate_s_m"]!r} s/m"']
+    elif t["model"] == "boucwen":
+        lines += [f'post_yield_stiffness = "{t["Kd_N_m"]!r} N/m"', f'characteristic_strength = "{t["Qd_N"]!r} N"',
+                  f'yield_displacement = "{t["dy_m"]!r} m"', f"shape = {t['shape']!r}"]
     else:
         lines.append(f'period = "{case.building.period!r} s"')
     if t["model"] == "2dof":
         lines += [f'superstructure_mass = "{t["superstructure_mass_kg"]!r} kg"',
                   f'superstructure_period = "{t["superstructure_period_s"]!r} s"',
                   f"superstructure_damping_ratio = {t['superstructure_damping_ratio']!r}"]
-    lines += [f"damping_ratio = {case.building.damping_ratio!r}", f'friction = "{t["friction_N"]!r} N"',
-              f'displacement = "{t["d0_m"]!r} m"']
+    if case.building.damping == "power":
+        lines += ['damping = "power"', f'damping_coefficient = "{case.building.damping_coefficient!r} N"',
+                  f"damping_exponent = {case.building.damping_exponent!r}"]
+    else:
+        lines.append(f"damping_ratio = {case.building.damping_ratio!r}")
+    if t["model"] != "pendulum":
+        lines.append(f'friction = "{t["friction_N"]!r} N"')
+    lines.append(f'displacement = "{t["d0_m"]!r} m"')
     return "\n".join(lines) + "\n\n" + record_table

@@ -1,0 +1,590 @@
+"""The compiled integrator of the isolation layer's free vibration where no closed form exists (SI units).
+
+One degree of freedom x(t), the isolation layer, under
+
+    m x_ddot + k x + f_h + d (f_f(s) + f_d(s)) = 0,     s = d x_dot >= 0, d = sign(x_dot) over a piece,
+
+with the hysteretic force ``f_h`` of a Bouc-Wen element (``q z``, ``dy z_dot = x_dot (1 - |z|^n (beta sgn(x_dot
+z) + gamma))``, beta = gamma = 1/2) or an elastic-perfectly-plastic element (``z``, ``z_dot = k_p x_dot`` until
+``|z|`` reaches ``f_p``), the sliders' friction ``f_f(s) = f_fast - (f_fast - f_slow) exp(-rate s)``
+(Constantinou's law; constant where f_fast = f_slow) and the damper's ``f_d(s) = C s^alpha``.
+
+Between events the equation is smooth and is integrated by the 8th-order Dormand-Prince tableau (DOP853's) on a
+fixed step ``h`` per piece, a continuous function of the parameters (so that the solution is a smooth function
+of them and central differences see no step-size noise). Every event is located on the tableau's own map
+``theta -> step(y, theta)`` by a safeguarded Newton iteration to machine precision and the piece restarts there:
+the reversals (x_dot = 0: the sliders stick for good where ``|k x + f_h| <= f_slow``, else the motion turns),
+the yields of the plastic element, and the zero crossings of the Bouc-Wen z (where sgn(x_dot z) switches).
+With a power-law damper (alpha != 1) the force ``C s^alpha`` is not smooth where the velocity vanishes: the steps
+next to a reversal are graded geometrically towards it (:data:`GRADES` halvings), so that its error stays at
+rounding. No smoothed sign function anywhere.
+
+The integration records every step's start state (a grid); any time is evaluated by a partial step from the
+grid point before it (the tableau's own continuous extension of the same order: a step of a shorter length).
+The dissipated energies (friction, damper, hysteresis) are integrated with the state, so the energy balance is
+closed to the integrator's accuracy.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+from scipy.integrate._ivp import dop853_coefficients as _dop
+
+# the 12-stage 8th-order Dormand-Prince tableau (scipy's, the one of DOP853)
+_S = 12
+_A = np.ascontiguousarray(_dop.A[:_S, :_S], dtype=np.float64)
+_B = np.ascontiguousarray(_dop.B, dtype=np.float64)
+_C = np.ascontiguousarray(_dop.C[:_S], dtype=np.float64)
+# its 7th-order continuous extension (three more stages; Hairer, Norsett and Wanner's dense output)
+_AX = np.ascontiguousarray(_dop.A, dtype=np.float64)
+_D = np.ascontiguousarray(_dop.D, dtype=np.float64)
+
+#: The state: x [m], x_dot [m/s], z (Bouc-Wen: [-]; plastic element: [N]), and the work so far [J] of the
+#: sliders' friction, of the damper and of the hysteresis.
+NY = 6
+#: The parameter vector's slots.
+(M, K, HKIND, Q, DY, N, KP, FP, FSLOW, FFAST, RATE, C, ALPHA) = range(13)
+NP = 13
+#: Hysteretic element: none, Bouc-Wen, elastic-perfectly-plastic.
+H_NONE, H_BOUCWEN, H_PLASTIC = 0, 1, 2
+#: Steps a period of the (initial) stiffness; steps over the Bouc-Wen element's transition (dy / (n v));
+#: steps over the friction law's velocity scale (1 / (rate a)).
+STEPS_PERIOD = 32.0
+STEPS_TRANSITION = 1.5
+STEPS_RATE = 2.0
+#: Halvings of the steps next to a reversal with a power-law damper (the last substep is 2^-GRADES of a step).
+GRADES = 14
+#: A creep into the sliders' holding limit is at rest below this fraction of the release's largest speed.
+CREEP = 1e-8
+#: End codes of a record's grid points: the step goes on, or the point starts a piece after an event.
+EV_NONE, EV_RELEASE, EV_REVERSAL, EV_YIELD, EV_ZERO, EV_STICK = 0, 1, 2, 3, 4, 5
+
+
+@njit(cache=True, nogil=True)
+def _rhs(P, y, d, yielding, out):
+    x, v, z = y[0], y[1], y[2]
+    s = d * v
+    if s < 0.0:
+        s = 0.0
+    rate = P[RATE]
+    if rate > 0.0:
+        ff = P[FFAST] - (P[FFAST] - P[FSLOW]) * math.exp(-rate * s)
+    else:
+        ff = P[FSLOW]
+    alpha = P[ALPHA]
+    if alpha == 1.0:
+        fd = P[C] * s
+    elif s > 0.0:
+        fd = P[C] * s ** alpha
+    else:
+        fd = 0.0
+    hk = P[HKIND]
+    fh = 0.0
+    zdot = 0.0
+    dh = 0.0
+    if hk == H_BOUCWEN:
+        q, dy = P[Q], P[DY]
+        fh = q * z
+        if z * v > 0.0:
+            az = abs(z)
+            zn = az if P[N] == 1.0 else az ** P[N]
+            zdot = v / dy * (1.0 - zn)
+            dh = q * zn * z * v
+        else:
+            zdot = v / dy
+    elif hk == H_PLASTIC:
+        fh = z
+        if yielding:
+            dh = P[FP] * s
+        else:
+            zdot = P[KP] * v
+    out[0] = v
+    out[1] = -(P[K] * x + fh + d * (ff + fd)) / P[M]
+    out[2] = zdot
+    out[3] = ff * s
+    out[4] = fd * s
+    out[5] = dh
+
+
+@njit(cache=True, nogil=True)
+def _step(P, y, h, d, yielding, k, tmp, out):
+    """One step of length h of the tableau from y (stages in k, scratch tmp) into out."""
+    for i in range(_S):
+        for j in range(NY):
+            acc = 0.0
+            for m in range(i):
+                acc += _A[i, m] * k[m, j]
+            tmp[j] = y[j] + h * acc
+        _rhs(P, tmp, d, yielding, k[i])
+    for j in range(NY):
+        acc = 0.0
+        for i in range(_S):
+            acc += _B[i] * k[i, j]
+        out[j] = y[j] + h * acc
+
+
+@njit(cache=True, nogil=True)
+def _fractions(graded_start, graded_end):
+    """The substeps of a step, as fractions of it: one, or graded towards a reversal at its start or end."""
+    if not graded_start and not graded_end:
+        return np.ones(1)
+    g = np.empty(GRADES + 1)
+    g[0] = 0.5 ** GRADES
+    for i in range(1, GRADES + 1):
+        g[i] = 0.5 ** (GRADES + 1 - i)
+    if graded_start and graded_end:
+        out = np.empty(2 * (GRADES + 1))
+        for i in range(GRADES + 1):
+            out[i] = 0.5 * g[i]
+            out[2 * GRADES + 1 - i] = 0.5 * g[i]
+        return out
+    if graded_start:
+        return g
+    return g[::-1].copy()
+
+
+@njit(cache=True, nogil=True)
+def _advance(P, y, h, d, yielding, graded_start, graded_end, k, tmp, a, out):
+    """y advanced by h (substeps graded as asked) into out; a is scratch."""
+    fr = _fractions(graded_start, graded_end)
+    for j in range(NY):
+        a[j] = y[j]
+    for f in fr:
+        _step(P, a, f * h, d, yielding, k, tmp, out)
+        for j in range(NY):
+            a[j] = out[j]
+
+
+@njit(cache=True, nogil=True)
+def _event_value(P, y, kind, d):
+    if kind == EV_REVERSAL:
+        return d * y[1]
+    if kind == EV_YIELD:
+        return P[FP] - d * y[2]
+    return y[2]  # EV_ZERO
+
+
+@njit(cache=True, nogil=True)
+def _locate(P, y, h, d, yielding, kind, graded_start, graded_end, k, tmp, a, out, r):
+    """The fraction theta in (0, h] of a step where the event's function (:func:`_event_value`) vanishes,
+    bracketed by [0, h]; a safeguarded Newton iteration on the tableau's map (derivative from the equation)."""
+    lo, hi = 0.0, h
+    # the event's function is positive before the event (the velocity's d x_dot, the plastic element's margin
+    # f_p - d z), or has the sign of z (a zero crossing of z): taken so even where it starts at 0 (a reversal's
+    # velocity at the piece's start)
+    glo = abs(_event_value(P, y, kind, d)) * (1.0 if kind != EV_ZERO or y[2] > 0.0 else -1.0)
+    _advance(P, y, h, d, yielding, graded_start, graded_end, k, tmp, a, out)
+    ghi = _event_value(P, out, kind, d)
+    if ghi == 0.0:
+        return h
+    theta = h * glo / (glo - ghi)
+    for _ in range(100):
+        if not (lo < theta < hi):
+            theta = 0.5 * (lo + hi)
+        _advance(P, y, theta, d, yielding, graded_start, graded_end, k, tmp, a, out)
+        g = _event_value(P, out, kind, d)
+        if g == 0.0:
+            return theta
+        if (g > 0.0) == (glo > 0.0 or (glo == 0.0 and kind != EV_ZERO)):
+            lo, glo = theta, g
+        else:
+            hi, ghi = theta, g
+        _rhs(P, out, d, yielding, r)
+        if kind == EV_REVERSAL:
+            dg = d * r[1]
+        elif kind == EV_YIELD:
+            dg = -d * r[2]
+        else:
+            dg = r[2]
+        new = theta - g / dg if dg != 0.0 else 0.5 * (lo + hi)
+        if not (lo < new < hi):
+            new = 0.5 * (lo + hi)
+        if abs(new - theta) <= 4e-16 * abs(theta) or hi - lo <= 4e-16 * hi:
+            return new if lo < new <= hi else hi
+        theta = new
+    return theta
+
+
+@njit(cache=True, nogil=True)
+def _stored(P, y):
+    e = 0.5 * P[K] * y[0] * y[0]
+    if P[HKIND] == H_BOUCWEN:
+        e += 0.5 * P[Q] * P[DY] * y[2] * y[2]
+    elif P[HKIND] == H_PLASTIC:
+        e += 0.5 * y[2] * y[2] / P[KP]
+    return e
+
+
+@njit(cache=True, nogil=True)
+def _step_size(P, y):
+    """The piece's step [s]: a fraction of the (initial) stiffness's period, of the Bouc-Wen transition at the
+    largest velocity the piece's energy allows, and of the friction law's velocity scale."""
+    k1 = P[K]
+    if P[HKIND] == H_BOUCWEN:
+        k1 += P[Q] / P[DY]
+    elif P[HKIND] == H_PLASTIC:
+        k1 += P[KP]
+    h = 2.0 * math.pi * math.sqrt(P[M] / k1) / STEPS_PERIOD
+    energy = 0.5 * P[M] * y[1] * y[1] + _stored(P, y)
+    vmax = math.sqrt(2.0 * energy / P[M])
+    if P[HKIND] == H_BOUCWEN and vmax > 0.0:
+        h = min(h, P[DY] / (max(P[N], 1.0) * vmax * STEPS_TRANSITION))
+    if P[RATE] > 0.0 and P[FFAST] != P[FSLOW]:
+        xmax = math.sqrt(2.0 * energy / P[K])
+        amax = (P[K] * xmax + P[Q] + P[FP] + max(P[FFAST], P[FSLOW])) / P[M] + 1e-300
+        h = min(h, 1.0 / (P[RATE] * amax * STEPS_RATE))
+    return h
+
+
+@njit(cache=True, nogil=True)
+def _net(P, y):
+    """The force the sliders must hold at rest: k x + f_h [N]."""
+    fh = 0.0
+    if P[HKIND] == H_BOUCWEN:
+        fh = P[Q] * y[2]
+    elif P[HKIND] == H_PLASTIC:
+        fh = y[2]
+    return P[K] * y[0] + fh
+
+
+@njit(cache=True, nogil=True)
+def _put(gt, gy, gd, gf, n, t, y, d, yielding):
+    gt[n] = t
+    for j in range(NY):
+        gy[n, j] = y[j]
+    gd[n] = d
+    gf[n] = 1 if yielding else 0
+    return n + 1
+
+
+@njit(cache=True, nogil=True)
+def _walk(P, y, span, d, yielding, graded_start, graded_end, t, gt, gy, gd, gf, n, k, tmp, out):
+    """Advance y by span through its (graded) substeps, recording each substep's start after the first as a grid
+    point; the end state in out. Returns the grid's count."""
+    fr = _fractions(graded_start, graded_end)
+    a = y.copy()
+    tt = t
+    for i in range(fr.size):
+        if i > 0:
+            n = _put(gt, gy, gd, gf, n, tt, a, d, yielding)
+        _step(P, a, fr[i] * span, d, yielding, k, tmp, out)
+        tt += fr[i] * span
+        for j in range(NY):
+            a[j] = out[j]
+    return n
+
+
+@njit(cache=True, nogil=True)
+def integrate(P, y0, t_end, capacity, max_steps):
+    """The free vibration from the state y0 at rest (t = 0) to t_end [s] (inf: until the sliders stick).
+
+    Returns (grid_t, grid_y, grid_d, grid_flags, n, stop_time, status): the grid's times [s], states, the
+    direction d of the piece each point starts a step of (0 at rest), flags (1: the plastic element yields),
+    the count of points, the stop time (inf if it never sticks) and a status (0 done, 1 the grid's capacity is
+    too small, 2 more than max_steps steps).
+
+    With a power-law damper the steps next to a reversal are graded towards it: the step after it from the
+    reversal on, the one before it from the start of the step before the one that holds it (so that every
+    plain step lies at least its own length away from where the velocity vanishes)."""
+    gt = np.empty(capacity)
+    gy = np.empty((capacity, NY))
+    gd = np.empty(capacity)
+    gf = np.empty(capacity, dtype=np.int64)
+    k = np.empty((_S, NY))
+    tmp = np.empty(NY)
+    a = np.empty(NY)
+    out = np.empty(NY)
+    y1 = np.empty(NY)
+    r = np.empty(NY)
+    y = y0.copy()
+    t = 0.0
+    n = 0
+    stop = math.inf
+    net = _net(P, y)
+    if abs(net) <= P[FSLOW]:  # held where it was pushed
+        n = _put(gt, gy, gd, gf, n, 0.0, y, 0.0, False)
+        return gt, gy, gd, gf, n, 0.0, 0
+    d = -1.0 if net > 0.0 else 1.0
+    yielding = P[HKIND] == H_PLASTIC and d * y[2] >= P[FP]
+    powered = P[ALPHA] != 1.0
+    graded = powered  # the release starts at rest: graded like a reversal
+    creep = CREEP * math.sqrt(2.0 * _stored(P, y) / P[M])
+    h = _step_size(P, y)
+    steps = 0
+    # the grid index, time and gradedness of the start of the step before the current one in this piece (-1: none)
+    prev, t_prev, graded_prev = -1, 0.0, False
+    n = _put(gt, gy, gd, gf, n, t, y, d, yielding)
+    while True:
+        if n + 4 * GRADES + 8 >= capacity:
+            return gt, gy, gd, gf, n, stop, 1
+        steps += 1
+        if steps > max_steps:
+            return gt, gy, gd, gf, n, stop, 2
+        here = n - 1  # the grid point the step starts from (at t, state y)
+        _advance(P, y, h, d, yielding, graded, False, k, tmp, a, y1)
+        # the first event in the step (if any)
+        kind = EV_NONE
+        theta = h
+        if d * y1[1] <= 0.0:
+            kind = EV_REVERSAL
+        if P[HKIND] == H_PLASTIC and not yielding and d * y1[2] >= P[FP]:
+            th = _locate(P, y, h, d, yielding, EV_YIELD, graded, False, k, tmp, a, out, r)
+            if kind == EV_NONE or th < theta:
+                kind, theta = EV_YIELD, th
+        if P[HKIND] == H_BOUCWEN and y[2] != 0.0 and (y1[2] == 0.0 or (y1[2] > 0.0) != (y[2] > 0.0)):
+            th = _locate(P, y, h, d, yielding, EV_ZERO, graded, False, k, tmp, a, out, r)
+            if kind == EV_NONE or th < theta:
+                kind, theta = EV_ZERO, th
+        if kind == EV_REVERSAL:
+            if powered and prev >= 0 and not graded:
+                # graded from the start of the step before: back to that point
+                th = _locate(P, gy[prev], t - t_prev + h, d, yielding, EV_REVERSAL, graded_prev, True, k, tmp, a,
+                             out, r)
+                reversal_at = t_prev + th
+            else:
+                th = _locate(P, y, h, d, yielding, EV_REVERSAL, graded, powered, k, tmp, a, out, r)
+                reversal_at = t + th
+            # a yield or zero crossing of z before it comes first
+            if theta < h and t + theta < reversal_at:
+                kind = EV_YIELD if P[HKIND] == H_PLASTIC else EV_ZERO
+            else:
+                theta = th
+        if kind == EV_NONE:
+            if graded:
+                n = _walk(P, y, h, d, yielding, True, False, t, gt, gy, gd, gf, n, k, tmp, out)
+            prev, t_prev, graded_prev = here, t, graded
+            t += h
+            for j in range(NY):
+                y[j] = y1[j]
+            graded = False
+            n = _put(gt, gy, gd, gf, n, t, y, d, yielding)
+            if d * y[1] < creep and abs(_net(P, y)) <= P[FSLOW] * (1.0 + 1e-9):
+                # creeping into the sliders' holding limit (a velocity-strengthening friction, an overdamped
+                # piece): the velocity only tends to 0; at rest once below CREEP of the release's scale
+                y[1] = 0.0
+                gy[n - 1, 1] = 0.0
+                gd[n - 1] = 0.0
+                stop = t
+                break
+            if t >= t_end:  # the horizon's step was the last
+                break
+            continue
+        # the event's instant
+        if kind == EV_REVERSAL and powered and prev >= 0 and not graded:
+            n = prev + 1
+            for j in range(NY):
+                a[j] = gy[prev, j]
+            n = _walk(P, a, theta, d, yielding, graded_prev, True, t_prev, gt, gy, gd, gf, n, k, tmp, out)
+            t = t_prev + theta
+        else:
+            n = _walk(P, y, theta, d, yielding, graded, kind == EV_REVERSAL and powered, t, gt, gy, gd, gf, n, k,
+                      tmp, out)
+            t += theta
+        for j in range(NY):
+            y[j] = out[j]
+        graded = False
+        if kind == EV_YIELD:
+            y[2] = d * P[FP]
+            yielding = True
+        elif kind == EV_ZERO:
+            y[2] = 0.0
+            # |z|^n with a fractional n is not smooth where z leaves 0: the next step is graded from it
+            graded = P[N] != math.floor(P[N])
+        else:  # a reversal: stick, or turn
+            y[1] = 0.0
+            net = _net(P, y)
+            if abs(net) <= P[FSLOW]:
+                stop = t
+                n = _put(gt, gy, gd, gf, n, t, y, 0.0, yielding)
+                break
+            d = -1.0 if net > 0.0 else 1.0
+            yielding = False
+            graded = powered
+            h = _step_size(P, y)
+        prev = -1
+        n = _put(gt, gy, gd, gf, n, t, y, d, yielding)
+        if t >= t_end:
+            break
+    return gt, gy, gd, gf, n, stop, 0
+
+
+@njit(cache=True, nogil=True)
+def _dense(P, y, h, d, yielding, K, tmp, F, ynew):
+    """The coefficients F (7 x NY) of the tableau's continuous extension over the step of length h from y."""
+    for i in range(16):
+        if i == _S:  # the stage at the step's end
+            for j in range(NY):
+                acc = 0.0
+                for m in range(_S):
+                    acc += _B[m] * K[m, j]
+                ynew[j] = y[j] + h * acc
+            _rhs(P, ynew, d, yielding, K[_S])
+            continue
+        for j in range(NY):
+            acc = 0.0
+            for m in range(i):
+                acc += _AX[i, m] * K[m, j]
+            tmp[j] = y[j] + h * acc
+        _rhs(P, tmp, d, yielding, K[i])
+    for j in range(NY):
+        dy = ynew[j] - y[j]
+        F[0, j] = dy
+        F[1, j] = h * K[0, j] - dy
+        F[2, j] = 2.0 * dy - h * (K[_S, j] + K[0, j])
+        for i in range(4):
+            acc = 0.0
+            for m in range(16):
+                acc += _D[i, m] * K[m, j]
+            F[3 + i, j] = h * acc
+
+
+@njit(cache=True, nogil=True)
+def evaluate(P, gt, gy, gd, gf, n, stop, y_push, t):
+    """The state (x, v, z and the three works) and the acceleration at times t [s] (any order; sorted is
+    fastest): the continuous extension of the grid step that holds each time (computed once per step), the
+    acceleration from the equation at that state; before the release the pushed state at rest, after the stop
+    the last point at rest (the value after an instant where the acceleration jumps)."""
+    m = t.size
+    ys = np.empty((m, NY))
+    acc = np.empty(m)
+    K = np.empty((16, NY))
+    tmp = np.empty(NY)
+    F = np.empty((7, NY))
+    ynew = np.empty(NY)
+    out = np.empty(NY)
+    r = np.empty(NY)
+    cached = -1
+    for i in range(m):
+        ti = t[i]
+        if ti < 0.0 or n == 1:
+            src = y_push if ti < 0.0 else gy[0]
+            for j in range(NY):
+                ys[i, j] = src[j]
+            acc[i] = 0.0
+            continue
+        if ti >= stop:
+            for j in range(NY):
+                ys[i, j] = gy[n - 1, j]
+            acc[i] = 0.0
+            continue
+        p = np.searchsorted(gt[:n], ti, side="right") - 1
+        if p >= n - 1:
+            p = n - 2
+        yielding = (gf[p] & 1) == 1
+        h = gt[p + 1] - gt[p]
+        tau = ti - gt[p]
+        if tau == 0.0 or h <= 0.0:
+            for j in range(NY):
+                out[j] = gy[p, j]
+        else:
+            if p != cached:
+                _dense(P, gy[p], h, gd[p], yielding, K, tmp, F, ynew)
+                cached = p
+            x = tau / h
+            for j in range(NY):
+                out[j] = 0.0
+            for q in range(7):
+                for j in range(NY):
+                    out[j] += F[6 - q, j]
+                    out[j] *= x if q % 2 == 0 else 1.0 - x
+            for j in range(NY):
+                out[j] += gy[p, j]
+        _rhs(P, out, gd[p], yielding, r)
+        for j in range(NY):
+            ys[i, j] = out[j]
+        acc[i] = r[1]
+    return ys, acc
+
+
+@njit(cache=True, nogil=True)
+def _accel(P, x, v, z, d):
+    """The acceleration at a state [m/s^2] (the equation's second component alone)."""
+    s = d * v
+    if s < 0.0:
+        s = 0.0
+    rate = P[RATE]
+    ff = P[FFAST] - (P[FFAST] - P[FSLOW]) * math.exp(-rate * s) if rate > 0.0 else P[FSLOW]
+    alpha = P[ALPHA]
+    fd = P[C] * s if alpha == 1.0 else (P[C] * s ** alpha if s > 0.0 else 0.0)
+    fh = P[Q] * z if P[HKIND] == H_BOUCWEN else (z if P[HKIND] == H_PLASTIC else 0.0)
+    return -(P[K] * x + fh + d * (ff + fd)) / P[M]
+
+
+@njit(cache=True, nogil=True)
+def motion(P, gt, gy, gd, gf, n, stop, y_push, t):
+    """x [m], x_dot [m/s] and x_ddot [m/s^2] at sorted times t [s]: what a record's channels need, as
+    :func:`evaluate` gives them (the same continuous extension), without the works, the grid walked once."""
+    m = t.size
+    out = np.empty((3, m))
+    K = np.empty((16, NY))
+    tmp = np.empty(NY)
+    F = np.empty((7, NY))
+    ynew = np.empty(NY)
+    p = 0
+    cached = -1
+    for i in range(m):
+        ti = t[i]
+        if ti < 0.0 or n == 1:
+            out[0, i] = y_push[0] if ti < 0.0 else gy[0, 0]
+            out[1, i] = 0.0
+            out[2, i] = 0.0
+            continue
+        if ti >= stop:
+            out[0, i] = gy[n - 1, 0]
+            out[1, i] = 0.0
+            out[2, i] = 0.0
+            continue
+        while p < n - 2 and gt[p + 1] <= ti:
+            p += 1
+        h = gt[p + 1] - gt[p]
+        tau = ti - gt[p]
+        if tau <= 0.0 or h <= 0.0:
+            x, v, z = gy[p, 0], gy[p, 1], gy[p, 2]
+        else:
+            if p != cached:
+                _dense(P, gy[p], h, gd[p], (gf[p] & 1) == 1, K, tmp, F, ynew)
+                cached = p
+            u = tau / h
+            w = 1.0 - u
+            x = 0.0
+            v = 0.0
+            z = 0.0
+            for q in range(7):
+                x += F[6 - q, 0]
+                v += F[6 - q, 1]
+                z += F[6 - q, 2]
+                f = u if q % 2 == 0 else w
+                x *= f
+                v *= f
+                z *= f
+            x += gy[p, 0]
+            v += gy[p, 1]
+            z += gy[p, 2]
+        out[0, i] = x
+        out[1, i] = v
+        out[2, i] = _accel(P, x, v, z, gd[p])
+    return out
+
+
+@njit(cache=True, nogil=True)
+def boucwen_push(n, dy, d0, steps):
+    """z after a monotonic push from x = 0, z = 0 to |d0| [m] (dz/dx = (1 - z^n) / dy), with the tableau on
+    ``steps`` equal steps in x; its sign is d0's."""
+    h = abs(d0) / steps
+    z = 0.0
+    k = np.empty(_S)
+    for _ in range(steps):
+        for i in range(_S):
+            acc = 0.0
+            for m in range(i):
+                acc += _A[i, m] * k[m]
+            zz = z + h * acc
+            k[i] = (1.0 - (zz if n == 1.0 else abs(zz) ** n)) / dy
+        acc = 0.0
+        for i in range(_S):
+            acc += _B[i] * k[i]
+        z += h * acc
+    return z if d0 > 0.0 else -z

@@ -1,0 +1,407 @@
+"""The isolation systems without a closed form: friction pendulums, Bouc-Wen bearings, power-law dampers (SI).
+
+- :class:`Pendulum`, the curved surface slider (friction pendulum): restoring force ``W x / R`` (W = m g, R the
+  radius of the sliding surface), friction ``mu(|v|) W sign(v)`` with Constantinou's law
+  ``mu(v) = mu_fast - (mu_fast - mu_slow) exp(-a |v|)`` (Constantinou, Mokha and Reinhorn 1990), or a constant
+  coefficient; the slider sticks at a reversal while ``|W x / R| <= mu_slow W``.
+- :class:`BoucWen`, smooth hysteresis for lead-rubber and high-damping rubber bearings: ``Kd x + Qd z`` with
+  ``dy z_dot = x_dot (1 - |z|^n (beta sgn(x_dot z) + gamma))``, beta = gamma = 1/2 (Wen 1976; the form of
+  Constantinou's and Park's isolator models: ``|z| <= 1``, initial stiffness ``Kd + Qd / dy``), in parallel with
+  optional sliders. As n grows it tends to the bilinear model with k1 = Kd + Qd / dy, k2 = Kd,
+  F_y = Qd + Kd dy.
+- Any model's damper may follow the power law of a fluid viscous damper, ``C |v|^alpha sign(v)``
+  (``damping_exponent`` alpha; 1 is the viscous damper): :class:`~quickrelease.building.model.Isolation` with
+  ``damping_exponent != 1``, and these two.
+
+Their free vibration (:class:`HystereticVibration`, made by :func:`quickrelease.building.model.free_vibration`)
+is integrated by the event-located scheme of :mod:`quickrelease.building._ode`: every reversal, stick, yield and
+zero crossing of z located to machine precision, no smoothed sign function; the dissipated energies are
+integrated with the motion.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..errors import ParameterError
+from . import _ode
+
+__all__ = ["GRAVITY", "Pendulum", "BoucWen", "HystereticVibration", "SHAPE_RANGE", "EXPONENT_RANGE"]
+
+#: Standard gravity [m/s^2]: the weight W = m g on the sliders.
+GRAVITY = 9.80665
+#: The Bouc-Wen shape exponent n's range (beyond ~20 the element is bilinear to the eye and the steps over its
+#: transition grow many).
+SHAPE_RANGE = (0.5, 25.0)
+#: The damper's exponent alpha's range (fluid viscous dampers: 0.1 to 2).
+EXPONENT_RANGE = (0.05, 2.0)
+#: Steps of the monotonic push of a Bouc-Wen element, a yield displacement per this many (and n times more).
+PUSH_STEPS = 4
+#: Most steps one free vibration may take.
+MAX_STEPS = 20_000_000
+
+
+def _positive(name: str, value: float, unit: str = "") -> float:
+    value = float(value)
+    if not (math.isfinite(value) and value > 0.0):
+        raise ParameterError(name, value, "(0, inf)", unit)
+    return value
+
+
+def _nonnegative(name: str, value: float, unit: str = "") -> float:
+    value = float(value)
+    if not (math.isfinite(value) and value >= 0.0):
+        raise ParameterError(name, value, "[0, inf)", unit)
+    return value
+
+
+def damping_exponent(value: float) -> float:
+    """The damper's exponent alpha, checked against :data:`EXPONENT_RANGE`."""
+    value = float(value)
+    lo, hi = EXPONENT_RANGE
+    if not (math.isfinite(value) and lo <= value <= hi):
+        raise ParameterError("damping_exponent", value, f"[{lo}, {hi}]")
+    return value
+
+
+def _set(obj, **values) -> None:
+    for name, value in values.items():
+        object.__setattr__(obj, name, value)
+
+
+@dataclass(frozen=True)
+class Pendulum:
+    """The friction pendulum (curved surface slider) under a rigid superstructure (SI units)."""
+
+    mass: float
+    """Mass on the sliders m [kg]; the weight W = m g (:data:`GRAVITY`)."""
+    radius: float
+    """Radius of the sliding surface R [m] (the effective radius; the pendulum period is 2 pi sqrt(R / g))."""
+    friction_slow: float
+    """Friction coefficient at vanishing velocity mu_slow [-] (also the static one: the slider holds below it)."""
+    friction_fast: float | None = None
+    """Friction coefficient at high velocity mu_fast [-]; None: equal to ``friction_slow`` (constant friction)."""
+    rate: float = 0.0
+    """Constantinou's rate a [s/m] of ``mu(v) = mu_fast - (mu_fast - mu_slow) exp(-a |v|)``."""
+    damping: float = 0.0
+    """Coefficient C of a damper in parallel, ``C |v|^alpha sign(v)`` [N (s/m)^alpha]."""
+    damping_exponent: float = 1.0
+    """The damper's exponent alpha [-] (1: viscous, C in N s/m)."""
+
+    def __post_init__(self) -> None:
+        _positive("mass", self.mass, "kg")
+        _positive("radius", self.radius, "m")
+        _nonnegative("friction_slow", self.friction_slow)
+        if self.friction_fast is None:
+            _set(self, friction_fast=float(self.friction_slow))
+        _nonnegative("friction_fast", self.friction_fast)
+        _nonnegative("rate", self.rate, "s/m")
+        _nonnegative("damping", self.damping, "N (s/m)^alpha")
+        _set(self, damping_exponent=damping_exponent(self.damping_exponent))
+
+    model = "pendulum"
+
+    @property
+    def weight(self) -> float:
+        """W = m g [N]."""
+        return self.mass * GRAVITY
+
+    @property
+    def stiffness(self) -> float:
+        """The pendulum's stiffness W / R [N/m]."""
+        return self.weight / self.radius
+
+    @property
+    def period(self) -> float:
+        """The pendulum period 2 pi sqrt(R / g) [s] (independent of the mass)."""
+        return 2.0 * math.pi * math.sqrt(self.radius / GRAVITY)
+
+    @property
+    def constant_friction(self) -> bool:
+        """Whether the friction coefficient is the same at every velocity."""
+        return self.friction_fast == self.friction_slow or self.rate == 0.0
+
+    def friction_coefficient(self, v) -> np.ndarray:
+        """Constantinou's mu(|v|) [-] at velocities v [m/s]."""
+        s = np.abs(np.asarray(v, dtype=float))
+        if self.rate == 0.0:
+            return np.full(s.shape, float(self.friction_slow))
+        return self.friction_fast - (self.friction_fast - self.friction_slow) * np.exp(-self.rate * s)
+
+    @property
+    def friction(self) -> float:
+        """The sliders' friction force at vanishing velocity, mu_slow W [N] (what holds the building at rest)."""
+        return self.friction_slow * self.weight
+
+    @property
+    def k2(self) -> float:
+        return self.stiffness
+
+    @property
+    def damping_ratio(self) -> float:
+        """The viscous damper's ratio referred to the stiffness of ``period``, ``c / (2 sqrt(k m))`` [-] (nan
+        with a power-law damper)."""
+        if self.damping_exponent != 1.0:
+            return math.nan
+        return self.damping / (2.0 * math.sqrt(self.k2 * self.mass))
+
+    def vector(self) -> np.ndarray:
+        """The integrator's parameter vector (:mod:`quickrelease.building._ode`)."""
+        P = np.zeros(_ode.NP)
+        P[_ode.M], P[_ode.K] = self.mass, self.stiffness
+        P[_ode.FSLOW] = self.friction
+        P[_ode.FFAST] = self.friction_fast * self.weight
+        P[_ode.RATE] = self.rate if not self.constant_friction else 0.0
+        P[_ode.C], P[_ode.ALPHA] = self.damping, self.damping_exponent
+        return P
+
+    def pushed(self, d0: float) -> float:
+        """The hysteretic variable after the push (none: 0)."""
+        return 0.0
+
+    def summary(self) -> dict[str, Any]:
+        return {"model": "pendulum", "mass_kg": self.mass, "radius_m": self.radius, "period_s": self.period,
+                "stiffness_N_m": self.stiffness, "friction_slow": self.friction_slow,
+                "friction_fast": float(self.friction_fast), "rate_s_m": self.rate, "friction_N": self.friction,
+                **_damper(self)}
+
+
+@dataclass(frozen=True)
+class BoucWen:
+    """Smooth hysteretic bearings (lead-rubber, high-damping rubber) as a Bouc-Wen element (SI units)."""
+
+    mass: float
+    """Mass carried m [kg]."""
+    post_yield_stiffness: float
+    """Kd [N/m]: the stiffness once the element has yielded."""
+    characteristic_strength: float
+    """Qd [N]: the hysteretic force at full yield (the loop's force at zero displacement)."""
+    yield_displacement: float
+    """dy [m]: the element's elastic range (initial stiffness Kd + Qd / dy)."""
+    shape: float = 1.0
+    """n [-]: the sharpness of the transition (large n: bilinear)."""
+    damping: float = 0.0
+    """Coefficient C of a damper in parallel, ``C |v|^alpha sign(v)`` [N (s/m)^alpha]."""
+    damping_exponent: float = 1.0
+    """The damper's exponent alpha [-] (1: viscous, C in N s/m)."""
+    friction: float = 0.0
+    """Coulomb friction of sliders in parallel F_s [N] (static = kinetic)."""
+
+    def __post_init__(self) -> None:
+        _positive("mass", self.mass, "kg")
+        _positive("post_yield_stiffness", self.post_yield_stiffness, "N/m")
+        _positive("characteristic_strength", self.characteristic_strength, "N")
+        _positive("yield_displacement", self.yield_displacement, "m")
+        n = float(self.shape)
+        if not (math.isfinite(n) and SHAPE_RANGE[0] <= n <= SHAPE_RANGE[1]):
+            raise ParameterError("shape", n, f"[{SHAPE_RANGE[0]}, {SHAPE_RANGE[1]}]")
+        _nonnegative("damping", self.damping, "N (s/m)^alpha")
+        _set(self, damping_exponent=damping_exponent(self.damping_exponent))
+        _nonnegative("friction", self.friction, "N")
+
+    model = "boucwen"
+
+    @property
+    def stiffness(self) -> float:
+        """The initial stiffness Kd + Qd / dy [N/m]."""
+        return self.post_yield_stiffness + self.characteristic_strength / self.yield_displacement
+
+    @property
+    def k2(self) -> float:
+        return float(self.post_yield_stiffness)
+
+    @property
+    def damping_ratio(self) -> float:
+        """The viscous damper's ratio referred to the stiffness of ``period``, ``c / (2 sqrt(k m))`` [-] (nan
+        with a power-law damper)."""
+        if self.damping_exponent != 1.0:
+            return math.nan
+        return self.damping / (2.0 * math.sqrt(self.k2 * self.mass))
+
+    @property
+    def period(self) -> float:
+        """The post-yield period 2 pi sqrt(m / Kd) [s]."""
+        return 2.0 * math.pi * math.sqrt(self.mass / self.post_yield_stiffness)
+
+    def bilinear(self) -> tuple[float, float, float]:
+        """The bilinear model it tends to as n grows: (k1, k2, F_y) = (Kd + Qd / dy, Kd, Qd + Kd dy)."""
+        return (self.stiffness, self.k2,
+                self.characteristic_strength + self.post_yield_stiffness * self.yield_displacement)
+
+    def vector(self) -> np.ndarray:
+        P = np.zeros(_ode.NP)
+        P[_ode.M], P[_ode.K] = self.mass, self.post_yield_stiffness
+        P[_ode.HKIND], P[_ode.Q] = _ode.H_BOUCWEN, self.characteristic_strength
+        P[_ode.DY], P[_ode.N] = self.yield_displacement, self.shape
+        P[_ode.FSLOW] = P[_ode.FFAST] = self.friction
+        P[_ode.C], P[_ode.ALPHA] = self.damping, self.damping_exponent
+        return P
+
+    def pushed(self, d0: float) -> float:
+        """z after the monotonic push from x = 0, z = 0 to d0 [m]: ``dz/dx = (1 - |z|^n) / dy`` (for n = 1
+        ``1 - exp(-|d0| / dy)``, signed), integrated on steps of dy / (:data:`PUSH_STEPS` max(n, 1))."""
+        n, dy = float(self.shape), float(self.yield_displacement)
+        # beyond dy (1 + 40 / min(n, 1)) z is 1 to rounding (1 - z falls as exp(-n x / dy) once past dy)
+        reach = min(abs(d0), dy * (1.0 + 40.0 / min(n, 1.0)))
+        steps = max(int(math.ceil(reach / dy * PUSH_STEPS * max(n, 1.0))), 8)
+        z = float(_ode.boucwen_push(n, dy, math.copysign(reach, d0), steps))
+        return z
+
+    def summary(self) -> dict[str, Any]:
+        return {"model": "boucwen", "mass_kg": self.mass, "Kd_N_m": self.k2, "Qd_N": self.characteristic_strength,
+                "dy_m": self.yield_displacement, "shape": self.shape, "initial_stiffness_N_m": self.stiffness,
+                "period_s": self.period, "friction_N": self.friction, **_damper(self)}
+
+
+def _damper(system) -> dict[str, float]:
+    if system.damping_exponent == 1.0:
+        return {"damping_ratio": system.damping_ratio, "damping_N_s_m": system.damping}
+    return {"damping_coefficient": system.damping, "damping_exponent": system.damping_exponent}
+
+
+def _works(ys: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    return ys[:, 3], ys[:, 4], ys[:, 5]
+
+
+@dataclass(frozen=True, eq=False)
+class HystereticVibration:
+    """The free vibration of an isolation layer without a closed form, from the pushed state (SI units).
+
+    The same interface as :class:`~quickrelease.building.model.FreeVibration`: :meth:`state`, :meth:`channels`,
+    :meth:`restoring_force`, :meth:`energies`, the turning points and the stop.
+    """
+
+    isolation: Any
+    """The isolation (:class:`Pendulum`, :class:`BoucWen`, or an Isolation with a power-law damper)."""
+    d0: float
+    """Pushed displacement at the release [m]."""
+    stop_time: float
+    """When the sliders stick for good [s] (inf: still moving at the horizon)."""
+    horizon: float
+    """The time up to which the motion was followed [s]."""
+    _P: np.ndarray = field(repr=False)
+    _grid: tuple = field(repr=False)
+    _push: np.ndarray = field(repr=False)
+
+    @property
+    def rest(self) -> tuple[float, float]:
+        """(x, z) where it sticks (the last state followed when it does not)."""
+        y = self._grid[1][self._grid[4] - 1]
+        return float(y[0]), float(y[2])
+
+    @property
+    def reversal_times(self) -> np.ndarray:
+        """Times of the turning points, the release instant first [s]."""
+        gt, gy, gd, _, n = self._grid
+        turns = np.flatnonzero((gd[1:n] != gd[: n - 1]) & (gd[: n - 1] != 0.0)) + 1
+        return np.concatenate(([0.0], gt[turns]))
+
+    @property
+    def turning_points(self) -> np.ndarray:
+        """Displacements at the turning points, d0 first [m]."""
+        gt, gy, gd, _, n = self._grid
+        turns = np.flatnonzero((gd[1:n] != gd[: n - 1]) & (gd[: n - 1] != 0.0)) + 1
+        return np.concatenate(([self.d0], gy[turns, 0]))
+
+    def _evaluate(self, t) -> tuple[np.ndarray, np.ndarray]:
+        t = np.asarray(t, dtype=float)
+        gt, gy, gd, gf, n = self._grid
+        ys, acc = _ode.evaluate(self._P, gt, gy, gd, gf, n, self.stop_time, self._push, np.ascontiguousarray(
+            t.ravel()))
+        return ys.reshape(t.shape + (_ode.NY,)), acc.reshape(t.shape)
+
+    def state(self, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Displacement [m], velocity [m/s] and acceleration [m/s^2] at times t [s] (the value after an instant
+        where the acceleration jumps; before the release at rest at d0)."""
+        t = np.asarray(t, dtype=float)
+        flat = np.ascontiguousarray(t.ravel())
+        if flat.size > 1 and not np.all(flat[1:] >= flat[:-1]):  # any order: through the sorted times
+            order = np.argsort(flat, kind="stable")
+            out = np.empty((3, flat.size))
+            out[:, order] = self._motion(flat[order])
+        else:
+            out = self._motion(flat)
+        return out[0].reshape(t.shape), out[1].reshape(t.shape), out[2].reshape(t.shape)
+
+    def _motion(self, t: np.ndarray) -> np.ndarray:
+        gt, gy, gd, gf, n = self._grid
+        return _ode.motion(self._P, gt, gy, gd, gf, n, self.stop_time, self._push, t)
+
+    def channels(self, t) -> dict[str, np.ndarray]:
+        """Every channel of the building's record at times t [s] (the roof moves with the rigid layer)."""
+        x, v, a = self.state(t)
+        return {"x": x, "v": v, "a": a, "x_roof": x, "v_roof": v, "a_roof": a}
+
+    def restoring_force(self, t) -> np.ndarray:
+        """The isolators' force without the sliders' friction and the damper [N]: ``W x / R`` (pendulum),
+        ``Kd x + Qd z`` (Bouc-Wen), ``k2 x + z`` (bilinear), ``k x`` (linear)."""
+        ys, _ = self._evaluate(t)
+        return _ode_net(self._P, ys)
+
+    def energies(self, t) -> dict[str, np.ndarray]:
+        """The energy balance at times t [J]: kinetic, stored (springs and the hysteretic element's elastic part:
+        ``Qd dy z^2 / 2`` for Bouc-Wen, ``z^2 / (2 (k1 - k2))`` for the plastic element), the work of the
+        hysteresis, of the sliders' friction and of the damper so far; their sum is ``initial``."""
+        ys, _ = self._evaluate(np.atleast_1d(np.asarray(t, dtype=float)))
+        P = self._P
+        kinetic = 0.5 * P[_ode.M] * ys[:, 1] ** 2
+        stored = _ode_stored(P, ys)
+        friction, viscous, hysteretic = _works(ys)
+        initial = float(_ode_stored(P, self._push[None, :])[0])
+        return {"kinetic": kinetic, "stored": stored, "hysteretic": hysteretic, "friction": friction,
+                "viscous": viscous, "initial": np.full(kinetic.shape, initial)}
+
+    def summary(self) -> dict[str, Any]:
+        peaks = self.turning_points
+        return {**self.isolation.summary(), "d0_m": self.d0, "stop_time_s": self.stop_time,
+                "rest_displacement_m": self.rest[0], "half_cycles": int(peaks.size - 1),
+                "first_peak_m": float(peaks[1]) if peaks.size > 1 else None}
+
+
+def _ode_net(P: np.ndarray, ys: np.ndarray) -> np.ndarray:
+    fh = np.zeros(ys.shape[:-1])
+    if P[_ode.HKIND] == _ode.H_BOUCWEN:
+        fh = P[_ode.Q] * ys[..., 2]
+    elif P[_ode.HKIND] == _ode.H_PLASTIC:
+        fh = ys[..., 2]
+    return P[_ode.K] * ys[..., 0] + fh
+
+
+def _ode_stored(P: np.ndarray, ys: np.ndarray) -> np.ndarray:
+    e = 0.5 * P[_ode.K] * ys[..., 0] ** 2
+    if P[_ode.HKIND] == _ode.H_BOUCWEN:
+        e = e + 0.5 * P[_ode.Q] * P[_ode.DY] * ys[..., 2] ** 2
+    elif P[_ode.HKIND] == _ode.H_PLASTIC:
+        e = e + 0.5 * ys[..., 2] ** 2 / P[_ode.KP]
+    return e
+
+
+def hysteretic_vibration(system, P: np.ndarray, z0: float, d0: float, t_end: float | None) -> HystereticVibration:
+    """The free vibration of ``system`` (parameter vector P, hysteretic variable z0 after the push to d0 [m]) up
+    to t_end [s] (None: until the sliders stick, which needs friction)."""
+    d0 = float(d0)
+    if not math.isfinite(d0) or d0 == 0.0:
+        raise ParameterError("d0", d0, "finite and non-zero", "m")
+    if t_end is None:
+        if P[_ode.FSLOW] == 0.0:
+            raise ParameterError("t_end", None, "a finite time in (0, inf) s when the isolation has no sliders' "
+                                 "friction (the motion never ends)")
+        horizon = math.inf
+    else:
+        horizon = _positive("t_end", t_end, "s")
+    y0 = np.array([d0, 0.0, z0, 0.0, 0.0, 0.0])
+    capacity = 4096
+    while True:
+        gt, gy, gd, gf, n, stop, status = _ode.integrate(P, y0, horizon, capacity, MAX_STEPS)
+        if status == 0:
+            break
+        if status == 2:
+            raise ParameterError("t_end", horizon, f"a span of at most {MAX_STEPS} integration steps", "s")
+        capacity *= 4
+    grid = (gt[:n].copy(), gy[:n].copy(), gd[:n].copy(), gf[:n].copy(), int(n))
+    return HystereticVibration(isolation=system, d0=d0, stop_time=float(stop), horizon=horizon, _P=P, _grid=grid,
+                               _push=y0)
