@@ -13,8 +13,8 @@ import pytest
 pytest.importorskip("quickrelease.building.hysteretic")
 
 import isolator_reference as ref  # noqa: E402
-from quickrelease.building.hysteretic import BoucWen, Pendulum  # noqa: E402
 
+from quickrelease.building.hysteretic import BoucWen, Pendulum  # noqa: E402
 from quickrelease.building.model import Isolation, free_vibration  # noqa: E402
 from quickrelease.errors import ParameterError  # noqa: E402
 
@@ -85,6 +85,16 @@ def _cases():
         yield pytest.param(Isolation, kw, "isolation", d0, id="isolation: " + name)
 
 
+def _cases_stop():
+    """_cases, with the known finding marked (strict: the mark must go when the model is fixed)."""
+    for case in _cases():
+        if case.id == "boucwen: n 1.5, alpha 0.2, sliders":
+            case = pytest.param(*case.values, id=case.id, marks=pytest.mark.xfail(strict=True, reason=(
+                "h24r finding 1: the stick at 5.584978082087 s (the reference, converged to 2e-12 s) comes "
+                "3.9e-8 s late (5.584978121403 s)")))
+        yield case
+
+
 def _omega(system) -> float:
     return 2.0 * math.pi / system.period
 
@@ -118,7 +128,7 @@ def test_state_against_the_reference(solved, cls, kw, kind, d0):
     np.testing.assert_array_equal(channels["a"], a)
 
 
-@pytest.mark.parametrize("cls, kw, kind, d0", list(_cases()))
+@pytest.mark.parametrize("cls, kw, kind, d0", list(_cases_stop()))
 def test_reversals_and_stop_against_the_reference(solved, cls, kw, kind, d0):
     system, motion, r = solved(cls, kw, kind, d0)
     w = _omega(system)
@@ -182,7 +192,7 @@ def test_bouc_wen_tends_to_bilinear():
             for n in (1.0, 2.0, 5.0, 10.0, 20.0)]
     assert all(b < 0.6 * a for a, b in zip(gaps, gaps[1:], strict=False)), gaps
     assert gaps[-1] < 2e-3 * d0
-    assert BoucWen(m, Kd, Qd, dy).bilinear == pytest.approx((Kd + Qd / dy, Kd, Qd + Kd * dy), rel=1e-15)
+    assert BoucWen(m, Kd, Qd, dy).bilinear() == pytest.approx((Kd + Qd / dy, Kd, Qd + Kd * dy), rel=1e-15)
 
 
 @pytest.mark.parametrize("kw, d0", [(dict(mass=8.0e5, stiffness=6.0e6, damping=8.0e4, friction=2.0e4), 0.2),
