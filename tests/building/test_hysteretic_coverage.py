@@ -28,7 +28,9 @@ SEEDS = 200 if SLOW else 3
 RATE, PRE, RELEASE = 200.0, 1.0, 1.0137
 NOISE_X, NOISE_A, OFFSET_A = 2e-4, 0.02, 0.01
 
-M_P, R, MU_SLOW, MU_FAST, A, ZETA_P, D0_P = 1.0e6, 2.5, 0.02, 0.06, 30.0, 0.01, 0.25
+# three reversals before it sticks (with one half-cycle only, a shift of x by delta and of both friction coefficients
+# by delta / R leaves the motion unchanged: the LVDT's offset, d0 and the friction level are then not separable)
+M_P, R, MU_SLOW, MU_FAST, A, ZETA_P, D0_P = 1.0e6, 2.5, 0.005, 0.015, 30.0, 0.01, 0.2
 M_B, KD, QD, DY, N, ZETA_B, D0_B = 8.0e5, 1.6e6, 4.0e5, 0.025, 1.0, 0.02, 0.2
 
 MODELS = {
