@@ -1489,7 +1489,12 @@ def _profile_interval(name, names, est, lo_b, hi_b, se, target, solve) -> tuple[
         f_lo, f_hi = profile_chi2(lo_v) - target, profile_chi2(hi_v) - target
         if f_lo * f_hi > 0:  # the piecewise profile stepped over the target between two refits: the outer one
             return outer
-        return brentq(lambda v: profile_chi2(v) - target, lo_v, hi_v, xtol=1e-3 * max(se, 1e-12))
+        try:
+            return brentq(lambda v: profile_chi2(v) - target, lo_v, hi_v, xtol=1e-3 * max(se, 1e-12))
+        except ValueError:  # the refits (each from the nearest one so far) moved the ends' profile values
+            # across the target: the outer end, the wider side (the model's profile has steps, issue 24's
+            # Bouc-Wen record of seed 2403)
+            return outer
 
     return edge(-1), edge(+1)
 
