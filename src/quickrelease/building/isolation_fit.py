@@ -1763,6 +1763,13 @@ def decay_check(fit: IsolationFit) -> dict[str, Any]:
         out["notes"].append("bilinear isolators follow no decay law: compare the equivalent period and damping "
                             "against the amplitude instead")
         return out
+    if fit.model == "boucwen" or fit.damping == "power" or (
+            fit.model == "pendulum" and fit.parameters.get("friction_fast") != fit.parameters.get("friction_slow")):
+        out["notes"].append(f"the {fit.model} model{' with a power-law damper' if fit.damping == 'power' else ''} "
+                            "follows no decay law of the linear model's form (its period, friction or damping change "
+                            "with the amplitude or the velocity): compare the equivalent quantities per cycle "
+                            "instead")
+        return out
     if fit.model == "2dof":
         out["notes"].append("the 2dof base decays in two coupled modes (and the roof can make the sliders stick "
                             "and slip again): the single-mode decay law does not hold; compare the equivalent "
