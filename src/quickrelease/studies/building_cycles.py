@@ -3,9 +3,9 @@
 :func:`measured_cycles` reads keff, EDC, beta_eff, Qd, Kd, Teff and mu
 (:func:`quickrelease.building.effective.loop_cycles`) off the record's loop after the release: the isolators'
 total force ``F = -m a`` from the accelerometer of the isolation layer (its fitted zero removed, ``fit.zero``)
-against the displacement transducer's x (its zero removed too); where the record has no accelerometer, the fitted model's force at the record's times against
-the measured x; without a displacement channel (or for ``2dof``, whose base force is not the isolators' alone),
-none.
+against the displacement transducer's x (its zero removed too); where the record has no accelerometer, the
+fitted model's force at the record's times against the measured x; without a displacement channel (or for
+``2dof``, whose base force is not the isolators' alone), none.
 
 How the loop is read, and why:
 
