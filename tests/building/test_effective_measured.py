@@ -144,3 +144,13 @@ def test_qd_of_a_ringing_force_needs_the_window():
         return np.ptp(q) / q.mean()
 
     assert spread(wide) < 0.06 and spread(narrow) > 4 * spread(wide)
+
+
+def test_bad_noise_and_window_are_one_line():
+    from quickrelease.errors import ParameterError
+
+    with pytest.raises(ParameterError, match="noise"):
+        cycle_turns([0.0, 1.0, 0.0], noise=-1.0)
+    with pytest.raises(ParameterError, match="qd_window"):
+        loop_cycles([0, 1, 2], [0, 1, 0], [0, 1, 0], qd_window=2.0)
+    assert cycle_turns(np.zeros(5), noise=1.0).size == 0  # nothing beyond the noise: no turning point
