@@ -203,7 +203,7 @@ def loop_cycles(t, x, force, mass: float | None = None, neighbourhood: int = 2,
         Where positive, Qd from each branch's least-squares line of F on x over ``|x| < qd_window D``, its
         intercept at x = 0, instead of the force interpolated between the two samples about the crossing:
         a measured force rings and carries noise there (on the friction damper's 1 Hz record in
-        ``tests/data/friction_damper`` the single crossing scatters Qd by 25 % between steady cycles,
+        ``tests/data/friction_damper`` the single crossing scatters Qd by 17 % between steady cycles,
         a window of D/4 by 4 %). 0 (default): the crossing, exact for a loop without noise.
 
     Returns
