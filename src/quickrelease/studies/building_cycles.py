@@ -29,12 +29,14 @@ standard errors) and its EDC 0.9 % (0.7 standard errors) from the fitted model's
   flip). Read on the raw samples, the force at the extremes would be the largest of several noisy samples,
   biased by about one noise level (1.3 % of keff on the example), more than its standard error.
 * **Standard errors by a parametric bootstrap over the channels' noise:** ``draws`` copies of the record with
-  fresh Gaussian noise of the fit's levels (``fit.noise``) added to each raw channel, each read the same way
-  with the same turning points; the spread of each quantity between them is its standard error (to first
-  order, the estimator's response to added noise of the record's level is its response to the record's own
-  noise). It covers the interpolation, the smoothing and the noise in the loop's area; not the bias of the
-  smoothing (negligible at 100 samples a period or more), and, for the model's force, not the fit's own
-  uncertainty (the model's band).
+  fresh Gaussian noise of the fit's levels (``fit.noise``) added to each raw channel, each read the same way,
+  its turning points found again (kept from the record where a copy finds another number of them); the
+  spread of each quantity between them is its standard error (to first order, the estimator's response to
+  added noise of the record's level is its response to the record's own noise). It covers the interpolation,
+  the smoothing, the turning points' samples and the noise in the loop's area; not the bias of the smoothing
+  (negligible at 100 samples a period or more), and, for the model's force, not the fit's own uncertainty
+  (the model's band). With the turning points kept fixed the errors came out 10-15 % too small (keff's 95 %
+  intervals held the truth in 93 % of the cycles, 96 % now).
 """
 
 from __future__ import annotations
@@ -226,26 +228,31 @@ def measured_cycles(fit: IsolationFit, draws: int = 100, window: int | None = No
         return x, f
 
     x, f = loop(x0, a0 if ach is not None else None)
-    # the release from rest is the first turning point; the reversals follow, beyond the noise of x
-    turns = cycle_turns(x, fit.noise.get(xch.name, 0.0))
-    turns = np.array([0, *[int(i) for i in turns if i > 0]], dtype=int)
-    if turns.size < 3:
-        return MeasuredCycles((), (), source, fname, xch.name, clock_ch.name, 1.0 / dt, int(draws), window)
+    sx = fit.noise.get(xch.name, 0.0)
 
-    def read(xv: np.ndarray, fv: np.ndarray) -> tuple[CycleProperties, ...]:
+    def find_turns(xv: np.ndarray) -> np.ndarray:
+        # the release from rest is the first turning point; the reversals follow, beyond the noise of x
+        return np.array([0, *[int(i) for i in cycle_turns(xv, sx) if i > 0]], dtype=int)
+
+    def read(xv: np.ndarray, fv: np.ndarray, turns: np.ndarray) -> tuple[CycleProperties, ...]:
         xs = _extremes_at_turns(smooth_half_cycles(xv, turns, window), turns, GUARD + 1)
         fs = smooth_half_cycles(fv, turns, window)
         return loop_cycles(t, xs, fs, mass=fit.mass, neighbourhood=0, turns=turns, qd_window=0.25)
 
-    cycles = read(x, f)
+    turns = find_turns(x)
+    if turns.size < 3:
+        return MeasuredCycles((), (), source, fname, xch.name, clock_ch.name, 1.0 / dt, int(draws), window)
+    cycles = read(x, f, turns)
     rng = np.random.default_rng(seed)
-    sx = fit.noise.get(xch.name, 0.0)
     sa = fit.noise.get(ach.name, 0.0) if ach is not None else 0.0
     samples = np.full((int(draws), len(cycles), len(SE_KEYS)), np.nan)
     for d in range(int(draws)):
         xv = x0 + rng.normal(0.0, sx, x0.size) if sx > 0 else x0
         av = a0 + rng.normal(0.0, sa, a0.size) if ach is not None and sa > 0 else (a0 if ach is not None else None)
-        again = read(*loop(xv, av))
+        xd, fd = loop(xv, av)
+        # the copy's own turning points (the reversals' samples move with the noise), where it finds as many
+        again_turns = find_turns(xd)
+        again = read(xd, fd, again_turns if again_turns.size == turns.size else turns)
         for i, c in enumerate(again[:len(cycles)]):
             samples[d, i] = [getattr(c, k) for k in SE_KEYS]
     with np.errstate(invalid="ignore"):
