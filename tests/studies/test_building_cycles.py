@@ -189,3 +189,26 @@ def test_bad_draws_and_window_are_one_line():
         measured_cycles(fit, draws=3)
     with pytest.raises(ParameterError, match="window"):
         measured_cycles(fit, window=8)
+
+
+def test_the_shipped_examples_measured_cycle_agrees_with_the_fitted_models():
+    """examples/building.toml (LVDT 200 Hz, accelerometer 100 Hz on its own clock, in mm and g0): its one whole
+    cycle before the sliders hold, read off the record, within 2 standard errors and 2 % of the fitted model's
+    own cycle (effective_cycles: the model's loop without noise) for keff, EDC and beta_eff."""
+    from pathlib import Path
+
+    from quickrelease.io.building_case import load_building
+    from quickrelease.io.case import load_case
+    from quickrelease.studies.building_analysis import analyse_building, effective_cycles
+
+    case = load_case(Path(__file__).resolve().parents[2] / "examples" / "building.toml")
+    fit = analyse_building(load_building(case), global_search=False).fit
+    measured = measured_cycles(fit, draws=40)
+    model = effective_cycles(fit)
+    assert measured.clock == "a" and len(measured.cycles) == 1 and len(model) >= 1
+    c, se = measured.cycles[0], measured.std_errors[0]
+    m = min(model, key=lambda q: abs(q.start_s - c.start_s))
+    assert abs(m.start_s - c.start_s) < 0.02
+    for key in ("keff_N_m", "edc_J", "beta_eff"):
+        assert abs(getattr(c, key) - getattr(m, key)) < 2 * se[key], key
+        assert getattr(c, key) == pytest.approx(getattr(m, key), rel=0.02), key
