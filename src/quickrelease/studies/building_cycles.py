@@ -42,6 +42,7 @@ standard errors) and its EDC 0.9 % (0.7 standard errors) from the fitted model's
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 from typing import Any
 
@@ -185,7 +186,8 @@ def measured_cycles(fit: IsolationFit, draws: int = 100, window: int | None = No
     Returns
     -------
     MeasuredCycles or None
-        None for ``2dof`` and for a record without a displacement channel.
+        None for ``2dof``, for a record without a displacement channel, and where fewer than 32 samples of the
+        common clock follow the release; no cycles where the record holds fewer than two half-cycles.
     """
     if int(draws) < 10:
         raise ParameterError("draws", draws, "10 or more")
@@ -255,7 +257,8 @@ def measured_cycles(fit: IsolationFit, draws: int = 100, window: int | None = No
         again = read(xd, fd, again_turns if again_turns.size == turns.size else turns)
         for i, c in enumerate(again[:len(cycles)]):
             samples[d, i] = [getattr(c, k) for k in SE_KEYS]
-    with np.errstate(invalid="ignore"):
+    with warnings.catch_warnings():  # a quantity nan in every copy (Qd of a cycle that misses x = 0): nan
+        warnings.simplefilter("ignore", RuntimeWarning)
         se = np.nanstd(samples, axis=0, ddof=1) if len(cycles) else np.zeros((0, len(SE_KEYS)))
     errors = tuple({k: float(se[i, j]) for j, k in enumerate(SE_KEYS)} for i in range(len(cycles)))
     return MeasuredCycles(cycles, errors, source, fname, xch.name, clock_ch.name, 1.0 / dt, int(draws), window)
