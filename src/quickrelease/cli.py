@@ -1032,6 +1032,24 @@ def _building_tables(result, summary: dict[str, Any], title: str) -> None:
              *estimate_row(r["parameter"], r["decay"], r["decay_se"])[1:3], f"{r['difference_in_se']:+.3g}")
             for r in rows],
             ("parameter", "fit", "decay", "decay SE", "difference [SE]"))
+    judged = summary.get("effective_judgement")
+    if judged and judged.get("cycles"):
+        from .report.display import (
+            CYCLE_HEADERS,
+            DEVIATION_HEADERS,
+            SPREAD_HEADERS,
+            effective_deviation_rows,
+            effective_quantity_rows,
+            spread_rows,
+        )
+
+        _table("Engineering quantities per cycle (the fitted model's loop)",
+               effective_quantity_rows(judged, summary["effective"]), CYCLE_HEADERS)
+        _table("The cycles against the identified model's curve at their amplitudes (difference and the 95% band's "
+               "half-width, % of the model)", effective_deviation_rows(judged), DEVIATION_HEADERS)
+        _table("Spread of the cycles about the model's curve (keff within "
+               f"{judged['keff_tolerance']:.0%}, EDC at least {judged['edc_fraction']:.0%}; the cycle from the release "
+               "not judged)", spread_rows(judged), SPREAD_HEADERS)
     for text in result.notes:
         _echo(f"note: {text}")
     for text in result.warnings:

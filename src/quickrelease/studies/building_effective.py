@@ -55,6 +55,8 @@ _NODES = 16
 _SPLITS = 4
 #: Grid points of the default amplitude grid.
 _GRID = 41
+#: How far beyond the grid's ends (a share of its span) :meth:`EffectiveCurve.at` still answers.
+_SLACK = 0.02
 #: Least share of the draws that must reach an amplitude for the band to be given there.
 _MIN_SHARE = 0.9
 
@@ -209,11 +211,12 @@ class EffectiveCurve(Summarised):
 
     def at(self, amplitude) -> dict[str, np.ndarray]:
         """Each curve and band end at the given amplitudes [m] (a cubic spline through the grid's points, linear
-        where some are nan; nan outside the grid): keys ``<quantity>``, ``<quantity>_lo``, ``<quantity>_hi``."""
+        where some are nan; nan outside the grid, beyond 2% of its span): keys ``<quantity>``, ``<quantity>_lo``, ``<quantity>_hi``."""
         a = np.atleast_1d(np.asarray(amplitude, dtype=float))
         out: dict[str, np.ndarray] = {}
         g = self.amplitude_m
-        inside = (a >= g[0]) & (a <= g[-1]) if g.size else np.zeros(a.shape, dtype=bool)
+        slack = _SLACK * (g[-1] - g[0]) if g.size else 0.0  # a sampled cycle's D a hair beyond the model's
+        inside = (a >= g[0] - slack) & (a <= g[-1] + slack) if g.size else np.zeros(a.shape, dtype=bool)
         for q in QUANTITIES:
             for suffix, arr in (("", self.curves), ("_lo", self.lower), ("_hi", self.upper)):
                 v = np.full(a.shape, math.nan)
@@ -222,6 +225,7 @@ class EffectiveCurve(Summarised):
                     v[inside] = CubicSpline(g, arr[q])(a[inside])
                 elif np.count_nonzero(ok) >= 2:
                     v[inside] = np.interp(a[inside], g[ok], arr[q][ok])
+                    v[inside & ((a < g[ok][0]) | (a > g[ok][-1]))] = math.nan
                 out[q + suffix] = v
         return out
 
