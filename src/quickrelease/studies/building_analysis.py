@@ -109,7 +109,8 @@ class BuildingResult(Summarised):
                     "decay_check": jsonable({k: v for k, v in self.decay_check.items() if k != "analysis"}),
                     "decay": None if self.decay is None else jsonable(self.decay.summary(self.fit.mass)),
                     "effective": [jsonable(c.summary()) for c in self.effective],
-                    "effective_curve": None if self.effective_curve is None else jsonable(self.effective_curve.summary()),
+                    "effective_curve": (None if self.effective_curve is None
+                                        else jsonable(self.effective_curve.summary())),
                     "effective_judgement": (None if self.effective_judgement is None
                                             else jsonable(self.effective_judgement.summary())),
                     **characteristic_strength(self.fit),

@@ -211,7 +211,8 @@ class EffectiveCurve(Summarised):
 
     def at(self, amplitude) -> dict[str, np.ndarray]:
         """Each curve and band end at the given amplitudes [m] (a cubic spline through the grid's points, linear
-        where some are nan; nan outside the grid, beyond 2% of its span): keys ``<quantity>``, ``<quantity>_lo``, ``<quantity>_hi``."""
+        where some are nan; nan outside the grid, beyond 2% of its span): keys ``<quantity>``,
+        ``<quantity>_lo``, ``<quantity>_hi``."""
         a = np.atleast_1d(np.asarray(amplitude, dtype=float))
         out: dict[str, np.ndarray] = {}
         g = self.amplitude_m
