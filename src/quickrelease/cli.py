@@ -1137,6 +1137,21 @@ def _building_campaign_tables(result) -> None:
                      number(law.p_value, 2), "yes" if law.significant else "no"))
     _table("Laws in the amplitude (weighted least squares; p of slope = 0)", rows,
            ("law", "a", "b", "p", "significant at 5%"))
+    laws = getattr(result, "cycle_laws", {})
+    if laws:
+        from .studies.building_campaign import CYCLE_QUANTITIES
+
+        rows = []
+        for law in laws.values():
+            _, _, y_scale, y_unit, symbol = CYCLE_QUANTITIES[law.quantity]
+            x = "D [m]" if law.variable == "displacement" else "ln(D / 1 m)"
+            per = "/m" if law.variable == "displacement" else ""
+            rows.append((f"{symbol} = a + b {x}", plus_minus(law.intercept * y_scale, law.intercept_se * y_scale,
+                                                             y_unit),
+                         plus_minus(law.slope * y_scale, law.slope_se * y_scale, y_unit + per),
+                         number(law.p_value, 2), "yes" if law.significant else "no"))
+        _table(f"Laws of the cycles' keff and beta_eff in the cycle amplitude D ({len(result.cycles)} cycles of the "
+               "releases' fitted models pooled; unweighted)", rows, ("law", "a", "b", "p", "significant at 5%"))
     for r in result.releases:
         if r.restarted_from:
             _echo(f"note: release {r.name} was refitted from the estimates of {r.restarted_from} (its first fit "

@@ -661,7 +661,31 @@ def _building_campaign_section(result, svgs: dict[str, str]) -> list[str]:
                  "a significant slope of T, ζ or F_s says the isolators depart from that model.</p>")
     parts.append(_figure(svgs, "campaign_building", "The isolation system against each variable: releases with "
                                                     "their 95% intervals, the fitted law and its 95% confidence band"))
+    parts.extend(_cycle_laws_section(result))
     return parts
+
+
+def _cycle_laws_section(result) -> list[str]:
+    """keff and beta_eff of the releases' cycles pooled, and their laws in the cycle amplitude (none for 2dof)."""
+    laws = getattr(result, "cycle_laws", {})
+    if not laws:
+        return []
+    from ..studies.building_campaign import CYCLE_QUANTITIES
+
+    rows = []
+    for law in laws.values():
+        _, _, y_scale, y_unit, symbol = CYCLE_QUANTITIES[law.quantity]
+        x = "cycle amplitude D [m]" if law.variable == "displacement" else "ln(D / 1 m)"
+        per = "/m" if law.variable == "displacement" else ""
+        rows.append((_e(symbol), _e(x), _e(plus_minus(law.intercept * y_scale, law.intercept_se * y_scale, y_unit)),
+                     _e(plus_minus(law.slope * y_scale, law.slope_se * y_scale, y_unit + per)),
+                     _num(law.p_value, ".2g"), "<strong>yes</strong>" if law.significant else "no"))
+    return ["<h2 id=\"campaign-cycles\">Engineering quantities of the cycles against their amplitude</h2>",
+            f"<p>{len(result.cycles)} cycles of the releases' fitted models (each from a reversal to the turning "
+            "point two half-cycles later; the cycle from the release left out), pooled: keff and beta_eff against "
+            "the cycle's amplitude D, unweighted least squares (the cycles of one release share its fit's "
+            "errors).</p>",
+            _html_table(("quantity", "x", "a", "b", "p (b = 0)", "slope significant at 5%"), rows, num=(2, 3, 4))]
 
 
 def _effective_section(result) -> str:

@@ -42,7 +42,7 @@ from ..building.model import free_vibration
 from ..errors import ParameterError
 
 __all__ = ["EffectiveCurve", "CycleJudgement", "model_cycles", "effective_curves", "judge_cycles", "CRITERIA",
-           "QUANTITIES", "DRAWS"]
+           "QUANTITIES", "DRAWS", "record_span"]
 
 #: The curves, with their units: effective stiffness, energy dissipated per cycle, effective damping, period.
 QUANTITIES = {"keff_N_m": "N/m", "edc_J": "J", "beta_eff": "-", "teff_s": "s"}
@@ -272,7 +272,9 @@ def _draws(fit: IsolationFit, draws: int, rng) -> tuple[list[dict[str, float]], 
     return [dict(zip(drawn, row, strict=True)) for row in sample.tolist()], drawn, held, clipped
 
 
-def _horizon(fit: IsolationFit) -> float:
+def record_span(fit: IsolationFit) -> float:
+    """The record's span after the release [s] (20 periods where the fit holds no channels): the horizon of the
+    model's cycles."""
     span = max(float(np.max(c.t)) for c in fit.channels) - fit.release_time if fit.channels else 0.0
     return span if span > 0.0 else 20.0 * float(fit.isolation().period)
 
@@ -312,7 +314,7 @@ def effective_curves(fit: IsolationFit, amplitudes=None, level: float = 0.95, dr
     if fit.model == "2dof":
         return EffectiveCurve(fit.model, fit.mass, np.empty(0), empty, empty, empty, level, draws, 0, (), (),
                               notes=("2dof: the base force is not the isolators' alone; no curves",))
-    horizon = _horizon(fit)
+    horizon = record_span(fit)
     best = model_cycles(fit.isolation(), fit.parameters["d0"], horizon)
     keep = ~best["from_release"] & np.isfinite(best["edc_J"])
     d = best["amplitude_m"][keep]
