@@ -193,3 +193,40 @@ def test_the_bands_cover_the_true_curves_95_percent_of_the_time():
             for j, q in enumerate(("keff_N_m", "edc_J", "beta_eff")):
                 hits.append(curve.lower[q][i] <= true[j] <= curve.upper[q][i])
     assert 0.88 <= np.mean(hits) <= 0.995, np.mean(hits)
+
+
+def test_the_analysis_cycles_agree_with_the_exact_model_cycles(fitted):
+    """effective_cycles (the model's loop sampled, read by loop_cycles) against model_cycles (exact) for every
+    cycle after the release's, the last one (ending where the sliders stop) included: keff, EDC to 1e-4."""
+    from quickrelease.studies.building_analysis import effective_cycles
+
+    sampled = effective_cycles(fitted)
+    exact = model_cycles(fitted.isolation(), fitted.parameters["d0"], 28.0)
+    assert len(sampled) == exact["amplitude_m"].size >= 5
+    for i, c in enumerate(sampled[1:], start=1):
+        assert c.amplitude_m == pytest.approx(exact["amplitude_m"][i], rel=1e-6)
+        assert c.keff_N_m == pytest.approx(exact["keff_N_m"][i], rel=1e-4)
+        assert c.edc_J == pytest.approx(exact["edc_J"][i], rel=1e-4)
+
+
+def test_the_tables_rows():
+    """The command's per-cycle rows from a judgement written here: differences in % of the model beside the band's
+    half-width (% of the model), the release's cycle shown without a comparison; the criteria's verdicts."""
+    from quickrelease.report.display import effective_deviation_rows, spread_rows
+
+    cyc = {"cycle": 1, "amplitude_m": 0.1, "from_release": False, "judged": True,
+           "keff_N_m": 1.0123e6, "keff_model_N_m": 1.0e6, "keff_lo_N_m": 0.9995e6, "keff_hi_N_m": 1.0005e6,
+           "keff_ratio": 1.0123, "edc_J": 990.0, "edc_model_J": 1000.0, "edc_lo_J": 980.0, "edc_hi_J": 1020.0,
+           "edc_ratio": 0.99, "beta_eff": 0.05, "beta_model": 0.05, "beta_lo": 0.049, "beta_hi": 0.051,
+           "beta_ratio": 1.0}
+    first = {**cyc, "cycle": 0, "from_release": True, "judged": False, "keff_model_N_m": None, "keff_ratio": None,
+             "edc_model_J": None, "edc_ratio": None, "beta_model": None, "beta_ratio": None}
+    rows = effective_deviation_rows({"cycles": [first, cyc]})
+    assert rows[0] == ("1", "-", "-", "-", "-", "-", "-")
+    assert rows[1] == ("2", "+1.230", "±0.05", "-1.0", "±2", "+0.0", "±2")
+    crit = [{"name": "keff_vs_model", "worst": 0.0123, "cycle": 1, "tolerance": 0.15, "passed": True},
+            {"name": "edc_vs_model", "worst": 0.7, "cycle": 1, "tolerance": 0.8, "passed": False},
+            {"name": "edc_spread", "worst": None, "cycle": None, "tolerance": 0.8, "passed": None}]
+    assert spread_rows({"criteria": crit}) == [("keff_vs_model", "0.0123", "2", "0.15", "pass"),
+                                              ("edc_vs_model", "0.7", "2", "0.8", "FAIL"),
+                                              ("edc_spread", "-", "-", "0.8", "no cycle judged")]
