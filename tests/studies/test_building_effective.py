@@ -120,10 +120,11 @@ def test_the_level_sets_the_bands_width(fitted):
 def test_parameters_the_record_does_not_identify_are_held(fitted):
     from dataclasses import replace
 
-    blind = replace(fitted, interval_method={**fitted.interval_method, "damping_ratio": "not identified"},
-                    std_errors={**fitted.std_errors, "damping_ratio": math.inf})
-    curve = effective_curves(blind, draws=40)
+    blind = replace(fitted, interval_method={**fitted.interval_method, "damping_ratio": "not identified"})
+    curve = effective_curves(blind, draws=40)  # held by its interval method, whatever its standard error
     assert "damping_ratio" in curve.held and "damping_ratio" not in curve.drawn
+    lost = replace(fitted, std_errors={**fitted.std_errors, "friction": math.inf})
+    assert "friction" in effective_curves(lost, draws=40).held  # no finite standard error: held too
     assert any("not identified" in n for n in curve.notes)
 
 
