@@ -253,3 +253,17 @@ def test_a_bilinear_isolators_model_cycles_follow_the_solve_ivp_loop():
         assert cyc["amplitude_m"][i] == pytest.approx(got[i].amplitude_m, rel=1e-6)
         assert cyc["keff_N_m"][i] == pytest.approx(got[i].keff_N_m, rel=1e-4)
         assert cyc["edc_J"][i] == pytest.approx(got[i].edc_J, rel=1e-4)
+
+
+def test_a_motion_of_fewer_than_two_half_cycles_has_no_cycles_and_no_curve(fitted):
+    """Sliders that stop the layer within one half-cycle: no cycle, and the curve of such a fit is empty with a
+    note (not an error)."""
+    from dataclasses import replace
+
+    iso = Isolation.linear(M, T, 0.0, 0.3 * M * G0)
+    cyc = model_cycles(iso, D0, 10.0)
+    assert all(v.size == 0 for v in cyc.values()) and cyc["from_release"].dtype == bool
+    stuck = replace(fitted, estimates={**fitted.estimates, "friction": 0.3 * M * G0})
+    curve = effective_curves(stuck, draws=20)
+    assert curve.amplitude_m.size == 0 and "fewer than two cycles" in curve.notes[0]
+    assert curve.summary()["amplitude_m"] == []

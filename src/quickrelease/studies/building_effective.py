@@ -104,8 +104,8 @@ def model_cycles(isolation, d0: float, horizon: float) -> dict[str, np.ndarray]:
     times = np.asarray(fv.reversal_times, dtype=float)
     times = times[times <= horizon]
     keys = ("start_s", "amplitude_m", "keff_N_m", "edc_J", "beta_eff", "teff_s", "from_release")
-    if times.size < 3:
-        return {k: np.empty(0) for k in keys}
+    if times.size < 3:  # fewer than two half-cycles: no cycle
+        return {k: np.empty(0, dtype=bool if k == "from_release" else float) for k in keys}
     stuck = math.isfinite(fv.stop_time) and fv.stop_time <= horizon
     eps = 1e-9 * float(np.min(np.diff(times)))
     x = fv.state(times)[0]
