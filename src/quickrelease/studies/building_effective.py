@@ -30,6 +30,7 @@ reversal's, so it lies off the curve by construction (for a slider, keff = k ins
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -350,13 +351,10 @@ def effective_curves(fit: IsolationFit, amplitudes=None, level: float = 0.95, dr
     for q in QUANTITIES:
         arr = np.array(stack[q]) if used else np.full((1, grid.size), math.nan)
         enough = np.count_nonzero(np.isfinite(arr), axis=0) >= _MIN_SHARE * max(used, 1)
-        with np.errstate(invalid="ignore"):
-            import warnings
-
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", RuntimeWarning)
-                lo = np.nanquantile(arr, lo_q, axis=0)
-                hi = np.nanquantile(arr, hi_q, axis=0)
+        with np.errstate(invalid="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # all-nan columns: nan, said by the band
+            lo = np.nanquantile(arr, lo_q, axis=0)
+            hi = np.nanquantile(arr, hi_q, axis=0)
         lo[~enough | outside] = math.nan
         hi[~enough | outside] = math.nan
         lower[q], upper[q] = lo, hi
