@@ -1035,6 +1035,24 @@ def _building_tables(result, summary: dict[str, Any], title: str) -> None:
              *estimate_row(r["parameter"], r["decay"], r["decay_se"])[1:3], f"{r['difference_in_se']:+.3g}")
             for r in rows],
             ("parameter", "fit", "decay", "decay SE", "difference [SE]"))
+    judged = summary.get("effective_judgement")
+    if judged and judged.get("cycles"):
+        from .report.display import (
+            CYCLE_HEADERS,
+            DEVIATION_HEADERS,
+            SPREAD_HEADERS,
+            effective_deviation_rows,
+            effective_quantity_rows,
+            spread_rows,
+        )
+
+        _table("Engineering quantities per cycle (the fitted model's loop)",
+               effective_quantity_rows(judged, summary["effective"]), CYCLE_HEADERS)
+        _table("The cycles against the identified model's curve at their amplitudes (difference and the 95% band's "
+               "half-width, % of the model)", effective_deviation_rows(judged), DEVIATION_HEADERS)
+        _table("Spread of the cycles about the model's curve (keff within "
+               f"{judged['keff_tolerance']:.0%}, EDC at least {judged['edc_fraction']:.0%}; the cycle from the release "
+               "not judged)", spread_rows(judged), SPREAD_HEADERS)
     for text in result.notes:
         _echo(f"note: {text}")
     for text in result.warnings:
@@ -1122,6 +1140,21 @@ def _building_campaign_tables(result) -> None:
                      number(law.p_value, 2), "yes" if law.significant else "no"))
     _table("Laws in the amplitude (weighted least squares; p of slope = 0)", rows,
            ("law", "a", "b", "p", "significant at 5%"))
+    laws = getattr(result, "cycle_laws", {})
+    if laws:
+        from .studies.building_campaign import CYCLE_QUANTITIES
+
+        rows = []
+        for law in laws.values():
+            _, _, y_scale, y_unit, symbol = CYCLE_QUANTITIES[law.quantity]
+            x = "D [m]" if law.variable == "displacement" else "ln(D / 1 m)"
+            per = "/m" if law.variable == "displacement" else ""
+            rows.append((f"{symbol} = a + b {x}", plus_minus(law.intercept * y_scale, law.intercept_se * y_scale,
+                                                             y_unit),
+                         plus_minus(law.slope * y_scale, law.slope_se * y_scale, y_unit + per),
+                         number(law.p_value, 2), "yes" if law.significant else "no"))
+        _table(f"Laws of the cycles' keff and beta_eff in the cycle amplitude D ({len(result.cycles)} cycles of the "
+               "releases' fitted models pooled; unweighted)", rows, ("law", "a", "b", "p", "significant at 5%"))
     for r in result.releases:
         if r.restarted_from:
             _echo(f"note: release {r.name} was refitted from the estimates of {r.restarted_from} (its first fit "

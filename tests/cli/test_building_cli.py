@@ -124,7 +124,7 @@ def test_building_command_json_folder_and_refusals(tmp_path):
     assert any("interpolated" in n for n in data["notes"])  # the loop's common time axis is said
     # the folder: exactly what the command wrote
     files = sorted(str(p.relative_to(out)) for p in out.rglob("*") if p.is_file())
-    stems = ("building_fit", "building_decay", "building_amplitude", "building_hysteresis")
+    stems = ("building_fit", "building_decay", "building_amplitude", "building_hysteresis", "building_effective")
     assert files == sorted(["manifest.json", "report.html", "summary.json", "timeseries.csv", "timeseries.nc"]
                            + [f"figures/{s}.{e}" for s in stems for e in ("png", "svg")])
     written = json.loads((out / "summary.json").read_text())
@@ -133,6 +133,11 @@ def test_building_command_json_folder_and_refusals(tmp_path):
     assert prov["input"]["sha256"] == hashlib.sha256(Path(case).read_bytes()).hexdigest()
     html = (out / "report.html").read_text()
     assert 'id="building-model">linear<' in html and "Decay cross-check" in html
+    # the engineering quantities against the identified model's curve, and the spread as the standards judge it
+    assert 'id="building-effective"' in html and "keff_vs_model" in html and "edc_spread" in html
+    curve, judged = data["effective_curve"], data["effective_judgement"]
+    assert len(curve["amplitude_m"]) == len(curve["keff_N_m_lo"]) == 41 and curve["level"] == 0.95
+    assert judged["passed"] is True and len(judged["cycles"]) == len(data["effective"])
     assert all(f'id="{s}"' in html for s in stems)
     # another run's inputs into the same folder: refused before the work, one line; the folder untouched
     before = (out / "summary.json").read_text()
@@ -154,6 +159,7 @@ def test_building_table_output(tmp_path):
     assert r.exit_code == 0, r.output
     assert "period T" in r.stdout and "slider friction F_s" in r.stdout and "Decay cross-check" in r.stdout
     assert "period_s" not in r.stdout and "friction_N" not in r.stdout  # human names, not JSON keys
+    assert "Engineering quantities per cycle" in r.stdout and "keff_vs_model" in r.stdout
 
 
 @pytest.mark.parametrize("what, fragments", [

@@ -521,3 +521,28 @@ def test_2dof_campaign_needs_the_superstructure_mass():
             fit_building_campaign(releases, M, "2dof", superstructure_mass=ms)
     with pytest.raises(ParameterError, match="quantities"):
         fit_building_campaign(releases, M, "2dof", superstructure_mass=0.5 * M, quantities=("yield_force",))
+
+
+def test_the_releases_cycles_pooled_and_their_laws_in_the_amplitude(constant, capsys):
+    """Every release's cycles after the release's: keff = k + F_s / D of its own fitted model (closed form), and
+    the laws of keff and beta_eff in D against numpy's polyfit over the pooled cycles; both fall with D (the
+    sliders' share F_s / D); the command's table and the report's section show them."""
+    cycles = constant.cycles
+    assert len(cycles) >= 3 * len(constant.releases)
+    for r in constant.releases:
+        mine = [c for c in cycles if c["release"] == r.name]
+        k = M * (2 * math.pi / r.values["period"]) ** 2
+        assert mine and all(c["keff_N_m"] == pytest.approx(k + r.values["friction"] / c["amplitude_m"], rel=1e-7)
+                            for c in mine)
+    d = np.array([c["amplitude_m"] for c in cycles])
+    for q in ("keff_N_m", "beta_eff"):
+        law = constant.cycle_laws[(q, "displacement")]
+        slope, intercept = np.polyfit(d, [c[q] for c in cycles], 1)
+        assert (law.slope, law.intercept) == pytest.approx((slope, intercept), rel=1e-9)
+        assert not law.weighted and law.slope < 0 and law.significant
+    assert ("keff_N_m", "force") not in constant.cycle_laws
+    s = json.loads(json.dumps(constant.summary()))
+    assert len(s["cycles"]) == len(cycles) and {law["quantity"] for law in s["cycle_laws"]} == {"keff_N_m", "beta_eff"}
+    _building_campaign_tables(constant)
+    assert "Laws of the cycles' keff and beta_eff" in capsys.readouterr().out
+    assert 'id="campaign-cycles"' in render_campaign_report(constant, {})

@@ -18,7 +18,7 @@ from ._style import panels, styled, unit_text
 from .plots import _COLORS, _joint_legend, headroom, record_panels, user_label
 
 __all__ = ["BUILDING_FIGURES", "building_figures", "fit_figure", "decay_figure", "amplitude_figure",
-           "hysteresis_figure", "off_scale"]
+           "hysteresis_figure", "off_scale", "effective_figure"]
 
 #: Figure stems of the building and what they show.
 BUILDING_FIGURES = {
@@ -28,6 +28,8 @@ BUILDING_FIGURES = {
     "building_amplitude": "Equivalent period and equivalent viscous damping ratio against the amplitude: record "
                           "and fitted model",
     "building_hysteresis": "Hysteresis loop: the isolators' force -m a against the displacement, record and model",
+    "building_effective": "Effective stiffness and effective damping against the cycle amplitude: the identified "
+                          "model's curve with its 95% band, the cycles as points",
 }
 
 #: Above this many samples a point cloud is rasterised in the SVG.
@@ -43,6 +45,9 @@ def building_figures(result) -> dict[str, Any]:
         figs["building_amplitude"] = amplitude_figure(result, model)
     if result.loop is not None:
         figs["building_hysteresis"] = hysteresis_figure(result)
+    curve = getattr(result, "effective_curve", None)
+    if curve is not None and curve.amplitude_m.size:
+        figs["building_effective"] = effective_figure(curve, result.effective, release_time=result.fit.release_time)
     return figs
 
 
@@ -195,4 +200,40 @@ def hysteresis_figure(result, fig=None, ax=None):
     ax.set_ylabel("isolators' force -m a [kN]")
     ax.set_title("Hysteresis loop")
     ax.legend(loc="best")
+    return fig
+
+
+@styled
+def effective_figure(curve, cycles=(), *, release_time: float | None = None,
+                     label: str = "cycles of the fitted model's loop", fig=None, ax=None):
+    """keff and beta_eff against the cycle amplitude: the identified model's curve and its band
+    (:class:`~quickrelease.studies.building_effective.EffectiveCurve`), and ``cycles`` (a sequence of
+    :class:`~quickrelease.building.effective.CycleProperties`: measured, or the model's) as points, the one from
+    the release (starting at ``release_time``, else the first) hollow: its F+ is the unloading branch's, off the
+    curve by construction. ``ax``: two Axes to draw into. Returns the figure."""
+    fig, (left, right) = panels(7.0, 3.0, (1, 2), fig=fig, ax=ax, left=0.1, right=0.98, bottom=0.16, top=0.86,
+                                wspace=0.32)
+    d = 1e3 * np.asarray(curve.amplitude_m)
+    pct = round(100 * curve.level)
+    for panel, q, scale in ((left, "keff_N_m", 1e-3), (right, "beta_eff", 1e2)):
+        panel.fill_between(d, scale * curve.lower[q], scale * curve.upper[q], color=_COLORS["a"], alpha=0.25, lw=0,
+                           label=f"{pct}% band ({curve.draws_used} draws)")
+        panel.plot(d, scale * curve.curves[q], color=_COLORS["a"], lw=1.0, label=f"identified {curve.model} model")
+        cycles = list(cycles)
+        if cycles:
+            first = [(c.start_s == release_time) if release_time is not None else i == 0
+                     for i, c in enumerate(cycles)]
+            x = np.array([1e3 * c.amplitude_m for c in cycles])
+            y = np.array([scale * getattr(c, q) for c in cycles])
+            mask = np.array(first, dtype=bool)
+            panel.plot(x[~mask], y[~mask], "o", ms=4, color=_COLORS["d"], label=label)
+            if mask.any():
+                panel.plot(x[mask], y[mask], "o", ms=4, mfc="none", color=_COLORS["d"],
+                           label="cycle from the release (not judged)")
+        panel.set_xlabel("cycle amplitude D [mm]")
+    left.set_ylabel("effective stiffness keff [kN/m]")
+    right.set_ylabel("effective damping beta_eff [%]")
+    left.set_title("Effective stiffness")
+    right.set_title("Effective damping")
+    left.legend(loc="best")
     return fig

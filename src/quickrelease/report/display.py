@@ -346,5 +346,98 @@ def summary_html(name: str, summary: Mapping[str, Any]) -> str:
     return f"<table><caption style=\"text-align:left\"><b>{html.escape(name)}</b></caption>{''.join(rows)}</table>"
 
 
+#: Headers of :func:`effective_cycle_rows` (the per-cycle table of the building's engineering quantities).
+EFFECTIVE_HEADERS = ("cycle", "D [mm]", "keff [kN/m]", "model keff (95% band) [kN/m]", "EDC [kJ]",
+                     "model EDC (95% band) [kJ]", "beta_eff [%]", "model beta_eff (95% band) [%]", "judged")
+
+
+def _band(value: float | None, lo: float | None, hi: float | None, scale: float, digits: int = 5) -> str:
+    """``value (lo .. hi)`` scaled, the three with the same decimals (the band's width sets them); "-"
+    without a value."""
+    if value is None:
+        return "-"
+    if lo is None or hi is None:
+        return number(value * scale, digits)
+    a, b, c = same_places([value * scale, lo * scale, hi * scale], (hi - lo) * scale, 2, digits)
+    return f"{a} ({b} .. {c})"
+
+
+def effective_cycle_rows(judgement: Mapping[str, Any]) -> list[tuple[str, ...]]:
+    """The per-cycle table of a building's engineering quantities (:data:`EFFECTIVE_HEADERS`) from the summary of
+    a :class:`~quickrelease.studies.building_effective.CycleJudgement`: each cycle's amplitude, keff, EDC and
+    beta_eff beside the identified model's value and 95% band at that amplitude, and whether it is judged."""
+    rows = []
+    for r in judgement.get("cycles", ()):
+        note = "yes" if r["judged"] else ("no: from the release" if r["from_release"] else "no: outside the curve")
+        rows.append((str(r["cycle"] + 1), number(r["amplitude_m"] * 1e3, 4), number(r["keff_N_m"] / 1e3, 5),
+                     _band(r["keff_model_N_m"], r["keff_lo_N_m"], r["keff_hi_N_m"], 1e-3),
+                     number(r["edc_J"] / 1e3, 4), _band(r["edc_model_J"], r["edc_lo_J"], r["edc_hi_J"], 1e-3),
+                     number(r["beta_eff"] * 1e2, 4),
+                     _band(r["beta_model"], r["beta_lo"], r["beta_hi"], 1e2), note))
+    return rows
+
+
+#: Headers of :func:`effective_quantity_rows`.
+CYCLE_HEADERS = ("cycle", "start [s]", "D [mm]", "keff [kN/m]", "EDC [kJ]", "beta_eff [%]", "Teff [s]", "judged")
+
+
+def _judged_text(r: Mapping[str, Any]) -> str:
+    return "yes" if r["judged"] else ("release" if r["from_release"] else "outside")
+
+
+def effective_quantity_rows(judgement: Mapping[str, Any], cycles: Iterable[Mapping[str, Any]]) -> list[tuple[str, ...]]:
+    """Per cycle (the summaries of :class:`~quickrelease.building.effective.CycleProperties`, in the order of the
+    judgement's rows): start, amplitude, keff, EDC, beta_eff, Teff and whether the cycle is judged
+    (:data:`CYCLE_HEADERS`)."""
+    rows = []
+    for r, c in zip(judgement.get("cycles", ()), cycles, strict=False):
+        teff = c.get("teff_s")
+        rows.append((str(r["cycle"] + 1), number(c["start_s"], 5), number(c["amplitude_m"] * 1e3, 4),
+                     number(c["keff_N_m"] / 1e3, 5), number(c["edc_J"] / 1e3, 4), number(c["beta_eff"] * 1e2, 4),
+                     "-" if teff is None else number(teff, 4), _judged_text(r)))
+    return rows
+
+
+#: Headers of :func:`effective_deviation_rows`.
+DEVIATION_HEADERS = ("cycle", "keff - model [%]", "band [%]", "EDC - model [%]", "band [%]", "beta_eff - model [%]",
+                     "band [%]")
+
+
+def effective_deviation_rows(judgement: Mapping[str, Any]) -> list[tuple[str, ...]]:
+    """Per cycle: its keff, EDC and beta_eff against the identified model's at its amplitude, in percent of the
+    model's, each beside the half-width of the model's band there (percent of the model); "-" where the cycle's
+    amplitude is outside the model's curve (:data:`DEVIATION_HEADERS`)."""
+    rows = []
+    for r in judgement.get("cycles", ()):
+        cells = [str(r["cycle"] + 1)]
+        for short, sfx in (("keff", "_N_m"), ("edc", "_J"), ("beta", "")):
+            model, lo, hi = r[f"{short}_model{sfx}"], r[f"{short}_lo{sfx}"], r[f"{short}_hi{sfx}"]
+            ratio = r[f"{short}_ratio"]
+            if model is None or ratio is None:
+                cells += ["-", "-"]
+                continue
+            half = None if lo is None or hi is None else 50.0 * (hi - lo) / model
+            dev = 100.0 * (ratio - 1.0)
+            text = fixed(dev, min(places_for(half, 2), 6)) if half else number(dev, 3)
+            cells += [text if text.startswith("-") else "+" + text, "-" if half is None else "±" + number(half, 2)]
+        rows.append(tuple(cells))
+    return rows
+
+
+#: Headers of :func:`spread_rows`.
+SPREAD_HEADERS = ("criterion", "worst", "at cycle", "limit", "verdict")
+
+
+def spread_rows(judgement: Mapping[str, Any]) -> list[tuple[str, ...]]:
+    """The spread of the cycles about the model's curve as the standards judge it, one row per criterion (from
+    a :class:`~quickrelease.studies.building_effective.CycleJudgement`'s summary)."""
+    rows = []
+    for c in judgement.get("criteria", ()):
+        verdict = "no cycle judged" if c["passed"] is None else ("pass" if c["passed"] else "FAIL")
+        rows.append((c["name"], "-" if c["worst"] is None else number(c["worst"], 3),
+                     "-" if c["cycle"] is None else str(c["cycle"] + 1), number(c["tolerance"], 3), verdict))
+    return rows
+
+
 # The result protocol (quickrelease._results) formats reprs and notebook tables with these two.
 register_formatters(short_repr, summary_html)

@@ -432,6 +432,7 @@ def building_section(result, svgs: dict[str, str]) -> str:
         parts.append(f"<p class=\"flag\">Warning: {_e(text)}</p>")
     for text in result.notes:
         parts.append(f"<p class=\"meta\">{_e(text)}</p>")
+    parts.append(_effective_section(result))
     for stem, caption in BUILDING_FIGURES.items():
         parts.append(_figure(svgs, stem, caption,
                              zoom=(lambda: building_fit_zoom(result)) if stem == "building_fit" else None))
@@ -667,4 +668,62 @@ def _building_campaign_section(result, svgs: dict[str, str]) -> list[str]:
                  "a significant slope of T, ζ or F_s says the isolators depart from that model.</p>")
     parts.append(_figure(svgs, "campaign_building", "The isolation system against each variable: releases with "
                                                     "their 95% intervals, the fitted law and its 95% confidence band"))
+    parts.extend(_cycle_laws_section(result))
     return parts
+
+
+def _cycle_laws_section(result) -> list[str]:
+    """keff and beta_eff of the releases' cycles pooled, and their laws in the cycle amplitude (none for 2dof)."""
+    laws = getattr(result, "cycle_laws", {})
+    if not laws:
+        return []
+    from ..studies.building_campaign import CYCLE_QUANTITIES
+
+    rows = []
+    for law in laws.values():
+        _, _, y_scale, y_unit, symbol = CYCLE_QUANTITIES[law.quantity]
+        x = "cycle amplitude D [m]" if law.variable == "displacement" else "ln(D / 1 m)"
+        per = "/m" if law.variable == "displacement" else ""
+        rows.append((_e(symbol), _e(x), _e(plus_minus(law.intercept * y_scale, law.intercept_se * y_scale, y_unit)),
+                     _e(plus_minus(law.slope * y_scale, law.slope_se * y_scale, y_unit + per)),
+                     _num(law.p_value, ".2g"), "<strong>yes</strong>" if law.significant else "no"))
+    return ["<h2 id=\"campaign-cycles\">Engineering quantities of the cycles against their amplitude</h2>",
+            f"<p>{len(result.cycles)} cycles of the releases' fitted models (each from a reversal to the turning "
+            "point two half-cycles later; the cycle from the release left out), pooled: keff and beta_eff against "
+            "the cycle's amplitude D, unweighted least squares (the cycles of one release share its fit's "
+            "errors).</p>",
+            _html_table(("quantity", "x", "a", "b", "p (b = 0)", "slope significant at 5%"), rows, num=(2, 3, 4))]
+
+
+def _effective_section(result) -> str:
+    """The engineering quantities per cycle beside the identified model's curve and band at each cycle's amplitude,
+    and the spread of the cycles as the standards judge it (empty without a curve: 2dof)."""
+    from .display import EFFECTIVE_HEADERS, effective_cycle_rows
+
+    judgement = getattr(result, "effective_judgement", None)
+    judged = None if judgement is None else judgement.summary()
+    if not judged or not judged.get("cycles"):
+        return ""
+    curve = result.effective_curve
+    parts = ["<h3 id=\"building-effective\">Engineering quantities per cycle</h3>",
+             "<p>Per cycle of the fitted model's loop (a cycle runs from a turning point to the one two half-cycles "
+             "later): amplitude D = (D+ - D-)/2, keff = (F+ - F-)/(D+ - D-), EDC the loop's area, beta_eff = EDC / "
+             "(2 π keff D²), beside the identified model's value at the cycle's amplitude and its "
+             f"{round(100 * curve.level)}% band.</p>",
+             _html_table(EFFECTIVE_HEADERS, [tuple(_e(c) for c in row) for row in effective_cycle_rows(judged)],
+                         num=range(1, 8))]
+    rows = []
+    for c in judged["criteria"]:
+        verdict = "no cycle judged" if c["passed"] is None else ("pass" if c["passed"] else "FAIL")
+        rows.append((_e(c["name"]), _e(c["demand"]), _num(c["worst"], ".3g"),
+                     "-" if c["cycle"] is None else str(c["cycle"] + 1), _num(c["tolerance"], ".3g"),
+                     verdict if verdict != "FAIL" else "<span class=\"flag\">FAIL</span>", _e(c["source"])))
+    parts.append("<p>The spread of the cycles as the standards judge it: a free decay runs each cycle at its own "
+                 "amplitude, so each cycle is judged against the model's curve at its amplitude, and the cycles' "
+                 "ratios to it against their mean. The tolerances are parameters "
+                 "(<code>judge_cycles(keff_tolerance=, edc_fraction=)</code>).</p>")
+    parts.append(_html_table(("criterion", "demand", "worst", "at cycle", "limit", "verdict", "after"), rows,
+                             num=(2, 3, 4)))
+    for text in curve.notes:
+        parts.append(f"<p class=\"meta\">{_e(text)}</p>")
+    return "\n".join(parts)

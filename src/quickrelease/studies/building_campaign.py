@@ -75,9 +75,11 @@ from ..errors import ParameterError, QuickReleaseError
 from ..io.export import jsonable
 from ..report._style import styled
 from ._laws import LinearLaw, fit_line, iter_tests, law_panel, weights_or_none
+from .building_effective import model_cycles, record_span
 
 __all__ = ["BuildingRelease", "ReleaseEstimates", "BuildingCampaignResult", "fit_building_campaign",
-           "building_campaign_figure", "derived_quantity", "law_standard_error", "BUILDING_VARIABLES", "QUANTITIES",
+           "building_campaign_figure", "derived_quantity", "pooled_cycles", "cycle_laws", "CYCLE_QUANTITIES",
+           "CYCLE_VARIABLES", "law_standard_error", "BUILDING_VARIABLES", "QUANTITIES",
            "DEFAULT_QUANTITIES", "REPORTED"]
 
 #: Regressors of the amplitude laws: (label, unit, scale for plots, plot unit).
@@ -105,6 +107,14 @@ DEFAULT_QUANTITIES = {
                  "stiffness_ratio", "yield_force"),
     "2dof": ("period", "damping_ratio", "friction", "equivalent_damping_ratio"),
 }
+#: The engineering quantities of the releases' cycles pooled, with laws in the cycle amplitude D: (label, unit,
+#: scale for tables, table unit, symbol).
+CYCLE_QUANTITIES = {
+    "keff_N_m": ("effective stiffness keff", "N/m", 1e-3, "kN/m", "keff"),
+    "beta_eff": ("effective damping beta_eff", "-", 1e2, "%", "beta_eff"),
+}
+#: Regressors of the cycles' laws (the release variables' counterparts): (label, unit).
+CYCLE_VARIABLES = {"displacement": ("cycle amplitude D", "m"), "log_displacement": ("ln(D / 1 m)", "-")}
 #: Quantities reported per release beside those with laws, by model (with their intervals; no law unless
 #: asked for in ``quantities``).
 REPORTED = {"2dof": ("superstructure_period", "superstructure_damping_ratio")}
@@ -347,6 +357,12 @@ class BuildingCampaignResult:
     """Quantities reported per release without a law (2dof: the superstructure's period and damping)."""
     superstructure_mass: float | None = None
     """2dof: the superstructure's mass at the roof given to every fit [kg]."""
+    cycles: tuple[dict[str, Any], ...] = ()
+    """Every release's cycles of its fitted model's loop, pooled (:func:`pooled_cycles`): ``release``,
+    ``amplitude_m``, ``keff_N_m``, ``edc_J``, ``beta_eff``, ``teff_s``; empty for 2dof."""
+    cycle_laws: dict[tuple[str, str], LinearLaw] = field(default_factory=dict)
+    """(quantity of :data:`CYCLE_QUANTITIES`, variable of :data:`CYCLE_VARIABLES`) -> the law over the pooled
+    cycles (unweighted: the cycles of one release share its fit's errors; the scatter sets the covariance)."""
 
     @property
     def kind(self) -> str:
@@ -374,7 +390,52 @@ class BuildingCampaignResult:
                            "reported": list(self.reported), "releases": [r.summary() for r in self.releases],
                            "laws": laws,
                            "significant_5pct": [f"{q} ~ {v}" for q, v in self.significant_effects()],
+                           "cycles": [dict(c) for c in self.cycles],
+                           "cycle_laws": [{**law.summary(), "units": {
+                               "a": CYCLE_QUANTITIES[law.quantity][1],
+                               "b": _slope_unit(CYCLE_QUANTITIES[law.quantity][1], CYCLE_VARIABLES[law.variable][1])}}
+                               for law in self.cycle_laws.values()],
                            "notes": self.notes})
+
+
+def _slope_unit(y_unit: str, x_unit: str) -> str:
+    return y_unit if x_unit == "-" else (f"1/{x_unit}" if y_unit == "-" else f"{y_unit}/{x_unit}")
+
+
+def pooled_cycles(names, fits) -> tuple[dict[str, Any], ...]:
+    """The cycles of each release's fitted model over its record (:func:`quickrelease.studies.building_effective.
+    model_cycles`, exact; the cycle from the release left out: its F+ is the unloading branch's), pooled in
+    the releases' order; none for 2dof (its base force is not the isolators' alone)."""
+    out = []
+    for name, fit in zip(names, fits, strict=True):
+        if fit.model == "2dof":
+            continue
+        cyc = model_cycles(fit.isolation(), fit.parameters["d0"], record_span(fit))
+        for i in range(cyc["amplitude_m"].size):
+            if cyc["from_release"][i] or not math.isfinite(cyc["edc_J"][i]):
+                continue
+            out.append({"release": name, **{k: float(cyc[k][i]) for k in
+                                            ("amplitude_m", "keff_N_m", "edc_J", "beta_eff", "teff_s")}})
+    return tuple(out)
+
+
+def cycle_laws(cycles, variables) -> dict[tuple[str, str], LinearLaw]:
+    """keff and beta_eff against the cycle amplitude D (``displacement``) or ln D (``log_displacement``) over the
+    pooled cycles, unweighted (:func:`quickrelease.studies._laws.fit_line`); the release variable ``force`` has
+    no per-cycle counterpart. Empty with fewer than three cycles."""
+    out: dict[tuple[str, str], LinearLaw] = {}
+    if len(cycles) < 3:
+        return out
+    d = np.array([c["amplitude_m"] for c in cycles])
+    for v in variables:
+        if v not in CYCLE_VARIABLES:
+            continue
+        x = d if v == "displacement" else np.log(d)
+        if np.ptp(x) == 0:
+            continue
+        for q in CYCLE_QUANTITIES:
+            out[(q, v)] = fit_line(x, [c[q] for c in cycles], quantity=q, variable=v)
+    return out
 
 
 def fit_building_campaign(releases, mass: float, model: str = "linear", *, variables=("displacement",),
@@ -460,9 +521,11 @@ def fit_building_campaign(releases, mass: float, model: str = "linear", *, varia
         for q in quantities:
             laws[(q, v)] = fit_line(x, [r.values[q] for r in estimates],
                                     weights_or_none(r.std_errors[q] for r in estimates), quantity=q, variable=v)
+    cycles = pooled_cycles([r.name for r in releases], fits)
     return BuildingCampaignResult(title=title or "Building campaign", source=source, model=model, mass=float(mass),
                                   releases=estimates, laws=laws, variables=variables, quantities=quantities,
-                                  notes=notes, reported=reported, superstructure_mass=superstructure_mass)
+                                  notes=notes, reported=reported, superstructure_mass=superstructure_mass,
+                                  cycles=cycles, cycle_laws=cycle_laws(cycles, variables))
 
 
 @styled

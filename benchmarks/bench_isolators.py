@@ -1,0 +1,96 @@
+"""Cost of the fits of the isolation systems without a closed form (issue 24), against the linear fit, same run.
+
+Run: python benchmarks/bench_isolators.py [--repeat N] [--models pendulum,boucwen,power]
+
+The records: 60 s at 200 Hz after 2 s of rest, three channels of the isolation layer (x with 0.2 mm noise and
+a 2 mm zero, v with 1 mm/s, a with 0.02 m/s^2 and a 0.01 m/s^2 zero), made by the independent solve_ivp
+simulator of ``tests/building/isolator_reference.py`` (not the package's integrator); the release instant
+is not given, no design values:
+
+* ``pendulum``: 1000 t on curved surface sliders R = 3 m, mu 0.01 / 0.025, a = 40 s/m, d0 = 0.30 m;
+* ``boucwen``: 800 t on lead-rubber bearings Kd = 1.6 MN/m, Qd = 400 kN, dy = 25 mm, n = 1, zeta 2 %,
+  d0 = 0.20 m (it moves for the whole record);
+* ``power``: 800 t, linear bearings T = 2.5 s with sliders (0.8 % of W) and fluid dampers C = 300 kN at 1 m/s,
+  alpha = 0.4, d0 = 0.15 m;
+* the baseline: the linear model's fit of a linear record of the same length (viscous 5 %, sliders 0.8 %).
+
+Timed by process CPU time (one core), best of ``--repeat``. Printed: CPU seconds, the issue's target (10 s),
+the ratio to the baseline, the reduced chi-square and whether the global minimum was confirmed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "tests" / "building"))
+
+RATE, DURATION, RELEASE = 200.0, 60.0, 2.0137
+NOISE = {"x": 2e-4, "v": 1e-3, "a": 0.02}
+ZERO = {"x": 0.002, "v": 0.0, "a": 0.01}
+TARGET = 10.0
+
+
+def systems():
+    import isolator_reference as ref
+
+    k = 8e5 * (2 * math.pi / 2.5) ** 2
+    return {
+        "linear": ("linear", "viscous", 8e5, ref.linear(8e5, k, 2 * 0.05 * math.sqrt(k * 8e5), friction=0.008 * 8e5 *
+                                                         9.80665), 0.15),
+        "pendulum": ("pendulum", "viscous", 1e6, ref.pendulum(1e6, 3.0, 0.01, 0.025, 40.0), 0.30),
+        "boucwen": ("boucwen", "viscous", 8e5, ref.boucwen(8e5, 1.6e6, 4e5, 0.025, 1.0,
+                                                           damping=2 * 0.02 * math.sqrt(1.6e6 * 8e5)), 0.20),
+        "power": ("linear", "power", 8e5, ref.linear(8e5, k, 3e5, 0.4, friction=0.008 * 8e5 * 9.80665), 0.15),
+    }
+
+
+def record(system, d0: float, seed: int):
+    import isolator_reference as ref
+
+    from quickrelease.building.isolation_fit import BuildingChannel
+
+    rng = np.random.default_rng(seed)
+    t = np.arange(round((DURATION + 2.0) * RATE)) / RATE
+    m = ref.simulate(system, d0, t - RELEASE, t_end=DURATION + 1.0)
+    return [BuildingChannel(n, n, t, y + ZERO[n] + rng.normal(0.0, NOISE[n], t.size))
+            for n, y in (("x", m.x), ("v", m.v), ("a", m.a))]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=1)
+    parser.add_argument("--models", default="pendulum,boucwen,power")
+    args = parser.parse_args()
+    from threadpoolctl import threadpool_limits
+
+    from quickrelease.building.isolation_fit import fit_isolation
+
+    cases = systems()
+    rows = []
+    with threadpool_limits(1):
+        for name in ["linear", *args.models.split(",")]:
+            model, damping, mass, system, d0 = cases[name]
+            channels = record(system, d0, seed=11)
+            best, fit = math.inf, None
+            for _ in range(args.repeat):
+                t0 = time.process_time()
+                fit = fit_isolation(channels, mass, model, damping=damping)
+                best = min(best, time.process_time() - t0)
+            rows.append((name, best, fit.chi2_reduced, fit.global_minimum_confirmed))
+    base = rows[0][1]
+    print(f"{'record':10s} {'CPU s':>8s} {'target':>7s} {'x linear':>9s} {'chi2_red':>9s}  global minimum")
+    for name, cpu, chi2r, ok in rows:
+        target = f"{TARGET:g} s" if name != "linear" else "-"
+        print(f"{name:10s} {cpu:8.2f} {target:>7s} {cpu / base:9.1f} {chi2r:9.3f}  "
+              f"{'confirmed' if ok else 'not confirmed'}")
+
+
+if __name__ == "__main__":
+    main()
