@@ -47,7 +47,13 @@ def building_figures(result) -> dict[str, Any]:
         figs["building_hysteresis"] = hysteresis_figure(result)
     curve = getattr(result, "effective_curve", None)
     if curve is not None and curve.amplitude_m.size:
-        figs["building_effective"] = effective_figure(curve, result.effective, release_time=result.fit.release_time)
+        measured = getattr(result, "measured", None)
+        if measured is not None:  # the record's own loop over the model's band
+            figs["building_effective"] = effective_figure(curve, measured.cycles, release_time=result.fit.release_time,
+                                                          label="cycles of the measured loop")
+        else:
+            figs["building_effective"] = effective_figure(curve, result.effective,
+                                                          release_time=result.fit.release_time)
     return figs
 
 

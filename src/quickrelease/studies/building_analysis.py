@@ -89,6 +89,10 @@ class BuildingResult(Summarised):
     effective_judgement: CycleJudgement | None = None
     """The cycles of :attr:`effective` against that curve, criterion by criterion (:func:`~quickrelease.studies.
     building_effective.judge_cycles`; None without a curve)."""
+    measured: Any = None
+    """The record's own loop per cycle with standard errors (:func:`quickrelease.studies.building_cycles.
+    measured_cycles`: -m a against x on one clock); None without a displacement channel, for 2dof, or where
+    the record holds no whole cycle."""
 
     @property
     def model(self) -> str:
@@ -113,6 +117,7 @@ class BuildingResult(Summarised):
                                         else jsonable(self.effective_curve.summary())),
                     "effective_judgement": (None if self.effective_judgement is None
                                             else jsonable(self.effective_judgement.summary())),
+                    "measured_cycles": None if self.measured is None else jsonable(self.measured.summary()),
                     **characteristic_strength(self.fit),
                     "fit": jsonable(self.fit.summary())})
         return out
@@ -372,12 +377,26 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
     loop = _loop(fit, channels, notes)
     effective = effective_cycles(fit)
     curve, judgement = _effective_curve(fit, effective)
+    measured = _measured(fit, notes)
     return BuildingResult(fit=fit, compared=tuple(compared), comparison=tuple(comparison), decay=decay,
                           decay_check=check, loop=loop, warnings=tuple(warnings), notes=tuple(notes),
                           effective=effective, effective_curve=curve, effective_judgement=judgement,
-                          source=source, curves=model_curves(fit),
+                          measured=measured, source=source, curves=model_curves(fit),
                           model_decay=None if decay is None else model_decay(fit),
                           decay_envelope={} if decay is None else decay_envelope(decay))
+
+
+def _measured(fit: IsolationFit, notes: list[str]):
+    """The record's own cycles (:func:`quickrelease.studies.building_cycles.measured_cycles`), None where it has
+    none; a reason it could not be read goes to ``notes``."""
+    from .building_cycles import measured_cycles
+
+    try:
+        out = measured_cycles(fit)
+    except QuickReleaseError as exc:
+        notes.append(f"measured cycles not read: {exc}")
+        return None
+    return out if out is not None and out.cycles else None
 
 
 def _effective_curve(fit: IsolationFit, cycles) -> tuple[EffectiveCurve | None, CycleJudgement | None]:
