@@ -70,14 +70,13 @@ def _band(n, p=0.95, tail=0.0005):
     return int(stats.binom.ppf(tail, n, p)), int(stats.binom.isf(tail, n, p))
 
 
-KNOWN = pytest.mark.xfail(strict=False, reason=(
-    "h24r findings 6, 7, 9 (/work/notes/h24r_findings.md): the Bouc-Wen fit ends in wrong minima (chi2_reduced "
-    "~1e3) on 5 of 16 seeds and raises on one; the pendulum's friction_fast and damping_ratio intervals cover "
-    "9 of 12"))
+KNOWN = {"pendulum": pytest.mark.xfail(strict=False, reason=(
+    "the pendulum's friction_fast and damping_ratio trade: their Jacobian intervals cover 9 of 12 seeds (2400-2411;"
+    " z spread 1.45): too narrow by ~1.4 (issue 24's notes)"))}
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("model", [pytest.param(m, marks=KNOWN) for m in MODELS])
+@pytest.mark.parametrize("model", [pytest.param(m, marks=KNOWN.get(m, ())) for m in MODELS])
 def test_intervals_cover_the_truth(model):
     spec = MODELS[model]
     rows = _rows(model)
