@@ -44,6 +44,7 @@ def test_pendulum_with_constant_friction_is_linear_coulomb(m, R, mu, C, d0):
     np.testing.assert_allclose(ref.turning_points, exact.turning_points, rtol=0, atol=1e-10 * abs(d0))
 
 
+@pytest.mark.slow
 def test_pendulum_at_a_large_rate_slides_with_mu_fast_and_sticks_with_mu_slow():
     """rate -> inf: mu = mu_fast at any speed, so the motion tends to linear + Coulomb with mu_fast W until that
     model sticks (|k x| <= mu_fast W); the gap falls like 1 / rate. The pendulum sticks only where
