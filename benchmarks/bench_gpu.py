@@ -76,9 +76,10 @@ def measure(n: int, repeat: int, seed: int = 0) -> dict:
         for target, xp, sync in targets:
             dev = [xp.asarray(a) for a in args]
             dev_obs = [xp.asarray(a) for a in obs + obs_k]
-            c_s, w_s, res = _best(lambda xp=xp, dev=dev: _gpu.stop_arrays(xp, *dev), repeat, sync)
-            c_i, w_i, idr = _best(lambda xp=xp, d=dev_obs: _gpu.identify_arrays(xp, *d), repeat, sync)
-            c_r, w_r, rel = _best(lambda xp=xp, dev=dev: _gpu.release_arrays(xp, *dev), repeat, sync)
+            ch = _gpu.device_chunk(xp)  # the chunk batch.*(backend="gpu") takes on this device
+            c_s, w_s, res = _best(lambda xp=xp, ch=ch, dev=dev: _gpu.stop_arrays(xp, *dev, chunk=ch), repeat, sync)
+            c_i, w_i, idr = _best(lambda xp=xp, ch=ch, d=dev_obs: _gpu.identify_arrays(xp, *d, chunk=ch), repeat, sync)
+            c_r, w_r, rel = _best(lambda xp=xp, ch=ch, dev=dev: _gpu.release_arrays(xp, *dev, chunk=ch), repeat, sync)
             t = _gpu.to_host(res[0])
             peak = _gpu.to_host(rel["peak_u_ddot"])
             lam = _gpu.to_host(idr["lam"])

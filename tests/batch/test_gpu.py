@@ -66,6 +66,27 @@ def _args(cases, xp=np):
     return [xp.asarray(cases[key]) for key in ("E_S", "alpha0", "F1", "F2", "k", "m2", "L1")]
 
 
+def _conditioning(cases, ulps: float = 4.0) -> np.ndarray:
+    """The most relative change of t_F (compiled CPU kernels) when E_S, alpha0, F1, F2 or c moves by ``ulps`` ulps.
+
+    A GPU's sine and cosine are within 2 ulps, not correctly rounded: a case whose t_F is ill-conditioned in its
+    inputs (the graded tier of a limit stop, where the margin to pi/2 is small: one ulp of alpha0 moves t_F by up
+    to 1e-9 relative in the wide sample) may differ from the CPU by that much on any backend. Measured on an H200
+    (2026-11-26): 228 of 20 000 wide cases beyond 1e-13, the largest 1.7e-9, each within 0.33 of this bound, and
+    within a few times of the CPU's own error against mpmath there."""
+    if "conditioning" not in cases:
+        cpu = cases["cpu"].stop_time
+        sens = np.zeros_like(cpu)
+        for key in ("E_S", "alpha0", "F1", "F2", "c"):
+            for sign in (1.0, -1.0):
+                moved = dict(cases, **{key: cases[key] * (1.0 + sign * ulps * EPS)})
+                other = batch.stop_time(*(moved[name] for name in KEYS)).stop_time
+                with np.errstate(invalid="ignore"):
+                    sens = np.fmax(sens, np.abs(other / cpu - 1.0))
+        cases["conditioning"] = sens
+    return cases["conditioning"]
+
+
 def _check_stop(cases, t, aF, code, borderline=0):
     """As the compiled kernels, to RTOL per (regime, tier). ``borderline``: how many cases may be classified or
     tiered otherwise and then differ by up to 2e-12 (a GPU's sine, 2 ulps, moves a margin or a tier criterion
@@ -77,7 +98,10 @@ def _check_stop(cases, t, aF, code, borderline=0):
     assert np.sum(np.abs(aF[same] / cpu.alpha_final[same] - 1.0) > RTOL) <= borderline
     finite = np.isfinite(cpu.stop_time) & same
     err = np.abs(t[finite] / cpu.stop_time[finite] - 1.0)
-    assert np.sum(err > RTOL) <= borderline and np.all(err <= 2e-12)
+    if borderline:  # on a GPU: within RTOL plus what 4 ulps of the inputs move t_F by (the compiled kernels say)
+        assert np.all(err <= RTOL + _conditioning(cases)[finite]), np.max(err / (RTOL + _conditioning(cases)[finite]))
+    else:
+        assert np.sum(err > RTOL) <= borderline and np.all(err <= 2e-12)
     for regime in (0, 1):
         for tier in (0, 1, 2):
             cls = ((cases["regime"] == regime) & (cases["tier"] == tier))[finite]
@@ -328,7 +352,11 @@ def test_on_the_gpu_as_the_compiled_kernels(sample):
                  "peak_u_ddot", "peak_v_ddot"):
         ref = getattr(cpu, name)
         fin = np.isfinite(ref) & (got.stopped_by == cpu.stopped_by)
-        assert np.sum(np.abs(getattr(got, name)[fin] / ref[fin] - 1.0) > RTOL) <= 1, name
+        err = np.abs(getattr(got, name)[fin] / ref[fin] - 1.0)
+        if name == "stop_time":
+            assert np.all(err <= RTOL + _conditioning(sample)[:3000][fin]), name
+        else:
+            assert np.sum(err > RTOL) <= 1, name
 
 
 # -- the backend's wiring, with numpy standing in for CuPy -----------------------------------------------------------
@@ -472,3 +500,17 @@ def test_bench_gpu_section(numpy_gpu, monkeypatch):
         assert g["stop_time_max_rel_diff"] <= RTOL and g["alpha_final_max_rel_diff"] <= RTOL
         assert g["identify_ends_max_rel_diff"] <= RTOL and g["identify_F1_max_diff_over_tolerance"] <= 1.0
         assert g["stopped_by_identical"] and g["identify_status_identical"]
+
+
+def test_device_chunk_from_the_free_memory():
+    """A quarter of the free device memory at BYTES_PER_CASE a case, as a power of two in [CHUNK, MAX_CHUNK]."""
+    from types import SimpleNamespace
+
+    def fake(free):
+        return SimpleNamespace(cuda=SimpleNamespace(runtime=SimpleNamespace(memGetInfo=lambda: (free, 2 * free))))
+
+    assert _gpu.device_chunk(np) == _gpu.CHUNK
+    assert _gpu.device_chunk(fake(140 * 2**30)) == 1 << 22  # an H200: capped
+    assert _gpu.device_chunk(fake(16 * 2**30)) == 1 << 21  # 2^21 cases x 2 kB = 4 GiB, a quarter of 16 GiB
+    assert _gpu.device_chunk(fake(16 * 2**30 - 1)) == 1 << 20
+    assert _gpu.device_chunk(fake(2**30)) == _gpu.CHUNK  # never below CHUNK

@@ -217,8 +217,9 @@ def _array_module(backend: str):
 
 def _on_device(xp, kernel, *arrays, **options):
     """``kernel(xp, *arrays on the device, **options)`` with its results (a tuple or a dict) copied back."""
-    from ._gpu import to_host
+    from ._gpu import device_chunk, to_host
 
+    options.setdefault("chunk", device_chunk(xp))
     res = kernel(xp, *(xp.asarray(a) for a in arrays), **options)
     if isinstance(res, dict):
         return {key: to_host(v) for key, v in res.items()}

@@ -588,14 +588,17 @@ def _gpu_section(sizes: Sizes, seed: int, log) -> dict[str, Any] | None:
         args = [cases[key] for key in ("E_S", "alpha0", "F1", "F2")] + [cases["c"] * cases["m1"] / cases["m2"],
                                                                          cases["m2"], cases["L1"]]
         dev = [cupy.asarray(a) for a in args]
-        st_dev, _, res = _timed(synced(lambda dev=dev: _gpu.stop_arrays(cupy, *dev)), n, sizes.repeat)
+        chunk = _gpu.device_chunk(cupy)  # as batch.*(backend="gpu")
+        st_dev, _, res = _timed(synced(lambda dev=dev, chunk=chunk: _gpu.stop_arrays(cupy, *dev, chunk=chunk)), n,
+                                sizes.repeat)
         st_e2e, _, st = _timed(lambda c=cases: batch.stop_time(**c, backend="gpu"), n, sizes.repeat)
         cpu = batch.stop_time(**cases)
         obs = _observations(cases, cpu)
         m = len(obs["E_S"])
         obs_dev = [cupy.asarray(a) for a in (obs["alpha0"], obs["alpha_final"], obs["stop_time"], obs["E_S"],
                                              obs["c"] * obs["m1"] / obs["m2"], obs["m2"], obs["L1"])]
-        id_dev, _, _ = _timed(synced(lambda d=obs_dev: _gpu.identify_arrays(cupy, *d)), m, sizes.repeat)
+        id_dev, _, _ = _timed(synced(lambda d=obs_dev, chunk=chunk: _gpu.identify_arrays(cupy, *d, chunk=chunk)), m,
+                              sizes.repeat)
         id_e2e, _, idg = _timed(lambda o=obs: batch.identify(**o, backend="gpu"), m, sizes.repeat)
         idc = batch.identify(**obs)
         fin = np.isfinite(cpu.stop_time)
