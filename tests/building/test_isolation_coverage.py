@@ -215,6 +215,7 @@ def test_hard_record_lands_in_the_right_basin():
 BILINEAR = (4.0e7, 4.0e6, 8.0e4, 0.03, 8.0e3, 0.2)  # k1, k2 [N/m], F_y [N], zeta, F_s [N], d0 [m]
 
 
+@pytest.mark.slow  # one seed of a coverage matrix (2-3 s); the quick run fits bilinear records in test_isolation_identify
 def test_coverage_bilinear():
     """Rubber bearings with sliders (the round-trip building above), fitted from the record alone (no design
     values: the hysteresis loop's start, the multi-start and the polish), unknown release: over the seeds the
