@@ -152,3 +152,24 @@ def mp_identify(E_S, alpha0, alpha_final, stop_time, c=(2, 3), dps=20):
         F1 = mpmath.findroot(lambda F1: mp_stop_time(E, a0, aF, F1, f2(F1), c) - tF,
                              (F1_star / 3, F1_star / 2), solver="secant")
         return float(F1), float(f2(F1))
+
+
+#: Parameter draws of the bands (studies.building_effective.DRAWS: 400) and copies of the measured-cycle bootstrap
+#: (studies.building_cycles.measured_cycles: 100) in the building analyses of the tests that use ``few_band_draws``.
+FEW_BAND_DRAWS, FEW_CYCLE_DRAWS = 40, 20
+
+
+@pytest.fixture(scope="module")
+def few_band_draws():
+    """analyse_building (and the ``building`` command in this process) with 40 band draws and 20 bootstrap copies
+    of the measured cycles instead of 400 and 100, for a module whose tests do not look at the bands' width or the
+    cycles' standard errors: the same code runs, in a tenth of the time. The defaults users get are unchanged."""
+    from functools import partial
+
+    from quickrelease.studies import building_analysis, building_cycles
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(building_analysis, "effective_curves",
+                   partial(building_analysis.effective_curves, draws=FEW_BAND_DRAWS))
+        mp.setattr(building_cycles, "measured_cycles", partial(building_cycles.measured_cycles, draws=FEW_CYCLE_DRAWS))
+        yield

@@ -37,6 +37,22 @@ def check_nonnegative(name: str, value, unit: str = ""):
     return value
 
 
+def finite_positive(name: str, value: float, unit: str = "") -> float:
+    """``float(value)``; ParameterError (naming ``name``, range (0, inf)) unless it is finite and > 0 [unit]."""
+    value = float(value)
+    if not (math.isfinite(value) and value > 0.0):
+        raise ParameterError(name, value, "(0, inf)", unit)
+    return value
+
+
+def finite_nonnegative(name: str, value: float, unit: str = "") -> float:
+    """``float(value)``; ParameterError (naming ``name``, range [0, inf)) unless it is finite and >= 0 [unit]."""
+    value = float(value)
+    if not (math.isfinite(value) and value >= 0.0):
+        raise ParameterError(name, value, "[0, inf)", unit)
+    return value
+
+
 def check_angle(name: str, value):
     """Raise ParameterError unless every element of ``value`` lies in (0, pi/2) [rad]."""
     arr = np.asarray(value, dtype=float)

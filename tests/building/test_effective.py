@@ -11,6 +11,8 @@ from building_reference import reference
 from quickrelease.building.effective import G0, loop_cycles
 from quickrelease.errors import ParameterError
 
+pytestmark = pytest.mark.usefixtures("few_band_draws")  # the bands' width is not looked at here
+
 
 def _bilinear_force(x, k1, k2, fy):
     """A bilinear spring's force along a displacement history, written here: the elastic-plastic part

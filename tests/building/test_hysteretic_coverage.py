@@ -13,20 +13,18 @@ import math
 import os
 from functools import cache
 
-import numpy as np
 import pytest
 
 pytest.importorskip("quickrelease.building.hysteretic")
 
 import isolator_reference as ref  # noqa: E402
-from scipy import stats  # noqa: E402
+from coverage_records import binomial_band, clocks, noisy_channels  # noqa: E402
 
-from quickrelease.building.isolation_fit import BuildingChannel, fit_isolation  # noqa: E402
+from quickrelease.building.isolation_fit import fit_isolation  # noqa: E402
 
 SLOW = bool(os.environ.get("QUICKRELEASE_SLOW"))
 SEEDS = 200 if SLOW else 3
-RATE, PRE, RELEASE = 200.0, 1.0, 1.0137
-NOISE_X, NOISE_A, OFFSET_A = 2e-4, 0.02, 0.01
+PRE, RELEASE = 1.0, 1.0137
 
 # three reversals before it sticks (with one half-cycle only, a shift of x by delta and of both friction coefficients
 # by delta / R leaves the motion unchanged: the LVDT's offset, d0 and the friction level are then not separable)
@@ -52,22 +50,10 @@ MODELS = {
 @cache
 def _rows(model):
     spec = MODELS[model]
-    tx = np.arange(round((PRE + spec["duration"]) * RATE)) / RATE
-    ta = tx + 0.0013
+    tx, ta = clocks(PRE, spec["duration"])
     x = ref.simulate(spec["system"], spec["d0"], tx - RELEASE, t_end=spec["duration"] + 1.0).x
     a = ref.simulate(spec["system"], spec["d0"], ta - RELEASE, t_end=spec["duration"] + 1.0).a
     return tx, x, ta, a
-
-
-def _channels(rows, seed):
-    tx, x, ta, a = rows
-    rng = np.random.default_rng(seed)
-    return [BuildingChannel("lvdt", "x", tx, x + rng.normal(0.0, NOISE_X, x.size)),
-            BuildingChannel("acc", "a", ta, a + OFFSET_A + rng.normal(0.0, NOISE_A, a.size))]
-
-
-def _band(n, p=0.95, tail=0.0005):
-    return int(stats.binom.ppf(tail, n, p)), int(stats.binom.isf(tail, n, p))
 
 
 KNOWN = {"pendulum": pytest.mark.xfail(strict=False, reason=(
@@ -83,7 +69,7 @@ def test_intervals_cover_the_truth(model):
     covered = dict.fromkeys(spec["truth"], 0)
     missed = []
     for seed in range(SEEDS):
-        fit = fit_isolation(_channels(rows, 2400 + seed), spec["mass"], model)
+        fit = fit_isolation(noisy_channels(rows, 2400 + seed), spec["mass"], model)
         for name, value in spec["truth"].items():
             lo, hi = fit.ci95[name]
             ok = lo <= value <= hi
@@ -92,7 +78,7 @@ def test_intervals_cover_the_truth(model):
                 missed.append((seed, name, fit.estimates[name], (lo, hi)))
     pooled = sum(covered.values()) / (SEEDS * len(covered))
     if SLOW:
-        lo, hi = _band(SEEDS)
+        lo, hi = binomial_band(SEEDS)
         assert all(lo <= c <= hi for c in covered.values()), (covered, missed[:20])
         assert 0.90 <= pooled <= 0.99, (pooled, covered)
     else:  # a few seeds: at most one miss per parameter

@@ -18,16 +18,15 @@ from functools import cache
 import numpy as np
 import pytest
 from building_reference import reference
+from coverage_records import OFFSET_A, binomial_band, clocks, noisy_channels
 from scipy import stats
 
-from quickrelease.building.isolation_fit import BuildingChannel, compare_models, decay_check, fit_isolation
+from quickrelease.building.isolation_fit import compare_models, decay_check, fit_isolation
 
 SLOW = bool(os.environ.get("QUICKRELEASE_SLOW"))
 M = 4.0e5  # kg
-RATE = 200.0
 PRE = 1.5  # s of quiet record before the release
 RELEASE = 1.5137  # s, record time (not given to the fit)
-NOISE_X, NOISE_A, OFFSET_A = 2e-4, 0.02, 0.01
 T, ZETA, FS, D0 = 2.0, 0.04, 1.2e4, 0.15  # the linear + Coulomb building
 K = M * (2 * math.pi / T) ** 2
 C = 2 * ZETA * math.sqrt(K * M)
@@ -36,22 +35,10 @@ C = 2 * ZETA * math.sqrt(K * M)
 @cache
 def _rows(k1, k2, fp, c, Fs, d0, duration):
     """The noise-free channels x(tx), a(ta) by the independent solve_ivp (one simulation per case)."""
-    tx = np.arange(round((PRE + duration) * RATE)) / RATE
-    ta = tx + 0.0013  # the accelerometer's own clock
+    tx, ta = clocks(PRE, duration)
     x = reference(M, k1, k2, fp, c, Fs, d0, tx - RELEASE)[0]
     a = reference(M, k1, k2, fp, c, Fs, d0, ta - RELEASE, with_rates=True)[0][2]
     return tx, x, ta, a
-
-
-def _channels(rows, seed):
-    tx, x, ta, a = rows
-    rng = np.random.default_rng(seed)
-    return [BuildingChannel("lvdt", "x", tx, x + rng.normal(0.0, NOISE_X, x.size)),
-            BuildingChannel("acc", "a", ta, a + OFFSET_A + rng.normal(0.0, NOISE_A, a.size))]
-
-
-def _band(n, p=0.95, tail=0.0005):
-    return int(stats.binom.ppf(tail, n, p)), int(stats.binom.isf(tail, n, p))
 
 
 def _rms_band(n, tail=0.0005):
@@ -68,7 +55,7 @@ def _coverage(rows, truth, n, **kw):
     z = {name: [] for name in truth}
     fits = []
     for seed in range(n):
-        fit = fit_isolation(_channels(rows, 1000 + seed), M, "linear", **kw)
+        fit = fit_isolation(noisy_channels(rows, 1000 + seed), M, "linear", **kw)
         fits.append(fit)
         for name, value in truth.items():
             lo, hi = fit.ci95[name]
@@ -85,7 +72,7 @@ def _linear_coverage(n):
 
 def test_round_trip_linear():
     """Period within 1%, damping ratio and friction within 5% of the truth (one record)."""
-    fit = fit_isolation(_channels(_rows(K, K, math.inf, C, FS, D0, 8.0), 7), M, "linear")
+    fit = fit_isolation(noisy_channels(_rows(K, K, math.inf, C, FS, D0, 8.0), 7), M, "linear")
     assert fit.estimates["period"] == pytest.approx(T, rel=0.01)
     assert fit.estimates["damping_ratio"] == pytest.approx(ZETA, rel=0.05)
     assert fit.estimates["friction"] == pytest.approx(FS, rel=0.05)
@@ -99,7 +86,7 @@ def test_round_trip_bilinear_from_design_values_and_model_choice():
     prefers the bilinear model on its record."""
     k1, k2, Fy, zeta, Fs, d0 = 4.0e7, 4.0e6, 8.0e4, 0.03, 8.0e3, 0.2
     rows = _rows(k1, k2, Fy * (1 - k2 / k1), 2 * zeta * math.sqrt(k1 * M), Fs, d0, 4.0)
-    channels = _channels(rows, 11)
+    channels = noisy_channels(rows, 11)
     T1 = 2 * math.pi * math.sqrt(M / k1)
     design = {"period": 1.2 * T1, "damping_ratio": 0.75 * zeta, "friction": 0.7 * Fs, "stiffness_ratio": 1.25 * k2 / k1,
               "yield_force": 0.75 * Fy}
@@ -120,7 +107,7 @@ def test_coverage_linear_coulomb():
     Jacobian intervals have an RMS near 1 (standard errors of the right size)."""
     n = 200 if SLOW else 60
     covered, z, _ = _linear_coverage(n)
-    lo, hi = _band(n)
+    lo, hi = binomial_band(n)
     assert all(lo <= c <= hi for c in covered.values()), (covered, (lo, hi))
     assert sum(covered.values()) >= 0.92 * n * len(covered), covered
     for name, values in z.items():
@@ -137,7 +124,7 @@ def test_coverage_without_friction():
     rows = _rows(K, K, math.inf, C, 0.0, D0, 6.0)
     truth = {**LINEAR_TRUTH, "friction": 0.0}
     covered, z, fits = _coverage(rows, truth, n)
-    lo, hi = _band(n)
+    lo, hi = binomial_band(n)
     assert all(f.interval_method["friction"] == "profile" for f in fits)
     assert sum(f.ci95["friction"][0] == 0.0 for f in fits) == covered["friction"]
     assert all(lo <= c <= hi for c in covered.values()), (covered, (lo, hi))
@@ -155,7 +142,7 @@ def test_coverage_with_noise_from_the_residuals():
     truth = {n_: v for n_, v in LINEAR_TRUTH.items() if n_ != "release_time"}
     covered, z, fits = _coverage(rows, truth, n, release_time=RELEASE, fit_release_time=False)
     assert all(f.noise_source == {"lvdt": "residuals", "acc": "residuals"} for f in fits)
-    lo, hi = _band(n)
+    lo, hi = binomial_band(n)
     assert all(lo <= covered[k] <= hi for k in truth), (covered, (lo, hi))
     for name in truth:
         rms = float(np.sqrt(np.mean(np.square(z[name]))))
@@ -172,7 +159,7 @@ def test_model_choice_on_linear_records_prefers_linear():
     rows = _rows(K, K, math.inf, C, FS, D0, 8.0)
     prefers_linear = 0
     for seed in range(n):
-        channels = _channels(rows, 1000 + seed)
+        channels = noisy_channels(rows, 1000 + seed)
         linear = fit_isolation(channels, M, "linear", profile=False)
         start = {"period": linear.estimates["period"], "damping_ratio": linear.estimates["damping_ratio"],
                  "friction": linear.estimates["friction"], "stiffness_ratio": 0.5, "yield_force": 0.5 * K * D0}
@@ -205,7 +192,7 @@ def test_standard_errors_survive_a_reversal_on_a_sample():
     2.6 times too small (z = 5.0, friction -5.5; on another record 50 times, z = 89); the guarded
     differences keep every estimate within 4 standard errors (measured: |z| <= 2.3)."""
     Fs, zeta, d0 = 0.01 * M * 9.80665, 0.05, 0.12
-    fit = fit_isolation(_channels(_rows(K, K, math.inf, 2 * zeta * math.sqrt(K * M), Fs, d0, 6.0), 1), M, "linear")
+    fit = fit_isolation(noisy_channels(_rows(K, K, math.inf, 2 * zeta * math.sqrt(K * M), Fs, d0, 6.0), 1), M, "linear")
     truth = {"period": T, "damping_ratio": zeta, "friction": Fs, "d0": d0, "release_time": RELEASE}
     z = {name: (fit.estimates[name] - value) / fit.std_errors[name] for name, value in truth.items()}
     assert all(abs(v) < 4.0 for v in z.values()), z
@@ -217,7 +204,7 @@ def test_hard_record_lands_in_the_right_basin():
     law, so a start without friction), and every start led to a wrong count of half-cycles (reduced
     chi-square 21; 3 of 100 seeds did, 0 now). The fit reaches the noise level and the truth."""
     Fs, zeta, d0 = 0.01 * M * 9.80665, 0.05, 0.12
-    fit = fit_isolation(_channels(_rows(K, K, math.inf, 2 * zeta * math.sqrt(K * M), Fs, d0, 6.0), 16), M, "linear",
+    fit = fit_isolation(noisy_channels(_rows(K, K, math.inf, 2 * zeta * math.sqrt(K * M), Fs, d0, 6.0), 16), M, "linear",
                         profile=False)
     assert fit.chi2_reduced < 1.3, fit.chi2_reduced
     truth = {"period": T, "damping_ratio": zeta, "friction": Fs, "d0": d0, "release_time": RELEASE}
@@ -228,6 +215,7 @@ def test_hard_record_lands_in_the_right_basin():
 BILINEAR = (4.0e7, 4.0e6, 8.0e4, 0.03, 8.0e3, 0.2)  # k1, k2 [N/m], F_y [N], zeta, F_s [N], d0 [m]
 
 
+@pytest.mark.slow  # one seed of a coverage matrix (2-3 s); the quick run fits bilinear records in test_isolation_identify
 def test_coverage_bilinear():
     """Rubber bearings with sliders (the round-trip building above), fitted from the record alone (no design
     values: the hysteresis loop's start, the multi-start and the polish), unknown release: over the seeds the
@@ -244,12 +232,12 @@ def test_coverage_bilinear():
              "offset_acc": OFFSET_A}
     covered = dict.fromkeys(truth, 0)
     for seed in range(n):
-        fit = fit_isolation(_channels(rows, 1000 + seed), M, "bilinear")
+        fit = fit_isolation(noisy_channels(rows, 1000 + seed), M, "bilinear")
         for name, value in truth.items():
             lo, hi = fit.ci95[name]
             covered[name] += lo <= value <= hi
     if SLOW:
-        lo, hi = _band(n)
+        lo, hi = binomial_band(n)
         assert all(lo <= c <= hi for c in covered.values()), (covered, (lo, hi))
         assert sum(covered.values()) >= 0.92 * n * len(covered), covered
     else:

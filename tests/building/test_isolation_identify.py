@@ -9,7 +9,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_isolation_coverage import D0, FS, RELEASE, ZETA, C, K, M, T, _channels, _rows
+from coverage_records import noisy_channels as _channels
+from test_isolation_coverage import D0, FS, RELEASE, ZETA, C, K, M, T, _rows
 
 from quickrelease._lsq import identified_covariance, unidentified
 from quickrelease.studies.building_analysis import analyse_building

@@ -59,7 +59,8 @@ def test_loop_estimate_on_noise_free_records(k1, k2, Fy, zeta, Fs, d0, rate):
 
 def _hard_linear_record(seed):
     """The hard linear record of test_isolation_coverage: sliders of 1% of the weight, four half-cycles."""
-    from test_isolation_coverage import K, _channels, _rows
+    from coverage_records import noisy_channels as _channels
+    from test_isolation_coverage import K, _rows
     Fs, zeta, d0 = 0.01 * M * 9.80665, 0.05, 0.12
     return _channels(_rows(K, K, math.inf, 2 * zeta * math.sqrt(K * M), Fs, d0, 6.0), seed), \
         {"period": 2.0, "damping_ratio": zeta, "friction": Fs, "d0": d0}

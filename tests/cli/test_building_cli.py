@@ -17,6 +17,8 @@ from typer.testing import CliRunner
 
 from quickrelease.cli import app
 
+pytestmark = pytest.mark.usefixtures("few_band_draws")  # the bands' width is not looked at here
+
 runner = CliRunner()
 
 G0 = 9.80665

@@ -15,6 +15,8 @@ from quickrelease import simulate
 from quickrelease.cli import app
 from quickrelease.errors import QuickReleaseError
 
+pytestmark = pytest.mark.usefixtures("few_band_draws")  # the bands' width is not looked at here
+
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 runner = CliRunner()
 

@@ -12,6 +12,8 @@ from typer.testing import CliRunner
 
 from quickrelease.cli import app
 
+pytestmark = pytest.mark.usefixtures("few_band_draws")  # the bands' width is not looked at here
+
 EXAMPLES = Path(__file__).parents[2] / "examples"
 runner = CliRunner()
 

@@ -31,6 +31,8 @@ from quickrelease.report.html import render_building_report
 from quickrelease.report.zoom import zoom_figure
 from quickrelease.studies.building_analysis import analyse_building
 
+pytestmark = pytest.mark.usefixtures("few_band_draws")  # the bands' width is not looked at here
+
 ROOT = Path(__file__).resolve().parents[2]
 VENDOR = ROOT / "src" / "quickrelease" / "report" / "vendor" / "uplot"
 #: The building: 650 t, T = 2 s, 3% damping, sliders at 120 kN (they hold it about 3 s after the release).

@@ -109,6 +109,7 @@ def test_the_band_covers_the_true_curve_and_has_the_delta_methods_width(fitted):
             assert mid[i] == pytest.approx(truth(d[i], *est)[j], rel=1e-7)
 
 
+@pytest.mark.slow  # 2000 draws; the quick run reaches effective_curves' bands in the test above
 def test_the_level_sets_the_bands_width(fitted):
     """The same draws at level 0.5: half-widths 0.6745 / 1.96 of the 95% band's (normal quantiles) within 15%."""
     wide = effective_curves(fitted, draws=1000, seed=2)

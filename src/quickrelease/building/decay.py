@@ -39,6 +39,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from ..errors import ParameterError
+from .effective import zigzag_scan
 
 __all__ = ["DecayAnalysis", "DecayLaw", "LAW_NAMES", "LawFit", "LoopEstimate", "MidMotionStart", "analyse_decay",
            "bilinear_loop", "combined_decay_law", "decay_laws", "estimate_noise", "first_turning_point",
@@ -629,16 +630,7 @@ def turning_points_with_errors(t, x, noise: float = 0.0, rest: float = 0.0, jitt
         rate = np.abs(np.diff(x)) / float(np.median((t[span:] - t[:-span]) / span))
         spread = math.hypot(spread, jitter * float(np.percentile(rate, 99)))
     threshold = spread * (2.0 * math.sqrt(2.0 * math.log(n)) + 2.0)
-    direction = -1.0 if x[0] > rest else 1.0
-    idx: list[int] = []
-    best = 1
-    for k in range(2, n):
-        if direction * (x[k] - x[best]) > 0.0:
-            best = k
-        elif direction * (x[best] - x[k]) > threshold:
-            idx.append(best)
-            direction = -direction
-            best = k
+    idx, direction, best = zigzag_scan(x, threshold, -1.0 if x[0] > rest else 1.0, 1)
     # the record ends on a rest (the sliders stuck) when the samples within the threshold of the running
     # extreme reach the end, at least four of them, with no trend across them beyond half the threshold
     # (a swing still under way rises by about the threshold there). Not "the extreme lies four samples

@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from .._validate import finite_nonnegative, finite_positive
 from ..errors import ParameterError
 from . import _ode
 
@@ -45,18 +46,12 @@ PUSH_STEPS = 4
 MAX_STEPS = 20_000_000
 
 
-def _positive(name: str, value: float, unit: str = "") -> float:
-    value = float(value)
-    if not (math.isfinite(value) and value > 0.0):
-        raise ParameterError(name, value, "(0, inf)", unit)
-    return value
-
-
-def _nonnegative(name: str, value: float, unit: str = "") -> float:
-    value = float(value)
-    if not (math.isfinite(value) and value >= 0.0):
-        raise ParameterError(name, value, "[0, inf)", unit)
-    return value
+def viscous_damping_ratio(system) -> float:
+    """The viscous damper's ratio of an isolation ``system`` (Pendulum, BoucWen) referred to its post-yield
+    stiffness k2, ``c / (2 sqrt(k2 m))`` [-] (nan with a power-law damper, exponent other than 1)."""
+    if system.damping_exponent != 1.0:
+        return math.nan
+    return system.damping / (2.0 * math.sqrt(system.k2 * system.mass))
 
 
 def damping_exponent(value: float) -> float:
@@ -93,14 +88,14 @@ class Pendulum:
     """The damper's exponent alpha [-] (1: viscous, C in N s/m)."""
 
     def __post_init__(self) -> None:
-        _positive("mass", self.mass, "kg")
-        _positive("radius", self.radius, "m")
-        _nonnegative("friction_slow", self.friction_slow)
+        finite_positive("mass", self.mass, "kg")
+        finite_positive("radius", self.radius, "m")
+        finite_nonnegative("friction_slow", self.friction_slow)
         if self.friction_fast is None:
             _set(self, friction_fast=float(self.friction_slow))
-        _nonnegative("friction_fast", self.friction_fast)
-        _nonnegative("rate", self.rate, "s/m")
-        _nonnegative("damping", self.damping, "N (s/m)^alpha")
+        finite_nonnegative("friction_fast", self.friction_fast)
+        finite_nonnegative("rate", self.rate, "s/m")
+        finite_nonnegative("damping", self.damping, "N (s/m)^alpha")
         _set(self, damping_exponent=damping_exponent(self.damping_exponent))
 
     model = "pendulum"
@@ -145,9 +140,7 @@ class Pendulum:
     def damping_ratio(self) -> float:
         """The viscous damper's ratio referred to the stiffness of ``period``, ``c / (2 sqrt(k m))`` [-] (nan
         with a power-law damper)."""
-        if self.damping_exponent != 1.0:
-            return math.nan
-        return self.damping / (2.0 * math.sqrt(self.k2 * self.mass))
+        return viscous_damping_ratio(self)
 
     def vector(self) -> np.ndarray:
         """The integrator's parameter vector (:mod:`quickrelease.building._ode`)."""
@@ -192,16 +185,16 @@ class BoucWen:
     """Coulomb friction of sliders in parallel F_s [N] (static = kinetic)."""
 
     def __post_init__(self) -> None:
-        _positive("mass", self.mass, "kg")
-        _positive("post_yield_stiffness", self.post_yield_stiffness, "N/m")
-        _positive("characteristic_strength", self.characteristic_strength, "N")
-        _positive("yield_displacement", self.yield_displacement, "m")
+        finite_positive("mass", self.mass, "kg")
+        finite_positive("post_yield_stiffness", self.post_yield_stiffness, "N/m")
+        finite_positive("characteristic_strength", self.characteristic_strength, "N")
+        finite_positive("yield_displacement", self.yield_displacement, "m")
         n = float(self.shape)
         if not (math.isfinite(n) and SHAPE_RANGE[0] <= n <= SHAPE_RANGE[1]):
             raise ParameterError("shape", n, f"[{SHAPE_RANGE[0]}, {SHAPE_RANGE[1]}]")
-        _nonnegative("damping", self.damping, "N (s/m)^alpha")
+        finite_nonnegative("damping", self.damping, "N (s/m)^alpha")
         _set(self, damping_exponent=damping_exponent(self.damping_exponent))
-        _nonnegative("friction", self.friction, "N")
+        finite_nonnegative("friction", self.friction, "N")
 
     model = "boucwen"
 
@@ -218,9 +211,7 @@ class BoucWen:
     def damping_ratio(self) -> float:
         """The viscous damper's ratio referred to the stiffness of ``period``, ``c / (2 sqrt(k m))`` [-] (nan
         with a power-law damper)."""
-        if self.damping_exponent != 1.0:
-            return math.nan
-        return self.damping / (2.0 * math.sqrt(self.k2 * self.mass))
+        return viscous_damping_ratio(self)
 
     @property
     def period(self) -> float:
@@ -392,7 +383,7 @@ def hysteretic_vibration(system, P: np.ndarray, z0: float, d0: float, t_end: flo
                                  "friction (the motion never ends)")
         horizon = math.inf
     else:
-        horizon = _positive("t_end", t_end, "s")
+        horizon = finite_positive("t_end", t_end, "s")
     y0 = np.array([d0, 0.0, z0, 0.0, 0.0, 0.0])
     capacity = 4096
     while True:

@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 from scipy.optimize import brentq
 
+from .._validate import finite_nonnegative, finite_positive
 from ..errors import ParameterError
 from . import _ode
 from .hysteretic import BoucWen, HystereticVibration, Pendulum, damping_exponent, hysteretic_vibration
@@ -62,20 +63,6 @@ RECORD_CHANNELS: dict[str, tuple[str, str, str]] = {
 MAX_PIECES = 1_000_000
 
 
-def _finite_positive(name: str, value: float, unit: str) -> float:
-    value = float(value)
-    if not (math.isfinite(value) and value > 0.0):
-        raise ParameterError(name, value, "(0, inf)", unit)
-    return value
-
-
-def _finite_nonnegative(name: str, value: float, unit: str) -> float:
-    value = float(value)
-    if not (math.isfinite(value) and value >= 0.0):
-        raise ParameterError(name, value, "[0, inf)", unit)
-    return value
-
-
 @dataclass(frozen=True)
 class Isolation:
     """The isolation layer under a rigid superstructure (SI units).
@@ -101,10 +88,10 @@ class Isolation:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "damping_exponent", damping_exponent(self.damping_exponent))
-        _finite_positive("mass", self.mass, "kg")
-        _finite_positive("stiffness", self.stiffness, "N/m")
-        _finite_nonnegative("damping", self.damping, "N s/m")
-        _finite_nonnegative("friction", self.friction, "N")
+        finite_positive("mass", self.mass, "kg")
+        finite_positive("stiffness", self.stiffness, "N/m")
+        finite_nonnegative("damping", self.damping, "N s/m")
+        finite_nonnegative("friction", self.friction, "N")
         if (self.post_yield_stiffness is None) != (self.yield_force is None):
             raise ParameterError("post_yield_stiffness/yield_force", "one of the two",
                                  "both (bilinear) or neither (linear)")
@@ -112,13 +99,13 @@ class Isolation:
             k2 = float(self.post_yield_stiffness)
             if not (math.isfinite(k2) and 0.0 < k2 < self.stiffness):
                 raise ParameterError("post_yield_stiffness", k2, f"(0, k1) = (0, {self.stiffness:.6g}) N/m", "N/m")
-            _finite_positive("yield_force", self.yield_force, "N")
+            finite_positive("yield_force", self.yield_force, "N")
 
     @classmethod
     def linear(cls, mass: float, period: float, damping_ratio: float = 0.0, friction: float = 0.0) -> Isolation:
         """Linear isolation: period T [s], damping ratio zeta [-] in [0, 1), slider friction F_s [N]."""
-        mass = _finite_positive("mass", mass, "kg")
-        period = _finite_positive("period", period, "s")
+        mass = finite_positive("mass", mass, "kg")
+        period = finite_positive("period", period, "s")
         zeta = _damping_ratio(damping_ratio)
         k = mass * (2.0 * math.pi / period) ** 2
         return cls(mass=mass, stiffness=k, damping=2.0 * zeta * math.sqrt(k * mass), friction=friction)
@@ -128,8 +115,8 @@ class Isolation:
                  friction: float = 0.0) -> Isolation:
         """Bilinear isolation: k1, k2 [N/m], F_y [N]; zeta [-] refers to the initial stiffness,
         ``c = 2 zeta sqrt(k1 m)``; slider friction F_s [N]."""
-        mass = _finite_positive("mass", mass, "kg")
-        k1 = _finite_positive("k1", k1, "N/m")
+        mass = finite_positive("mass", mass, "kg")
+        k1 = finite_positive("k1", k1, "N/m")
         zeta = _damping_ratio(damping_ratio)
         return cls(mass=mass, stiffness=k1, damping=2.0 * zeta * math.sqrt(k1 * mass), friction=friction,
                    post_yield_stiffness=k2, yield_force=yield_force)
@@ -498,7 +485,7 @@ def free_vibration(isolation: Isolation | Pendulum | BoucWen, d0: float, t_end: 
                                  "(the motion never ends)")
         horizon = math.inf
     else:
-        horizon = _finite_positive("t_end", t_end, "s")
+        horizon = finite_positive("t_end", t_end, "s")
     pieces: list[_Piece] = []
     t, x, v, z = 0.0, d0, 0.0, z0
     direction = -math.copysign(1.0, R0)
@@ -610,17 +597,17 @@ class TwoDOF:
     """Damping ratio of the superstructure on a fixed base, zeta_s = c_s / (2 sqrt(k_s m_s)) [-], in [0, 1)."""
 
     def __post_init__(self) -> None:
-        mass = _finite_positive("mass", self.mass, "kg")
-        ms = _finite_positive("superstructure_mass", self.superstructure_mass, "kg")
+        mass = finite_positive("mass", self.mass, "kg")
+        ms = finite_positive("superstructure_mass", self.superstructure_mass, "kg")
         if not ms < mass:
             raise ParameterError("superstructure_mass", ms, f"(0, mass) = (0, {mass:.6g}) kg", "kg")
-        _finite_positive("period", self.period, "s")
-        _finite_positive("superstructure_period", self.superstructure_period, "s")
+        finite_positive("period", self.period, "s")
+        finite_positive("superstructure_period", self.superstructure_period, "s")
         _damping_ratio(self.damping_ratio)
         zs = float(self.superstructure_damping_ratio)
         if not (math.isfinite(zs) and 0.0 <= zs < 1.0):
             raise ParameterError("superstructure_damping_ratio", zs, "[0, 1)")
-        _finite_nonnegative("friction", self.friction, "N")
+        finite_nonnegative("friction", self.friction, "N")
 
     model = "2dof"
 
@@ -1022,7 +1009,7 @@ def free_vibration_2dof(building: TwoDOF, d0: float, t_end: float | None = None)
                                  "(the motion never ends)")
         horizon = math.inf
     else:
-        horizon = _finite_positive("t_end", t_end, "s")
+        horizon = finite_positive("t_end", t_end, "s")
     k, ks, cs, Fs = b.stiffness, b.superstructure_stiffness, b.superstructure_damping, float(b.friction)
     pieces: list = []
     stop = math.inf

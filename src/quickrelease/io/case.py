@@ -288,8 +288,8 @@ CASE_SCHEMA: dict[str, dict[str, tuple[str, str]]] = {
         "damping_coefficient": ("force", "the power-law damper's force at 1 m/s, C [N (s/m)^alpha], e.g. '400 kN'"),
         "damping_exponent": ("dimensionless", "the power-law damper's exponent alpha in [0.05, 2], e.g. 0.3"),
         "radius": ("length", "the friction pendulum's radius of curvature R, e.g. '2.5 m'"),
-        "friction_slow": ("dimensionless", "the pendulum's friction coefficient at low velocity >= 0, e.g. 0.03"),
-        "friction_fast": ("dimensionless", "the pendulum's friction coefficient at high velocity >= 0, e.g. 0.07"),
+        "friction_slow": ("dimensionless", "the pendulum's friction coefficient at low velocity in [0, 1], e.g. 0.03"),
+        "friction_fast": ("dimensionless", "the pendulum's friction coefficient at high velocity in [0, 1], e.g. 0.07"),
         "rate": ("slowness", "Constantinou's rate a of mu(v) >= 0, e.g. '30 s/m'"),
         "post_yield_stiffness": ("stiffness", "the Bouc-Wen bearings' post-yield stiffness Kd, e.g. '5 MN/m'"),
         "characteristic_strength": ("force", "the Bouc-Wen bearings' characteristic strength Qd, e.g. '300 kN'"),
@@ -438,6 +438,43 @@ class Case:
 def _fail(source: str, key: str, value: Any, expected: str) -> CaseFileError:
     shown = repr(value) if not isinstance(value, dict) else "a table"
     return CaseFileError(f"{source}: {key} = {shown}: expected {expected}")
+
+
+#: The isolators' design values a case file may give, beyond which they are no isolation system (and the
+#: floats overflow or underflow: radius = 1e308 m makes the restoring force 1e-302 N): the pendulum's radius
+#: [m] (periods 2 pi sqrt(R / g) of 0.2 to 63 s; usual radii 1.5 to 4 m), Constantinou's rate [s/m] (3 / a, the
+#: speed where mu reaches 95% of the way to mu_fast, down to 0.3 mm/s), the Bouc-Wen yield displacement [m].
+ISOLATOR_RANGES = {"radius": (0.01, 1000.0, "m"), "rate": (0.0, 1.0e4, "s/m"), "yield_displacement": (1.0e-5, 1.0, "m")}
+#: The post-yield period 2 pi sqrt(m / Kd) [s] the Bouc-Wen bearings' post_yield_stiffness may give.
+POST_YIELD_PERIOD_RANGE = (0.1, 100.0)
+#: Most characteristic strength Qd and most damper force at 1 m/s, in weights m g [-].
+MOST_STRENGTH_WEIGHTS = 1.0
+MOST_DAMPER_WEIGHTS = 10.0
+
+
+def _check_isolator_ranges(values: dict[str, Any], table: Any, source: str, mass: float | None) -> None:
+    """CaseFileError naming the first design value of the isolators outside its range (the key, its value and
+    the range, in SI units; those scaled by the mass where the mass is given)."""
+    for key, (lo, hi, unit) in ISOLATOR_RANGES.items():
+        value = values.get(f"building.{key}")
+        if value is not None and not lo <= value <= hi:
+            raise _fail(source, f"[building] {key}", table[key], f"{key} in [{lo:g}, {hi:g}] {unit}")
+    if mass is None:
+        return
+    weight = mass * STANDARD_GRAVITY
+    kd = values.get("building.post_yield_stiffness")
+    t_lo, t_hi = POST_YIELD_PERIOD_RANGE
+    k_lo, k_hi = mass * (2.0 * math.pi / t_hi) ** 2, mass * (2.0 * math.pi / t_lo) ** 2
+    if kd is not None and not k_lo <= kd <= k_hi:
+        raise _fail(source, "[building] post_yield_stiffness", table["post_yield_stiffness"],
+                    f"post_yield_stiffness in [{k_lo:.6g}, {k_hi:.6g}] N/m (post-yield periods 2 pi sqrt(m / Kd) "
+                    f"of {t_lo:g} to {t_hi:g} s for the mass {mass:.6g} kg)")
+    for key, most, what in (("characteristic_strength", MOST_STRENGTH_WEIGHTS, "N"),
+                            ("damping_coefficient", MOST_DAMPER_WEIGHTS, "N (s/m)^alpha")):
+        value = values.get(f"building.{key}")
+        if value is not None and not value <= most * weight:
+            raise _fail(source, f"[building] {key}", table[key], f"{key} in [0, {most * weight:.6g}] {what} "
+                        f"(at most {most:g} m g, the weight m g = {weight:.6g} N)")
 
 
 #: The masses a building may have [kg]: 1 kg (a bench model) to 1e12 kg (a hundred times the heaviest
@@ -785,6 +822,7 @@ def _building(values: dict[str, Any], table: Any, source: str, base: Path) -> Bu
                             "stiffnesses act on the mass), e.g. '650 t'")
     if "building.displacement" not in values and mass is None:
         raise CaseFileError(f"{source}: [building] needs displacement (d0) or the mass or weight (d0 = P / k)")
+    _check_isolator_ranges(values, table, source, mass)
     k1, k2 = values.get("building.k1"), values.get("building.k2")
     if k1 is not None and k2 is not None and not k2 < k1:
         raise _fail(source, "[building] k2", table["k2"], f"a post-yield stiffness in (0, k1) = (0, {k1:.6g}) N/m")
