@@ -20,13 +20,14 @@ answer. The limits: the pendulum with mu_fast -> mu_slow (or a rate so large the
 dy = F_y / k1), with Qd -> 0 linear; bilinear with k2 -> k1 or F_y -> inf is linear. A more complex model
 chosen is never right.
 
-Slow: 2 seeds per model in the fast default run of the comparison (marked slow: a seed's four fits take 20-90 s
-here), ``MATRIX_SEEDS`` per model with -m slow, 50 with QUICKRELEASE_SLOW=1.
+Slow (a seed's four fits take 1-10 min of CPU here, the Bouc-Wen fit of another model's record the slowest):
+``MATRIX_SEEDS`` per true model, 1 with -m slow, 50 with QUICKRELEASE_SLOW=1. Not in the default run either: the
+constant-friction pendulum (the linear + Coulomb equivalence, two fits, 25 s) and the one-half-cycle pendulum.
 """
 
 import math
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cache
 
 import numpy as np
@@ -307,13 +308,30 @@ def test_one_half_cycle_pendulum_symmetry_is_exact():
     assert beyond.stop_time > base.stop_time and np.max(np.abs(beyond.x + 1.2 * highest - base.x)) > 10 * NOISE_X
 
 
+def _shifted(fit, shift: float) -> dict[str, float]:
+    """The fit's estimates moved along the family by ``shift`` [m] (R from the fitted period)."""
+    est = fit.estimates
+    R = ref.GRAVITY * (est["period"] / (2 * math.pi)) ** 2
+    return {**est, "d0": est["d0"] - shift, "offset_lvdt": est["offset_lvdt"] + shift,
+            "friction_slow": est["friction_slow"] - shift / R, "friction_fast": est["friction_fast"] - shift / R}
+
+
+def _chi2_at(fit, estimates: dict[str, float]) -> float:
+    """The fit's weighted misfit with its estimates replaced (the package's model, its noise levels)."""
+    moved = replace(fit, estimates=estimates)
+    return float(sum(np.sum(((c.values - moved.model_values(c)) / fit.noise[c.name]) ** 2) for c in fit.channels))
+
+
 @pytest.mark.slow
 def test_one_half_cycle_pendulum_fit_warns():
-    """What the fit does today on such a record: it warns that the fit is ill-conditioned (measured: condition
-    number 3.1e11) and reaches the noise level."""
+    """What the fit does today on such a record: it reaches the noise level and warns that the fit is
+    ill-conditioned (measured: condition number of the correlations 3.1e11); the fitted point moved along the
+    family to the true friction_slow has the same misfit (so the record cannot exclude it)."""
     fit = _half_fit()
     assert fit.chi2_reduced < 1.3
     assert any("ill-conditioned" in w for w in fit.warnings), fit.warnings
+    shift = (fit.estimates["friction_slow"] - HALF["slow"]) * ref.GRAVITY * (fit.estimates["period"] / (2 * math.pi)) ** 2
+    assert _chi2_at(fit, _shifted(fit, shift)) == pytest.approx(_chi2_at(fit, fit.estimates), rel=1e-8)
 
 
 HALF_NOT_IDENTIFIED = ("friction_slow", "friction_fast", "d0", "offset_lvdt")
@@ -339,6 +357,7 @@ def test_one_half_cycle_pendulum_reports_not_identified():
     for name in HALF_NOT_IDENTIFIED:
         lo, hi = fit.ci95[name]
         want_lo, want_hi = family[name]
+        slack = 1e-3 * (want_hi - want_lo)  # the fitted point's family: R from the fitted period, not the true one
         honest[name] = (fit.interval_method[name] == "not identified"
-                        or (lo <= want_lo + 1e-9 and hi >= want_hi - 1e-9))
+                        or (lo <= want_lo + slack and hi >= want_hi - slack))
     assert all(honest.values()), {n: (fit.ci95[n], fit.interval_method[n], family[n]) for n in honest}
