@@ -264,3 +264,15 @@ def test_no_end_without_friction_needs_t_end():
     with pytest.raises(ParameterError) as info:
         free_vibration(BoucWen(**{**BOUCWEN_OK, "friction": 0.0}), 0.2)
     assert info.value.name == "t_end"
+
+
+@pytest.mark.parametrize("rate", [1.0e4 * (1.0 + 1e-15) * 1.01, 1.0e6, 1.0e308])
+def test_a_rate_beyond_its_range_is_named(rate):
+    """Constantinou's rate beyond 1e4 s/m (mu_fast within 0.5 mm/s) is refused before any step: 1e308 s/m ran into
+    MAX_STEPS (20 million steps) before the check."""
+    from quickrelease.building.hysteretic import Pendulum
+    from quickrelease.errors import ParameterError
+
+    with pytest.raises(ParameterError, match=r"rate = .* \[0, 10000\] s/m"):
+        Pendulum(1e6, 3.0, 0.01, 0.025, rate=rate)
+    assert Pendulum(1e6, 3.0, 0.01, 0.025, rate=1.0e4).rate == 1.0e4

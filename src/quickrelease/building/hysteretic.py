@@ -42,6 +42,10 @@ SHAPE_RANGE = (0.5, 25.0)
 EXPONENT_RANGE = (0.05, 2.0)
 #: Steps of the monotonic push of a Bouc-Wen element, a yield displacement per this many (and n times more).
 PUSH_STEPS = 4
+#: Constantinou's rate a's range [s/m] (measured: 10 to 100 s/m): above 1e4 s/m mu(v) reaches mu_fast within
+#: 0.5 mm/s, and the steps that resolve mu(v) (1 / (a |a_max| STEPS_RATE)) grow past millions a record (a = 1e6
+#: took 11 s for one free vibration; 1e308 ran into MAX_STEPS).
+RATE_RANGE = (0.0, 1.0e4)
 #: Most steps one free vibration may take.
 MAX_STEPS = 20_000_000
 
@@ -95,6 +99,8 @@ class Pendulum:
             _set(self, friction_fast=float(self.friction_slow))
         finite_nonnegative("friction_fast", self.friction_fast)
         finite_nonnegative("rate", self.rate, "s/m")
+        if self.rate > RATE_RANGE[1]:
+            raise ParameterError("rate", self.rate, f"[{RATE_RANGE[0]:g}, {RATE_RANGE[1]:g}] s/m")
         finite_nonnegative("damping", self.damping, "N (s/m)^alpha")
         _set(self, damping_exponent=damping_exponent(self.damping_exponent))
 
