@@ -104,3 +104,53 @@ def test_synth_with_power_dampers_reports_the_damper_law(tmp_path):
     assert rows["damping_coefficient"]["truth"] == 300e3 and rows["damping_exponent"]["truth"] == 0.5
     assert rows["Kd_N_m"]["truth"] == pytest.approx(2.4e6, rel=1e-12)
     assert {"Qd_N", "dy_m", "shape"} <= set(rows) and "damping_ratio" not in rows
+
+
+def test_the_whole_test_carries_an_identified_pendulum_into_the_clearance(tmp_path):
+    """The run's clearance uses the pendulum fitted to the record (before: the assumed values, with a note): its
+    radius from the fitted period, R = g (T / 2 pi)^2, and the fitted friction law and d0."""
+    from types import SimpleNamespace
+
+    from quickrelease.building import Pendulum
+    from quickrelease.studies.planning import clearance
+    from quickrelease.workflow import identified_building
+
+    spec = case(tmp_path, PENDULUM).building
+    T, d0 = 3.0, 0.2
+    est = {"period": T, "friction_slow": 0.025, "friction_fast": 0.025, "rate": 0.0, "damping_ratio": 0.0, "d0": d0}
+    R = G * (T / (2 * math.pi)) ** 2
+    fit = SimpleNamespace(model="pendulum", mass=1200e3, parameters=est, std_errors={}, damping="viscous",
+                          isolation=lambda: Pendulum(1200e3, R, 0.025, 0.025, 0.0))
+    identified, note = identified_building(spec, SimpleNamespace(fit=fit))
+    assert "identified from its record (pendulum model" in note and "radius R = 2.2" in note
+    assert identified.radius == pytest.approx(R, rel=1e-12) and identified.friction_fast == 0.025
+    assert identified.friction_force == pytest.approx(0.025 * 1200e3 * G, rel=1e-12)  # mu_slow W holds it
+    release = plan_case(case(tmp_path, PENDULUM))
+    c = clearance(_first_integral(release), identified, d0)
+    assert c.building_period == pytest.approx(T, rel=1e-12)
+    assert c.first_return_time == pytest.approx(T / 2, rel=1e-9)  # constant friction: half a period
+
+
+def _first_integral(plan):
+    from quickrelease.device.solvers import FirstIntegral
+
+    case_, env, d = plan.case, plan.envelope, plan.case.device
+    return FirstIntegral(case_.stored_energy, case_.alpha0, env.F1, env.F2, d.m1, d.m2, d.L1, case_.mass_factor)
+
+
+@pytest.mark.slow
+def test_the_bouc_wen_summary_keeps_its_qd_with_its_own_interval(tmp_path):
+    """With sliders beside the lead-rubber bearings, the JSON's Qd_N is the bearings' fitted Qd inside its own 95%
+    interval (before: overwritten by Qd + F_s, outside the interval printed beside it); F_s is friction_N."""
+    from quickrelease.studies.building_analysis import analyse_building
+
+    text = BOUCWEN.replace('mass = "1200 t"', 'mass = "1200 t"\nfriction = "60 kN"') + 'damping_ratio = 0.02\n'
+    syn = synthesize_building(synth_case(tmp_path, text), ["x", "a"], rate=50.0, release_time=1.0, duration=12.0)
+    start = {k: v for k, v in syn.fit_parameters().items() if not k.startswith("offset_")}
+    result = analyse_building(channels=syn.building_channels(), mass=1200e3, model="boucwen", start=start,
+                              global_search=False)
+    s = result.summary()
+    lo, hi = s["Qd_N_ci95"]
+    assert lo <= s["Qd_N"] <= hi
+    assert s["Qd_N"] == pytest.approx(result.fit.estimates["characteristic_strength"], rel=1e-12)
+    assert s["friction_N"] == pytest.approx(result.fit.estimates["friction"], rel=1e-12)

@@ -251,11 +251,15 @@ _VALID = {
     ("building", "friction"): lambda x: x >= 0.0,
     ("building", "friction_coefficient"): lambda x: x >= 0.0,
     ("building", "superstructure_damping_ratio"): lambda x: 0.0 <= x < 1.0,
-    ("building", "damping_coefficient"): lambda x: x >= 0.0,
     ("building", "damping_exponent"): lambda x: 0.05 <= x <= 2.0,
     ("building", "friction_slow"): lambda x: 0.0 <= x <= 1.0,
     ("building", "friction_fast"): lambda x: 0.0 <= x <= 1.0,
-    ("building", "rate"): lambda x: x >= 0.0,
+    ("building", "rate"): lambda x: 0.0 <= x <= 1e3,  # the fit's range: mu_fast reached at 3 mm/s or more
+    ("building", "radius"): lambda x: 0.01 <= x <= 1e3,  # periods 0.2 s to 63 s (built: 1 to 6 m)
+    ("building", "yield_displacement"): lambda x: 1e-6 <= x <= 10.0,  # the fit's range
+    ("building", "post_yield_stiffness"): lambda x: 0.0 < x <= 1e15,
+    ("building", "characteristic_strength"): lambda x: 0.0 < x <= 1e13,  # 100 times the heaviest building's weight
+    ("building", "damping_coefficient"): lambda x: 0.0 <= x <= 1e13,
     ("building", "shape"): lambda x: 0.5 <= x <= 25.0,
 }
 
@@ -285,15 +289,18 @@ CASE_SCHEMA: dict[str, dict[str, tuple[str, str]]] = {
     "building": {
         "model": ("building_model", "'linear', 'bilinear', '2dof', 'pendulum' or 'boucwen'"),
         "damping": ("damping_law", "'viscous' (damping_ratio) or 'power' (damping_coefficient, damping_exponent)"),
-        "damping_coefficient": ("force", "the power-law damper's force at 1 m/s, C [N (s/m)^alpha], e.g. '400 kN'"),
+        "damping_coefficient": ("force", "the power-law damper's force at 1 m/s, C [N (s/m)^alpha] in [0, 1e13], "
+                                "e.g. '400 kN'"),
         "damping_exponent": ("dimensionless", "the power-law damper's exponent alpha in [0.05, 2], e.g. 0.3"),
-        "radius": ("length", "the friction pendulum's radius of curvature R, e.g. '2.5 m'"),
+        "radius": ("length", "the friction pendulum's radius of curvature R in [0.01, 1000] m, e.g. '2.5 m'"),
         "friction_slow": ("dimensionless", "the pendulum's friction coefficient at low velocity >= 0, e.g. 0.03"),
         "friction_fast": ("dimensionless", "the pendulum's friction coefficient at high velocity >= 0, e.g. 0.07"),
-        "rate": ("slowness", "Constantinou's rate a of mu(v) >= 0, e.g. '30 s/m'"),
-        "post_yield_stiffness": ("stiffness", "the Bouc-Wen bearings' post-yield stiffness Kd, e.g. '5 MN/m'"),
-        "characteristic_strength": ("force", "the Bouc-Wen bearings' characteristic strength Qd, e.g. '300 kN'"),
-        "yield_displacement": ("length", "the Bouc-Wen bearings' yield displacement dy, e.g. '10 mm'"),
+        "rate": ("slowness", "Constantinou's rate a of mu(v) in [0, 1000] s/m, e.g. '30 s/m'"),
+        "post_yield_stiffness": ("stiffness", "the Bouc-Wen bearings' post-yield stiffness Kd in (0, 1e15] N/m, "
+                                 "e.g. '5 MN/m'"),
+        "characteristic_strength": ("force", "the Bouc-Wen bearings' characteristic strength Qd in (0, 1e13] N, "
+                                    "e.g. '300 kN'"),
+        "yield_displacement": ("length", "the Bouc-Wen bearings' yield displacement dy in [1e-6, 10] m, e.g. '10 mm'"),
         "shape": ("dimensionless", "the Bouc-Wen shape exponent n in [0.5, 25], e.g. 1.0"),
         "period": ("time", "a positive period, e.g. '2.5 s'"),
         "damping_ratio": ("dimensionless", "a damping ratio in [0, 1), e.g. 0.1"),
