@@ -39,13 +39,16 @@ for key in keys:
           f"{'not identified' if ci is None else f'[{ci[0]:.5g}, {ci[1]:.5g}]'}")
 
 # %%
-# Per cycle of the measured loop (-m a against x), with standard errors, and the model's curves
-measured = result.measured
-for c, se in zip(measured.cycles, measured.std_errors, strict=True):
-    print(f"D {c.amplitude_m * 1e3:6.1f} mm: keff {c.keff_N_m / 1e3:7.1f} +- {se['keff_N_m'] / 1e3:.1f} kN/m, "
-          f"EDC {c.edc_J / 1e3:6.2f} +- {se['edc_J'] / 1e3:.2f} kJ, beta_eff {c.beta_eff:.3f} +- {se['beta_eff']:.3f}")
+# Per cycle of the identified model's loop along the record (keff, EDC, beta_eff), judged against the model's
+# curve at each cycle's amplitude; then the curves against the amplitude with 95% bands (400 draws of the
+# fitted parameters), the cycles as points
+for c in result.effective:
+    print(f"D {c.amplitude_m * 1e3:6.1f} mm: keff {c.keff_N_m / 1e3:7.1f} kN/m, EDC {c.edc_J / 1e3:6.2f} kJ, "
+          f"beta_eff {c.beta_eff:.3f}, Teff {c.teff_s:.2f} s")
 print(f"model: Qd = {summary['Qd_N'] / 1e3:.1f} kN, Kd = {summary['Kd_N_m'] / 1e3:.1f} kN/m")
+for criterion in result.effective_judgement.criteria:
+    print(f"{criterion['name']}: worst {criterion['worst']:.3g}, limit {criterion['tolerance']}, "
+          f"{'pass' if criterion['passed'] else 'FAIL'}")
 
 fig = fit_figure(result)
-fig2 = effective_figure(result.effective_curve, measured.cycles, release_time=result.fit.release_time,
-                        label="cycles of the measured loop")
+fig2 = effective_figure(result.effective_curve, result.effective, release_time=result.fit.release_time)
