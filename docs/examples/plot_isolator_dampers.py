@@ -29,7 +29,7 @@ CASE = "lead_rubber_damper_building.toml"
 data = load_building(load_case(EXAMPLES / CASE, require_test=False))
 window = [BuildingChannel(c.name, c.kind, c.t[c.t < 16.0], c.values[c.t < 16.0], c.noise, c.offset)
           for c in data.channels]  # the release and three cycles
-result = analyse_building(data, channels=window)
+result = analyse_building(data, channels=window, global_search=False)  # started from the design values
 summary = result.summary()
 keys = ["Kd_N_m", "Qd_N", "dy_m", "shape"]
 keys += (["damping_coefficient", "damping_exponent"] if result.fit.damping == "power" else ["damping_ratio"])
