@@ -307,9 +307,6 @@ def test_an_isolator_gallery_example_runs_and_its_intervals_hold_the_truth(name,
     interval holding the value its synthetic record was made with."""
     import runpy
 
-    import matplotlib
-
-    matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     monkeypatch.chdir(DOCS / "examples")

@@ -49,7 +49,8 @@ for c in result.effective:
           f"beta_eff {c.beta_eff:.3f}, Teff {c.teff_s:.2f} s")
 print(f"model: Qd = {summary['Qd_N'] / 1e3:.1f} kN, Kd = {summary['Kd_N_m'] / 1e3:.1f} kN/m")
 for criterion in result.effective_judgement.criteria:
-    print(f"{criterion['name']}: worst {criterion['worst']:.3g}, limit {criterion['tolerance']}, "
+    worst = "-" if criterion["worst"] is None else f"{criterion['worst']:.3g}"
+    print(f"{criterion['name']}: worst {worst}, limit {criterion['tolerance']}, "
           f"{'pass' if criterion['passed'] else 'FAIL'}")
 
 fig = fit_figure(result)
