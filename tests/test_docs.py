@@ -290,3 +290,31 @@ def test_every_equation_of_the_built_site_is_typeset():
         pytest.skip("no built site: sphinx-build -W -b html docs docs/_build/html (CI builds it)")
     assert len(math_pages()) >= 5
     assert unrendered_math(site) == []
+
+
+#: The gallery's isolator examples and the truth of their records (examples/make_isolator_records.py, the tests'
+#: independent simulator): each printed 95% interval must hold it.
+ISOLATOR_GALLERY = {
+    "plot_isolator_pendulum.py": {"radius_m": 2.5, "period_s": 2 * 3.141592653589793 * (2.5 / 9.80665) ** 0.5},
+    "plot_isolator_lead_rubber.py": {"Kd_N_m": 1.6e6, "Qd_N": 4.0e5, "dy_m": 0.025, "damping_ratio": 0.02},
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", sorted(ISOLATOR_GALLERY))
+def test_an_isolator_gallery_example_runs_and_its_intervals_hold_the_truth(name, monkeypatch, capsys):
+    """As the gallery runs it (in docs/examples/, 30-45 s of CPU each): the figures drawn, and each printed 95%
+    interval holding the value its synthetic record was made with."""
+    import runpy
+
+    import matplotlib.pyplot as plt
+
+    monkeypatch.chdir(DOCS / "examples")
+    found = runpy.run_path(str(DOCS / "examples" / name), run_name="__gallery__")
+    printed = capsys.readouterr().out
+    assert isinstance(found["fig"], plt.Figure)
+    plt.close("all")
+    for key, truth in ISOLATOR_GALLERY[name].items():
+        row = re.search(rf"^{key}\s+\S+\s+95% interval \[(\S+), (\S+)\]$", printed, re.M)
+        assert row is not None, f"{key} not printed with an interval:\n{printed}"
+        assert float(row.group(1)) <= truth <= float(row.group(2)), row.group(0)

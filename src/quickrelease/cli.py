@@ -833,7 +833,15 @@ def _synth_building(case, channels: str | None, rate: str | None, noise: list[st
 
     from .io.building_case import BUILDING_CHANNELS
     from .io.export import write_text
-    from .studies.synth import building_case_toml, parse_channel_values, predicted_building_errors, synthesize_building
+    from .studies.synth import (
+        building_case_toml,
+        building_precision,
+        describe_truth,
+        parse_channel_values,
+        predicted_building_errors,
+        predicted_summary,
+        synthesize_building,
+    )
     from .units import parse_quantity
 
     if case.building is None:
@@ -855,7 +863,7 @@ def _synth_building(case, channels: str | None, rate: str | None, noise: list[st
         write_text(case_text, case_out)
     summary = {"file": str(out), "rows": int(syn.t.size), "rate_Hz": syn.rate, "channels": names,
                "truth": syn.truth, "noise": syn.noise, "offsets": syn.offsets, "seed": seed, "notes": syn.notes,
-               "predicted": pred.summary(), "case_file": None if case_out is None else str(case_out)}
+               "predicted": predicted_summary(pred), "case_file": None if case_out is None else str(case_out)}
     if as_json:
         _print_json(summary)
         return
@@ -867,8 +875,7 @@ def _synth_building(case, channels: str | None, rate: str | None, noise: list[st
                                            f"{quantity(t['superstructure_period_s'], 's')}, zeta_s = "
                                            f"{quantity(t['superstructure_damping_ratio'])})")
     _echo(f"Wrote {out} ({syn.t.size} rows at {syn.rate:g} Hz, channels {', '.join(names)}); {t['model']} isolation, "
-          f"T = {quantity(t['period_s'], 's')}, zeta = {quantity(t['damping_ratio'])}, F_s = "
-          f"{quantity(t['friction_N'], 'N')}{sup}; released from d0 = {quantity(1e3 * t['d0_m'])} mm at "
+          f"{describe_truth(t)}{sup}; released from d0 = {quantity(1e3 * t['d0_m'])} mm at "
           f"{quantity(t['release_time_s'], 's')}, {stop}")
     for note in syn.notes:
         _echo(f"note: {note}")
@@ -876,7 +883,7 @@ def _synth_building(case, channels: str | None, rate: str | None, noise: list[st
            [(key_for(split_key(key)[0], row["unit"])[0], quantity(row["truth"], row["unit"]),
              quantity(row["se"], row["unit"], 2) if math.isfinite(row["se"]) else "not determined",
              "" if row["relative_se"] is None or not math.isfinite(row["se"]) else f"{100 * row['relative_se']:.2g}%")
-            for key, row in pred.physical().items()], ("parameter", "truth", "standard error", "relative"))
+            for key, row in building_precision(pred).items()], ("parameter", "truth", "standard error", "relative"))
     for warning in pred.warnings:
         _echo(f"warning: {warning}")
     if case_out is not None:

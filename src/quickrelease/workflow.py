@@ -144,11 +144,26 @@ def identified_building(spec, building) -> tuple[Any, str]:
         changes.update(period=None, k1=iso.stiffness, k2=iso.k2, yield_force=float(iso.yield_force))
     elif fit.model == "2dof" and "period" in est:  # the clearance takes the superstructure as rigid on the layer
         changes.update(period=est["period"], k1=None, k2=None, yield_force=None)
+    elif fit.model == "pendulum" and "radius" in fields:  # W x / R and mu(v) W: the sliders' mu_slow W holds the push
+        iso = fit.isolation()
+        changes.update(period=None, radius=float(iso.radius), friction_slow=float(iso.friction_slow),
+                       friction_fast=float(iso.friction_fast), rate=float(iso.rate), friction=None,
+                       friction_coefficient=float(iso.friction_slow))
+    elif fit.model == "boucwen" and "post_yield_stiffness" in fields:
+        iso = fit.isolation()
+        changes.update(period=None, post_yield_stiffness=float(iso.k2),
+                       characteristic_strength=float(iso.characteristic_strength),
+                       yield_displacement=float(iso.yield_displacement), shape=float(iso.shape),
+                       friction=float(iso.friction))
     else:
         return spec, (f"clearance checked with the assumed [building] values: the identified {fit.model} "
                       "isolation cannot be carried into the clearance check")
     if "model" in fields:
         changes["model"] = fit.model
+    if fit.damping == "power":  # the fluid dampers' law, not a damping ratio
+        changes.pop("damping_ratio")
+        changes.update(damping="power", damping_coefficient=float(est["damping_coefficient"]),
+                       damping_exponent=float(est["damping_exponent"]))
     changes = {k: v for k, v in changes.items() if k in fields}
     identified = dataclasses.replace(spec, **changes)
     words = clearance_words(changes, fit.std_errors)
@@ -161,6 +176,14 @@ _NOTE_VALUES = {
     "period": ("period T", "period", "s", 1.0), "damping_ratio": ("damping ratio zeta", "damping_ratio", "", 1.0),
     "friction": ("slider friction F_s", "friction", "kN", 1e-3), "k1": ("initial stiffness k1", None, "kN/m", 1e-3),
     "k2": ("post-yield stiffness k2", None, "kN/m", 1e-3), "yield_force": ("yield force F_y", None, "kN", 1e-3),
+    "radius": ("radius R", None, "m", 1.0), "friction_slow": ("friction mu_slow", "friction_slow", "", 1.0),
+    "friction_fast": ("friction mu_fast", "friction_fast", "", 1.0), "rate": ("rate a", "rate", "s/m", 1.0),
+    "post_yield_stiffness": ("post-yield stiffness Kd", None, "kN/m", 1e-3),
+    "characteristic_strength": ("characteristic strength Qd", "characteristic_strength", "kN", 1e-3),
+    "yield_displacement": ("yield displacement dy", "yield_displacement", "mm", 1e3),
+    "shape": ("shape n", "shape", "", 1.0),
+    "damping_coefficient": ("damper coefficient C", "damping_coefficient", "kN (s/m)^alpha", 1e-3),
+    "damping_exponent": ("damper exponent alpha", "damping_exponent", "", 1.0),
     "mass": ("mass", None, "t", 1e-3), "displacement": ("pushed displacement d0", "d0", "mm", 1e3),
 }
 

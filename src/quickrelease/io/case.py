@@ -252,11 +252,16 @@ _VALID = {
     ("building", "friction"): lambda x: x >= 0.0,
     ("building", "friction_coefficient"): lambda x: x >= 0.0,
     ("building", "superstructure_damping_ratio"): lambda x: 0.0 <= x < 1.0,
-    ("building", "damping_coefficient"): lambda x: x >= 0.0,
     ("building", "damping_exponent"): lambda x: 0.05 <= x <= 2.0,
     ("building", "friction_slow"): lambda x: 0.0 <= x <= 1.0,
     ("building", "friction_fast"): lambda x: 0.0 <= x <= 1.0,
+    # the isolators' ranges that depend on the mass, or say what an isolation system is: ISOLATOR_RANGES below
     ("building", "rate"): lambda x: x >= 0.0,
+    ("building", "radius"): lambda x: x > 0.0,
+    ("building", "yield_displacement"): lambda x: x > 0.0,
+    ("building", "post_yield_stiffness"): lambda x: x > 0.0,
+    ("building", "characteristic_strength"): lambda x: x > 0.0,
+    ("building", "damping_coefficient"): lambda x: x >= 0.0,
     ("building", "shape"): lambda x: 0.5 <= x <= 25.0,
 }
 
@@ -286,15 +291,18 @@ CASE_SCHEMA: dict[str, dict[str, tuple[str, str]]] = {
     "building": {
         "model": ("building_model", "'linear', 'bilinear', '2dof', 'pendulum' or 'boucwen'"),
         "damping": ("damping_law", "'viscous' (damping_ratio) or 'power' (damping_coefficient, damping_exponent)"),
-        "damping_coefficient": ("force", "the power-law damper's force at 1 m/s, C [N (s/m)^alpha], e.g. '400 kN'"),
+        "damping_coefficient": ("force", "the power-law damper's force at 1 m/s, C [N (s/m)^alpha] in [0, 10 m g], "
+                                "e.g. '400 kN'"),
         "damping_exponent": ("dimensionless", "the power-law damper's exponent alpha in [0.05, 2], e.g. 0.3"),
-        "radius": ("length", "the friction pendulum's radius of curvature R, e.g. '2.5 m'"),
+        "radius": ("length", "the friction pendulum's radius of curvature R in [0.01, 1000] m, e.g. '2.5 m'"),
         "friction_slow": ("dimensionless", "the pendulum's friction coefficient at low velocity in [0, 1], e.g. 0.03"),
         "friction_fast": ("dimensionless", "the pendulum's friction coefficient at high velocity in [0, 1], e.g. 0.07"),
-        "rate": ("slowness", "Constantinou's rate a of mu(v) >= 0, e.g. '30 s/m'"),
-        "post_yield_stiffness": ("stiffness", "the Bouc-Wen bearings' post-yield stiffness Kd, e.g. '5 MN/m'"),
-        "characteristic_strength": ("force", "the Bouc-Wen bearings' characteristic strength Qd, e.g. '300 kN'"),
-        "yield_displacement": ("length", "the Bouc-Wen bearings' yield displacement dy, e.g. '10 mm'"),
+        "rate": ("slowness", "Constantinou's rate a of mu(v) in [0, 1e4] s/m, e.g. '30 s/m'"),
+        "post_yield_stiffness": ("stiffness", "the Bouc-Wen bearings' post-yield stiffness Kd, post-yield period "
+                                 "2 pi sqrt(m / Kd) in [0.1, 100] s, e.g. '5 MN/m'"),
+        "characteristic_strength": ("force", "the Bouc-Wen bearings' characteristic strength Qd in (0, m g], "
+                                    "e.g. '300 kN'"),
+        "yield_displacement": ("length", "the Bouc-Wen bearings' yield displacement dy in [1e-5, 1] m, e.g. '10 mm'"),
         "shape": ("dimensionless", "the Bouc-Wen shape exponent n in [0.5, 25], e.g. 1.0"),
         "period": ("time", "a positive period, e.g. '2.5 s'"),
         "damping_ratio": ("dimensionless", "a damping ratio in [0, 1), e.g. 0.1"),

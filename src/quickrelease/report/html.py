@@ -452,6 +452,30 @@ def render_building_report(result, svgs: dict[str, str], title: str = "Building 
     return _page(title, parts)
 
 
+def _building_design(b, period: float) -> str:
+    """The assumed building's design values as the clearance check used them (HTML): the period, the damper's
+    and the isolators' friction, each model in its own terms."""
+    if b.model == "pendulum":
+        mu = (f"friction {_num(b.friction_slow, '.3g')}" if b.friction_fast in (None, b.friction_slow) or not b.rate
+              else f"friction {_num(b.friction_slow, '.3g')} to {_num(b.friction_fast, '.3g')} "
+                   f"(rate {_num(b.rate, '.3g')} s/m)")
+        text = f"R = {_num(b.radius, '.4g')} m (T = 2π√(R/g) = {_e(number(period, 6))} s), {mu} of the weight"
+    elif b.model == "boucwen":
+        text = (f"K<sub>d</sub> = {_num(b.post_yield_stiffness / 1e3)} kN/m (T = {_e(number(period, 6))} s), "
+                f"Q<sub>d</sub> = {_num(b.characteristic_strength / 1e3)} kN, d<sub>y</sub> = "
+                f"{_num(1e3 * b.yield_displacement, '.4g')} mm, n = {_num(b.shape or 1.0, '.3g')}")
+    else:
+        text = f"T = {_e(number(b.initial_period, 6))} s"
+    if b.damping == "power":
+        text += (f", dampers C = {_num(b.damping_coefficient / 1e3)} kN (s/m)<sup>α</sup>, "
+                 f"α = {_num(b.damping_exponent, '.3g')}")
+    else:
+        text += f", ζ = {_num(b.damping_ratio, '.3g')}"
+    if b.model != "pendulum":
+        text += f", isolator friction {_num(b.friction_force / 1e3)} kN"
+    return text
+
+
 def _plan_section(plan, svgs: dict[str, str]) -> str:
     """Test planning: fuse and angle, member checks, release envelope, clearance with the building."""
     from ..studies.planning import ENVELOPE_QUANTITIES
@@ -516,9 +540,7 @@ def _plan_section(plan, svgs: dict[str, str]) -> str:
         verdict = ("<span class=\"flag\">CONTACT: the building reaches the front head "
                    f"(first at {_num(c.first_contact_time, '.3g')} s); {_num(1e3 * c.margin_needed)} mm more "
                    "room is needed</span>" if c.contact else "no contact: the head stays clear of the building")
-        parts.append(f"<p>Building ({_e(b.model)}): T = {_e(number(b.initial_period, 6))} s, "
-                     f"ζ = {_num(b.damping_ratio, '.3g')}, isolator "
-                     f"friction {_num(b.friction_force / 1e3)} kN; pushed displacement d0 = "
+        parts.append(f"<p>Building ({_e(b.model)}): {_building_design(b, c.building_period)}; pushed displacement d0 = "
                      f"{_num(1e3 * c.d0)} mm; {_e(c.describe_minimum())}; "
                      f"largest approach {_num(1e3 * c.max_approach)} mm. "
                      f"{verdict}.</p>")

@@ -118,7 +118,9 @@ class BuildingResult(Summarised):
                     "effective_judgement": (None if self.effective_judgement is None
                                             else jsonable(self.effective_judgement.summary())),
                     "measured_cycles": None if self.measured is None else jsonable(self.measured.summary()),
-                    **characteristic_strength(self.fit),
+                    # the Bouc-Wen model's Qd_N and Kd_N_m are its fitted parameters, with their intervals: the
+                    # sliders' friction_N stays apart (the model's Qd_N would add it, under the bearings' interval)
+                    **{k: v for k, v in characteristic_strength(self.fit).items() if f"{k}_ci95" not in out},
                     "fit": jsonable(self.fit.summary())})
         return out
 

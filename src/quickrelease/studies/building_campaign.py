@@ -627,7 +627,12 @@ def load_building_campaign(path, data: dict[str, Any]) -> tuple[str, str, tuple[
         raise CaseFileError(f"{source}: [building] is not a table")
     if template.get("model", "linear") not in DEFAULT_QUANTITIES:
         raise CaseFileError(f"{source}: [building] model = {template.get('model')!r}: a campaign fits the "
-                            f"{' or '.join(repr(m) for m in DEFAULT_QUANTITIES)} model")
+                            f"{' or '.join(repr(m) for m in DEFAULT_QUANTITIES)} model (fit each release of a "
+                            "pendulum or Bouc-Wen building with `quickrelease building`)")
+    if template.get("damping", "viscous") != "viscous":
+        raise CaseFileError(f"{source}: [building] damping = {template.get('damping')!r}: a campaign fits viscous "
+                            "damping (damping_ratio) only (fit each release with fluid dampers with "
+                            "`quickrelease building`)")
     if "displacement" in template:
         raise CaseFileError(f"{source}: [building] displacement: give each release's own in [[tests]] "
                             "displacement")

@@ -507,6 +507,12 @@ class Clearance:
     """(u_dot0, (u_ddot0 - a_b0) / 2): gap ~ u_dot0 t + that t^2 for small t."""
     note: str = ""
     """Why no minimum is reported (:data:`GAP_GROWS`), else empty."""
+    building_period: float = math.nan
+    """The building model's period [s]: 2 pi sqrt(m / k) (linear, 2dof rigid), the initial one 2 pi sqrt(m / k1)
+    (bilinear), 2 pi sqrt(R / g) whatever the mass (pendulum), the post-yield 2 pi sqrt(m / Kd) (Bouc-Wen)."""
+    first_return_time: float | None = None
+    """The building's first reversal after the release, where it comes closest to the device [s]; None where it
+    stops or creeps on beyond 100 periods without one."""
 
     def describe_minimum(self) -> str:
         """``minimum gap X mm at Y s``, or why there is none."""
@@ -518,6 +524,7 @@ class Clearance:
         return {"d0_m": self.d0, "min_gap_m": self.min_gap, "min_gap_time_s": self.min_gap_time,
                 "contact": self.contact, "first_contact_time_s": self.first_contact_time,
                 "margin_needed_m": self.margin_needed, "max_approach_m": self.max_approach, "horizon_s": self.horizon,
+                "building_period_s": self.building_period, "first_return_time_s": self.first_return_time,
                 "note": self.note}
 
 
@@ -579,7 +586,7 @@ def clearance(release: FirstIntegral, building: BuildingSpec, d0: float, n: int 
     t_stop = release.stop_time()
     # the building's first return (its largest approach) within the horizon: half a period for the linear
     # isolation, later for a bilinear one pushed past its yield (the soft branch's longer period)
-    first = free_vibration(iso, d0, t_end=100.0 * period).reversal_times
+    first = first_return(iso, d0)
     horizon = max(1.5 * t_stop, period, float(first[1]) if first.size > 1 else 0.0)
     motion = free_vibration(iso, d0, t_end=horizon)
     f = _Gap(release, motion, d0)
@@ -639,7 +646,23 @@ def clearance(release: FirstIntegral, building: BuildingSpec, d0: float, n: int 
                      contact=bool(contact), first_contact_time=first_contact,
                      margin_needed=max(0.0, -g_min) if g_min is not None else 0.0,
                      max_approach=float(np.max(approach)), horizon=horizon,
-                     gap_series=(u_dot0, 0.5 * (u_ddot0 - a_b0)), note=note)
+                     gap_series=(u_dot0, 0.5 * (u_ddot0 - a_b0)), note=note, building_period=float(period),
+                     first_return_time=float(first[1]) if first.size > 1 else None)
+
+
+def first_return(iso, d0: float, limit: float = 100.0) -> np.ndarray:
+    """The reversal times [s] of the building released from ``d0`` over the shortest horizon that holds its first
+    return: 2 periods, grown fourfold up to ``limit`` periods until a reversal after the release, or the stop, is
+    in it. A model without a closed form (pendulum, Bouc-Wen, a power-law damper) is integrated step by step, and
+    a power-law damper's creep near rest costs seconds per period (17 s for 100 periods): the clearance check of
+    each friction sample needs its first return only."""
+    period = float(iso.period)
+    span = 2.0 * period
+    while True:
+        motion = free_vibration(iso, d0, t_end=span)
+        if motion.reversal_times.size > 1 or motion.stop_time <= span or span >= limit * period:
+            return motion.reversal_times
+        span = min(4.0 * span, limit * period)
 
 
 def _gap_at(s: float, release: FirstIntegral, building: BuildingSpec, d0: float) -> float:

@@ -1,0 +1,52 @@
+"""The new models' keys in case files (issue 24): each bad value one line naming the file, key, value and valid
+range, exit 2, nothing written; a campaign of a model or damper it does not fit says so in one line."""
+
+import pytest
+from typer.testing import CliRunner
+
+from quickrelease.cli import app
+
+runner = CliRunner()
+PENDULUM = dict(radius="'2.5 m'", friction_slow="0.02", friction_fast="0.06", rate="'30 s/m'")
+BOUCWEN = dict(post_yield_stiffness="'1.6 MN/m'", characteristic_strength="'400 kN'", yield_displacement="'25 mm'",
+               shape="1.0")
+
+
+def table(model: str, values: dict[str, str]) -> str:
+    return (f"[building]\nmodel = '{model}'\nmass = '900 t'\ndisplacement = '200 mm'\n"
+            + "".join(f"{k} = {v}\n" for k, v in values.items()))
+
+
+BAD = [("pendulum", "radius", "'1e308 m'"), ("pendulum", "radius", "'1e-300 m'"), ("pendulum", "radius", "'-2.5 m'"),
+       ("pendulum", "radius", "'0 m'"), ("pendulum", "radius", "'nan m'"), ("pendulum", "friction_slow", "-0.01"),
+       ("pendulum", "friction_fast", "nan"), ("pendulum", "rate", "'1e308 s/m'"), ("pendulum", "rate", "'-1 s/m'"),
+       ("boucwen", "post_yield_stiffness", "'1e308 N/m'"), ("boucwen", "characteristic_strength", "'0 N'"),
+       ("boucwen", "yield_displacement", "'0 m'"), ("boucwen", "yield_displacement", "'1e308 m'"),
+       ("boucwen", "shape", "100"), ("boucwen", "shape", "nan")]
+
+
+@pytest.mark.parametrize("model, key, value", BAD, ids=[f"{m}-{k}={v}" for m, k, v in BAD])
+def test_a_bad_value_of_a_new_key_is_one_line_naming_it(model, key, value, tmp_path):
+    values = {**(PENDULUM if model == "pendulum" else BOUCWEN), key: value}
+    (tmp_path / "c.toml").write_text(table(model, values), encoding="utf-8")
+    r = runner.invoke(app, ["synth", str(tmp_path / "c.toml"), "--building", "--out", str(tmp_path / "o.csv")])
+    lines = r.stderr.strip().splitlines()
+    assert r.exit_code == 2 and len(lines) == 1, r.stderr
+    assert "c.toml" in lines[0] and f"[building] {key} = " in lines[0]
+    assert not (tmp_path / "o.csv").exists()
+
+
+@pytest.mark.parametrize("model, extra, words", [
+    ("pendulum", PENDULUM, "a campaign fits the 'linear' or 'bilinear' or '2dof' model"),
+    ("linear", {"period": "'2 s'", "damping": "'power'", "damping_coefficient": "'100 kN'", "damping_exponent": "0.5"},
+     "damping = 'power': a campaign fits viscous damping"),
+])
+def test_a_campaign_of_a_model_it_does_not_fit_says_so(model, extra, words, tmp_path):
+    text = table(model, extra).replace("displacement = '200 mm'\n", "")
+    text += "[building.record]\ntime = 't_s'\n[building.record.channels]\nx = { column = 'x_mm', unit = 'mm' }\n"
+    text += "[[tests]]\nname = 'R1'\ndisplacement = '100 mm'\nrecord = 'r.csv'\n"
+    (tmp_path / "camp.toml").write_text(text, encoding="utf-8")
+    r = runner.invoke(app, ["campaign", str(tmp_path / "camp.toml"), "--out", str(tmp_path / "out")])
+    lines = r.stderr.strip().splitlines()
+    assert r.exit_code == 2 and len(lines) == 1 and words in lines[0], r.stderr
+    assert not (tmp_path / "out").exists()
