@@ -3,7 +3,7 @@ A building on friction pendulums
 ================================
 
 ``examples/pendulum_building.toml``: 1000 t on curved surface sliders of radius R = 2.5 m, friction after
-Constantinou's law mu(v) = mu_fast - (mu_fast - mu_slow) exp(-a |v|) (2 % at rest, 6 % at speed, a = 30 s/m),
+Constantinou's law ``mu(v) = mu_fast - (mu_fast - mu_slow) exp(-a |v|)`` (2 % at rest, 6 % at speed, a = 30 s/m),
 1 % viscous damping, pushed 250 mm and released. Its record is synthetic, made by the tests' independent
 simulator (``examples/make_isolator_records.py``: solve_ivp with events, no code of the package): an LVDT at
 200 Hz and an accelerometer at 100 Hz on its own clock. A friction pendulum's snap-back is short: it swings back
