@@ -14,10 +14,17 @@ fixed step ``h`` per piece, a continuous function of the parameters (so that the
 of them and central differences see no step-size noise). Every event is located on the tableau's own map
 ``theta -> step(y, theta)`` by a safeguarded Newton iteration to machine precision and the piece restarts there:
 the reversals (x_dot = 0: the sliders stick for good where ``|k x + f_h| <= f_slow``, else the motion turns),
-the yields of the plastic element, and the zero crossings of the Bouc-Wen z (where sgn(x_dot z) switches).
-With a power-law damper (alpha != 1) the force ``C s^alpha`` is not smooth where the velocity vanishes: the steps
-next to a reversal are graded geometrically towards it (:data:`GRADES` halvings), so that its error stays at
-rounding. No smoothed sign function anywhere.
+the yields of the plastic element, and the Bouc-Wen element's zero crossings of z and its saturations.
+The Bouc-Wen element's law is a property of the piece (its ``mode``), never switched inside a step: unloading
+(``z x_dot < 0``: ``dy z_dot = x_dot``, linear in x), loading (``dy z_dot = x_dot (1 - |z|^n)``: the transition
+to full yield over a displacement ~dy / n, the only stiff part of the motion) and saturated: once ``1 - |z|``
+falls below :data:`SATURATION` (``1 - |z|`` decays as ``exp(-n |x - x_0| / dy)`` while loading), z is set to
+``sign(x_dot)`` (a change of the force of Qd 1e-13) and held there to the next reversal, on the steps of the
+post-yield stiffness. The steps over the transition are sized by the largest velocity the loading piece can
+reach before it saturates (not the release's), so a sharp element (n = 25) of a small dy costs a few hundred
+steps a half-cycle, not millions. With a power-law damper (alpha != 1) the force ``C s^alpha`` is not smooth
+where the velocity vanishes: the steps next to a reversal are graded geometrically towards it (:data:`GRADES`
+halvings), so that its error stays at rounding. No smoothed sign function anywhere.
 
 The integration records every step's start state (a grid); any time is evaluated by a partial step from the
 grid point before it (the tableau's own continuous extension of the same order: a step of a shorter length).
@@ -50,6 +57,12 @@ NY = 6
 NP = 13
 #: Hysteretic element: none, Bouc-Wen, elastic-perfectly-plastic.
 H_NONE, H_BOUCWEN, H_PLASTIC = 0, 1, 2
+#: A piece's mode (its grid points' flag): the plastic element elastic (0) or yielding (1); the Bouc-Wen element
+#: unloading (0, ``z x_dot < 0``: elastic), saturated (1, ``z = sign(x_dot)``) or loading (2).
+ELASTIC, YIELDING, LOADING = 0, 1, 2
+#: The Bouc-Wen element is saturated where ``1 - |z|`` falls below this (then z = +-1 exactly, and the force
+#: changes by Qd times this).
+SATURATION = 1e-13
 #: Steps a period of the (initial) stiffness; steps over the Bouc-Wen element's transition (dy / (n v));
 #: steps over the friction law's velocity scale (1 / (rate a)).
 STEPS_PERIOD = 32.0
@@ -64,7 +77,7 @@ EV_NONE, EV_RELEASE, EV_REVERSAL, EV_YIELD, EV_ZERO, EV_STICK = 0, 1, 2, 3, 4, 5
 
 
 @njit(cache=True, nogil=True)
-def _rhs(P, y, d, yielding, out):
+def _rhs(P, y, d, mode, out):
     x, v, z = y[0], y[1], y[2]
     s = d * v
     if s < 0.0:
@@ -88,16 +101,18 @@ def _rhs(P, y, d, yielding, out):
     if hk == H_BOUCWEN:
         q, dy = P[Q], P[DY]
         fh = q * z
-        if z * v > 0.0:
+        if mode == LOADING:
             az = abs(z)
             zn = az if P[N] == 1.0 else az ** P[N]
             zdot = v / dy * (1.0 - zn)
             dh = q * zn * z * v
+        elif mode == YIELDING:  # saturated: z = d, all of the element's work dissipated
+            dh = q * z * v
         else:
             zdot = v / dy
     elif hk == H_PLASTIC:
         fh = z
-        if yielding:
+        if mode == YIELDING:
             dh = P[FP] * s
         else:
             zdot = P[KP] * v
@@ -110,7 +125,7 @@ def _rhs(P, y, d, yielding, out):
 
 
 @njit(cache=True, nogil=True)
-def _step(P, y, h, d, yielding, k, tmp, out):
+def _step(P, y, h, d, mode, k, tmp, out):
     """One step of length h of the tableau from y (stages in k, scratch tmp) into out."""
     for i in range(_S):
         for j in range(NY):
@@ -118,7 +133,7 @@ def _step(P, y, h, d, yielding, k, tmp, out):
             for m in range(i):
                 acc += _A[i, m] * k[m, j]
             tmp[j] = y[j] + h * acc
-        _rhs(P, tmp, d, yielding, k[i])
+        _rhs(P, tmp, d, mode, k[i])
     for j in range(NY):
         acc = 0.0
         for i in range(_S):
@@ -147,13 +162,13 @@ def _fractions(graded_start, graded_end):
 
 
 @njit(cache=True, nogil=True)
-def _advance(P, y, h, d, yielding, graded_start, graded_end, k, tmp, a, out):
+def _advance(P, y, h, d, mode, graded_start, graded_end, k, tmp, a, out):
     """y advanced by h (substeps graded as asked) into out; a is scratch."""
     fr = _fractions(graded_start, graded_end)
     for j in range(NY):
         a[j] = y[j]
     for f in fr:
-        _step(P, a, f * h, d, yielding, k, tmp, out)
+        _step(P, a, f * h, d, mode, k, tmp, out)
         for j in range(NY):
             a[j] = out[j]
 
@@ -162,13 +177,13 @@ def _advance(P, y, h, d, yielding, graded_start, graded_end, k, tmp, a, out):
 def _event_value(P, y, kind, d):
     if kind == EV_REVERSAL:
         return d * y[1]
-    if kind == EV_YIELD:
-        return P[FP] - d * y[2]
+    if kind == EV_YIELD:  # the plastic element's yield; the Bouc-Wen element's saturation
+        return (1.0 - SATURATION if P[HKIND] == H_BOUCWEN else P[FP]) - d * y[2]
     return y[2]  # EV_ZERO
 
 
 @njit(cache=True, nogil=True)
-def _locate(P, y, h, d, yielding, kind, graded_start, graded_end, k, tmp, a, out, r):
+def _locate(P, y, h, d, mode, kind, graded_start, graded_end, k, tmp, a, out, r):
     """The fraction theta in (0, h] of a step where the event's function (:func:`_event_value`) vanishes,
     bracketed by [0, h]; a safeguarded Newton iteration on the tableau's map (derivative from the equation)."""
     lo, hi = 0.0, h
@@ -176,7 +191,7 @@ def _locate(P, y, h, d, yielding, kind, graded_start, graded_end, k, tmp, a, out
     # f_p - d z), or has the sign of z (a zero crossing of z): taken so even where it starts at 0 (a reversal's
     # velocity at the piece's start)
     glo = abs(_event_value(P, y, kind, d)) * (1.0 if kind != EV_ZERO or y[2] > 0.0 else -1.0)
-    _advance(P, y, h, d, yielding, graded_start, graded_end, k, tmp, a, out)
+    _advance(P, y, h, d, mode, graded_start, graded_end, k, tmp, a, out)
     ghi = _event_value(P, out, kind, d)
     if ghi == 0.0:
         return h
@@ -184,7 +199,7 @@ def _locate(P, y, h, d, yielding, kind, graded_start, graded_end, k, tmp, a, out
     for _ in range(100):
         if not (lo < theta < hi):
             theta = 0.5 * (lo + hi)
-        _advance(P, y, theta, d, yielding, graded_start, graded_end, k, tmp, a, out)
+        _advance(P, y, theta, d, mode, graded_start, graded_end, k, tmp, a, out)
         g = _event_value(P, out, kind, d)
         if g == 0.0:
             return theta
@@ -192,7 +207,7 @@ def _locate(P, y, h, d, yielding, kind, graded_start, graded_end, k, tmp, a, out
             lo, glo = theta, g
         else:
             hi, ghi = theta, g
-        _rhs(P, out, d, yielding, r)
+        _rhs(P, out, d, mode, r)
         if kind == EV_REVERSAL:
             dg = d * r[1]
         elif kind == EV_YIELD:
@@ -219,24 +234,46 @@ def _stored(P, y):
 
 
 @njit(cache=True, nogil=True)
-def _step_size(P, y):
-    """The piece's step [s]: a fraction of the (initial) stiffness's period, of the Bouc-Wen transition at the
-    largest velocity the piece's energy allows, and of the friction law's velocity scale."""
+def _step_size(P, y, d, mode):
+    """The piece's step [s]: a fraction of the period of its stiffness (the initial one, or the post-yield one where
+    the Bouc-Wen element is saturated), of the Bouc-Wen
+    transition while loading, and of the friction law's velocity scale.
+
+    The transition: ``dy / (n v)`` over :data:`STEPS_TRANSITION`, v the largest velocity the piece can reach
+    before it saturates: from the piece's start ``v0`` with at most the acceleration ``a_max`` the piece's
+    energy allows over the displacement to saturation, ``dy G_n(1 - SATURATION)`` with
+    ``G_n(z) = int_0^z du / (1 - u^n) <= 1 + ln(1 / SATURATION) / n``, and at most the energy's own bound."""
     k1 = P[K]
-    if P[HKIND] == H_BOUCWEN:
+    if P[HKIND] == H_BOUCWEN and mode != YIELDING:
         k1 += P[Q] / P[DY]
-    elif P[HKIND] == H_PLASTIC:
+    elif P[HKIND] == H_PLASTIC:  # (the plastic element's steps: its initial stiffness's throughout)
         k1 += P[KP]
     h = 2.0 * math.pi * math.sqrt(P[M] / k1) / STEPS_PERIOD
     energy = 0.5 * P[M] * y[1] * y[1] + _stored(P, y)
     vmax = math.sqrt(2.0 * energy / P[M])
-    if P[HKIND] == H_BOUCWEN and vmax > 0.0:
-        h = min(h, P[DY] / (max(P[N], 1.0) * vmax * STEPS_TRANSITION))
+    xmax = math.sqrt(2.0 * energy / P[K])
+    amax = (P[K] * xmax + P[Q] + P[FP] + max(P[FFAST], P[FSLOW])) / P[M] + 1e-300
+    if P[HKIND] == H_BOUCWEN and mode == LOADING and vmax > 0.0:
+        reach = P[DY] * (1.0 - d * y[2] + math.log(1.0 / SATURATION) / P[N])
+        v = min(vmax, math.sqrt(y[1] * y[1] + 2.0 * (amax + P[C] * vmax ** P[ALPHA] / P[M]) * reach))
+        h = min(h, P[DY] / (max(P[N], 1.0) * v * STEPS_TRANSITION))
     if P[RATE] > 0.0 and P[FFAST] != P[FSLOW]:
-        xmax = math.sqrt(2.0 * energy / P[K])
-        amax = (P[K] * xmax + P[Q] + P[FP] + max(P[FFAST], P[FSLOW])) / P[M] + 1e-300
         h = min(h, 1.0 / (P[RATE] * amax * STEPS_RATE))
     return h
+
+
+@njit(cache=True, nogil=True)
+def _mode(P, y, d):
+    """The mode of a piece that starts at rest or after an event at y, moving in direction d: the plastic element
+    yields where ``d z`` has reached its strength; the Bouc-Wen element loads where ``d z >= 0`` (saturated where
+    ``d z >= 1 - SATURATION``), else unloads."""
+    if P[HKIND] == H_PLASTIC:
+        return YIELDING if d * y[2] >= P[FP] else ELASTIC
+    if P[HKIND] == H_BOUCWEN:
+        if d * y[2] >= 1.0 - SATURATION:
+            return YIELDING
+        return LOADING if d * y[2] >= 0.0 else ELASTIC
+    return ELASTIC
 
 
 @njit(cache=True, nogil=True)
@@ -251,17 +288,17 @@ def _net(P, y):
 
 
 @njit(cache=True, nogil=True)
-def _put(gt, gy, gd, gf, n, t, y, d, yielding):
+def _put(gt, gy, gd, gf, n, t, y, d, mode):
     gt[n] = t
     for j in range(NY):
         gy[n, j] = y[j]
     gd[n] = d
-    gf[n] = 1 if yielding else 0
+    gf[n] = mode
     return n + 1
 
 
 @njit(cache=True, nogil=True)
-def _walk(P, y, span, d, yielding, graded_start, graded_end, t, gt, gy, gd, gf, n, k, tmp, out):
+def _walk(P, y, span, d, mode, graded_start, graded_end, t, gt, gy, gd, gf, n, k, tmp, out):
     """Advance y by span through its (graded) substeps, recording each substep's start after the first as a grid
     point; the end state in out. Returns the grid's count."""
     fr = _fractions(graded_start, graded_end)
@@ -269,8 +306,8 @@ def _walk(P, y, span, d, yielding, graded_start, graded_end, t, gt, gy, gd, gf, 
     tt = t
     for i in range(fr.size):
         if i > 0:
-            n = _put(gt, gy, gd, gf, n, tt, a, d, yielding)
-        _step(P, a, fr[i] * span, d, yielding, k, tmp, out)
+            n = _put(gt, gy, gd, gf, n, tt, a, d, mode)
+        _step(P, a, fr[i] * span, d, mode, k, tmp, out)
         tt += fr[i] * span
         for j in range(NY):
             a[j] = out[j]
@@ -305,18 +342,20 @@ def integrate(P, y0, t_end, capacity, max_steps):
     stop = math.inf
     net = _net(P, y)
     if abs(net) <= P[FSLOW]:  # held where it was pushed
-        n = _put(gt, gy, gd, gf, n, 0.0, y, 0.0, False)
+        n = _put(gt, gy, gd, gf, n, 0.0, y, 0.0, ELASTIC)
         return gt, gy, gd, gf, n, 0.0, 0
     d = -1.0 if net > 0.0 else 1.0
-    yielding = P[HKIND] == H_PLASTIC and d * y[2] >= P[FP]
+    mode = _mode(P, y, d)
+    if P[HKIND] == H_BOUCWEN and mode == YIELDING:
+        y[2] = d
     powered = P[ALPHA] != 1.0
     graded = powered  # the release starts at rest: graded like a reversal
     creep = CREEP * math.sqrt(2.0 * _stored(P, y) / P[M])
-    h = _step_size(P, y)
+    h = _step_size(P, y, d, mode)
     steps = 0
     # the grid index, time and gradedness of the start of the step before the current one in this piece (-1: none)
     prev, t_prev, graded_prev = -1, 0.0, False
-    n = _put(gt, gy, gd, gf, n, t, y, d, yielding)
+    n = _put(gt, gy, gd, gf, n, t, y, d, mode)
     while True:
         if n + 4 * GRADES + 8 >= capacity:
             return gt, gy, gd, gf, n, stop, 1
@@ -324,43 +363,45 @@ def integrate(P, y0, t_end, capacity, max_steps):
         if steps > max_steps:
             return gt, gy, gd, gf, n, stop, 2
         here = n - 1  # the grid point the step starts from (at t, state y)
-        _advance(P, y, h, d, yielding, graded, False, k, tmp, a, y1)
+        _advance(P, y, h, d, mode, graded, False, k, tmp, a, y1)
         # the first event in the step (if any)
         kind = EV_NONE
         theta = h
         if d * y1[1] <= 0.0:
             kind = EV_REVERSAL
-        if P[HKIND] == H_PLASTIC and not yielding and d * y1[2] >= P[FP]:
-            th = _locate(P, y, h, d, yielding, EV_YIELD, graded, False, k, tmp, a, out, r)
+        first = EV_NONE  # the first event other than a reversal (a yield, a saturation, z's zero crossing)
+        if ((P[HKIND] == H_PLASTIC and mode == ELASTIC and d * y1[2] >= P[FP])
+                or (P[HKIND] == H_BOUCWEN and mode == LOADING and d * y1[2] >= 1.0 - SATURATION)):
+            first = EV_YIELD
+        if P[HKIND] == H_BOUCWEN and mode == ELASTIC and (y1[2] == 0.0 or (y1[2] > 0.0) != (y[2] > 0.0)):
+            first = EV_ZERO
+        if first != EV_NONE:
+            th = _locate(P, y, h, d, mode, first, graded, False, k, tmp, a, out, r)
             if kind == EV_NONE or th < theta:
-                kind, theta = EV_YIELD, th
-        if P[HKIND] == H_BOUCWEN and y[2] != 0.0 and (y1[2] == 0.0 or (y1[2] > 0.0) != (y[2] > 0.0)):
-            th = _locate(P, y, h, d, yielding, EV_ZERO, graded, False, k, tmp, a, out, r)
-            if kind == EV_NONE or th < theta:
-                kind, theta = EV_ZERO, th
+                kind, theta = first, th
         if kind == EV_REVERSAL:
             if powered and prev >= 0 and not graded:
                 # graded from the start of the step before: back to that point
-                th = _locate(P, gy[prev], t - t_prev + h, d, yielding, EV_REVERSAL, graded_prev, True, k, tmp, a,
+                th = _locate(P, gy[prev], t - t_prev + h, d, mode, EV_REVERSAL, graded_prev, True, k, tmp, a,
                              out, r)
                 reversal_at = t_prev + th
             else:
-                th = _locate(P, y, h, d, yielding, EV_REVERSAL, graded, powered, k, tmp, a, out, r)
+                th = _locate(P, y, h, d, mode, EV_REVERSAL, graded, powered, k, tmp, a, out, r)
                 reversal_at = t + th
             # a yield or zero crossing of z before it comes first
             if theta < h and t + theta < reversal_at:
-                kind = EV_YIELD if P[HKIND] == H_PLASTIC else EV_ZERO
+                kind = first
             else:
                 theta = th
         if kind == EV_NONE:
             if graded:
-                n = _walk(P, y, h, d, yielding, True, False, t, gt, gy, gd, gf, n, k, tmp, out)
+                n = _walk(P, y, h, d, mode, True, False, t, gt, gy, gd, gf, n, k, tmp, out)
             prev, t_prev, graded_prev = here, t, graded
             t += h
             for j in range(NY):
                 y[j] = y1[j]
             graded = False
-            n = _put(gt, gy, gd, gf, n, t, y, d, yielding)
+            n = _put(gt, gy, gd, gf, n, t, y, d, mode)
             if d * y[1] < creep and abs(_net(P, y)) <= P[FSLOW] * (1.0 + 1e-9):
                 # creeping into the sliders' holding limit (a velocity-strengthening friction, an overdamped
                 # piece): the velocity only tends to 0; at rest once below CREEP of the release's scale
@@ -377,42 +418,50 @@ def integrate(P, y0, t_end, capacity, max_steps):
             n = prev + 1
             for j in range(NY):
                 a[j] = gy[prev, j]
-            n = _walk(P, a, theta, d, yielding, graded_prev, True, t_prev, gt, gy, gd, gf, n, k, tmp, out)
+            n = _walk(P, a, theta, d, mode, graded_prev, True, t_prev, gt, gy, gd, gf, n, k, tmp, out)
             t = t_prev + theta
         else:
-            n = _walk(P, y, theta, d, yielding, graded, kind == EV_REVERSAL and powered, t, gt, gy, gd, gf, n, k,
+            n = _walk(P, y, theta, d, mode, graded, kind == EV_REVERSAL and powered, t, gt, gy, gd, gf, n, k,
                       tmp, out)
             t += theta
         for j in range(NY):
             y[j] = out[j]
         graded = False
-        if kind == EV_YIELD:
+        if kind == EV_YIELD and P[HKIND] == H_PLASTIC:
             y[2] = d * P[FP]
-            yielding = True
-        elif kind == EV_ZERO:
+            mode = YIELDING
+        elif kind == EV_YIELD:  # the Bouc-Wen element saturates: on the post-yield stiffness's steps
+            y[2] = d
+            mode = YIELDING
+            h = _step_size(P, y, d, mode)
+        elif kind == EV_ZERO:  # the Bouc-Wen element starts loading: on the transition's steps
             y[2] = 0.0
+            mode = LOADING
             # |z|^n with a fractional n is not smooth where z leaves 0: the next step is graded from it
             graded = P[N] != math.floor(P[N])
+            h = _step_size(P, y, d, mode)
         else:  # a reversal: stick, or turn
             y[1] = 0.0
             net = _net(P, y)
             if abs(net) <= P[FSLOW]:
                 stop = t
-                n = _put(gt, gy, gd, gf, n, t, y, 0.0, yielding)
+                n = _put(gt, gy, gd, gf, n, t, y, 0.0, mode)
                 break
             d = -1.0 if net > 0.0 else 1.0
-            yielding = False
+            mode = _mode(P, y, d)
+            if P[HKIND] == H_BOUCWEN and mode == YIELDING:
+                y[2] = d
             graded = powered
-            h = _step_size(P, y)
+            h = _step_size(P, y, d, mode)
         prev = -1
-        n = _put(gt, gy, gd, gf, n, t, y, d, yielding)
+        n = _put(gt, gy, gd, gf, n, t, y, d, mode)
         if t >= t_end:
             break
     return gt, gy, gd, gf, n, stop, 0
 
 
 @njit(cache=True, nogil=True)
-def _dense(P, y, h, d, yielding, K, tmp, F, ynew):
+def _dense(P, y, h, d, mode, K, tmp, F, ynew):
     """The coefficients F (7 x NY) of the tableau's continuous extension over the step of length h from y."""
     for i in range(16):
         if i == _S:  # the stage at the step's end
@@ -421,14 +470,14 @@ def _dense(P, y, h, d, yielding, K, tmp, F, ynew):
                 for m in range(_S):
                     acc += _B[m] * K[m, j]
                 ynew[j] = y[j] + h * acc
-            _rhs(P, ynew, d, yielding, K[_S])
+            _rhs(P, ynew, d, mode, K[_S])
             continue
         for j in range(NY):
             acc = 0.0
             for m in range(i):
                 acc += _AX[i, m] * K[m, j]
             tmp[j] = y[j] + h * acc
-        _rhs(P, tmp, d, yielding, K[i])
+        _rhs(P, tmp, d, mode, K[i])
     for j in range(NY):
         dy = ynew[j] - y[j]
         F[0, j] = dy
@@ -473,7 +522,7 @@ def evaluate(P, gt, gy, gd, gf, n, stop, y_push, t):
         p = np.searchsorted(gt[:n], ti, side="right") - 1
         if p >= n - 1:
             p = n - 2
-        yielding = (gf[p] & 1) == 1
+        mode = gf[p]
         h = gt[p + 1] - gt[p]
         tau = ti - gt[p]
         if tau == 0.0 or h <= 0.0:
@@ -481,7 +530,7 @@ def evaluate(P, gt, gy, gd, gf, n, stop, y_push, t):
                 out[j] = gy[p, j]
         else:
             if p != cached:
-                _dense(P, gy[p], h, gd[p], yielding, K, tmp, F, ynew)
+                _dense(P, gy[p], h, gd[p], mode, K, tmp, F, ynew)
                 cached = p
             x = tau / h
             for j in range(NY):
@@ -492,7 +541,7 @@ def evaluate(P, gt, gy, gd, gf, n, stop, y_push, t):
                     out[j] *= x if q % 2 == 0 else 1.0 - x
             for j in range(NY):
                 out[j] += gy[p, j]
-        _rhs(P, out, gd[p], yielding, r)
+        _rhs(P, out, gd[p], mode, r)
         for j in range(NY):
             ys[i, j] = out[j]
         acc[i] = r[1]
@@ -545,7 +594,7 @@ def motion(P, gt, gy, gd, gf, n, stop, y_push, t):
             x, v, z = gy[p, 0], gy[p, 1], gy[p, 2]
         else:
             if p != cached:
-                _dense(P, gy[p], h, gd[p], (gf[p] & 1) == 1, K, tmp, F, ynew)
+                _dense(P, gy[p], h, gd[p], gf[p], K, tmp, F, ynew)
                 cached = p
             u = tau / h
             w = 1.0 - u
