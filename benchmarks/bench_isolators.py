@@ -1,6 +1,6 @@
 """Cost of the fits of the isolation systems without a closed form (issue 24), against the linear fit, same run.
 
-Run: python benchmarks/bench_isolators.py [--repeat N] [--models pendulum,boucwen,power]
+Run: python benchmarks/bench_isolators.py [--repeat N] [--models pendulum,boucwen,boucwen-weak,power]
 
 The records: 60 s at 200 Hz after 2 s of rest, three channels of the isolation layer (x with 0.2 mm noise and
 a 2 mm zero, v with 1 mm/s, a with 0.02 m/s^2 and a 0.01 m/s^2 zero), made by the independent solve_ivp
@@ -8,8 +8,12 @@ simulator of ``tests/building/isolator_reference.py`` (not the package's integra
 is not given, no design values:
 
 * ``pendulum``: 1000 t on curved surface sliders R = 3 m, mu 0.01 / 0.025, a = 40 s/m, d0 = 0.30 m;
-* ``boucwen``: 800 t on lead-rubber bearings Kd = 1.6 MN/m, Qd = 400 kN, dy = 25 mm, n = 1, zeta 2 %,
-  d0 = 0.20 m (it moves for the whole record);
+* ``boucwen``: 800 t on lead-rubber bearings Kd = 3.5 MN/m (post-yield period 3.0 s), Qd = 400 kN (5 % of W),
+  dy = 25 mm, n = 1, zeta 2 %, d0 = 0.20 m (it rings down for the whole record: no sliders);
+* ``boucwen-weak``: the same with Kd = 1.6 MN/m (4.4 s): Kd d0 = 320 kN falls short of Qd, so the layer barely
+  recentres (one swing to 0.07 m, then a creep towards 0.04 m over the minute), a test pushed short of the
+  bearings' restoring range; kept as the hard case (not part of the default run: 2 min, and today's fit
+  does not find its global minimum);
 * ``power``: 800 t, linear bearings T = 2.5 s with sliders (0.8 % of W) and fluid dampers C = 300 kN at 1 m/s,
   alpha = 0.4, d0 = 0.15 m;
 * the baseline: the linear model's fit of a linear record of the same length (viscous 5 %, sliders 0.8 %).
@@ -45,8 +49,10 @@ def systems():
         "linear": ("linear", "viscous", 8e5, ref.linear(8e5, k, 2 * 0.05 * math.sqrt(k * 8e5), friction=0.008 * 8e5 *
                                                          9.80665), 0.15),
         "pendulum": ("pendulum", "viscous", 1e6, ref.pendulum(1e6, 3.0, 0.01, 0.025, 40.0), 0.30),
-        "boucwen": ("boucwen", "viscous", 8e5, ref.boucwen(8e5, 1.6e6, 4e5, 0.025, 1.0,
-                                                           damping=2 * 0.02 * math.sqrt(1.6e6 * 8e5)), 0.20),
+        "boucwen": ("boucwen", "viscous", 8e5, ref.boucwen(8e5, 3.5e6, 4e5, 0.025, 1.0,
+                                                           damping=2 * 0.02 * math.sqrt(3.5e6 * 8e5)), 0.20),
+        "boucwen-weak": ("boucwen", "viscous", 8e5, ref.boucwen(8e5, 1.6e6, 4e5, 0.025, 1.0,
+                                                                damping=2 * 0.02 * math.sqrt(1.6e6 * 8e5)), 0.20),
         "power": ("linear", "power", 8e5, ref.linear(8e5, k, 3e5, 0.4, friction=0.008 * 8e5 * 9.80665), 0.15),
     }
 
@@ -85,10 +91,10 @@ def main() -> None:
                 best = min(best, time.process_time() - t0)
             rows.append((name, best, fit.chi2_reduced, fit.global_minimum_confirmed))
             if len(rows) == 1:
-                print(f"{'record':10s} {'CPU s':>8s} {'target':>7s} {'x linear':>9s} {'chi2_red':>9s}  global minimum")
+                print(f"{'record':12s} {'CPU s':>8s} {'target':>7s} {'x linear':>9s} {'chi2_red':>9s}  global minimum")
             cpu, base = best, rows[0][1]
             target = f"{TARGET:g} s" if name != "linear" else "-"
-            print(f"{name:10s} {cpu:8.2f} {target:>7s} {cpu / base:9.1f} {fit.chi2_reduced:9.3f}  "
+            print(f"{name:12s} {cpu:8.2f} {target:>7s} {cpu / base:9.1f} {fit.chi2_reduced:9.3f}  "
                   f"{'confirmed' if fit.global_minimum_confirmed else 'not confirmed'}", flush=True)
 
 

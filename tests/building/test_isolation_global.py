@@ -294,3 +294,25 @@ def test_progress_says_what_runs():
     starts = [s for s in said if s.startswith("linear: start ")]
     assert starts and all(s.endswith(")") for s in starts) and "of" in starts[0]
     assert any(s.startswith("linear: minimum 1 of") for s in said)
+
+
+@pytest.mark.parametrize("kind", ["creeps after its first turn", "sticks at its first turn"])
+def test_record_period_of_a_record_without_a_crossing(kind):
+    """A displacement that never crosses its final level: twice the time from the release to its first turning
+    point, by the independent reference (isolator_reference.py). A Bouc-Wen element whose Qd exceeds Kd d0 (n 1,
+    no sliders) turns short of its final level and creeps towards it for a minute (before: twice the time to
+    that level, 84 s, and the fit's search box and release window followed it); a linear isolation with sliders
+    that stick at the first turn."""
+    import isolator_reference as ref
+
+    if kind.startswith("creeps"):
+        system = ref.boucwen(M, 1.6e6, 4.0e5, 0.025, 1.0, damping=2 * 0.02 * math.sqrt(1.6e6 * M))
+    else:
+        k = M * (2 * math.pi / 2.5) ** 2
+        system = ref.linear(M, k, 2 * 0.05 * math.sqrt(k * M), friction=0.3 * k * 0.2)
+    t = np.arange(0.0, 62.0, 1.0 / RATE)
+    motion = ref.simulate(system, 0.2, t - RELEASE, t_end=61.0)
+    first_turn = motion.reversal_times[1]  # (the release's the first)
+    assert kind.startswith("sticks") == (motion.stop_time == first_turn)
+    x = motion.x + 0.002 + np.random.default_rng(3).normal(0.0, 2e-4, t.size)
+    assert record_period([BuildingChannel("x", "x", t, x)], 2.01) == pytest.approx(2 * first_turn, abs=0.1)

@@ -1285,6 +1285,7 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
         warnings.append(f"superstructure_period at its lower bound ({SUPERSTRUCTURE_PERIOD_MIN:g} s): the record "
                         "does not resolve a superstructure this stiff (it moves with the isolation layer), and "
                         "the rigid model is this fit's limit: fit model='linear' and compare_models")
+    warnings += _limits(names, unseen, est, std_errors, ci)
     if cond > CONDITION_WARNING:
         warnings.append(f"ill-conditioned fit (condition number of the correlations {cond:.2g}): some combination "
                         "of parameters is not determined by the record")
@@ -1316,6 +1317,27 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
                         channels=tuple(channels), superstructure_mass=superstructure_mass,
                         fixed={n: float(values[n]) for n in fixed}, search=cert, drift_origin=misfit.drift_origin,
                         damping=damping)
+
+
+def _limits(names: list[str], unseen: set[str], est: dict[str, float], se: dict[str, float],
+            ci: dict[str, tuple[float, float]]) -> list[str]:
+    """Where a Bouc-Wen fit ends at one of its limits, the warning that says which simpler model it fell to: the
+    shape n within two standard errors of its upper bound (the bilinear limit: the record holds no evidence of
+    a rounded transition), or Qd's interval reaching 0 (the linear limit: no hysteresis the record resolves
+    beyond the sliders' friction). There the model fits the record as well as its limit does, with more
+    parameters, and its Qd, dy, n describe no loop the record holds: the comparison (BIC) should decide."""
+    out = []
+    top = PARAMETER_BOUNDS["shape"][1]
+    if "shape" in names and "shape" not in unseen and top - est["shape"] <= max(2.0 * se["shape"], 1e-3 * top):
+        out.append(f"shape n = {est['shape']:.4g} within two standard errors of its bound ({top:g}): the record "
+                   "holds no evidence of a rounded transition, and this fit is the bilinear model's limit (compare "
+                   "with model='bilinear', fewer parameters)")
+    if "characteristic_strength" in names and "characteristic_strength" not in unseen \
+            and ci["characteristic_strength"][0] <= 0.0:
+        out.append("characteristic_strength's interval reaches 0: the record resolves no hysteresis beyond the "
+                   "sliders' friction, and this fit is the linear model's limit (compare with model='linear', "
+                   "fewer parameters)")
+    return out
 
 
 #: The Bouc-Wen shapes tried from the bilinear fit (n = 1 the rounded loop of lead-rubber, larger: sharper).

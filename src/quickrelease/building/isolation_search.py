@@ -101,7 +101,8 @@ def record_period(channels, t_r: float) -> float | None:
     does not count), on the first channel (x, v, a, then the roof's) with at least two such crossings after
     the release ``t_r``. A displacement that crosses once or never (sliders that stick after a swing or two)
     gives twice the time from the release to its first turning point (a half-period after a release from
-    rest); a velocity that crosses once, twice the time to its crossing (the turn); an acceleration that
+    rest): where it turns back by half the band and 10 noise levels, else where it reaches its final level; a
+    velocity that crosses once, twice the time to its crossing (the turn); an acceleration that
     crosses once, four times (the equilibrium, a quarter-period after the release)."""
     for kind in ("x", "v", "a", "x_roof", "v_roof", "a_roof"):
         for ch in channels:
@@ -138,8 +139,16 @@ def record_period(channels, t_r: float) -> float | None:
                 return float(2.0 * (crossings[0] - t_r))
             if kind in ("a", "a_roof") and len(crossings) == 1:  # the acceleration a quarter-period after the release
                 return float(4.0 * (crossings[0] - t_r))
-            if kind in ("x", "x_roof") and not crossings:  # stuck at its first turning point: the final level
-                z = y * math.copysign(1.0, float(y[0]))
+            if kind in ("x", "x_roof") and not crossings:
+                z = y * math.copysign(1.0, float(y[0]))  # from the pushed side (+) towards the final level
+                # a first turning point short of the level, where the record turns back by half the band and
+                # 10 noise levels (a creep after it, as of a Bouc-Wen element whose Qd exceeds Kd d0: the final
+                # level is reached tens of seconds later, and twice that time was taken for the period)
+                run = np.minimum.accumulate(z)
+                back = np.nonzero(z > run + max(0.5 * h, 10.0 * sigma))[0]
+                if back.size and back[0] > 0:
+                    return float(2.0 * (t[int(np.argmin(z[: back[0]]))] - t_r))
+                # else stuck at its first turning point: the final level
                 near = np.nonzero(z <= 3.0 * sigma + 1e-3 * h)[0]
                 if near.size and t[near[0]] > t[0]:
                     return float(2.0 * (t[near[0]] - t_r))
