@@ -940,10 +940,12 @@ def _final_groups(groups, res, names: list[str], values: dict[str, float], misfi
 def _profile_step(names: list[str], physical: list[str], unseen: set[str], est: dict[str, float],
                   std_errors: dict[str, float], lower: dict[str, float], upper: dict[str, float],
                   profile: bool | None, chi2: float, tq: float, scale: float, solve,
-                  ci: dict[str, tuple[float, float]], method: dict[str, str], progress=None) -> list[str]:
+                  ci: dict[str, tuple[float, float]], method: dict[str, str], progress=None,
+                  cov=None) -> list[str]:
     """Profile-likelihood intervals (into ``ci`` and ``method``) for the physical parameters that want one
     (``profile`` True; or None and at a bound or with a relative standard error above
-    ``PROFILE_RELATIVE_SE``), the chi-square target ``chi2 + t^2 scale``. Returns the warnings."""
+    ``PROFILE_RELATIVE_SE``), the chi-square target ``chi2 + t^2 scale``; ``cov`` (the fit's covariance, in the
+    order of ``names``) gives each refit's start its slope along the correlations. Returns the warnings."""
     warnings = []
     for n in physical:
         if n not in names or n in unseen:
@@ -955,7 +957,12 @@ def _profile_step(names: list[str], physical: list[str], unseen: set[str], est: 
             target = chi2 + tq**2 * scale
             if progress is not None:
                 progress(f"profile-likelihood interval of {n}")
-            ci[n] = _profile_interval(n, names, est, lower[n], upper[n], std_errors[n], target, solve)
+            slope = None
+            if cov is not None:
+                i = names.index(n)
+                slope = {m: float(cov[j, i] / cov[i, i]) for j, m in enumerate(names)
+                         if m != n and m not in unseen and cov[i, i] > 0 and math.isfinite(cov[j, i] / cov[i, i])}
+            ci[n] = _profile_interval(n, names, est, lower[n], upper[n], std_errors[n], target, solve, slope)
             method[n] = "profile"
             if ci[n] == (lower[n], upper[n]):
                 warnings.append(f"{n} not identified by this record (its profile interval is its whole range "
@@ -1269,7 +1276,7 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
             ci[n], method[n] = (math.nan, math.nan), "not identified"
             warnings.append(f"{n} not identified by this record (standard error inf, no interval)")
     warnings += _profile_step(names, physical, unseen, est, std_errors, lower, upper, profile, chi2, tq, scale,
-                              solve, ci, method, progress)
+                              solve, ci, method, progress, cov)
     final = _final_groups(groups, res, names, values, misfit, model, std_errors)
     cert = certificate(final, len([o for o, _ in named]), chi2_red, evaluations)
     warnings += list(cert.warnings)
@@ -1515,17 +1522,27 @@ def _requiet(res, channels, noise, source, sig, names, values, solve, t_detected
     return solve(names, values, res.x) if changed else res
 
 
-def _profile_interval(name, names, est, lo_b, hi_b, se, target, solve) -> tuple[float, float]:
-    """The interval of ``name`` where the profile chi-square (others re-fitted) stays below ``target``."""
+def _profile_interval(name, names, est, lo_b, hi_b, se, target, solve, slope=None) -> tuple[float, float]:
+    """The interval of ``name`` where the profile chi-square (others re-fitted) stays below ``target``.
+
+    Each refit starts from the nearest one so far, moved along the correlations: the others by ``slope`` (their
+    regression on ``name``, ``cov[other, name] / cov[name, name]``) times the step in ``name``. Where the record
+    leaves a family of parameters exactly undetermined (a pendulum that sticks after one half-cycle: d0, the
+    LVDT's zero and both friction levels shift together and the record does not change), that start lies on
+    the family and the refit keeps its chi-square; from the unmoved start, the local refits of an
+    ill-conditioned misfit ended short of the family and the interval of friction_slow left out values that
+    give the same record (0.0044-0.0083 beside a truth of 0.02)."""
     others = [n for n in names if n != name]
     done = {est[name]: [est[n] for n in others]}  # refits so far: each starts from the nearest one
+    slopes = np.array([(slope or {}).get(n, 0.0) for n in others])
 
     def profile_chi2(value: float) -> float:
         base = dict(est)
         base[name] = value
         near = min(done, key=lambda v: abs(v - value))
+        start = np.asarray(done[near]) + slopes * (value - near)
         # the chi-square is compared with a target ~ chi2 + 4: a relative tolerance of 1e-10 is ample
-        res = solve(others, base, done[near], tol=1e-10)
+        res = solve(others, base, start, tol=1e-10)
         done[value] = list(res.x)
         return float(res.fun @ res.fun)
 
