@@ -153,7 +153,7 @@ def test_the_measured_cycles_standard_errors_cover_the_truth():
     """Coverage over independent records: the 95 % intervals (+-1.96 SE) of keff, EDC, F+ and F- of every
     cycle after the release's hold the exact value in 88-99 % of the cases (at least 150 intervals each)."""
     hits = {k: [] for k in ("keff_N_m", "edc_J", "f_plus_N", "f_minus_N")}
-    for seed in range(50):
+    for seed in range(60):
         channels, cycles_true = record(seed=100 + seed)
         fit = fit_isolation(channels, M, global_search=False)
         result = measured_cycles(fit, draws=40, seed=seed)
