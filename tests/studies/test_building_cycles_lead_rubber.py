@@ -122,3 +122,22 @@ def test_the_smoothing_window_is_the_loops_own_not_the_models_period(cycles_true
     for i, (c, se) in enumerate(zip(result.cycles, result.std_errors, strict=True)):
         for key in ("edc_J", "amplitude_m", "keff_N_m"):
             assert abs(getattr(c, key) - cycles_true[i][key]) < 3.5 * se[key], (i, key)
+
+
+def test_the_models_cycles_of_the_lead_rubber_isolator_are_the_references_loops(cycles_true):
+    """The identified model's cycles (studies.building_effective.model_cycles, the curves' input) of the true
+    Bouc-Wen isolator, one for one with the reference's: start, D and keff to 1e-4, EDC to 1e-3 (the reference's
+    trapezoids at 10 kHz), every EDC positive and the amplitudes strictly decreasing (the curves interpolate over
+    them: with the overlapping cycles they came in equal pairs and every curve was nan)."""
+    from quickrelease.building.hysteretic import BoucWen
+    from quickrelease.studies.building_effective import model_cycles
+
+    iso = BoucWen(M, KD, QD, DY, 1.0, damping=2.0 * ZETA * math.sqrt(KD * M))
+    cyc = model_cycles(iso, D0, SPAN - RELEASE)
+    assert cyc["start_s"].size == len(cycles_true)
+    assert np.all(cyc["edc_J"] > 0) and np.all(np.diff(cyc["amplitude_m"]) < 0)
+    for i, tr in enumerate(cycles_true):
+        assert cyc["start_s"][i] + RELEASE == pytest.approx(tr["start"], abs=1e-4)
+        assert cyc["amplitude_m"][i] == pytest.approx(tr["amplitude_m"], rel=1e-4)
+        assert cyc["edc_J"][i] == pytest.approx(tr["edc_J"], rel=1e-3)
+        assert cyc["keff_N_m"][i] == pytest.approx(tr["keff_N_m"], rel=1e-4)  # the release's: F+ leaving d0
