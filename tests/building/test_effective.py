@@ -35,12 +35,13 @@ def test_a_bilinear_loop_gives_its_closed_forms():
     x = D * np.sin(2 * math.pi * t / 2.0 - math.pi / 2)  # starts at -D: every cycle whole
     f = _bilinear_force(x, k1, k2, fy)
     cycles = loop_cycles(t, x, f, mass=8e5)
-    assert len(cycles) == 3  # turning points at 1, 2, ..., 5 s
+    # turning points at 1, 2, ..., 5 s (the virgin rise from -D before the first): two cycles, 1-3 s and 3-5 s
+    assert [(c.start_s, c.end_s) for c in cycles] == [(1.0, 3.0), (3.0, 5.0)]
     dy = fy / k1
     qd = fy - k2 * dy
     keff = qd / D + k2
     edc = 4.0 * qd * (D - dy)
-    for c in cycles[1:]:  # the first cycle starts from the virgin spring
+    for c in cycles:
         assert c.amplitude_m == pytest.approx(D, rel=1e-6)
         assert c.keff_N_m == pytest.approx(keff, rel=1e-4)
         assert c.edc_J == pytest.approx(edc, rel=1e-4)
@@ -51,6 +52,43 @@ def test_a_bilinear_loop_gives_its_closed_forms():
         assert c.mu == pytest.approx(qd / (8e5 * G0), rel=1e-4)
 
 
+def _through_peaks(peaks, samples=2000):
+    """A displacement history from 0 through the given peaks, each half-cycle a half cosine of ``samples``
+    samples, 1 s long; and its times."""
+    pts = [0.0, *peaks]
+    s = 0.5 * (1.0 - np.cos(np.pi * np.arange(1, samples + 1) / samples))
+    x = np.concatenate([[0.0], *[a + (b - a) * s for a, b in zip(pts[:-1], pts[1:], strict=True)]])
+    return np.arange(x.size) / samples, x
+
+
+def test_a_bilinear_decay_about_a_drifting_centre_gives_each_cycles_closed_form():
+    """A bilinear spring taken through shrinking peaks on the pushed side and peaks drifting away on the other
+    (as a lead-rubber building's loops shrink about a residual displacement that creeps back). Each cycle runs
+    from a pushed-side peak P to the next, P' < P, through the trough V between them; its loop closed by the
+    chord along the loading branch (the spring is yielded at both ends) is the steady loop between V and P, so
+    EDC = 4 Qd (D - Dy) with D = (P - V) / 2, keff = Qd / D + k2, F+ = k2 P + Qd, F- = k2 V - Qd. The cycles
+    follow each other (eight half-cycles and one more: four cycles); cycles from the troughs would add three more, whose
+    loops end beyond their start (V' < V)."""
+    k1, k2, fy = 20e6, 2e6, 100e3
+    peaks = [0.20, -0.12, 0.17, -0.125, 0.14, -0.13, 0.11, -0.135, 0.08]
+    t, x = _through_peaks([*peaks, -0.05])  # the last peak a reversal, the half-cycle after it no cycle
+    f = _bilinear_force(x, k1, k2, fy)
+    cycles = loop_cycles(t, x, f, mass=8e5)
+    assert [(c.start_s, c.end_s) for c in cycles] == [(1.0, 3.0), (3.0, 5.0), (5.0, 7.0), (7.0, 9.0)]
+    dy = fy / k1
+    qd = fy - k2 * dy
+    for j, c in enumerate(cycles):
+        top, trough = peaks[2 * j], peaks[2 * j + 1]
+        D = 0.5 * (top - trough)
+        assert c.amplitude_m == pytest.approx(D, rel=1e-9)
+        assert c.f_plus_N == pytest.approx(k2 * top + qd, rel=1e-9)
+        assert c.f_minus_N == pytest.approx(k2 * trough - qd, rel=1e-9)
+        assert c.keff_N_m == pytest.approx(qd / D + k2, rel=1e-9)
+        assert c.edc_J == pytest.approx(4.0 * qd * (D - dy), rel=1e-5)
+        assert c.qd_N == pytest.approx(qd, rel=1e-6)
+        assert c.kd_N_m == pytest.approx(k2, rel=1e-6)
+
+
 def test_a_viscous_ellipse_dissipates_pi_c_omega_d2():
     """F = k x + c x' along x = D sin(w t): EDC = pi c w D^2, keff = k (the force at the displacement's
     extremes, where x' = 0), beta_eff = c w / (2 k), Qd = c w D (the branches at x = 0)."""
@@ -58,7 +96,9 @@ def test_a_viscous_ellipse_dissipates_pi_c_omega_d2():
     t = np.linspace(0.0, 10.0, 100001)
     x, v = D * np.sin(w * t), D * w * np.cos(w * t)
     cycles = loop_cycles(t, x, k * x + c * v)
-    assert len(cycles) >= 6
+    # eight turning points (1.25 s apart from 0.625 s): three cycles, each starting where the one before ended
+    assert [cyc.start_s for cyc in cycles] == pytest.approx([0.625, 3.125, 5.625], abs=1e-4)
+    assert [cyc.end_s for cyc in cycles] == pytest.approx([3.125, 5.625, 8.125], abs=1e-4)
     for cyc in cycles:
         assert cyc.edc_J == pytest.approx(math.pi * c * w * D**2, rel=1e-6)
         # F+ is the largest force within two samples of D+: c x' there adds 2 c w^2 D dt (5e-5 of k here)

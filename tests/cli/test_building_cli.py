@@ -156,7 +156,8 @@ def test_building_command_json_folder_and_refusals(tmp_path):
 
 
 def test_building_table_output(tmp_path):
-    _write_record(tmp_path, duration=8.0, seed=2)
+    # 7 s after the release: three whole cycles (the per-cycle table needs two after the release's)
+    _write_record(tmp_path, duration=9.0, seed=2)
     r = run("building", _case(tmp_path, _building_toml()))
     assert r.exit_code == 0, r.output
     assert "period T" in r.stdout and "slider friction F_s" in r.stdout and "Decay cross-check" in r.stdout

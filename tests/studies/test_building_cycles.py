@@ -5,7 +5,8 @@ the spring cannot overcome them), the viscous work integrated as a third state. 
 is: an LVDT at 200 Hz and an accelerometer at 100 Hz on its own clock (3.7 ms late), each with its noise and a
 zero offset.
 
-Per cycle (turning point k to k + 2), from the simulator's own turning points x_k and viscous work W:
+Per cycle (turning point k to k + 2, k = 0, 2, 4, ...: each cycle starts where the one before ended, the release
+the first), from the simulator's own turning points x_k and viscous work W:
 EDC = W_{k+2} - W_k + F_s (|x_k - x_{k+1}| + |x_{k+1} - x_{k+2}|) (the loop closed by the chord between the
 spring's forces at its ends, which cancels the spring's energy), F+ = k D+ + F_s and F- = k D- - F_s (the
 force before the sliders flip), keff = (F+ - F-) / (D+ - D-)."""
@@ -65,9 +66,10 @@ def sample(segs, turns, M, k, c, Fs, t):
 
 
 def truth(turns, k, Fs):
-    """Per cycle k -> k + 2 of the turning points: EDC, F+, F-, keff, D (the release's cycle first)."""
+    """Per cycle k -> k + 2 of the turning points, k = 0, 2, ...: EDC, F+, F-, keff, D (the release's cycle
+    first)."""
     out = []
-    for i in range(len(turns) - 2):
+    for i in range(0, len(turns) - 2, 2):
         (_, x0, w0), (_, x1, _), (_, x2, w2) = turns[i:i + 3]
         edc = w2 - w0 + Fs * (abs(x0 - x1) + abs(x1 - x2))
         dp, dm = max(x0, x1, x2), min(x0, x1, x2)
@@ -126,7 +128,7 @@ def test_smoothing_half_cycles_keeps_a_flip_at_the_turning_point():
 def test_the_measured_cycles_of_an_independent_record_within_their_errors():
     """One record: every cycle after the release's (whose F+ is the departing force) within 3.5 standard
     errors of the exact cycle for F+, F-, keff and EDC, and the mean of EDC's errors in standard errors within
-    1.5 (4 of its standard deviations for 6 cycles: x and F out of step by a millisecond open the loop by two
+    1.5 (2.6 of its standard deviations for 3 cycles: x and F out of step by a millisecond open the loop by two
     standard errors); the errors themselves below 10 % (6 % for keff at the last, 33 mm cycle)."""
     channels, cycles_true = record(seed=3)
     fit = fit_isolation(channels, M, global_search=False)
@@ -134,7 +136,7 @@ def test_the_measured_cycles_of_an_independent_record_within_their_errors():
     assert result.force_source == "accelerometer" and result.clock == "acc"
     assert result.sample_rate_hz == pytest.approx(100.0)
     pairs = _matched(result, cycles_true)
-    assert len(pairs) >= 6
+    assert len(pairs) >= 4 and len(pairs) == len(result.cycles)
     for c, se, tr in pairs[1:]:
         for key in ("f_plus_N", "f_minus_N", "keff_N_m", "edc_J"):
             assert abs(getattr(c, key) - tr[key]) < 3.5 * se[key], key
@@ -151,7 +153,7 @@ def test_the_measured_cycles_standard_errors_cover_the_truth():
     """Coverage over independent records: the 95 % intervals (+-1.96 SE) of keff, EDC, F+ and F- of every
     cycle after the release's hold the exact value in 88-99 % of the cases (at least 150 intervals each)."""
     hits = {k: [] for k in ("keff_N_m", "edc_J", "f_plus_N", "f_minus_N")}
-    for seed in range(30):
+    for seed in range(60):
         channels, cycles_true = record(seed=100 + seed)
         fit = fit_isolation(channels, M, global_search=False)
         result = measured_cycles(fit, draws=40, seed=seed)
@@ -172,7 +174,7 @@ def test_without_an_accelerometer_the_models_force_and_without_a_displacement_no
     result = measured_cycles(fit, draws=20)
     assert result.force_source == "model" and result.clock == "lvdt"
     pairs = _matched(result, cycles_true)
-    assert len(pairs) >= 6
+    assert len(pairs) >= 4 and len(pairs) == len(result.cycles)
     for c, _, tr in pairs[1:]:
         assert c.keff_N_m == pytest.approx(tr["keff_N_m"], rel=0.02)
         assert c.edc_J == pytest.approx(tr["edc_J"], rel=0.05)

@@ -59,7 +59,7 @@ def test_the_model_cycles_are_the_closed_forms():
     iso = Isolation.linear(M, T, ZETA, FS)
     cyc = model_cycles(iso, D0, 40.0)
     assert cyc["from_release"][0] and not cyc["from_release"][1:].any()
-    assert cyc["amplitude_m"].size >= 5
+    assert cyc["amplitude_m"].size >= 4
     for i in range(1, cyc["amplitude_m"].size):
         want = truth(cyc["amplitude_m"][i])
         got = [cyc[q][i] for q in ("keff_N_m", "edc_J", "beta_eff", "teff_s")]
@@ -204,7 +204,7 @@ def test_the_analysis_cycles_agree_with_the_exact_model_cycles(fitted):
 
     sampled = effective_cycles(fitted)
     exact = model_cycles(fitted.isolation(), fitted.parameters["d0"], 28.0)
-    assert len(sampled) == exact["amplitude_m"].size >= 5
+    assert len(sampled) == exact["amplitude_m"].size >= 4
     for i, c in enumerate(sampled[1:], start=1):
         assert c.amplitude_m == pytest.approx(exact["amplitude_m"][i], rel=1e-6)
         assert c.keff_N_m == pytest.approx(exact["keff_N_m"][i], rel=1e-4)
@@ -237,20 +237,20 @@ def test_the_tables_rows():
 def test_a_bilinear_isolators_model_cycles_follow_the_solve_ivp_loop():
     """A bilinear spring on sliders with dampers (yielding inside the half-cycles): model_cycles against the loop of
     the independent solve_ivp, sampled at 2e5 points a period and read by loop_cycles at the reference's own
-    turning points, to 1e-4 (keff, EDC) for the four cycles after the release's (122 to 6.5 mm)."""
+    turning points, to 1e-4 (keff, EDC) for the two cycles after the release's (74 and 6.5 mm)."""
     from quickrelease.building.effective import loop_cycles
 
     k1, k2, fy, zeta, fs, d0 = 12e6, 2.4e6, 60e3, 0.01, 3e3, 0.2  # D_y = 5 mm
     iso = Isolation.bilinear(M, k1, k2, fy, zeta, fs)
     cyc = model_cycles(iso, d0, 9.0)
-    assert cyc["amplitude_m"].size == 5
+    assert cyc["amplitude_m"].size == 3
     t = np.linspace(0.0, 9.0, 9 * 200000 // 2 + 1)
     c = 2 * zeta * math.sqrt(k1 * M)
     (x, v, a), t_stop = reference(M, k1, k2, fy * (1 - k2 / k1), c, fs, d0, t, with_rates=True)
     turns = [0] + [int(i) + 1 for i in np.nonzero(np.sign(v[1:-1]) * np.sign(v[2:]) < 0)[0]]
     got = loop_cycles(t, x, -M * a, turns=turns)
-    assert len(got) == 5 and t_stop == math.inf
-    for i in range(1, 5):
+    assert len(got) == 3 and t_stop == math.inf
+    for i in range(1, 3):
         assert cyc["amplitude_m"][i] == pytest.approx(got[i].amplitude_m, rel=1e-6)
         assert cyc["keff_N_m"][i] == pytest.approx(got[i].keff_N_m, rel=1e-4)
         assert cyc["edc_J"][i] == pytest.approx(got[i].edc_J, rel=1e-4)

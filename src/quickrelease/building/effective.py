@@ -6,8 +6,14 @@ the energy dissipated, the effective damping, the characteristic strength and th
 (``-m x_ddot`` of :func:`quickrelease.building.decay.hysteresis_loop` for a rigid superstructure, or a
 model's force), one :class:`CycleProperties` per cycle:
 
-* a cycle runs from a turning point of x to the turning point two half-cycles later (a free decay's cycles
-  shrink; a constant-amplitude test's repeat);
+* a cycle is two successive half-cycles, from a turning point of x to the turning point two half-cycles later,
+  and each cycle starts where the one before ended (:func:`cycle_starts`: turning points 0 to 2, 2 to 4, ...;
+  a half-cycle left over at the end is no cycle): each half-cycle is counted once, and every cycle of a free
+  decay runs from one peak on the pushed side to the next (its first turning point is the release). Cycles
+  from every turning point (0 to 2, 1 to 3, ...) overlapped, and in a decay about a drifting centre (a
+  lead-rubber building's loops shrink about a residual displacement that creeps back) those from the other
+  side's peaks, which move apart there rather than closing in, had the D and keff of their neighbour and a
+  negative area (a free decay's cycles shrink; a constant-amplitude test's repeat);
 * ``D+``, ``D-``: the cycle's largest and smallest displacements; ``F+``, ``F-``: the force at them, taken
   on the branch that reaches them (the extreme force within two samples of the displacement's extreme: a
   slider's force flips at the reversal, and the standards read the force before the flip);
@@ -39,7 +45,7 @@ import numpy as np
 
 from ..errors import ParameterError
 
-__all__ = ["CycleProperties", "loop_cycles", "cycle_turns", "G0"]
+__all__ = ["CycleProperties", "loop_cycles", "cycle_turns", "cycle_starts", "G0"]
 
 #: Standard gravity [m/s^2] (mu = Qd / (m g)).
 G0 = 9.80665
@@ -137,6 +143,12 @@ def zigzag_scan(x: np.ndarray, threshold: float, direction: float, best: int) ->
     return out, direction, best
 
 
+def cycle_starts(n_turns: int) -> range:
+    """The index, among ``n_turns`` turning points, of each cycle's first: 0, 2, 4, ... (a cycle runs to the
+    turning point two after its first, where the next begins); empty with fewer than 3 turning points."""
+    return range(0, max(int(n_turns) - 2, 0), 2)
+
+
 def _turning_force(f: np.ndarray, i: int) -> float:
     """The force at a turning point without the jump a slider's force makes there: the mean of the samples
     either side of it (the sample itself at the record's ends)."""
@@ -218,8 +230,9 @@ def loop_cycles(t, x, force, mass: float | None = None, neighbourhood: int = 2,
     Returns
     -------
     tuple of CycleProperties
-        One per cycle (turning point to the turning point two half-cycles later), in time order; empty where
-        the loop holds fewer than two half-cycles.
+        One per cycle (turning point to the turning point two half-cycles later, each cycle starting where the
+        one before ended: :func:`cycle_starts`), in time order; empty where the loop holds fewer than two
+        half-cycles.
     """
     t = np.asarray(t, dtype=float)
     x = np.asarray(x, dtype=float)
@@ -236,7 +249,7 @@ def loop_cycles(t, x, force, mass: float | None = None, neighbourhood: int = 2,
     if turns.size and (np.any(np.diff(turns) <= 0) or turns[0] < 0 or turns[-1] >= x.size):
         raise ParameterError("turns", f"{turns.size} indices", f"increasing sample indices in [0, {x.size - 1}]")
     out = []
-    for k in range(turns.size - 2):
+    for k in cycle_starts(turns.size):
         i0, i1 = int(turns[k]), int(turns[k + 2])
         xs, fs = x[i0:i1 + 1], f[i0:i1 + 1]
         ip, im = i0 + int(np.argmax(xs)), i0 + int(np.argmin(xs))

@@ -133,7 +133,7 @@ def effective_cycles(fit: IsolationFit, points_per_period: int = 20000) -> tuple
     force is not the isolators' alone). The force at an extreme is the largest within two samples of it, which
     carries the damper's force of those samples: 4 zeta (2 pi / points_per_period) of keff (3e-5 at zeta = 0.03
     and the default 20000, within the bands of :func:`~quickrelease.studies.building_effective.effective_curves`
-    on clean records; 3e-4 at 2000); 0.09 s for a 60 s record of 43 cycles."""
+    on clean records; 3e-4 at 2000); 0.09 s for a 60 s record of 22 cycles."""
     if fit.model == "2dof":
         return ()
     iso = fit.isolation()
@@ -335,22 +335,27 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
     comparison: list[dict[str, Any]] = []
     if compare:
         compared.append(fit)
+        if damping != "viscous":
+            notes.append(f'every model compared with the same damper law: damping = "{damping}"')
+        # the case's start values belong to its model, but for the push, the release and the dampers (a power-law
+        # damper's C and alpha are the dampers' own, whatever the bearings): the others start from the decay analysis
+        shared = ("d0", "release_time") + (("damping_coefficient", "damping_exponent") if damping == "power" else ())
         for other in MODELS:
             if other == model:
                 continue
             if other == "2dof" and superstructure_mass is None:
                 notes.append("model 2dof not compared: no superstructure_mass in [building]")
                 continue
-            try:  # the case's start values belong to its model: the others start from the decay analysis; their
-                # intervals are not reported (AIC/BIC only), so no profile-likelihood re-fits
+            try:  # their intervals are not reported (AIC/BIC only), so no profile-likelihood re-fits
                 compared.append(fit_isolation(channels, mass, other, release_time=release_time, profile=False,
                                               tolerance=COMPARE_TOLERANCE, progress=progress,
-                                              exclude_spikes=exclude_spikes,
+                                              exclude_spikes=exclude_spikes, damping=damping,
                                               superstructure_mass=superstructure_mass if other == "2dof" else None,
-                                              start={k: v for k, v in (start or {}).items()
-                                                     if k in ("d0", "release_time")} or None))
-            except QuickReleaseError as exc:
-                notes.append(f"model {other} not compared: {exc}")
+                                              start={k: v for k, v in (start or {}).items() if k in shared} or None))
+            except QuickReleaseError as exc:  # e.g. 2dof, whose dampers are viscous only
+                why = (f'it takes no {damping}-law damper (damping = "{damping}")'
+                       if isinstance(exc, ParameterError) and exc.name == "damping" else str(exc))
+                notes.append(f"model {other} not compared: {why}")
         comparison = compare_models(compared)
         if len(comparison) > 1:
             best, second = comparison[0], comparison[1]

@@ -38,6 +38,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from .._results import Summarised
+from ..building.effective import cycle_starts
 from ..building.isolation_fit import PARAMETER_BOUNDS, IsolationFit
 from ..building.model import free_vibration
 from ..errors import ParameterError
@@ -95,7 +96,8 @@ def _gauss_integral(fv, edges: np.ndarray, mass: float) -> np.ndarray:
 
 def model_cycles(isolation, d0: float, horizon: float) -> dict[str, np.ndarray]:
     """The cycles of a model's free vibration from the release at d0 [m] up to ``horizon`` [s], exactly (see
-    the module docstring): per cycle (turning point to the turning point two half-cycles later) ``start_s``
+    the module docstring): per cycle (turning point to the turning point two half-cycles later, each starting
+    where the one before ended: :func:`~quickrelease.building.effective.cycle_starts`) ``start_s``
     [s], ``amplitude_m`` [m], ``keff_N_m`` [N/m], ``edc_J`` [J] (nan where a cycle ends where the sliders hold
     and the solution has no ``restoring_force``), ``beta_eff`` [-], ``teff_s`` [s] and ``from_release``
     (the cycle starts at the release). ``isolation`` is any model :func:`quickrelease.building.free_vibration`
@@ -132,22 +134,22 @@ def model_cycles(isolation, d0: float, horizon: float) -> dict[str, np.ndarray]:
     edges = np.array(sorted(cuts))
     cumulative = np.concatenate([[0.0], np.cumsum(_gauss_integral(fv, edges, mass))])
     work = np.interp(times, edges, cumulative)  # the turning points are edges: exact look-ups
-    n = times.size - 2
-    out = {k: np.empty(n) for k in keys}
-    for j in range(n):
+    starts = cycle_starts(times.size)  # each cycle where the one before ended, as loop_cycles reads them
+    out = {k: np.empty(len(starts)) for k in keys}
+    for i, j in enumerate(starts):
         idx = np.array([j, j + 1, j + 2])
         ip, im = idx[np.argmax(x[idx])], idx[np.argmin(x[idx])]
         span = x[ip] - x[im]
         keff = (before[ip] - before[im]) / span if span > 0 else math.nan
         D = 0.5 * span
         edc = work[j + 2] - work[j] + 0.5 * (chord[j] + chord[j + 2]) * (x[j] - x[j + 2])
-        out["start_s"][j] = times[j]
-        out["amplitude_m"][j] = D
-        out["keff_N_m"][j] = keff
-        out["edc_J"][j] = edc
-        out["beta_eff"][j] = edc / (2.0 * math.pi * keff * D * D) if keff > 0 else math.nan
-        out["teff_s"][j] = 2.0 * math.pi * math.sqrt(mass / keff) if keff > 0 else math.nan
-        out["from_release"][j] = float(j == 0)
+        out["start_s"][i] = times[j]
+        out["amplitude_m"][i] = D
+        out["keff_N_m"][i] = keff
+        out["edc_J"][i] = edc
+        out["beta_eff"][i] = edc / (2.0 * math.pi * keff * D * D) if keff > 0 else math.nan
+        out["teff_s"][i] = 2.0 * math.pi * math.sqrt(mass / keff) if keff > 0 else math.nan
+        out["from_release"][i] = float(j == 0)
     out["from_release"] = out["from_release"].astype(bool)
     return out
 
