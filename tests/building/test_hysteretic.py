@@ -309,3 +309,29 @@ def test_a_rate_beyond_its_range_is_named(rate):
     with pytest.raises(ParameterError, match=r"rate = .* \[0, 10000\] s/m"):
         Pendulum(1e6, 3.0, 0.01, 0.025, rate=rate)
     assert Pendulum(1e6, 3.0, 0.01, 0.025, rate=1.0e4).rate == 1.0e4
+
+
+def test_a_power_law_damper_holds_a_creep_past_the_holding_limit():
+    """A linear layer with sliders and a damper of alpha 0.32 whose fifth turn lands 0.8 % past the sliders'
+    holding limit (h26c's finding: 31 s of CPU for 10 s of record, 347 000 steps, as the damper's stiffness at
+    the creep's speed, alpha C s^(alpha - 1), shrank the explicit steps to 1e-7 s). By hand: the excess force
+    k |x_5| - F_s moves the layer at most at ((k |x_5| - F_s) / C)^(1 / alpha), 1e-11 m/s, below CREEP (1e-8) of
+    the release's speed: it is at rest from that turn. Against the reference (solve_ivp, to 6.4 s, past the turn):
+    the turns and their times, and the position at 6.4 s (the reference still creeping) to 1e-10 m."""
+    kw = dict(mass=8.0e5, stiffness=5054201.15597149, damping=147011.40526694263, friction=5347.85283858028,
+              damping_exponent=0.32443963578443663)
+    d0 = 0.15003356189987052
+    iso = Isolation(**kw)
+    motion = free_vibration(iso, d0, t_end=9.98)
+    r = ref.simulate(_reference_system(kw, "isolation"), d0, np.array([6.4]), t_end=6.4)
+    assert motion.reversal_times.size == r.reversal_times.size == 6
+    np.testing.assert_allclose(motion.reversal_times, r.reversal_times, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(motion.turning_points, r.turning_points, rtol=0, atol=1e-9)
+    x5 = float(r.turning_points[-1])
+    excess = kw["stiffness"] * abs(x5) - kw["friction"]
+    creep_speed = (excess / kw["damping"]) ** (1.0 / kw["damping_exponent"])
+    release_speed = math.sqrt(kw["stiffness"] / kw["mass"]) * d0  # sqrt(2 E / m), E = k d0^2 / 2
+    assert 0.0 < excess < 0.01 * kw["friction"] and creep_speed < 1e-8 * release_speed
+    assert motion.stop_time == pytest.approx(r.reversal_times[-1], abs=1e-8)
+    assert abs(float(motion.state(np.array([6.4]))[0][0]) - float(r.x[0])) < 1e-10
+    assert motion._grid[4] < 1000
