@@ -835,11 +835,9 @@ def _synth_building(case, channels: str | None, rate: str | None, noise: list[st
     from .io.export import write_text
     from .studies.synth import (
         building_case_toml,
-        building_precision,
         describe_truth,
         parse_channel_values,
         predicted_building_errors,
-        predicted_summary,
         synthesize_building,
     )
     from .units import parse_quantity
@@ -863,7 +861,7 @@ def _synth_building(case, channels: str | None, rate: str | None, noise: list[st
         write_text(case_text, case_out)
     summary = {"file": str(out), "rows": int(syn.t.size), "rate_Hz": syn.rate, "channels": names,
                "truth": syn.truth, "noise": syn.noise, "offsets": syn.offsets, "seed": seed, "notes": syn.notes,
-               "predicted": predicted_summary(pred), "case_file": None if case_out is None else str(case_out)}
+               "predicted": pred.summary(), "case_file": None if case_out is None else str(case_out)}
     if as_json:
         _print_json(summary)
         return
@@ -883,7 +881,7 @@ def _synth_building(case, channels: str | None, rate: str | None, noise: list[st
            [(key_for(split_key(key)[0], row["unit"])[0], quantity(row["truth"], row["unit"]),
              quantity(row["se"], row["unit"], 2) if math.isfinite(row["se"]) else "not determined",
              "" if row["relative_se"] is None or not math.isfinite(row["se"]) else f"{100 * row['relative_se']:.2g}%")
-            for key, row in building_precision(pred).items()], ("parameter", "truth", "standard error", "relative"))
+            for key, row in pred.physical().items()], ("parameter", "truth", "standard error", "relative"))
     for warning in pred.warnings:
         _echo(f"warning: {warning}")
     if case_out is not None:

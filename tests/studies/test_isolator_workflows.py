@@ -9,7 +9,7 @@ from scipy.optimize import brentq
 from quickrelease.io.case import load_case
 from quickrelease.report.html import _building_design
 from quickrelease.studies.planning import plan_case
-from quickrelease.studies.synth import building_precision, predicted_building_errors, synthesize_building
+from quickrelease.studies.synth import predicted_building_errors, synthesize_building
 
 G = 9.80665
 P = 1598e3  # N, the planned push
@@ -89,7 +89,7 @@ def test_synth_of_a_pendulum_swings_to_the_coulomb_amplitude_and_reports_its_pre
     x = syn.clean["x"]
     assert x.min() == pytest.approx(-(d0 - 2 * mu * R), abs=2e-5)  # a 200 Hz sample within 1e-4 of the extreme
     assert syn.truth["period_s"] == pytest.approx(2 * math.pi * math.sqrt(R / G), rel=1e-12)
-    rows = building_precision(predicted_building_errors(syn))
+    rows = predicted_building_errors(syn).physical()
     T, se_T = rows["period_s"]["truth"], rows["period_s"]["se"]
     assert rows["radius_m"]["truth"] == pytest.approx(R, rel=1e-12)
     assert rows["radius_m"]["se"] == pytest.approx(2 * R / T * se_T, rel=1e-12)  # R = g (T / 2 pi)^2
@@ -100,10 +100,92 @@ def test_synth_of_a_pendulum_swings_to_the_coulomb_amplitude_and_reports_its_pre
 def test_synth_with_power_dampers_reports_the_damper_law(tmp_path):
     power = BOUCWEN + 'damping = "power"\ndamping_coefficient = "300 kN"\ndamping_exponent = 0.5\n'
     syn = synthesize_building(synth_case(tmp_path, power), ["x"], rate=100.0, release_time=1.0, duration=10.0)
-    rows = building_precision(predicted_building_errors(syn))
+    rows = predicted_building_errors(syn).physical()
     assert rows["damping_coefficient"]["truth"] == 300e3 and rows["damping_exponent"]["truth"] == 0.5
     assert rows["Kd_N_m"]["truth"] == pytest.approx(2.4e6, rel=1e-12)
     assert {"Qd_N", "dy_m", "shape"} <= set(rows) and "damping_ratio" not in rows
+
+
+PENDULUM_LAW = ('model = "pendulum"\nmass = "1200 t"\nradius = "2.5 m"\nfriction_slow = 0.03\nfriction_fast = 0.06\n'
+                'rate = "30 s/m"\n')
+POWER = BOUCWEN + 'damping = "power"\ndamping_coefficient = "300 kN"\ndamping_exponent = 0.5\n'
+
+
+@pytest.mark.parametrize("building", [PENDULUM_LAW, POWER], ids=["pendulum", "boucwen-power"])
+def test_the_predicted_rows_line_up_with_the_fitted_ones(tmp_path, building):
+    """The precision's rows carry the keys, in the order, of the fitted values in the building's JSON
+    (studies.building_analysis.physical_estimates), so predicted and fitted rows of each model line up."""
+    from types import SimpleNamespace
+
+    from quickrelease.building.isolation_fit import _isolation
+    from quickrelease.studies.building_analysis import physical_estimates
+
+    syn = synthesize_building(synth_case(tmp_path, building), ["x"], rate=50.0, release_time=1.0, duration=4.0)
+    pred = predicted_building_errors(syn)
+    t = syn.truth
+    fit = SimpleNamespace(model=t["model"], mass=t["mass_kg"], estimates=dict(pred.parameters), ci95={},
+                          interval_method={}, parameters=dict(pred.parameters),
+                          damping="power" if "damping_exponent" in pred.parameters else "viscous",
+                          isolation=lambda: _isolation(t["model"], t["mass_kg"], pred.parameters))
+    fitted = [k for k in physical_estimates(fit) if not k.endswith("_ci95") and k not in ("not_identified",
+                                                                                         "interval_method")]
+    predicted = [k for k in pred.physical() if k not in ("d0_m", "release_time_s") and not k.startswith("offset_")]
+    assert predicted == fitted
+    assert set(fitted) >= ({"radius_m", "friction_slow", "friction_fast", "rate_s_m"} if t["model"] == "pendulum"
+                           else {"Kd_N_m", "Qd_N", "dy_m", "shape", "damping_coefficient", "damping_exponent"})
+
+
+@pytest.mark.parametrize("name", ["pendulum", "boucwen"])
+def test_synth_json_and_table_give_the_new_models_rows(tmp_path, name):
+    """`quickrelease synth --building --json` (planning the instrumentation): under predicted.parameters the
+    pendulum's R = g (T / 2 pi)^2 with se(R) = 2 R / T se(T) and its friction law, the Bouc-Wen bearings' Kd =
+    m (2 pi / T)^2 with se(Kd) = 2 Kd / T se(T), Qd, dy, n and the sliders' F_s, each with the standard error of
+    its own parameter; the printed table has a row for each. (The power-law damper's rows: the two tests above;
+    its synthetic record costs 2 s here, the viscous one's nothing.)"""
+    import json
+
+    from typer.testing import CliRunner
+
+    from quickrelease.cli import app
+
+    runner = CliRunner()
+    args = ["--channels", "x", "--rate", "50 Hz", "--release-time", "1 s", "--duration", "4 s",
+            "--noise", "x=0.1 mm"]
+    keys = {"pendulum": ("friction_slow", "friction_fast", "rate"),
+            "boucwen": ("characteristic_strength", "yield_displacement", "shape", "damping_ratio", "friction")}
+    json_keys = {"rate": "rate_s_m", "characteristic_strength": "Qd_N", "yield_displacement": "dy_m",
+                 "friction": "friction_N"}
+    building = {"pendulum": PENDULUM_LAW, "boucwen": BOUCWEN + 'friction = "20 kN"\ndamping_ratio = 0.02\n'}[name]
+    (tmp_path / f"{name}.toml").write_text("[building]\n" + building + 'displacement = "250 mm"\n')
+    r = runner.invoke(app, ["synth", str(tmp_path / f"{name}.toml"), "--building", *args, "--out",
+                            str(tmp_path / f"{name}.csv"), "--overwrite", "--json"])
+    assert r.exit_code == 0, r.output
+    pred = json.loads(r.stdout)["predicted"]
+    rows, se = pred["parameters"], pred["std_errors"]
+    T, se_T = rows["period_s"]["truth"], rows["period_s"]["se"]
+    assert se_T == se["period"] and 0 < se_T < T
+    if name == "pendulum":
+        R = G * (T / (2 * math.pi)) ** 2
+        assert R == pytest.approx(2.5, rel=1e-12)
+        assert rows["radius_m"]["truth"] == pytest.approx(R, rel=1e-12)
+        assert rows["radius_m"]["se"] == pytest.approx(2 * R / T * se_T, rel=1e-9)
+        assert rows["rate_s_m"]["truth"] == 30.0 and rows["rate_s_m"]["unit"] == "s/m"
+    else:
+        Kd = 1200e3 * (2 * math.pi / T) ** 2
+        assert Kd == pytest.approx(2.4e6, rel=1e-12)
+        assert rows["Kd_N_m"]["truth"] == pytest.approx(Kd, rel=1e-12)
+        assert rows["Kd_N_m"]["se"] == pytest.approx(2 * Kd / T * se_T, rel=1e-9)
+        assert rows["Qd_N"]["truth"] == 600e3 and rows["friction_N"]["truth"] == 20e3
+    for n in keys[name]:
+        assert rows[json_keys.get(n, n)]["se"] == pytest.approx(se[n], rel=1e-9), n
+    r = runner.invoke(app, ["synth", str(tmp_path / f"{name}.toml"), "--building", *args, "--out",
+                            str(tmp_path / f"{name}.csv"), "--overwrite"])
+    assert r.exit_code == 0, r.output
+    table = r.stdout[r.stdout.index("Precision of a"):]
+    labels = {"pendulum": ("period T", "radius", "friction slow", "friction fast", "rate"),
+              "boucwen": ("period T", "Kd", "Qd", "dy", "shape", "damping ratio zeta", "slider friction F_s")}
+    for label in labels[name]:
+        assert f"│ {label} " in table, (label, table)
 
 
 def test_the_whole_test_carries_an_identified_pendulum_into_the_clearance(tmp_path):

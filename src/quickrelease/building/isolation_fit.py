@@ -1601,10 +1601,22 @@ class IsolationPrecision:
     unit_covariance: np.ndarray | None = field(default=None, repr=False)
 
     def physical(self) -> dict[str, dict[str, Any]]:
-        """The building's parameters with their predicted standard errors, keyed as the building's JSON:
-        ``period_s`` (bilinear: ``k1_N_m = m (2 pi / T1)^2`` and ``k2_N_m = (k2/k1) k1`` by the delta method,
-        and ``Fy_N``), ``damping_ratio``, ``friction_N``, 2dof ``superstructure_period_s`` and
-        ``superstructure_damping_ratio``, then ``d0_m``, ``release_time_s`` and ``offset_<channel>``; each
+        """The building's parameters with their predicted standard errors, keyed as the building's JSON
+        (:func:`quickrelease.studies.building_analysis.analyse_building`'s ``isolation``): the model's, then the
+        damper's, the sliders' friction and the rest.
+
+        - linear, 2dof: ``period_s``;
+        - bilinear: ``k1_N_m = m (2 pi / T1)^2`` and ``k2_N_m = (k2/k1) k1``, ``Fy_N``;
+        - pendulum: ``period_s``, ``radius_m = g (T / 2 pi)^2``, ``friction_slow``, ``friction_fast``, ``rate_s_m``;
+        - boucwen: ``period_s``, ``Kd_N_m = m (2 pi / T)^2``, ``Qd_N``, ``dy_m``, ``shape``;
+        - the damper: ``damping_ratio`` (viscous) or ``damping_coefficient`` and ``damping_exponent`` (power);
+        - ``friction_N`` (not the pendulum's), 2dof ``superstructure_period_s`` and
+          ``superstructure_damping_ratio``, then ``d0_m``, ``release_time_s``, ``offset_<channel>`` and
+          ``drift_<channel>``.
+
+        The derived k1, k2, R and Kd by the delta method, ``se^2 = g^T C g`` with g their gradient in the fit's
+        parameters and C the whole covariance (so k2 honours the correlation of k2/k1 and T1; R and Kd, functions
+        of T alone, come out 2 R / T and 2 Kd / T times T's standard error). Each row is
         ``{"truth", "se", "relative_se" (None where the truth is 0 or a time on the record's clock), "unit"}``
         (parameters held fixed are left out; ``se`` inf where not determined; :meth:`summary` gives None)."""
         p, index = self.parameters, {n: i for i, n in enumerate(self.names)}
@@ -1624,6 +1636,7 @@ class IsolationPrecision:
                     "relative_se": se / abs(value) if relative and value != 0 else None}
 
         out: dict[str, dict[str, Any]] = {}
+        keys: dict[str, str] = {}
         if self.model == "bilinear":
             if "period" in index or "stiffness_ratio" in index:
                 T1, r = p["period"], p["stiffness_ratio"]
@@ -1632,10 +1645,20 @@ class IsolationPrecision:
                 out["k1_N_m"] = row(k1, d_T, "N/m")
                 out["k2_N_m"] = row(r * k1, {**{n: r * d for n, d in d_T.items()},
                                              **({"stiffness_ratio": k1} if "stiffness_ratio" in index else {})}, "N/m")
-            keys = {"yield_force": "Fy_N"}
-        else:
-            keys = {"period": "period_s"}
-        keys.update(damping_ratio="damping_ratio", friction="friction_N",
+            keys["yield_force"] = "Fy_N"
+        elif "period" in index:
+            T = p["period"]
+            out["period_s"] = row(T, {"period": 1.0}, self.units["period"])
+            if self.model == "pendulum":  # R = g (T / 2 pi)^2: dR/dT = 2 R / T
+                R = GRAVITY * (T / (2.0 * math.pi)) ** 2
+                out["radius_m"] = row(R, {"period": 2.0 * R / T}, "m")
+            elif self.model == "boucwen":  # Kd = m (2 pi / T)^2: dKd/dT = -2 Kd / T
+                Kd = self.mass * (2.0 * math.pi / T) ** 2
+                out["Kd_N_m"] = row(Kd, {"period": -2.0 * Kd / T}, "N/m")
+        keys.update(friction_slow="friction_slow", friction_fast="friction_fast", rate="rate_s_m",
+                    characteristic_strength="Qd_N", yield_displacement="dy_m", shape="shape",
+                    damping_ratio="damping_ratio", damping_coefficient="damping_coefficient",
+                    damping_exponent="damping_exponent", friction="friction_N",
                     superstructure_period="superstructure_period_s",
                     superstructure_damping_ratio="superstructure_damping_ratio", d0="d0_m",
                     release_time="release_time_s")
@@ -1682,11 +1705,13 @@ def predicted_isolation_errors(channels, mass: float, model: str, parameters: di
         The record's channels, each with its ``noise`` given [SI].
     mass : float
         Mass on the isolators [kg].
-    model : {"linear", "bilinear", "2dof"}
+    model : {"linear", "bilinear", "2dof", "pendulum", "boucwen"}
     parameters : dict
-        The truth, in the fit's parameter names [SI]: period, damping_ratio, friction (bilinear also
-        stiffness_ratio, yield_force; 2dof superstructure_period, superstructure_damping_ratio), d0,
-        release_time [s, record time], and offset_<channel> (default 0; they enter linearly).
+        The truth, in the fit's parameter names [SI]: period, damping_ratio (or, for the power-law damper,
+        damping_coefficient and damping_exponent), friction (bilinear also stiffness_ratio, yield_force; 2dof
+        superstructure_period, superstructure_damping_ratio; boucwen characteristic_strength,
+        yield_displacement, shape; the pendulum friction_slow, friction_fast, rate [s/m] instead of friction),
+        d0, release_time [s, record time], and offset_<channel> (default 0; they enter linearly).
     superstructure_mass : float, optional
         2dof: the roof mass [kg].
     fixed : sequence of str

@@ -20,7 +20,6 @@ from typing import Any, ClassVar
 import numpy as np
 
 from .._validate import BYTES_PER_SAMPLE, check_seed, check_size
-from ..building.hysteretic import GRAVITY
 from ..building.model import RECORD_CHANNELS
 from ..device.solvers import FirstIntegral
 from ..errors import ParameterError, QuickReleaseError
@@ -391,58 +390,6 @@ def predicted_building_errors(synthetic: SyntheticBuildingRecord):
     return predicted_isolation_errors(synthetic.building_channels(noise_free=True), t["mass_kg"], t["model"],
                                       synthetic.fit_parameters(),
                                       superstructure_mass=t.get("superstructure_mass_kg"))
-
-
-#: The new models' and the power-law damper's parameters (fit_isolation's names) -> their keys in the building's
-#: JSON, for the precision table (:func:`building_precision`).
-_MODEL_KEYS = {"friction_slow": "friction_slow", "friction_fast": "friction_fast", "rate": "rate_s_m",
-               "characteristic_strength": "Qd_N", "yield_displacement": "dy_m", "shape": "shape",
-               "damping_coefficient": "damping_coefficient", "damping_exponent": "damping_exponent"}
-
-
-def building_precision(precision) -> dict[str, dict[str, Any]]:
-    """The rows of :meth:`~quickrelease.building.isolation_fit.IsolationPrecision.physical`, with those of every
-    model: after ``period_s`` the pendulum's radius ``radius_m`` = g (T / 2 pi)^2 and friction law
-    (``friction_slow``, ``friction_fast``, ``rate_s_m``), the Bouc-Wen bearings' ``Kd_N_m`` = m (2 pi / T)^2,
-    ``Qd_N``, ``dy_m``, ``shape``, and the power-law damper's ``damping_coefficient`` and ``damping_exponent``;
-    each ``{"truth", "se", "relative_se", "unit"}`` (se inf where not determined; the derived R and Kd by the
-    first-order propagation of T's standard error: 2 R / T and 2 Kd / T times it)."""
-    rows = precision.physical()
-    p, se, units = precision.parameters, precision.std_errors, precision.units
-
-    def row(value: float, error: float, unit: str) -> dict[str, Any]:
-        return {"truth": float(value), "se": float(error), "unit": unit,
-                "relative_se": float(error) / abs(value) if value != 0 else None}
-
-    extra: dict[str, dict[str, Any]] = {}
-    if "period" in se and precision.model in ("pendulum", "boucwen"):
-        T, se_T = p["period"], se["period"]
-        if precision.model == "pendulum":
-            R = GRAVITY * (T / (2.0 * math.pi)) ** 2
-            extra["radius_m"] = row(R, 2.0 * R / T * se_T, "m")
-        else:
-            Kd = precision.mass * (2.0 * math.pi / T) ** 2
-            extra["Kd_N_m"] = row(Kd, 2.0 * Kd / T * se_T, "N/m")
-    for name, key in _MODEL_KEYS.items():
-        if name in se:
-            extra[key] = row(p[name], se[name], units[name])
-    out: dict[str, dict[str, Any]] = {}
-    for key, value in rows.items():
-        out[key] = value
-        if key == "period_s":
-            out.update(extra)
-            extra = {}
-    out.update(extra)
-    return out
-
-
-def predicted_summary(precision) -> dict[str, Any]:
-    """:meth:`~quickrelease.building.isolation_fit.IsolationPrecision.summary` with ``parameters`` the rows of
-    :func:`building_precision` (every model's parameters; None for a standard error that is not finite)."""
-    out = precision.summary()
-    out["parameters"] = {k: {kk: (None if isinstance(vv, float) and not math.isfinite(vv) else vv)
-                             for kk, vv in row.items()} for k, row in building_precision(precision).items()}
-    return out
 
 
 def describe_truth(truth: dict[str, Any]) -> str:
