@@ -950,7 +950,8 @@ def _profile_step(names: list[str], physical: list[str], unseen: set[str], est: 
     for n in physical:
         if n not in names or n in unseen:
             continue
-        at_bound = est[n] - lower[n] <= 2.0 * std_errors[n] or upper[n] - est[n] <= 2.0 * std_errors[n]
+        lo_n, hi_n = lower.get(n, -math.inf), upper.get(n, math.inf)  # (d0 and the zeros are unbounded)
+        at_bound = est[n] - lo_n <= 2.0 * std_errors[n] or hi_n - est[n] <= 2.0 * std_errors[n]
         rel = std_errors[n] / abs(est[n]) if est[n] != 0 else math.inf
         want = profile if profile is not None else (at_bound or rel > PROFILE_RELATIVE_SE)
         if want and len(names) > 1:
@@ -962,11 +963,11 @@ def _profile_step(names: list[str], physical: list[str], unseen: set[str], est: 
                 i = names.index(n)
                 slope = {m: float(cov[j, i] / cov[i, i]) for j, m in enumerate(names)
                          if m != n and m not in unseen and cov[i, i] > 0 and math.isfinite(cov[j, i] / cov[i, i])}
-            ci[n] = _profile_interval(n, names, est, lower[n], upper[n], std_errors[n], target, solve, slope)
+            ci[n] = _profile_interval(n, names, est, lo_n, hi_n, std_errors[n], target, solve, slope)
             method[n] = "profile"
-            if ci[n] == (lower[n], upper[n]):
+            if ci[n] == (lo_n, hi_n):
                 warnings.append(f"{n} not identified by this record (its profile interval is its whole range "
-                                f"[{lower[n]:.4g}, {upper[n]:.4g}])")
+                                f"[{lo_n:.4g}, {hi_n:.4g}])")
         if rel > PROFILE_RELATIVE_SE and not at_bound:
             warnings.append(f"{n} is poorly determined (standard error {rel:.0%} of the estimate)")
     return warnings
