@@ -528,7 +528,9 @@ def test_the_releases_cycles_pooled_and_their_laws_in_the_amplitude(constant, ca
     the laws of keff and beta_eff in D against numpy's polyfit over the pooled cycles; both fall with D (the
     sliders' share F_s / D); the command's table and the report's section show them."""
     cycles = constant.cycles
-    assert len(cycles) >= 3 * len(constant.releases)
+    # (cycles run from a turning point to the next but one, each half-cycle counted once: 14 over these 5
+    # releases; 28 when every turning point started a cycle, overlapping)
+    assert len(cycles) >= 2 * len(constant.releases)
     for r in constant.releases:
         mine = [c for c in cycles if c["release"] == r.name]
         k = M * (2 * math.pi / r.values["period"]) ** 2
