@@ -236,8 +236,8 @@ def _stored(P, y):
 @njit(cache=True, nogil=True)
 def _step_size(P, y, d, mode):
     """The piece's step [s]: a fraction of the period of its stiffness (the initial one, or the post-yield one where
-    the Bouc-Wen element is saturated), of the Bouc-Wen
-    transition while loading, and of the friction law's velocity scale.
+    the Bouc-Wen element is saturated), of the Bouc-Wen transition while loading, and of the friction law's
+    velocity scale.
 
     The transition: ``dy / (n v)`` over :data:`STEPS_TRANSITION`, v the largest velocity the piece can reach
     before it saturates: from the piece's start ``v0`` with at most the acceleration ``a_max`` the piece's
@@ -333,9 +333,9 @@ def integrate(P, y0, t_end, capacity, max_steps):
     """The free vibration from the state y0 at rest (t = 0) to t_end [s] (inf: until the sliders stick).
 
     Returns (grid_t, grid_y, grid_d, grid_flags, n, stop_time, status): the grid's times [s], states, the
-    direction d of the piece each point starts a step of (0 at rest), flags (1: the plastic element yields),
-    the count of points, the stop time (inf if it never sticks) and a status (0 done, 1 the grid's capacity is
-    too small, 2 more than max_steps steps).
+    direction d of the piece each point starts a step of (0 at rest), the piece's mode (:data:`ELASTIC`,
+    :data:`YIELDING`, :data:`LOADING`), the count of points, the stop time (inf if it never sticks) and a status
+    (0 done, 1 the grid's capacity is too small, 2 more than max_steps steps).
 
     With a power-law damper the steps next to a reversal are graded towards it: the step after it from the
     reversal on, the one before it from the start of the step before the one that holds it (so that every
