@@ -8,6 +8,7 @@ solve_ivp with events): 8 s at 100 Hz, released at 2 s, LVDT noise 0.1 mm and ac
 """
 
 import math
+import os
 import sys
 from pathlib import Path
 
@@ -86,6 +87,8 @@ def test_a_viscous_case_compares_viscous_fits(monkeypatch):
 
 
 @pytest.mark.slow
+@pytest.mark.skipif(not os.environ.get("QUICKRELEASE_SLOW"), reason="opt-in (QUICKRELEASE_SLOW=1): three power-law "
+                    "fits, 43 s of CPU, beyond CI's budget; the spy tests above check the wiring")
 def test_a_power_damped_record_ranks_the_models_under_its_law(monkeypatch):
     """The whole comparison (linear, bilinear, pendulum; 2dof refused; no Bouc-Wen, whose fit of another model's
     record takes minutes): every compared fit has the power-law damper and fits the record to its noise (reduced
