@@ -503,6 +503,18 @@ PARAMETER_BOUNDS = {"period": (1e-3, 1e3), "damping_ratio": (0.0, 0.95), "fricti
                     "damping_exponent": EXPONENT_RANGE}
 
 
+#: Each fitted parameter's key in the building's JSON (the fitted values of
+#: :func:`quickrelease.studies.building_analysis.physical_estimates` and the predicted precision of
+#: :meth:`IsolationPrecision.physical`), in the order the rows are given.
+JSON_KEYS = {"period": "period_s", "yield_force": "Fy_N", "friction_slow": "friction_slow",
+             "friction_fast": "friction_fast", "rate": "rate_s_m", "characteristic_strength": "Qd_N",
+             "yield_displacement": "dy_m", "shape": "shape", "damping_ratio": "damping_ratio",
+             "damping_coefficient": "damping_coefficient", "damping_exponent": "damping_exponent",
+             "friction": "friction_N", "superstructure_period": "superstructure_period_s",
+             "superstructure_damping_ratio": "superstructure_damping_ratio", "d0": "d0_m",
+             "release_time": "release_time_s"}
+
+
 def _physical_names(model: str, damping: str = "viscous") -> list[str]:
     """The physical parameters of a model with its damper's law (in the fit's order)."""
     damper = ["damping_ratio"] if damping == "viscous" else ["damping_coefficient", "damping_exponent"]
@@ -1646,7 +1658,7 @@ class IsolationPrecision:
                 out["k1_N_m"] = row(k1, d_T, "N/m")
                 out["k2_N_m"] = row(r * k1, {**{n: r * d for n, d in d_T.items()},
                                              **({"stiffness_ratio": k1} if "stiffness_ratio" in index else {})}, "N/m")
-            keys["yield_force"] = "Fy_N"
+            keys["yield_force"] = JSON_KEYS["yield_force"]
         elif "period" in index:
             T = p["period"]
             out["period_s"] = row(T, {"period": 1.0}, self.units["period"])
@@ -1656,13 +1668,7 @@ class IsolationPrecision:
             elif self.model == "boucwen":  # Kd = m (2 pi / T)^2: dKd/dT = -2 Kd / T
                 Kd = self.mass * (2.0 * math.pi / T) ** 2
                 out["Kd_N_m"] = row(Kd, {"period": -2.0 * Kd / T}, "N/m")
-        keys.update(friction_slow="friction_slow", friction_fast="friction_fast", rate="rate_s_m",
-                    characteristic_strength="Qd_N", yield_displacement="dy_m", shape="shape",
-                    damping_ratio="damping_ratio", damping_coefficient="damping_coefficient",
-                    damping_exponent="damping_exponent", friction="friction_N",
-                    superstructure_period="superstructure_period_s",
-                    superstructure_damping_ratio="superstructure_damping_ratio", d0="d0_m",
-                    release_time="release_time_s")
+        keys.update((name, key) for name, key in JSON_KEYS.items() if name not in ("period", "yield_force"))
         for name, key in keys.items():
             if name in index:
                 out[key] = row(p[name], {name: 1.0}, self.units[name], relative=name != "release_time")

@@ -28,6 +28,7 @@ from .._results import Summarised
 from ..building.decay import DecayAnalysis, analyse_decay, hysteresis_loop
 from ..building.effective import CycleProperties, loop_cycles
 from ..building.isolation_fit import (
+    JSON_KEYS,
     BuildingChannel,
     IsolationFit,
     compare_models,
@@ -187,7 +188,8 @@ def physical_estimates(fit: IsolationFit) -> dict[str, Any]:
     blind = {n for n, how in fit.interval_method.items() if how == "not identified"}
     out["not_identified"] = []
 
-    def put(key: str, name: str, value: float | None = None) -> None:
+    def put(name: str, value: float | None = None) -> None:
+        key = JSON_KEYS[name]
         out[key] = float(est[name]) if name in est else value
         out[f"{key}_ci95"] = [float(v) for v in ci[name]] if name in ci and name not in blind else None
         if name in blind:
@@ -209,32 +211,32 @@ def physical_estimates(fit: IsolationFit) -> dict[str, Any]:
             k2_ci = None  # the record does not bound k2
             out["not_identified"].append("k2_N_m")
         out["k2_N_m_ci95"] = k2_ci
-        put("Fy_N", "yield_force", float(iso.yield_force))
+        put("yield_force", float(iso.yield_force))
     elif model == "pendulum":
-        put("period_s", "period", float(iso.period))
+        put("period", float(iso.period))
         out["radius_m"] = float(iso.radius)  # R = g (T / 2 pi)^2, increasing in T: its interval the image of T's
         out["radius_m_ci95"] = (None if "period" not in ci or "period" in blind
                                 else [9.80665 * (v / (2.0 * math.pi)) ** 2 for v in ci["period"]])
         for name in ("friction_slow", "friction_fast", "rate"):
-            put(name if name != "rate" else "rate_s_m", name, float(getattr(iso, name)))
+            put(name, float(getattr(iso, name)))
     elif model == "boucwen":
-        put("period_s", "period", float(iso.period))
+        put("period", float(iso.period))
         out["Kd_N_m"] = float(iso.k2)  # Kd = m (2 pi / T)^2, decreasing in T
         out["Kd_N_m_ci95"] = (None if "period" not in ci or "period" in blind
                               else sorted(fit.mass * (2.0 * math.pi / v) ** 2 if v > 0 else math.inf
                                           for v in ci["period"]))
-        put("Qd_N", "characteristic_strength", float(iso.characteristic_strength))
-        put("dy_m", "yield_displacement", float(iso.yield_displacement))
-        put("shape", "shape", float(iso.shape))
+        put("characteristic_strength", float(iso.characteristic_strength))
+        put("yield_displacement", float(iso.yield_displacement))
+        put("shape", float(iso.shape))
     else:
-        put("period_s", "period", float(iso.period))
+        put("period", float(iso.period))
     if fit.damping == "power":
-        put("damping_coefficient", "damping_coefficient", float(iso.damping))
-        put("damping_exponent", "damping_exponent", float(iso.damping_exponent))
+        put("damping_coefficient", float(iso.damping))
+        put("damping_exponent", float(iso.damping_exponent))
     else:
-        put("damping_ratio", "damping_ratio", float(est.get("damping_ratio", fit.parameters.get("damping_ratio"))))
+        put("damping_ratio", float(est.get("damping_ratio", fit.parameters.get("damping_ratio"))))
     if model != "pendulum":
-        put("friction_N", "friction", float(iso.friction))
+        put("friction", float(iso.friction))
     out["interval_method"] = dict(fit.interval_method)
     return {k: jsonable(v) for k, v in out.items()}
 
