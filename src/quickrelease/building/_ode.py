@@ -72,12 +72,140 @@ STEPS_RATE = 2.0
 GRADES = 14
 #: A creep into the sliders' holding limit is at rest below this fraction of the release's largest speed.
 CREEP = 1e-8
+#: A piece's mode bit: creeping (added to the element's mode): the damper (alpha < 1) holds the layer on its slow
+#: manifold, inertia a small correction (see :func:`_creep`).
+CREEPING = 4
+#: A piece creeps where the damper's relaxation rate at the quasi-static speed, g'(S0) / m, is at least this many
+#: times the layer's circular frequency sqrt(k_t / m) (the neglected terms are (omega / lambda)^4 = 1e-8 of the
+#: creep's speed), once its speed is within CREEP_TOL of the slow manifold's.
+CREEP_RATIO = 100.0
+CREEP_TOL = 1e-6
+#: Where the damper dominates (alpha < 1, the layer pushed on past the sliders), an explicit step spans at most this
+#: many of the damper's relaxation times m / g'(s).
+STEP_RELAX = 0.5
 #: End codes of a record's grid points: the step goes on, or the point starts a piece after an event.
 EV_NONE, EV_RELEASE, EV_REVERSAL, EV_YIELD, EV_ZERO, EV_STICK = 0, 1, 2, 3, 4, 5
 
 
 @njit(cache=True, nogil=True)
+def _resist(P, s):
+    """The sliders' friction and the damper's force against a speed s > 0 [m/s], g(s) = f_f(s) + C s^alpha [N],
+    and its first two derivatives [N s/m], [N s^2/m^2]."""
+    rate = P[RATE]
+    df = P[FFAST] - P[FSLOW]
+    if rate > 0.0 and df != 0.0:
+        e = math.exp(-rate * s)
+        f, f1, f2 = P[FFAST] - df * e, df * rate * e, -df * rate * rate * e
+    else:
+        f, f1, f2 = P[FSLOW], 0.0, 0.0
+    a = P[ALPHA]
+    p = P[C] * s ** a
+    return f + p, f1 + a * p / s, f2 + a * (a - 1.0) * p / (s * s)
+
+
+@njit(cache=True, nogil=True)
+def _quasi(P, push):
+    """The quasi-static speed S0 [m/s] at which the sliders and the damper balance the force ``push`` [N] that
+    drives the layer on, g(S0) = push (0 where the sliders hold it, push <= f_slow). Closed form for constant
+    friction, ((push - f_slow) / C)^(1 / alpha); else a safeguarded Newton iteration on ln S0 (g increases with
+    the speed: the friction's law strengthens with it)."""
+    excess = push - P[FSLOW]
+    if excess <= 0.0 or P[C] <= 0.0:
+        return 0.0
+    hi = (excess / P[C]) ** (1.0 / P[ALPHA])  # g(hi) >= push: the friction is at least f_slow
+    if P[RATE] <= 0.0 or P[FFAST] == P[FSLOW]:
+        return hi
+    u_hi = math.log(hi)
+    u_lo = u_hi
+    for _ in range(40):  # g -> f_slow < push as the speed vanishes
+        u_lo -= 20.0
+        if _resist(P, math.exp(u_lo))[0] < push:
+            break
+    u = u_hi
+    for _ in range(200):
+        s = math.exp(u)
+        g, g1, _g2 = _resist(P, s)
+        if g == push:
+            return s
+        if g > push:
+            u_hi = u
+        else:
+            u_lo = u
+        new = u - (g - push) / (g1 * s)
+        if not (u_lo < new < u_hi):
+            new = 0.5 * (u_lo + u_hi)
+        if abs(new - u) <= 1e-15 or u_hi - u_lo <= 1e-15:
+            return math.exp(new)
+        u = new
+    return math.exp(u)
+
+
+@njit(cache=True, nogil=True)
+def _slope(P, z, mode):
+    """dz/dx of the hysteretic element in a piece of this mode, and the layer's tangent stiffness k_t [N/m]."""
+    base = mode & 3
+    if P[HKIND] == H_BOUCWEN:
+        if base == YIELDING:
+            return 0.0, P[K]
+        zx = 1.0 / P[DY]
+        if base == LOADING:
+            az = abs(z)
+            zx *= 1.0 - (az if P[N] == 1.0 else az ** P[N])
+        return zx, P[K] + P[Q] * zx
+    if P[HKIND] == H_PLASTIC and base == ELASTIC:
+        return P[KP], P[K] + P[KP]
+    return 0.0, P[K]
+
+
+@njit(cache=True, nogil=True)
+def _creep(P, y, d, mode, out):
+    """The right-hand side on the slow manifold: the layer pushed on past the sliders by ``push = -d (k x + f_h)``,
+    moving at ``S = S0 + S1``: S0 the quasi-static speed (g(S0) = push, :func:`_quasi`) and S1 = m k_t S0 / g'(S0)^2
+    its first correction for inertia (from m dS/dt = push - g(S), dpush/dt = -k_t S); the neglected terms are
+    (m k_t / g'^2)^2 of S. The velocity's rate is dS/dt to the same order."""
+    zx, kt = _slope(P, y[2], mode)
+    s0 = _quasi(P, -d * _net(P, y))
+    for j in range(NY):
+        out[j] = 0.0
+    if s0 <= 0.0:
+        return
+    m = P[M]
+    _g, g1, g2 = _resist(P, s0)
+    s1 = m * kt * s0 / (g1 * g1)
+    s = s0 + s1
+    v = d * s
+    ds0 = -kt * s / g1
+    dkt = 0.0
+    zdot = v * zx
+    base = mode & 3
+    if P[HKIND] == H_BOUCWEN and base == LOADING and P[N] > 0.0:
+        z = y[2]
+        az = abs(z)
+        if az > 0.0:
+            dkt = -P[Q] * P[N] * az ** (P[N] - 1.0) * (1.0 if z > 0.0 else -1.0) * zdot / P[DY]
+    ds1 = m * (dkt * s0 + kt * ds0) / (g1 * g1) - 2.0 * m * kt * s0 * g2 * ds0 / (g1 * g1 * g1)
+    out[0] = v
+    out[1] = d * (ds0 + ds1)
+    out[2] = zdot
+    g, _g1, _g2 = _resist(P, s)
+    fd = P[C] * s ** P[ALPHA]
+    out[3] = (g - fd) * s
+    out[4] = fd * s
+    if P[HKIND] == H_BOUCWEN:
+        if base == LOADING:
+            az = abs(y[2])
+            out[5] = P[Q] * (az if P[N] == 1.0 else az ** P[N]) * y[2] * v
+        elif base == YIELDING:
+            out[5] = P[Q] * y[2] * v
+    elif P[HKIND] == H_PLASTIC and base == YIELDING:
+        out[5] = P[FP] * s
+
+
+@njit(cache=True, nogil=True)
 def _rhs(P, y, d, mode, out):
+    if mode & CREEPING:
+        _creep(P, y, d, mode, out)
+        return
     x, v, z = y[0], y[1], y[2]
     s = d * v
     if s < 0.0:
@@ -243,6 +371,7 @@ def _step_size(P, y, d, mode):
     before it saturates: from the piece's start ``v0`` with at most the acceleration ``a_max`` the piece's
     energy allows over the displacement to saturation, ``dy G_n(1 - SATURATION)`` with
     ``G_n(z) = int_0^z du / (1 - u^n) <= 1 + ln(1 / SATURATION) / n``, and at most the energy's own bound."""
+    mode = mode & 3
     k1 = P[K]
     if P[HKIND] == H_BOUCWEN and mode != YIELDING:
         k1 += P[Q] / P[DY]
@@ -260,6 +389,32 @@ def _step_size(P, y, d, mode):
     if P[RATE] > 0.0 and P[FFAST] != P[FSLOW]:
         h = min(h, 1.0 / (P[RATE] * amax * STEPS_RATE))
     return h
+
+
+@njit(cache=True, nogil=True)
+def _relax_step(P, y, d, mode, h):
+    """The step [s] of a piece whose layer the sliders do not hold (push = -d (k x + f_h) > f_slow) and a damper of
+    alpha < 1 resists: at most STEP_RELAX of the damper's relaxation time m / g'(s) at the speed s the layer has
+    (the quasi-static speed at a turn), h otherwise; and whether the piece is on its slow manifold and may creep
+    (the relaxation at least CREEP_RATIO times faster than the layer's oscillation, the speed within CREEP_TOL of
+    S0 + S1). Returns (step, creep, S)."""
+    push = -d * _net(P, y)
+    if push <= P[FSLOW]:
+        return h, False, 0.0
+    s0 = _quasi(P, push)
+    if s0 <= 0.0:
+        return h, False, 0.0
+    m = P[M]
+    _g, g1, _g2 = _resist(P, s0)
+    _zx, kt = _slope(P, y[2], mode)
+    s = d * y[1]
+    if g1 >= CREEP_RATIO * math.sqrt(kt * m):
+        target = s0 + m * kt * s0 / (g1 * g1)
+        if abs(s - target) <= CREEP_TOL * target:
+            return h, True, target
+    if s > 0.0:
+        _g, g1, _g2 = _resist(P, s)
+    return min(h, STEP_RELAX * m / g1), False, 0.0
 
 
 @njit(cache=True, nogil=True)
@@ -364,8 +519,10 @@ def integrate(P, y0, t_end, capacity, max_steps):
     if P[HKIND] == H_BOUCWEN and mode == YIELDING:
         y[2] = d
     powered = P[ALPHA] != 1.0
+    stiff = P[ALPHA] < 1.0 and P[C] > 0.0  # a damper that can dominate the sliders at low speed
     graded = powered  # the release starts at rest: graded like a reversal
-    h = _step_size(P, y, d, mode)
+    hp = _step_size(P, y, d, mode)  # the piece's step
+    h = _relax_step(P, y, d, mode, hp)[0] if stiff else hp
     steps = 0
     # the grid index, time and gradedness of the start of the step before the current one in this piece (-1: none)
     prev, t_prev, graded_prev = -1, 0.0, False
@@ -381,13 +538,14 @@ def integrate(P, y0, t_end, capacity, max_steps):
         # the first event in the step (if any)
         kind = EV_NONE
         theta = h
-        if d * y1[1] <= 0.0:
+        if not (mode & CREEPING) and d * y1[1] <= 0.0:
             kind = EV_REVERSAL
         first = EV_NONE  # the first event other than a reversal (a yield, a saturation, z's zero crossing)
-        if ((P[HKIND] == H_PLASTIC and mode == ELASTIC and d * y1[2] >= P[FP])
-                or (P[HKIND] == H_BOUCWEN and mode == LOADING and d * y1[2] >= 1.0 - SATURATION)):
+        base = mode & 3
+        if ((P[HKIND] == H_PLASTIC and base == ELASTIC and d * y1[2] >= P[FP])
+                or (P[HKIND] == H_BOUCWEN and base == LOADING and d * y1[2] >= 1.0 - SATURATION)):
             first = EV_YIELD
-        if P[HKIND] == H_BOUCWEN and mode == ELASTIC and (y1[2] == 0.0 or (y1[2] > 0.0) != (y[2] > 0.0)):
+        if P[HKIND] == H_BOUCWEN and base == ELASTIC and (y1[2] == 0.0 or (y1[2] > 0.0) != (y[2] > 0.0)):
             first = EV_ZERO
         if first != EV_NONE:
             th = _locate(P, y, h, d, mode, first, graded, False, k, tmp, a, out, r)
@@ -424,6 +582,21 @@ def integrate(P, y0, t_end, capacity, max_steps):
                 gd[n - 1] = 0.0
                 stop = t
                 break
+            if mode & CREEPING:
+                if _quasi(P, -d * _net(P, y)) < creep:  # the creep's speed below CREEP: at rest (as _held)
+                    y[1] = 0.0
+                    gy[n - 1, 1] = 0.0
+                    gd[n - 1] = 0.0
+                    stop = t
+                    break
+            elif stiff:
+                h, creeps, speed = _relax_step(P, y, d, mode, hp)
+                if creeps:  # on the slow manifold: on it from here, on the piece's steps
+                    mode |= CREEPING
+                    y[1] = d * speed
+                    gy[n - 1, 1] = y[1]
+                    gf[n - 1] = mode
+                    h = hp
             if t >= t_end:  # the horizon's step was the last
                 break
             continue
@@ -441,19 +614,20 @@ def integrate(P, y0, t_end, capacity, max_steps):
         for j in range(NY):
             y[j] = out[j]
         graded = False
+        creeping = mode & CREEPING
         if kind == EV_YIELD and P[HKIND] == H_PLASTIC:
             y[2] = d * P[FP]
-            mode = YIELDING
+            mode = YIELDING | creeping
         elif kind == EV_YIELD:  # the Bouc-Wen element saturates: on the post-yield stiffness's steps
             y[2] = d
-            mode = YIELDING
-            h = _step_size(P, y, d, mode)
+            mode = YIELDING | creeping
+            hp = _step_size(P, y, d, mode)
         elif kind == EV_ZERO:  # the Bouc-Wen element starts loading: on the transition's steps
             y[2] = 0.0
-            mode = LOADING
+            mode = LOADING | creeping
             # |z|^n with a fractional n is not smooth where z leaves 0: the next step is graded from it
             graded = P[N] != math.floor(P[N])
-            h = _step_size(P, y, d, mode)
+            hp = _step_size(P, y, d, mode)
         else:  # a reversal: stick, or turn
             y[1] = 0.0
             net = _net(P, y)
@@ -466,7 +640,8 @@ def integrate(P, y0, t_end, capacity, max_steps):
             if P[HKIND] == H_BOUCWEN and mode == YIELDING:
                 y[2] = d
             graded = powered
-            h = _step_size(P, y, d, mode)
+            hp = _step_size(P, y, d, mode)
+        h = _relax_step(P, y, d, mode, hp)[0] if stiff and not (mode & CREEPING) else hp
         prev = -1
         n = _put(gt, gy, gd, gf, n, t, y, d, mode)
         if t >= t_end:
@@ -628,7 +803,12 @@ def motion(P, gt, gy, gd, gf, n, stop, y_push, t):
             z += gy[p, 2]
         out[0, i] = x
         out[1, i] = v
-        out[2, i] = _accel(P, x, v, z, gd[p])
+        if gf[p] & CREEPING:
+            ynew[0], ynew[1], ynew[2] = x, v, z
+            _creep(P, ynew, gd[p], gf[p], tmp)
+            out[2, i] = tmp[1]
+        else:
+            out[2, i] = _accel(P, x, v, z, gd[p])
     return out
 
 
