@@ -363,6 +363,28 @@ def test_a_power_law_damper_fast_creep_position(after):
     assert motion._grid[4] < 1000
 
 
+def test_a_power_law_damper_slow_creep_for_a_minute():
+    """A layer (alpha 0.40, sliders 0.2 % of W) whose third turn lands past the holding limit and creeps for the
+    rest of a minute at 2e-4 .. 7e-6 m/s, where the damper's relaxation rate g'(s) / m is 12 to 90 times the
+    layer's frequency (the power-law fit's global stage met such layers: 16 000 explicit steps, 80 ms each record).
+    Against the reference (solve_ivp, the full equation): position to 1e-10 m and velocity to 1e-9 m/s over the
+    creep, and the turns; the whole minute in under 4000 grid points."""
+    kw = dict(mass=8e5, stiffness=5469221.96966757, damping=409588.41631502716, friction=15088.378477101933,
+              damping_exponent=0.39524753842512517)
+    d0 = 0.14897337271346028
+    t = np.array([2.0, 2.6, 5.0, 20.0, 59.0])
+    motion = free_vibration(Isolation(**kw), d0, t_end=59.9)
+    r = ref.simulate(_reference_system(kw, "isolation"), d0, t, t_end=59.0)
+    x, v, _a = motion.state(t)
+    np.testing.assert_allclose(x, r.x, rtol=0, atol=5e-10)
+    np.testing.assert_allclose(v, r.v, rtol=0, atol=1e-9)
+    assert r.stop_time == math.inf and motion.stop_time == math.inf
+    assert motion.reversal_times.size == r.reversal_times.size == 3
+    np.testing.assert_allclose(motion.reversal_times, r.reversal_times, rtol=0, atol=1e-8)
+    assert abs(float(r.v[-1])) > 1e-6 and float(x[-1]) > kw["friction"] / kw["stiffness"]  # still creeping
+    assert motion._grid[4] < 4000
+
+
 def test_a_power_law_damper_holds_a_creep_past_the_holding_limit():
     """A linear layer with sliders and a damper of alpha 0.32 whose fifth turn lands 0.8 % past the sliders'
     holding limit (h26c's finding: 31 s of CPU for 10 s of record, 347 000 steps, as the damper's stiffness at
