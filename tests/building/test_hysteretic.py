@@ -385,6 +385,43 @@ def test_a_power_law_damper_slow_creep_for_a_minute():
     assert motion._grid[4] < 4000
 
 
+_CREEPS = {  # layers whose last turn lands past the sliders' holding limit, a damper of alpha < 1 holding the creep
+    "pendulum, Constantinou's law, alpha 0.2": (Pendulum, "pendulum", dict(
+        mass=6.0e5, radius=3.0, friction_slow=0.005, friction_fast=0.015, rate=10.0, damping=2.0e4,
+        damping_exponent=0.2), 0.2),
+    "boucwen n 1 loading, alpha 0.3": (BoucWen, "boucwen", dict(
+        mass=8.0e5, post_yield_stiffness=1.6e6, characteristic_strength=1.0e5, yield_displacement=0.03, shape=1.0,
+        damping=5.0e4, damping_exponent=0.3, friction=2.0e3), 0.2),
+    "boucwen n 2 unloading, alpha 0.2": (BoucWen, "boucwen", dict(
+        mass=8.0e5, post_yield_stiffness=1.6e6, characteristic_strength=1.0e5, yield_displacement=0.03, shape=2.0,
+        damping=5.0e4, damping_exponent=0.2, friction=2.0e3), 0.2),
+}
+
+
+@pytest.mark.parametrize("name", list(_CREEPS))
+def test_creep_on_the_slow_manifold_against_the_reference(name):
+    """A creep for the rest of 20 s (speeds 1e-7 .. 3e-6 m/s, the damper's relaxation rate over 100 times the
+    layer's frequency: the package integrates it on the slow manifold, _ode._creep): against the reference
+    (solve_ivp on the full equation with inertia) x to 1e-9 of d0, v and a to 1e-8 of d0 omega, d0 omega^2, the turns
+    to 1e-7 s; the energy balance to 1e-9 of the initial energy; the layer still creeping at the end."""
+    cls, kind, kw, d0 = _CREEPS[name]
+    system = cls(**kw)
+    motion = free_vibration(system, d0, t_end=20.0)
+    t = np.array([3.0, 6.0, 8.0, 12.0, 19.0])
+    r = ref.simulate(_reference_system(kw, kind), d0, t, t_end=19.0)
+    x, v, a = motion.state(t)
+    w = _omega(system)
+    np.testing.assert_allclose(x, r.x, rtol=0, atol=1e-9 * d0)
+    np.testing.assert_allclose(v, r.v, rtol=0, atol=1e-8 * d0 * w)
+    np.testing.assert_allclose(a, r.a, rtol=0, atol=1e-8 * d0 * w * w)
+    assert motion.reversal_times.size == r.reversal_times.size >= 2
+    np.testing.assert_allclose(motion.reversal_times, r.reversal_times, rtol=0, atol=1e-7)
+    assert motion.stop_time == math.inf and r.stop_time == math.inf and 1e-8 < abs(float(r.v[-1])) < 1e-5
+    e = motion.energies(t)
+    total = e["kinetic"] + e["stored"] + e["hysteretic"] + e["friction"] + e["viscous"]
+    np.testing.assert_allclose(total, e["initial"], rtol=1e-9)
+
+
 def test_a_power_law_damper_holds_a_creep_past_the_holding_limit():
     """A linear layer with sliders and a damper of alpha 0.32 whose fifth turn lands 0.8 % past the sliders'
     holding limit (h26c's finding: 31 s of CPU for 10 s of record, 347 000 steps, as the damper's stiffness at
