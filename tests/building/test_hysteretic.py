@@ -385,6 +385,27 @@ def test_a_power_law_damper_slow_creep_for_a_minute():
     assert motion._grid[4] < 4000
 
 
+def test_a_creep_ends_at_rest_when_its_speed_falls_below_creep():
+    """The fast creep followed to its end: inertia-free, the excess e = k |x| - F_s obeys de/dt = -k (e / C)^p,
+    p = 1 / alpha, so by hand e^(1 - p) grows linearly in time from the fifth turn (x_5 from the reference), and the
+    layer is at rest (_ode.CREEP: its speed 1e-8 of the release's, omega d0) where C s^alpha = e, i.e.
+    e_stop = C (1e-8 omega d0)^alpha: at 6761 s, at x = (F_s + e_stop) / k. The package's stop to 1e-5 of that
+    time (the hand formula neglects inertia: the transient and (omega / lambda)^2), its rest position to 1e-12 m."""
+    kw = _FAST_CREEP
+    motion = free_vibration(Isolation(**kw), _FAST_CREEP_D0)
+    r = _fast_creep()[1]
+    k, c, alpha, f, m = kw["stiffness"], kw["damping"], kw["damping_exponent"], kw["friction"], kw["mass"]
+    t5, x5 = float(r.reversal_times[-1]), float(r.turning_points[-1])
+    p = 1.0 / alpha
+    e0 = k * abs(x5) - f
+    e_stop = c * (1e-8 * math.sqrt(k / m) * _FAST_CREEP_D0) ** alpha
+    t_stop = t5 + (e_stop ** (1.0 - p) - e0 ** (1.0 - p)) / ((p - 1.0) * k * c ** -p)
+    assert 6000.0 < t_stop < 7000.0
+    assert motion.stop_time == pytest.approx(t_stop, rel=1e-5)
+    assert motion.rest[0] == pytest.approx(math.copysign((f + e_stop) / k, x5), abs=1e-12)
+    np.testing.assert_allclose(motion.reversal_times[:-1], r.reversal_times, rtol=0, atol=1e-7)
+
+
 _CREEPS = {  # layers whose last turn lands past the sliders' holding limit, a damper of alpha < 1 holding the creep
     "pendulum, Constantinou's law, alpha 0.2": (Pendulum, "pendulum", dict(
         mass=6.0e5, radius=3.0, friction_slow=0.005, friction_fast=0.015, rate=10.0, damping=2.0e4,

@@ -90,6 +90,9 @@ STEP_STABLE = 3.0
 BAND_TOL = 1e-3
 #: End codes of a record's grid points: the step goes on, or the point starts a piece after an event.
 EV_NONE, EV_RELEASE, EV_REVERSAL, EV_YIELD, EV_ZERO, EV_STICK = 0, 1, 2, 3, 4, 5
+#: The event that ends a creep: the force pushing the layer on falls to what the sliders and the damper resist at
+#: the creep's lowest speed (the quasi-static speed reaches CREEP of the release's: at rest, as :func:`_held`).
+EV_REST = 6
 
 
 @njit(cache=True, nogil=True)
@@ -307,7 +310,9 @@ def _advance(P, y, h, d, mode, graded_start, graded_end, k, tmp, a, out):
 
 
 @njit(cache=True, nogil=True)
-def _event_value(P, y, kind, d):
+def _event_value(P, y, kind, d, level):
+    if kind == EV_REST:  # the push -d (k x + f_h) above ``level``
+        return -d * _net(P, y) - level
     if kind == EV_REVERSAL:
         return d * y[1]
     if kind == EV_YIELD:  # the plastic element's yield; the Bouc-Wen element's saturation
@@ -316,16 +321,16 @@ def _event_value(P, y, kind, d):
 
 
 @njit(cache=True, nogil=True)
-def _locate(P, y, h, d, mode, kind, graded_start, graded_end, k, tmp, a, out, r):
+def _locate(P, y, h, d, mode, kind, graded_start, graded_end, k, tmp, a, out, r, level):
     """The fraction theta in (0, h] of a step where the event's function (:func:`_event_value`) vanishes,
     bracketed by [0, h]; a safeguarded Newton iteration on the tableau's map (derivative from the equation)."""
     lo, hi = 0.0, h
     # the event's function is positive before the event (the velocity's d x_dot, the plastic element's margin
     # f_p - d z), or has the sign of z (a zero crossing of z): taken so even where it starts at 0 (a reversal's
     # velocity at the piece's start)
-    glo = abs(_event_value(P, y, kind, d)) * (1.0 if kind != EV_ZERO or y[2] > 0.0 else -1.0)
+    glo = abs(_event_value(P, y, kind, d, level)) * (1.0 if kind != EV_ZERO or y[2] > 0.0 else -1.0)
     _advance(P, y, h, d, mode, graded_start, graded_end, k, tmp, a, out)
-    ghi = _event_value(P, out, kind, d)
+    ghi = _event_value(P, out, kind, d, level)
     if ghi == 0.0:
         return h
     theta = h * glo / (glo - ghi)
@@ -333,7 +338,7 @@ def _locate(P, y, h, d, mode, kind, graded_start, graded_end, k, tmp, a, out, r)
         if not (lo < theta < hi):
             theta = 0.5 * (lo + hi)
         _advance(P, y, theta, d, mode, graded_start, graded_end, k, tmp, a, out)
-        g = _event_value(P, out, kind, d)
+        g = _event_value(P, out, kind, d, level)
         if g == 0.0:
             return theta
         if (g > 0.0) == (glo > 0.0 or (glo == 0.0 and kind != EV_ZERO)):
@@ -345,6 +350,9 @@ def _locate(P, y, h, d, mode, kind, graded_start, graded_end, k, tmp, a, out, r)
             dg = d * r[1]
         elif kind == EV_YIELD:
             dg = -d * r[2]
+        elif kind == EV_REST:
+            dg = -d * (P[K] * r[0] + (P[Q] * r[2] if P[HKIND] == H_BOUCWEN else
+                                      (r[2] if P[HKIND] == H_PLASTIC else 0.0)))
         else:
             dg = r[2]
         new = theta - g / dg if dg != 0.0 else 0.5 * (lo + hi)
@@ -521,6 +529,7 @@ def integrate(P, y0, t_end, capacity, max_steps):
     stop = math.inf
     net = _net(P, y)
     creep = CREEP * math.sqrt(2.0 * _stored(P, y) / P[M])
+    rest = _resist(P, creep)[0] if creep > 0.0 and P[ALPHA] < 1.0 and P[C] > 0.0 else 0.0  # a creep's end (EV_REST)
     if _held(P, net, creep):  # held where it was pushed
         n = _put(gt, gy, gd, gf, n, 0.0, y, 0.0, ELASTIC)
         return gt, gy, gd, gf, n, 0.0, 0
@@ -558,17 +567,21 @@ def integrate(P, y0, t_end, capacity, max_steps):
         if P[HKIND] == H_BOUCWEN and base == ELASTIC and (y1[2] == 0.0 or (y1[2] > 0.0) != (y[2] > 0.0)):
             first = EV_ZERO
         if first != EV_NONE:
-            th = _locate(P, y, h, d, mode, first, graded, False, k, tmp, a, out, r)
+            th = _locate(P, y, h, d, mode, first, graded, False, k, tmp, a, out, r, rest)
             if kind == EV_NONE or th < theta:
                 kind, theta = first, th
+        if mode & CREEPING and -d * _net(P, y1) <= rest:  # the creep ends in this step
+            th = _locate(P, y, h, d, mode, EV_REST, graded, False, k, tmp, a, out, r, rest)
+            if kind == EV_NONE or th < theta:
+                kind, theta = EV_REST, th
         if kind == EV_REVERSAL:
             if powered and prev >= 0 and not graded:
                 # graded from the start of the step before: back to that point
                 th = _locate(P, gy[prev], t - t_prev + h, d, mode, EV_REVERSAL, graded_prev, True, k, tmp, a,
-                             out, r)
+                             out, r, rest)
                 reversal_at = t_prev + th
             else:
-                th = _locate(P, y, h, d, mode, EV_REVERSAL, graded, powered, k, tmp, a, out, r)
+                th = _locate(P, y, h, d, mode, EV_REVERSAL, graded, powered, k, tmp, a, out, r, rest)
                 reversal_at = t + th
             # a yield or zero crossing of z before it comes first
             if theta < h and t + theta < reversal_at:
@@ -592,14 +605,7 @@ def integrate(P, y0, t_end, capacity, max_steps):
                 gd[n - 1] = 0.0
                 stop = t
                 break
-            if mode & CREEPING:
-                if _quasi(P, -d * _net(P, y)) < creep:  # the creep's speed below CREEP: at rest (as _held)
-                    y[1] = 0.0
-                    gy[n - 1, 1] = 0.0
-                    gd[n - 1] = 0.0
-                    stop = t
-                    break
-            elif stiff:
+            if stiff and not (mode & CREEPING):
                 h, creeps, speed = _relax_step(P, y, d, mode, hp)
                 if creeps:  # on the slow manifold: on it from here, on the piece's steps
                     mode |= CREEPING
@@ -625,6 +631,11 @@ def integrate(P, y0, t_end, capacity, max_steps):
             y[j] = out[j]
         graded = False
         creeping = mode & CREEPING
+        if kind == EV_REST:  # the creep's speed down to CREEP of the release's: at rest (as _held)
+            y[1] = 0.0
+            stop = t
+            n = _put(gt, gy, gd, gf, n, t, y, 0.0, mode)
+            break
         if kind == EV_YIELD and P[HKIND] == H_PLASTIC:
             y[2] = d * P[FP]
             mode = YIELDING | creeping
