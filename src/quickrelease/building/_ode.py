@@ -26,6 +26,16 @@ steps a half-cycle, not millions. With a power-law damper (alpha != 1) the force
 where the velocity vanishes: the steps next to a reversal are graded geometrically towards it (:data:`GRADES`
 halvings), so that its error stays at rounding. No smoothed sign function anywhere.
 
+A damper of alpha < 1 dominates the sliders at low speed: where the layer is pushed on past the sliders' holding
+limit (``push = -d (k x + f_h) > f_slow``) its speed relaxes towards the slow manifold ``g(s) = push``
+(``g(s) = f_f(s) + C s^alpha``) at the rate ``g'(s) / m``, which grows without bound as s falls (a creep of 1e-6 m/s:
+hundreds of times the layer's frequency). There the explicit steps span at most STEP_RELAX of the relaxation time
+while the speed relaxes (and the speed at most halves in a step while it slows down onto the manifold), STEP_STABLE
+once it is on it, and where the relaxation is CREEP_RATIO times faster than the layer's oscillation the piece
+creeps (mode bit :data:`CREEPING`): it moves at ``S0 + S1``, the quasi-static speed and its first correction for
+inertia (:func:`_creep`; the neglected terms are (omega / lambda)^4 of the speed), on the piece's own steps, until
+a yield or zero crossing of z, or its end at rest (:data:`EV_REST`, located as the other events).
+
 The integration records every step's start state (a grid); any time is evaluated by a partial step from the
 grid point before it (the tableau's own continuous extension of the same order: a step of a shorter length).
 The dissipated energies (friction, damper, hysteresis) are integrated with the state, so the energy balance is
@@ -507,7 +517,7 @@ def integrate(P, y0, t_end, capacity, max_steps):
 
     Returns (grid_t, grid_y, grid_d, grid_flags, n, stop_time, status): the grid's times [s], states, the
     direction d of the piece each point starts a step of (0 at rest), the piece's mode (:data:`ELASTIC`,
-    :data:`YIELDING`, :data:`LOADING`), the count of points, the stop time (inf if it never sticks) and a status
+    :data:`YIELDING`, :data:`LOADING`, plus :data:`CREEPING` on the slow manifold), the count of points, the stop time (inf if it never sticks) and a status
     (0 done, 1 the grid's capacity is too small, 2 more than max_steps steps).
 
     With a power-law damper the steps next to a reversal are graded towards it: the step after it from the
