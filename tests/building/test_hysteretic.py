@@ -406,6 +406,21 @@ def test_a_creep_ends_at_rest_when_its_speed_falls_below_creep():
     np.testing.assert_allclose(motion.reversal_times[:-1], r.reversal_times, rtol=0, atol=1e-7)
 
 
+def test_a_damper_too_weak_to_matter_is_no_division_by_zero():
+    """A bilinear layer whose fit tried a damper of C 1.2e-3 N (s/m)^alpha, alpha 0.05 (found by
+    test_a_power_damped_record_ranks_the_models_under_its_law): the quasi-static speed ((|F| - F_s) / C)^(1 / alpha)
+    overflows and the damper's slope g'(s) underflows, and the integrator raised ZeroDivisionError (g'^2 = 0).
+    Now the motion, against the reference."""
+    k2, kp, fp = 4728.45766, 5.27081157e6, 1.64116491e6
+    kw = dict(mass=8.0e5, stiffness=kp + k2, post_yield_stiffness=k2, yield_force=fp * (kp + k2) / kp,
+              damping=1.15991931e-3, damping_exponent=5.02661623e-2, friction=1.23196653e5)
+    d0 = 0.152366524
+    t = np.linspace(0.0, 5.9, 60)
+    motion = free_vibration(Isolation(**kw), d0, t_end=6.0)
+    r = ref.simulate(_reference_system(kw, "isolation"), d0, t, t_end=6.0)
+    np.testing.assert_allclose(motion.state(t)[0], r.x, rtol=0, atol=1e-9)
+
+
 _CREEPS = {  # layers whose last turn lands past the sliders' holding limit, a damper of alpha < 1 holding the creep
     "pendulum, Constantinou's law, alpha 0.2": (Pendulum, "pendulum", dict(
         mass=6.0e5, radius=3.0, friction_slow=0.005, friction_fast=0.015, rate=10.0, damping=2.0e4,

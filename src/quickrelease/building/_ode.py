@@ -118,7 +118,7 @@ def _resist(P, s):
         f, f1, f2 = P[FSLOW], 0.0, 0.0
     a = P[ALPHA]
     p = P[C] * s ** a
-    return f + p, f1 + a * p / s, f2 + a * (a - 1.0) * p / (s * s)
+    return f + p, f1 + a * (p / s), f2 + a * (a - 1.0) * (p / s / s)  # (no underflow of s * s to 0)
 
 
 @njit(cache=True, nogil=True)
@@ -149,7 +149,7 @@ def _quasi(P, push):
             u_hi = u
         else:
             u_lo = u
-        new = u - (g - push) / (g1 * s)
+        new = u - (g - push) / s / g1 if g1 > 0.0 else 0.5 * (u_lo + u_hi)
         if not (u_lo < new < u_hi):
             new = 0.5 * (u_lo + u_hi)
         if abs(new - u) <= 1e-15 or u_hi - u_lo <= 1e-15:
@@ -189,7 +189,7 @@ def _creep(P, y, d, mode, out):
         return
     m = P[M]
     _g, g1, g2 = _resist(P, s0)
-    s1 = m * kt * s0 / (g1 * g1)
+    s1 = m * kt * s0 / g1 / g1
     s = s0 + s1
     v = d * s
     ds0 = -kt * s / g1
@@ -201,7 +201,7 @@ def _creep(P, y, d, mode, out):
         az = abs(z)
         if az > 0.0:
             dkt = -P[Q] * P[N] * az ** (P[N] - 1.0) * (1.0 if z > 0.0 else -1.0) * zdot / P[DY]
-    ds1 = m * (dkt * s0 + kt * ds0) / (g1 * g1) - 2.0 * m * kt * s0 * g2 * ds0 / (g1 * g1 * g1)
+    ds1 = m * (dkt * s0 + kt * ds0) / g1 / g1 - 2.0 * m * kt * s0 * g2 * ds0 / g1 / g1 / g1
     out[0] = v
     out[1] = d * (ds0 + ds1)
     out[2] = zdot
@@ -427,18 +427,22 @@ def _relax_step(P, y, d, mode, h):
     if push <= P[FSLOW]:
         return h, False, 0.0
     s0 = _quasi(P, push)
-    if s0 <= 0.0:
+    if not (0.0 < s0 < math.inf):
         return h, False, 0.0
     m = P[M]
     _g, g1, _g2 = _resist(P, s0)
+    if not (0.0 < g1 < math.inf):  # (a damper too weak to matter at that speed)
+        return h, False, 0.0
     _zx, kt = _slope(P, y[2], mode)
     s = d * y[1]
-    target = s0 + m * kt * s0 / (g1 * g1)
+    target = s0 + m * kt * s0 / g1 / g1
     off = abs(s - target)
     if g1 >= CREEP_RATIO * math.sqrt(kt * m) and off <= CREEP_TOL * target:
         return h, True, target
     if s > 0.0:
         g, g1, _g2 = _resist(P, s)
+        if not (0.0 < g1 < math.inf):
+            return h, False, 0.0
         if g > push:  # slowing down towards the slow manifold: the speed at most halves in a step (so the
             # relaxation rate, which grows as s^(alpha - 1), at most doubles over it)
             h = min(h, 0.5 * s * m / (g - push))
@@ -517,8 +521,9 @@ def integrate(P, y0, t_end, capacity, max_steps):
 
     Returns (grid_t, grid_y, grid_d, grid_flags, n, stop_time, status): the grid's times [s], states, the
     direction d of the piece each point starts a step of (0 at rest), the piece's mode (:data:`ELASTIC`,
-    :data:`YIELDING`, :data:`LOADING`, plus :data:`CREEPING` on the slow manifold), the count of points, the stop time (inf if it never sticks) and a status
-    (0 done, 1 the grid's capacity is too small, 2 more than max_steps steps).
+    :data:`YIELDING`, :data:`LOADING`, plus :data:`CREEPING` on the slow manifold), the count of points, the stop
+    time (inf if it never sticks) and a status (0 done, 1 the grid's capacity is too small, 2 more than max_steps
+    steps).
 
     With a power-law damper the steps next to a reversal are graded towards it: the step after it from the
     reversal on, the one before it from the start of the step before the one that holds it (so that every
