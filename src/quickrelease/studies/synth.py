@@ -396,26 +396,32 @@ def describe_truth(truth: dict[str, Any]) -> str:
     """The synthetic building's isolation in its model's terms, for a person (SI values with prefixes): the period
     (pendulum: its radius R and 2 pi sqrt(R / g); Bouc-Wen: Kd, Qd, dy, n), the damper (zeta, or C and alpha) and
     the sliders' friction (the pendulum's mu_slow to mu_fast at rate a)."""
-    from ..report.display import quantity
+    from ..report.display import describe_isolation, quantity
 
     t = truth
-    if t["model"] == "pendulum":
-        text = (f"R = {quantity(t['radius_m'], 'm')} (T = {quantity(t['period_s'], 's')}), friction "
-                f"mu = {quantity(t['friction_slow'])} to {quantity(t['friction_fast'])} (rate "
-                f"{quantity(t['rate_s_m'], 's/m')})")
-    elif t["model"] == "boucwen":
-        text = (f"Kd = {quantity(t['Kd_N_m'], 'N/m')} (T = {quantity(t['period_s'], 's')}), Qd = "
-                f"{quantity(t['Qd_N'], 'N')}, dy = {quantity(t['dy_m'], 'm')}, n = {quantity(t['shape'])}")
-    else:
-        text = f"T = {quantity(t['period_s'], 's')}"
-    if "damping_exponent" in t:
-        text += (f", dampers C = {quantity(t['damping_coefficient'], 'N')} (s/m)^alpha, alpha = "
-                 f"{quantity(t['damping_exponent'])}")
-    else:
-        text += f", zeta = {quantity(t['damping_ratio'])}"
-    if t["model"] != "pendulum":
-        text += f", F_s = {quantity(t['friction_N'], 'N')}"
-    return text
+    render = {
+        "pendulum": lambda radius, period, friction_slow, friction_fast, rate: (
+            f"R = {quantity(radius, 'm')} (T = {quantity(period, 's')}), friction mu = {quantity(friction_slow)} "
+            f"to {quantity(friction_fast)} (rate {quantity(rate, 's/m')})"),
+        "boucwen": lambda post_yield_stiffness, period, characteristic_strength, yield_displacement, shape: (
+            f"Kd = {quantity(post_yield_stiffness, 'N/m')} (T = {quantity(period, 's')}), Qd = "
+            f"{quantity(characteristic_strength, 'N')}, dy = {quantity(yield_displacement, 'm')}, "
+            f"n = {quantity(shape)}"),
+        "period": lambda period: f"T = {quantity(period, 's')}",
+        "power": lambda damping_coefficient, damping_exponent: (
+            f"dampers C = {quantity(damping_coefficient, 'N')} (s/m)^alpha, alpha = {quantity(damping_exponent)}"),
+        "viscous": lambda damping_ratio: f"zeta = {quantity(damping_ratio)}",
+        "friction": lambda friction: f"F_s = {quantity(friction, 'N')}",
+    }
+    power = "damping_exponent" in t
+    return describe_isolation(t["model"], render, period=t["period_s"], radius=t.get("radius_m"),
+                              friction_slow=t.get("friction_slow"), friction_fast=t.get("friction_fast"),
+                              rate=t.get("rate_s_m"), post_yield_stiffness=t.get("Kd_N_m"),
+                              characteristic_strength=t.get("Qd_N"), yield_displacement=t.get("dy_m"),
+                              shape=t.get("shape"), power=power, damping_coefficient=t.get("damping_coefficient"),
+                              damping_exponent=t.get("damping_exponent"),
+                              damping_ratio=t.get("damping_ratio", 0.0) if not power else 0.0,
+                              friction=t.get("friction_N", 0.0))
 
 
 def building_pushed_displacement(case: Case) -> float:
