@@ -158,6 +158,27 @@ def _measured(channels, clean: dict[str, np.ndarray], offsets: dict[str, float],
     return data
 
 
+def _sampling(channels, table: dict[str, tuple], defaults: dict[str, float], noise: dict[str, float] | None,
+              rate: float, release_time: float, jitter: float, missing: float) -> dict[str, float]:
+    """Check a synthetic record's sampling (rate [Hz] and release_time [s] finite and > 0, jitter and missing in
+    [0, 1)) and return the noise of every channel (``defaults`` updated by ``noise``), each finite and > 0 (the
+    noise weights the fit of the record and its predicted precision), in the unit of ``table[name][1]``;
+    ParameterError naming the first that is not."""
+    if not (math.isfinite(rate) and rate > 0):
+        raise ParameterError("rate", rate, "(0, inf)", "Hz")
+    if not (math.isfinite(release_time) and release_time > 0):
+        raise ParameterError("release_time", release_time, "(0, inf)", "s")
+    if not 0.0 <= jitter < 1.0:
+        raise ParameterError("jitter", jitter, "[0, 1)")
+    if not 0.0 <= missing < 1.0:
+        raise ParameterError("missing", missing, "[0, 1)")
+    noise = {**defaults, **(noise or {})}
+    for name in channels:
+        if not (math.isfinite(noise[name]) and noise[name] > 0):
+            raise ParameterError(f"noise of {name}", noise[name], "(0, inf) (the noise weights a fit)", table[name][1])
+    return noise
+
+
 def synthesize(case: Case, channels: list[str] | tuple[str, ...], *, rate: float, noise: dict[str, float] | None = None,
                release_time: float = 0.5, duration: float | None = None, offsets: dict[str, float] | None = None,
                seed: int = 0, jitter: float = 0.0, missing: float = 0.0) -> SyntheticRecord:
@@ -189,19 +210,7 @@ def synthesize(case: Case, channels: list[str] | tuple[str, ...], *, rate: float
     unknown = [c for c in channels if c not in CHANNELS]
     if unknown or not channels:
         raise ParameterError("channels", ",".join(unknown) or "(none)", f"a list of {', '.join(CHANNELS)}")
-    if not (math.isfinite(rate) and rate > 0):
-        raise ParameterError("rate", rate, "(0, inf)", "Hz")
-    if not (math.isfinite(release_time) and release_time > 0):
-        raise ParameterError("release_time", release_time, "(0, inf)", "s")
-    if not 0.0 <= jitter < 1.0:
-        raise ParameterError("jitter", jitter, "[0, 1)")
-    if not 0.0 <= missing < 1.0:
-        raise ParameterError("missing", missing, "[0, 1)")
-    noise = {**DEFAULT_NOISE, **(noise or {})}
-    for name in channels:  # > 0: the noise weights the fit of the record and its predicted precision
-        if not (math.isfinite(noise[name]) and noise[name] > 0):
-            raise ParameterError(f"noise of {name}", noise[name], "(0, inf) (the noise weights a fit)",
-                                 CHANNELS[name][1])
+    noise = _sampling(channels, CHANNELS, DEFAULT_NOISE, noise, rate, release_time, jitter, missing)
     offsets = {name: float((offsets or {}).get(name, 0.0)) for name in channels}
     for name, value in offsets.items():
         if not math.isfinite(value):
@@ -489,19 +498,7 @@ def synthesize_building(case: Case, channels: list[str] | tuple[str, ...], *, ra
         what = f"unknown channel {unknown[0]!r}" if unknown else "no channel" if not channels else "a channel twice"
         raise QuickReleaseError(f"channels = {','.join(channels)!r}: {what}; valid: distinct channels of the "
                                 f"building's record, {', '.join(BUILDING_CHANNELS)}")
-    if not (math.isfinite(rate) and rate > 0):
-        raise ParameterError("rate", rate, "(0, inf)", "Hz")
-    if not (math.isfinite(release_time) and release_time > 0):
-        raise ParameterError("release_time", release_time, "(0, inf)", "s")
-    if not 0.0 <= jitter < 1.0:
-        raise ParameterError("jitter", jitter, "[0, 1)")
-    if not 0.0 <= missing < 1.0:
-        raise ParameterError("missing", missing, "[0, 1)")
-    noise = {**BUILDING_NOISE, **(noise or {})}
-    for name in channels:
-        if not (math.isfinite(noise[name]) and noise[name] > 0):
-            raise ParameterError(f"noise of {name}", noise[name], "(0, inf) (the noise weights a fit)",
-                                 BUILDING_CHANNELS[name][1])
+    noise = _sampling(channels, BUILDING_CHANNELS, BUILDING_NOISE, noise, rate, release_time, jitter, missing)
     offsets = {name: float((offsets or {}).get(name, 0.0)) for name in channels}
     for name, value in offsets.items():
         if not math.isfinite(value):
