@@ -110,3 +110,19 @@ def test_a_key_given_twice_is_named(tmp_path):
     lines = r.stderr.strip().splitlines()
     assert r.exit_code == 2 and len(lines) == 1, r.stderr
     assert "not valid TOML" in lines[0] and "line 9 reads \"radius = '3 m'\"" in lines[0], lines[0]
+
+
+@pytest.mark.parametrize("model, values, key", [
+    ("pendulum", {"radius": "'2.5 m'", "friction_coefficient": "1"}, "friction_coefficient = 1"),
+    # W d0 / R = 0.2 m / 2.5 m = 8 % of the weight, below mu_slow = 10 %
+    ("pendulum", {**PENDULUM, "friction_slow": "0.1", "friction_fast": "0.1"}, "friction_slow = 0.1"),
+    # k d0 = 900 t (2 pi / 2 s)^2 0.2 m = 1.78 MN, below 2 MN
+    ("linear", {"period": "'2 s'", "friction": "'2 MN'"}, "friction = 2e+06 N"),
+])
+def test_a_building_its_friction_holds_names_the_friction_key(model, values, key, tmp_path):
+    (tmp_path / "c.toml").write_text(table(model, values), encoding="utf-8")
+    r = runner.invoke(app, ["synth", str(tmp_path / "c.toml"), "--building", "--out", str(tmp_path / "o.csv")])
+    lines = r.stderr.strip().splitlines()
+    assert r.exit_code == 2 and len(lines) == 1, r.stderr
+    assert "never moves" in lines[0] and f"[building] {key})" in lines[0], lines[0]
+    assert not (tmp_path / "o.csv").exists()

@@ -510,9 +510,16 @@ def synthesize_building(case: Case, channels: list[str] | tuple[str, ...], *, ra
         raise ParameterError("d0", d0, "(0, inf) (the push must move the building past its sliders' friction)", "m")
     R0 = pushed_state(iso.rigid() if two else iso, d0)[1]  # 2dof: the isolators hold k d0, the storey no shear
     if abs(R0) <= iso.friction:
+        if spec.friction_coefficient is not None:
+            key = f"friction_coefficient = {spec.friction_coefficient:.6g}"
+        elif spec.model == "pendulum":
+            key = f"friction_slow = {spec.friction_slow:.6g}"
+        else:
+            key = f"friction = {spec.friction_force:.6g} N"
         raise QuickReleaseError(f"{case.source}: [building] d0 = {d0:.6g} m: the sliders' friction F_s = "
                                 f"{iso.friction:.6g} N holds the building there (restoring force {R0:.6g} N <= F_s), "
-                                "so it never moves after the release: push it farther")
+                                f"so it never moves after the release: push it farther, or give less friction "
+                                f"([building] {key})")
     period = iso.period
     motion = free_vibration(iso, d0, t_end=20.0 * period)
     t_stop = motion.stop_time
