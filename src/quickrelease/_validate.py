@@ -115,6 +115,47 @@ def check_seed(name: str, seed) -> int:
     return int(seed)
 
 
+def check_integer(name: str, value, least: int, most: int | None = None, odd: bool = False) -> int:
+    """``int(value)``; ParameterError (naming ``name``, its value and the range) unless it is a whole number (an
+    int, a numpy integer or an integral float; not a bool) in [least, most], odd where ``odd``."""
+    whole = (not isinstance(value, bool) and isinstance(value, int | np.integer | float | np.floating)
+             and math.isfinite(value) and float(value) == int(value))
+    n = int(value) if whole else None
+    if n is None or n < least or (most is not None and n > most) or (odd and n % 2 == 0):
+        kind = "odd integers" if odd else "integers"
+        raise ParameterError(name, value, f"{kind} in [{least}, {'inf' if most is None else most}]")
+    return n
+
+
+def check_real(name: str, value, valid: str, unit: str = "", test=math.isfinite) -> float:
+    """``float(value)``; ParameterError (naming ``name``, its value and ``valid``) unless ``value`` is a real number
+    (an int, float or numpy scalar; not a bool, a string or an array) for which ``test`` holds."""
+    if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
+        raise ParameterError(name, value if isinstance(value, int | float | str) or value is None
+                             else type(value).__name__, valid, unit)
+    number = float(value)
+    if not test(number):
+        raise ParameterError(name, number, valid, unit)
+    return number
+
+
+def check_samples(name: str, value, ndim: int = 1, unit: str = "", finite: bool = True) -> np.ndarray:
+    """``value`` as a float array of ``ndim`` dimensions with at least one element; ParameterError naming ``name``
+    unless it is one (a string, a nested list, a value that is not a number, an empty array), or, where ``finite``,
+    unless every element is finite."""
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterError(name, type(value).__name__, f"a {ndim}-D array of numbers", unit) from None
+    raw = np.asarray(value).dtype  # bools, and objects (None converts to nan), are not numbers here
+    if isinstance(value, str | bytes | bool) or raw.kind in "bO" or arr.ndim != ndim or arr.size == 0:
+        shown = f"{arr.size} value(s) in {arr.ndim} dimension(s)" if not isinstance(value, str | bytes) else value
+        raise ParameterError(name, shown, f"a {ndim}-D array of one or more numbers", unit)
+    if finite and not np.all(np.isfinite(arr)):
+        raise ParameterError(name, _first_bad(arr, ~np.isfinite(arr)), "finite numbers", unit)
+    return arr
+
+
 def renamed(**old_to_new: str):
     """Decorator: keyword arguments renamed for one vocabulary across the API (``E_S=`` is now
     ``stored_energy=``) still work, with a DeprecationWarning naming the new name."""

@@ -70,12 +70,14 @@ _FAST_UNITS: dict[str, tuple[str, float]] = {
 MAX_LENGTH = 100
 
 #: A quantity: a finite decimal number (no nan, inf, hex or underscores), then optionally a unit.
-_QUANTITY = re.compile(r"(?P<number>[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?)\s*(?P<unit>.*)", re.DOTALL)
+#: ASCII digits only: Python's \d and float() take any script's digits ('２.５' would read as 2.5).
+_QUANTITY = re.compile(r"(?P<number>[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?)\s*(?P<unit>.*)",
+                       re.DOTALL)
 #: A unit: names joined by '*', '/' or a space, each with an optional small integer power (^2, **-1);
 #: '1/s' style reciprocals too. No numbers elsewhere, no nested powers, no parentheses: nothing pint
 #: could spend long on, and nothing that is an expression rather than a unit.
 _NAME = r"(?:[A-Za-z_\u00b0\u00b5\u03bc\u03a9\u2126%][A-Za-z_0-9\u00b0\u00b5\u03bc\u03a9\u2126]*)"
-_POWER = r"(?:\s*(?:\^|\*\*)\s*[+-]?\d{1,2})?"
+_POWER = r"(?:\s*(?:\^|\*\*)\s*[+-]?[0-9]{1,2})?"
 _UNIT = re.compile(rf"(?:1\s*/\s*)?{_NAME}{_POWER}(?:\s*(?:\*|/|\s)\s*{_NAME}{_POWER})*")
 
 

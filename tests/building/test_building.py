@@ -117,3 +117,14 @@ def test_held_by_friction_and_bad_input():
         Isolation.linear(1.0e5, float("nan"))
     with pytest.raises(ParameterError, match="d0"):
         free_vibration(Isolation.linear(1.0e5, 2.0, 0.0, 1.0), float("inf"))
+
+
+@pytest.mark.parametrize("t_end", [float("nan"), float("inf"), -1.0, 0.0])
+def test_a_horizon_that_is_not_a_finite_positive_time_is_refused(t_end):
+    """For the one-mass layer and the 2dof building alike (building.model._horizon)."""
+    from quickrelease.building.model import TwoDOF
+
+    with pytest.raises(ParameterError, match="t_end"):
+        free_vibration(Isolation.linear(1.0e5, 2.0, 0.05, 1.0e3), 0.1, t_end=t_end)
+    with pytest.raises(ParameterError, match="t_end"):
+        free_vibration(TwoDOF(1.0e6, 0.5e6, 2.0, 0.5, friction=1.0e3), 0.1, t_end=t_end)

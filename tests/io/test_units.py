@@ -47,6 +47,9 @@ def test_fast_table_agrees_with_the_pint_path():
     ("", "has no number"),
     ("1 m^999", "is not a unit"),
     ("\x1b[31m1", "has no number"),
+    ("\uff12.\uff15 kN", "has no number"),  # fullwidth digits: float() would read 2.5
+    ("\u0662 kN", "has no number"),  # an Arabic-Indic two
+    ("1 m^\u0662", "is not a unit"),
 ])
 def test_bad_quantities_are_refused_naming_the_parameter(text, fragment):
     with pytest.raises(UnitError) as info:

@@ -223,3 +223,21 @@ def test_campaign_figures_draw_into_the_users_axes():
     axes = mine.subplots(len(result.variables), len(result.quantities))
     assert building_campaign_figure(result, ax=axes) is mine
     assert len(mine.axes) == len(result.variables) * len(result.quantities)
+
+
+def test_a_record_figures_channel_sits_above_its_residuals_on_one_time_axis():
+    """report.plots.record_axes (the device's and the building's fit figures): the user's axes in their order,
+    channel then residuals; else two new panels per channel, every panel sharing the first's time axis."""
+    from quickrelease.report.plots import record_axes
+
+    fig = Figure()
+    grid = fig.add_gridspec(5, 1)
+    top0, bottom0, share = record_axes(fig, None, grid, 0, None)
+    top1, bottom1, share1 = record_axes(fig, None, grid, 1, share)
+    assert share is top0 and share1 is top0 and len(fig.axes) == 4
+    for ax in (bottom0, top1, bottom1):
+        assert ax.get_shared_x_axes().joined(ax, top0)
+    assert top0.get_subplotspec().rowspan.start == 0 and bottom0.get_subplotspec().rowspan.start == 1
+    assert top1.get_subplotspec().rowspan.start == 3 and bottom1.get_subplotspec().rowspan.start == 4
+    mine = [object() for _ in range(4)]
+    assert record_axes(fig, mine, None, 1, None) == (mine[2], mine[3], None)

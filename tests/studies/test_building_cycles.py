@@ -214,3 +214,74 @@ def test_the_shipped_examples_measured_cycle_agrees_with_the_fitted_models():
     for key in ("keff_N_m", "edc_J", "beta_eff"):
         assert abs(getattr(c, key) - getattr(m, key)) < 2 * se[key], key
         assert getattr(c, key) == pytest.approx(getattr(m, key), rel=0.02), key
+
+
+BAD_COUNTS = [float("nan"), float("inf"), -1, 0, "x", None, 2.5, True, [], np.array([11, 13]), 1e308]
+
+
+@pytest.fixture(scope="module")
+def short_fit():
+    channels, _ = record(seed=7, span=8.0)
+    return fit_isolation(channels, M, global_search=False)
+
+
+@pytest.mark.parametrize("name, value", [("draws", v) for v in BAD_COUNTS] + [("window", v) for v in BAD_COUNTS if v is not None]
+                         + [("window", 9.5), ("window", 10), ("draws", 10**7)]
+                         + [("seed", v) for v in (float("nan"), -1, "x", None, 2.5, True, [1, 2])],
+                         ids=lambda v: repr(v)[:12])
+def test_every_bad_argument_of_measured_cycles_is_a_parameter_error_naming_it(short_fit, name, value):
+    """Before: draws='x' or nan a bare ValueError, inf an OverflowError, 1e308 numpy's 'Maximum allowed dimension
+    exceeded', a seed of -1 or 'x' numpy's own errors."""
+    from quickrelease.errors import ParameterError
+
+    with pytest.raises(ParameterError) as info:
+        measured_cycles(short_fit, **{"draws": 10, name: value})
+    assert info.value.name == name and "\n" not in str(info.value)
+    assert " is outside " in str(info.value)
+
+
+def test_measured_cycles_of_something_not_a_fit_is_a_parameter_error():
+    from quickrelease.errors import ParameterError
+
+    with pytest.raises(ParameterError, match="fit = dict"):
+        measured_cycles({})
+
+
+@pytest.mark.parametrize("kwargs, name", [
+    (dict(y="abc"), "y"), (dict(y=[]), "y"), (dict(y=np.ones((3, 40))), "y"), (dict(y=None), "y"),
+    (dict(turns=[5, 3]), "turns"), (dict(turns=[0, 400]), "turns"), (dict(turns=[-1, 20]), "turns"),
+    (dict(turns=[1.5, 20]), "turns"), (dict(turns="x"), "turns"), (dict(turns=[[1, 2]]), "turns"),
+    (dict(window=1), "window"), (dict(window=8), "window"), (dict(window=float("inf")), "window"),
+    (dict(window="9"), "window"), (dict(guard=-1), "guard"), (dict(guard=0.5), "guard"), (dict(guard=None), "guard"),
+])
+def test_every_bad_argument_of_smooth_half_cycles_is_a_parameter_error_naming_it(kwargs, name):
+    from quickrelease.errors import ParameterError
+
+    args = {"y": np.sin(np.linspace(0.0, 10.0, 400)), "turns": [0, 100, 200], "window": 9, "guard": 1, **kwargs}
+    with pytest.raises(ParameterError) as info:
+        smooth_half_cycles(**args)
+    assert info.value.name == name
+
+
+@pytest.mark.parametrize("kwargs, name", [
+    (dict(turns=None), "turns"), (dict(turns="x"), "turns"), (dict(turns=[3, 1, 2]), "turns"),
+    (dict(period="2 s"), "period"), (dict(period=None), "period"), (dict(dt=[0.01]), "dt"), (dict(dt=True), "dt"),
+])
+def test_every_bad_argument_of_default_window_is_a_parameter_error_naming_it(kwargs, name):
+    from quickrelease.errors import ParameterError
+    from quickrelease.studies.building_cycles import default_window
+
+    with pytest.raises(ParameterError) as info:
+        default_window(**{"turns": np.array([0]), "period": 2.0, "dt": 0.01, **kwargs})
+    assert info.value.name == name
+
+
+@pytest.mark.parametrize("period, dt, expected", [
+    (2.0, 0.01, 25),  # an eighth of 2 s at 10 ms: 25 samples
+    (float("nan"), 0.01, 25), (1e308, 0.01, 61), (2.0, float("inf"), 25), (-2.0, 0.01, 25), (0.1, 0.01, 7),
+])
+def test_default_window_without_turns_is_an_eighth_of_the_period_within_7_and_61(period, dt, expected):
+    """Before: period 1e308 raised OverflowError (int of an infinite window)."""
+    from quickrelease.studies.building_cycles import default_window
+
+    assert default_window(np.array([0]), period, dt) == expected

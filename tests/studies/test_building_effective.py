@@ -18,7 +18,7 @@ from quickrelease.building.effective import G0, CycleProperties
 from quickrelease.building.isolation_fit import BuildingChannel, fit_isolation
 from quickrelease.building.model import Isolation
 from quickrelease.errors import ParameterError
-from quickrelease.studies.building_effective import effective_curves, judge_cycles, model_cycles
+from quickrelease.studies.building_effective import EffectiveCurve, effective_curves, judge_cycles, model_cycles
 
 M, T, ZETA, FS, D0 = 8e5, 2.5, 0.03, 0.004 * 8e5 * G0, 0.15
 
@@ -268,3 +268,55 @@ def test_a_motion_of_fewer_than_two_half_cycles_has_no_cycles_and_no_curve(fitte
     curve = effective_curves(stuck, draws=20)
     assert curve.amplitude_m.size == 0 and "fewer than two cycles" in curve.notes[0]
     assert curve.summary()["amplitude_m"] == []
+
+
+BAD_REALS = [float("nan"), float("inf"), -1.0, 0.0, "x", None, True, [], np.array([0.1, 0.2]), 1e308]
+
+
+@pytest.mark.parametrize("name, value", [("level", v) for v in BAD_REALS]
+                         + [("draws", v) for v in (float("nan"), float("inf"), -1, 0, "x", None, 20.5, True, [],
+                                                   1e308, 10**7)]
+                         + [("seed", v) for v in (float("nan"), -1, "x", None, 2.5, True)]
+                         + [("amplitudes", v) for v in (float("nan"), -0.1, 0.0, "x", [], [[0.1, 0.2]], ["a"],
+                                                        True, [0.1, float("inf")])],
+                         ids=lambda v: repr(v)[:12])
+def test_every_bad_argument_of_effective_curves_is_a_parameter_error_naming_it(fitted, name, value):
+    """Before: level='x' or draws='x' a bare ValueError, draws=inf an OverflowError, draws=1e308 numpy's 'Maximum
+    allowed dimension exceeded', seed=-1 numpy's error, amplitudes=['a'] a bare ValueError."""
+    with pytest.raises(ParameterError) as info:
+        effective_curves(fitted, **{"draws": 20, name: value})
+    assert info.value.name == name and " is outside " in str(info.value)
+
+
+@pytest.mark.parametrize("name, value", [("keff_tolerance", v) for v in BAD_REALS]
+                         + [("edc_fraction", v) for v in BAD_REALS]
+                         + [("release_time", v) for v in (float("nan"), float("inf"), "x", True, [1.0])]
+                         + [("cycles", v) for v in (1.5, None, "x", [1.0, 2.0])] + [("curve", None)],
+                         ids=lambda v: repr(v)[:12])
+def test_every_bad_argument_of_judge_cycles_is_a_parameter_error_naming_it(fitted, name, value):
+    curve = EffectiveCurve("linear", M, np.empty(0), {}, {}, {}, 0.95, 20, 0, ())
+    args = {"cycles": [], "curve": curve, name: value}
+    with pytest.raises(ParameterError) as info:
+        judge_cycles(**args)
+    assert info.value.name == name
+
+
+@pytest.mark.parametrize("name, value", [("d0", v) for v in (float("nan"), 0.0, "x", None, True, [0.1])]
+                         + [("horizon", v) for v in (float("nan"), float("inf"), -1.0, 0.0, "x", None, [5.0])],
+                         ids=lambda v: repr(v)[:12])
+def test_every_bad_argument_of_model_cycles_is_a_parameter_error_naming_it(name, value):
+    from quickrelease.building.model import Isolation
+
+    args = {"isolation": Isolation.linear(M, T, ZETA, FS), "d0": D0, "horizon": 10.0, name: value}
+    with pytest.raises(ParameterError) as info:
+        model_cycles(**args)
+    assert info.value.name == name
+
+
+@pytest.mark.parametrize("value", ["x", [[0.1, 0.2]], ["a"], None, {"a": 1}])
+def test_the_curve_at_what_is_not_an_amplitude_is_a_parameter_error(fitted, value):
+    curve = effective_curves(fitted, draws=20)
+    with pytest.raises(ParameterError) as info:
+        curve.at(value)
+    assert info.value.name == "amplitude"
+    assert curve.at([])["keff_N_m"].shape == (0,)

@@ -274,3 +274,30 @@ def test_standard_errors_scale_with_the_noise_over_the_float_range(factor):
         assert far.std_errors[n] == pytest.approx(factor * ref.std_errors[n], rel=1e-9), n
     for key, row in far.physical().items():
         assert row["se"] == pytest.approx(factor * ref.physical()[key]["se"], rel=1e-9), key
+
+
+@pytest.mark.parametrize("name, value", [("rate", 0.0), ("rate", float("nan")), ("release_time", -1.0),
+                                         ("release_time", float("inf")), ("jitter", 1.0), ("jitter", -0.1),
+                                         ("jitter", float("nan")), ("missing", 1.0), ("missing", float("nan"))])
+def test_the_sampling_of_a_synthetic_record_outside_its_range_is_refused_naming_it(tmp_path, name, value):
+    """rate and release_time in (0, inf), jitter and missing in [0, 1): the device's synthesize and the building's
+    share these checks (studies.synth._sampling)."""
+    from quickrelease.errors import ParameterError
+    from quickrelease.studies.synth import synthesize
+
+    args = {"rate": 200.0, "release_time": 2.0, "jitter": 0.0, "missing": 0.0, name: value}
+    with pytest.raises(ParameterError) as info:
+        synthesize_building(_case(tmp_path, COULOMB), ["x"], **args)
+    assert info.value.name == name
+    device = load_case(Path(__file__).resolve().parents[2] / "examples" / "fit.toml")
+    with pytest.raises(ParameterError) as info:
+        synthesize(device, ["u"], **args)
+    assert info.value.name == name
+
+
+@pytest.mark.parametrize("noise", [0.0, -1e-3, float("nan"), float("inf")])
+def test_a_noise_that_is_not_positive_is_refused_naming_the_channel(tmp_path, noise):
+    from quickrelease.errors import ParameterError
+
+    with pytest.raises(ParameterError, match="noise of x"):
+        synthesize_building(_case(tmp_path, COULOMB), ["x"], rate=200.0, noise={"x": noise})

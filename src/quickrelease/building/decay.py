@@ -39,7 +39,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from ..errors import ParameterError
-from .effective import zigzag_scan
+from ._zigzag import zigzag_scan
 
 __all__ = ["DecayAnalysis", "DecayLaw", "LAW_NAMES", "LawFit", "LoopEstimate", "MidMotionStart", "analyse_decay",
            "bilinear_loop", "combined_decay_law", "decay_laws", "estimate_noise", "first_turning_point",

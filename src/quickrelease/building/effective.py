@@ -44,6 +44,8 @@ from typing import Any
 import numpy as np
 
 from ..errors import ParameterError
+from ._zigzag import zigzag as _zigzag
+from ._zigzag import zigzag_scan as zigzag_scan  # re-exported: its home before building._zigzag
 
 __all__ = ["CycleProperties", "loop_cycles", "cycle_turns", "cycle_starts", "G0"]
 
@@ -112,35 +114,6 @@ def cycle_turns(x: np.ndarray, noise: float = 0.0) -> np.ndarray:
             sign[i] = sign[i - 1]
     change = np.nonzero(sign[1:] * sign[:-1] < 0.0)[0] + 1
     return change
-
-
-def _zigzag(x: np.ndarray, threshold: float) -> np.ndarray:
-    """The samples of the running extremes from which x came back by more than ``threshold``, in time order
-    (the first direction: the first move beyond the threshold from the first sample; the first sample itself
-    is no turning point, e.g. a release from rest: give it in ``turns``)."""
-    k0 = np.nonzero(np.abs(x - x[0]) > threshold)[0] if x.size else np.array([], dtype=int)
-    if k0.size == 0:
-        return np.array([], dtype=int)
-    direction = 1.0 if x[k0[0]] > x[0] else -1.0
-    out, _, _ = zigzag_scan(x, threshold, direction, int(k0[0]))
-    return np.array(out, dtype=int)
-
-
-def zigzag_scan(x: np.ndarray, threshold: float, direction: float, best: int) -> tuple[list[int], float, int]:
-    """The zigzag with hysteresis from sample ``best`` on, moving in ``direction`` (+1 up, -1 down): the running
-    extreme in the current direction becomes a turning point once x has come back from it by more than
-    ``threshold`` [x's unit]. Returns the turning points' samples, and the direction and running extreme at
-    the end (the last swing's, not yet a turning point). Shared by :func:`cycle_turns` and
-    :func:`quickrelease.building.decay.turning_points_with_errors`."""
-    out: list[int] = []
-    for k in range(best + 1, x.size):
-        if direction * (x[k] - x[best]) > 0.0:
-            best = k
-        elif direction * (x[best] - x[k]) > threshold:
-            out.append(best)
-            direction = -direction
-            best = k
-    return out, direction, best
 
 
 def cycle_starts(n_turns: int) -> range:

@@ -445,6 +445,17 @@ def _motion_summary(building, motion) -> dict[str, Any]:
             "first_peak_m": float(peaks[1]) if peaks.size > 1 else None}
 
 
+def _horizon(t_end: float | None, friction: float) -> float:
+    """How long to follow a free vibration [s]: ``t_end`` (finite and > 0), or with None until the sliders hold it
+    for good (inf), which needs their ``friction`` [N] > 0; ParameterError naming t_end otherwise."""
+    if t_end is not None:
+        return finite_positive("t_end", t_end, "s")
+    if friction == 0.0:
+        raise ParameterError("t_end", None, "a finite time in (0, inf) s when the sliders have no friction "
+                             "(the motion never ends)")
+    return math.inf
+
+
 def free_vibration(isolation: Isolation | Pendulum | BoucWen, d0: float, t_end: float | None = None) \
         -> FreeVibration | HystereticVibration:
     """The building's free vibration after the release from the pushed displacement d0 [m], at rest.
@@ -479,13 +490,7 @@ def free_vibration(isolation: Isolation | Pendulum | BoucWen, d0: float, t_end: 
     iso = isolation
     d0 = float(d0)
     z0, R0, _ = pushed_state(iso, d0)
-    if t_end is None:
-        if iso.friction == 0.0:
-            raise ParameterError("t_end", None, "a finite time in (0, inf) s when the sliders have no friction "
-                                 "(the motion never ends)")
-        horizon = math.inf
-    else:
-        horizon = finite_positive("t_end", t_end, "s")
+    horizon = _horizon(t_end, iso.friction)
     pieces: list[_Piece] = []
     t, x, v, z = 0.0, d0, 0.0, z0
     direction = -math.copysign(1.0, R0)
@@ -1003,13 +1008,7 @@ def free_vibration_2dof(building: TwoDOF, d0: float, t_end: float | None = None)
     d0 = float(d0)
     if not math.isfinite(d0) or d0 == 0.0:
         raise ParameterError("d0", d0, "finite and non-zero", "m")
-    if t_end is None:
-        if b.friction == 0.0:
-            raise ParameterError("t_end", None, "a finite time in (0, inf) s when the sliders have no friction "
-                                 "(the motion never ends)")
-        horizon = math.inf
-    else:
-        horizon = finite_positive("t_end", t_end, "s")
+    horizon = _horizon(t_end, b.friction)
     k, ks, cs, Fs = b.stiffness, b.superstructure_stiffness, b.superstructure_damping, float(b.friction)
     pieces: list = []
     stop = math.inf

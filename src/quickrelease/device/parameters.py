@@ -223,13 +223,27 @@ def read_toml_text(path: Path, what: str, error: type[Exception]) -> tuple[dict[
     from .._files import TOML_MAX_BYTES, read_input
 
     raw = read_input(path, what, error, TOML_MAX_BYTES)
+    text = ""
     try:
         text = raw.decode("utf-8")
         return tomllib.loads(text), text
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise error(f"{path}: not valid TOML ({exc})") from None
+        raise error(f"{path}: not valid TOML ({exc}){_quoted_line(text, exc)}") from None
     except RecursionError:
         raise error(f"{path}: not valid TOML (nested too deeply to parse)") from None
+
+
+def _quoted_line(text: str, exc: Exception) -> str:
+    """``: line N reads '...'`` for a TOML error that names its line (tomllib's message gives the line and column
+    only: a key defined twice is otherwise not named), else ""."""
+    import re
+
+    match = re.search(r"at line (\d+), column \d+", str(exc))
+    lines = text.splitlines() if isinstance(text, str) else []
+    if match is None or not 1 <= int(match[1]) <= len(lines):
+        return ""
+    line = lines[int(match[1]) - 1].strip()
+    return f": line {match[1]} reads {line[:80]!r}" if line else ""
 
 
 def load_device(path: str | Path) -> Device:

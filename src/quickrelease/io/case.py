@@ -250,7 +250,7 @@ _VALID = {
     ("fuse", "tolerance"): lambda x: 0.0 < x < 1.0,
     ("building", "damping_ratio"): lambda x: 0.0 <= x < 1.0,
     ("building", "friction"): lambda x: x >= 0.0,
-    ("building", "friction_coefficient"): lambda x: x >= 0.0,
+    ("building", "friction_coefficient"): lambda x: 0.0 <= x <= 1.0,
     ("building", "superstructure_damping_ratio"): lambda x: 0.0 <= x < 1.0,
     ("building", "damping_exponent"): lambda x: 0.05 <= x <= 2.0,
     ("building", "friction_slow"): lambda x: 0.0 <= x <= 1.0,
@@ -309,7 +309,7 @@ CASE_SCHEMA: dict[str, dict[str, tuple[str, str]]] = {
         "mass": ("mass", "a positive mass, e.g. '1500 t'"),
         "weight": ("force", "a positive weight, e.g. '14700 kN'"),
         "friction": ("force", "a force >= 0 (sliding isolators), e.g. '150 kN'"),
-        "friction_coefficient": ("dimensionless", "a friction coefficient >= 0 (times the weight), e.g. 0.01"),
+        "friction_coefficient": ("dimensionless", "a friction coefficient in [0, 1] (times the weight), e.g. 0.01"),
         "displacement": ("length", "a positive pushed displacement d0, e.g. '50 mm'"),
         "k1": ("stiffness", "a positive initial stiffness of the bilinear bearings, e.g. '40 MN/m'"),
         "k2": ("stiffness", "a positive post-yield stiffness below k1, e.g. '4 MN/m'"),
@@ -557,8 +557,10 @@ def _number(source: str, where: str, key: str, kind: str, value: Any, expected: 
     try:
         number = parse_quantity(value, kind, key)
     except QuickReleaseError as exc:
-        reason = str(exc)
-        raise CaseFileError(f"{source}: {where} = {value!r}: {_strip_name(reason, key, value)}") from None
+        reason = _strip_name(str(exc), key, value)
+        if "has dimension" not in reason:  # what is not a quantity: the key's own range, not the grammar's example
+            reason = f"{reason.split('; expected ')[0]}; expected {expected}"
+        raise CaseFileError(f"{source}: {where} = {value!r}: {reason}") from None
     valid = _VALID.get((section, key))
     ok = math.isfinite(number) and (valid(number) if valid else number > 0.0)
     if kind == "angle" and number >= 0.5 * math.pi:
@@ -823,6 +825,11 @@ def _building(values: dict[str, Any], table: Any, source: str, base: Path) -> Bu
     if model == "pendulum" and "friction_coefficient" in given and given & {"friction_slow", "friction_fast"}:
         raise CaseFileError(f"{source}: [building] friction_coefficient and friction_slow/friction_fast: give one "
                             "(a constant coefficient, or Constantinou's law)")
+    if model == "pendulum" and "friction_slow" not in given and given & {"friction_fast", "rate"}:
+        key = "friction_fast" if "friction_fast" in given else "rate"
+        raise CaseFileError(f"{source}: [building] {key} = {table[key]!r} without friction_slow: Constantinou's "
+                            "law mu(v) = mu_fast - (mu_fast - mu_slow) exp(-a |v|) needs friction_slow (mu at "
+                            "vanishing speed, in [0, 1]), or give a constant friction_coefficient")
     if "building.friction" in values and "building.friction_coefficient" in values:
         raise CaseFileError(f"{source}: [building] friction and friction_coefficient: give one of the two")
     if "building.friction_coefficient" in values and mass is None:

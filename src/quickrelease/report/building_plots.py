@@ -15,7 +15,7 @@ import numpy as np
 from ..building.isolation_fit import CHANNEL_KINDS
 from ._style import STYLE as _STYLE
 from ._style import panels, styled, unit_text
-from .plots import _COLORS, _joint_legend, headroom, record_panels, user_label
+from .plots import _COLORS, _joint_legend, headroom, record_axes, record_panels, user_label
 
 __all__ = ["BUILDING_FIGURES", "building_figures", "fit_figure", "decay_figure", "amplitude_figure",
            "hysteresis_figure", "off_scale", "effective_figure"]
@@ -74,12 +74,7 @@ def fit_figure(result, fig=None, ax=None):
     bottom = None
     for k, ch in enumerate(channels):
         unit = _unit(ch.kind)
-        if given is not None:
-            top, bottom = given[2 * k], given[2 * k + 1]
-        else:
-            top = fig.add_subplot(grid[3 * k], sharex=share)
-            share = share or top
-            bottom = fig.add_subplot(grid[3 * k + 1], sharex=share)
+        top, bottom, share = record_axes(fig, given, grid, k, share)
         raster = ch.t.size > _RASTER
         top.plot(ch.t, ch.values, ".", ms=1.5, color=_COLORS["d"], alpha=0.6, label="record", rasterized=raster)
         curve = result.curves[ch.name]  # computed by the analysis (building_analysis.model_curves)

@@ -441,3 +441,34 @@ def spread_rows(judgement: Mapping[str, Any]) -> list[tuple[str, ...]]:
 
 # The result protocol (quickrelease._results) formats reprs and notebook tables with these two.
 register_formatters(short_repr, summary_html)
+
+
+def describe_isolation(model: str, render: Mapping[str, Any], *, period: float, radius: float | None = None,
+                       friction_slow: float | None = None, friction_fast: float | None = None,
+                       rate: float | None = None, post_yield_stiffness: float | None = None,
+                       characteristic_strength: float | None = None, yield_displacement: float | None = None,
+                       shape: float | None = None, power: bool = False, damping_coefficient: float | None = None,
+                       damping_exponent: float | None = None, damping_ratio: float = 0.0,
+                       friction: float = 0.0) -> str:
+    """An isolation system's design in its model's terms, for a person: one describer for the synthetic truth
+    (:func:`quickrelease.studies.synth.describe_truth`, text) and the planned building (the report's HTML).
+
+    The terms, in order: the model's stiffness (``"pendulum"``: radius R [m], period T [s], friction_slow,
+    friction_fast [-] and rate [s/m]; ``"boucwen"``: Kd [N/m], T, Qd [N], dy [m], shape n; otherwise ``"period"``:
+    T), then the damper (``"power"``: C [N (s/m)^alpha] and alpha; ``"viscous"``: zeta), then, but for the
+    pendulum whose friction is in its own term, the sliders' ``"friction"`` [N]. ``render`` maps each term's name
+    to a function of its values (keyword arguments as above) giving its text; the texts are joined by ", "."""
+    if model == "pendulum":
+        terms = [("pendulum", dict(radius=radius, period=period, friction_slow=friction_slow,
+                                   friction_fast=friction_fast, rate=rate))]
+    elif model == "boucwen":
+        terms = [("boucwen", dict(post_yield_stiffness=post_yield_stiffness, period=period,
+                                  characteristic_strength=characteristic_strength,
+                                  yield_displacement=yield_displacement, shape=shape))]
+    else:
+        terms = [("period", dict(period=period))]
+    terms.append(("power", dict(damping_coefficient=damping_coefficient, damping_exponent=damping_exponent))
+                 if power else ("viscous", dict(damping_ratio=damping_ratio)))
+    if model != "pendulum":
+        terms.append(("friction", dict(friction=friction)))
+    return ", ".join(render[name](**values) for name, values in terms)

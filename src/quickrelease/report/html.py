@@ -455,25 +455,33 @@ def render_building_report(result, svgs: dict[str, str], title: str = "Building 
 def _building_design(b, period: float) -> str:
     """The assumed building's design values as the clearance check used them (HTML): the period, the damper's
     and the isolators' friction, each model in its own terms."""
-    if b.model == "pendulum":
-        mu = (f"friction {_num(b.friction_slow, '.3g')}" if b.friction_fast in (None, b.friction_slow) or not b.rate
-              else f"friction {_num(b.friction_slow, '.3g')} to {_num(b.friction_fast, '.3g')} "
-                   f"(rate {_num(b.rate, '.3g')} s/m)")
-        text = f"R = {_num(b.radius, '.4g')} m (T = 2π√(R/g) = {_e(number(period, 6))} s), {mu} of the weight"
-    elif b.model == "boucwen":
-        text = (f"K<sub>d</sub> = {_num(b.post_yield_stiffness / 1e3)} kN/m (T = {_e(number(period, 6))} s), "
-                f"Q<sub>d</sub> = {_num(b.characteristic_strength / 1e3)} kN, d<sub>y</sub> = "
-                f"{_num(1e3 * b.yield_displacement, '.4g')} mm, n = {_num(b.shape or 1.0, '.3g')}")
-    else:
-        text = f"T = {_e(number(b.initial_period, 6))} s"
-    if b.damping == "power":
-        text += (f", dampers C = {_num(b.damping_coefficient / 1e3)} kN (s/m)<sup>α</sup>, "
-                 f"α = {_num(b.damping_exponent, '.3g')}")
-    else:
-        text += f", ζ = {_num(b.damping_ratio, '.3g')}"
-    if b.model != "pendulum":
-        text += f", isolator friction {_num(b.friction_force / 1e3)} kN"
-    return text
+    from .display import describe_isolation
+
+    def pendulum(radius, period, friction_slow, friction_fast, rate):
+        mu = (f"friction {_num(friction_slow, '.3g')}" if friction_fast in (None, friction_slow) or not rate
+              else f"friction {_num(friction_slow, '.3g')} to {_num(friction_fast, '.3g')} "
+                   f"(rate {_num(rate, '.3g')} s/m)")
+        return f"R = {_num(radius, '.4g')} m (T = 2π√(R/g) = {_e(number(period, 6))} s), {mu} of the weight"
+
+    render = {
+        "pendulum": pendulum,
+        "boucwen": lambda post_yield_stiffness, period, characteristic_strength, yield_displacement, shape: (
+            f"K<sub>d</sub> = {_num(post_yield_stiffness / 1e3)} kN/m (T = {_e(number(period, 6))} s), "
+            f"Q<sub>d</sub> = {_num(characteristic_strength / 1e3)} kN, d<sub>y</sub> = "
+            f"{_num(1e3 * yield_displacement, '.4g')} mm, n = {_num(shape or 1.0, '.3g')}"),
+        "period": lambda period: f"T = {_e(number(period, 6))} s",
+        "power": lambda damping_coefficient, damping_exponent: (
+            f"dampers C = {_num(damping_coefficient / 1e3)} kN (s/m)<sup>α</sup>, α = {_num(damping_exponent, '.3g')}"),
+        "viscous": lambda damping_ratio: f"ζ = {_num(damping_ratio, '.3g')}",
+        "friction": lambda friction: f"isolator friction {_num(friction / 1e3)} kN",
+    }
+    return describe_isolation(b.model, render, period=period if b.model in ("pendulum", "boucwen")
+                              else b.initial_period, radius=b.radius, friction_slow=b.friction_slow,
+                              friction_fast=b.friction_fast, rate=b.rate, post_yield_stiffness=b.post_yield_stiffness,
+                              characteristic_strength=b.characteristic_strength,
+                              yield_displacement=b.yield_displacement, shape=b.shape, power=b.damping == "power",
+                              damping_coefficient=b.damping_coefficient, damping_exponent=b.damping_exponent,
+                              damping_ratio=b.damping_ratio, friction=b.friction_force)
 
 
 def _plan_section(plan, svgs: dict[str, str]) -> str:

@@ -211,12 +211,7 @@ def fit_figure(result, fig=None, ax=None):
     for k, name in enumerate(names):
         ch = result.record.channels[name]
         unit = unit_text(CHANNELS[name][1])
-        if given is not None:
-            top, bottom = given[2 * k], given[2 * k + 1]
-        else:
-            top = fig.add_subplot(grid[3 * k], sharex=share)
-            share = share or top
-            bottom = fig.add_subplot(grid[3 * k + 1], sharex=share)
+        top, bottom, share = record_axes(fig, given, grid, k, share)
         top.plot(ch.t, ch.values, ".", ms=1.6, color=_COLORS["d"], alpha=0.6, label="measured")
         top.plot(t_fine, curves[name], color=_COLORS["a"], lw=1.2, label="fitted model")
         top.set_ylabel(f"{name} [{unit}]")
@@ -252,6 +247,16 @@ def record_panels(n: int, per_channel: float, fig, ax, left: float):
     grid = None if given is not None else \
         fig.add_gridspec(3 * n - 1, 1, height_ratios=([3, 1.2, 0.5] * n)[:-1], hspace=0.1)
     return fig, given, grid
+
+
+def record_axes(fig, given, grid, k: int, share):
+    """The axes of channel ``k`` of a record figure (:func:`record_panels`' layout) and of its residuals, and the
+    axes whose time axis the panels share: the user's (``given``) or two new panels on ``grid``."""
+    if given is not None:
+        return given[2 * k], given[2 * k + 1], share
+    top = fig.add_subplot(grid[3 * k], sharex=share)
+    share = share or top
+    return top, fig.add_subplot(grid[3 * k + 1], sharex=share), share
 
 
 def _channel_axes(width: float, height: float, n: int, fig, ax, **margins):

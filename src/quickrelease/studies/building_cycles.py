@@ -49,11 +49,15 @@ from typing import Any
 import numpy as np
 
 from .._results import Summarised
+from .._validate import check_integer, check_real, check_samples, check_seed
 from ..building.effective import CycleProperties, cycle_turns, loop_cycles
 from ..building.isolation_fit import BuildingChannel, IsolationFit
 from ..errors import ParameterError
 
 __all__ = ["MeasuredCycles", "measured_cycles", "default_window", "SE_KEYS"]
+
+#: Most bootstrap copies of the record (each is read as the record is: a million is hours of work).
+MOST_DRAWS = 1_000_000
 
 #: The quantities of each cycle that get a standard error (CycleProperties' field names).
 SE_KEYS = ("amplitude_m", "f_plus_N", "f_minus_N", "keff_N_m", "edc_J", "beta_eff", "qd_N", "kd_N_m", "teff_s", "mu")
@@ -128,8 +132,14 @@ def smooth_half_cycles(y: np.ndarray, turns: np.ndarray, window: int, guard: int
     last): each run's interior, without the ``guard`` samples next to each turning point, by a local quadratic
     over ``window`` samples; the turning point and the guard samples before it from the quadratic of the run that
     reaches them, the guard samples after it from the run that leaves it. A run too short for the window keeps
-    its samples."""
-    y = np.asarray(y, dtype=float)
+    its samples.
+
+    ParameterError (naming the argument) unless ``y`` is a 1-D array of numbers, ``turns`` strictly increasing
+    sample indices of it, ``window`` an odd number of samples >= 3 (the quadratic's) and ``guard`` >= 0."""
+    y = check_samples("y", y, finite=False)
+    turns = _turn_indices(turns, y.size)
+    window = check_integer("window", window, ORDER + 1, odd=True)
+    guard = check_integer("guard", guard, 0)
     out = y.copy()
     bounds = [0, *[int(i) for i in turns], y.size - 1]
     for a, b in zip(bounds[:-1], bounds[1:], strict=True):
@@ -144,6 +154,18 @@ def smooth_half_cycles(y: np.ndarray, turns: np.ndarray, window: int, guard: int
         if b > hi:
             out[hi + 1:b + 1] = post  # the turning point b from the run that reaches it
     return out
+
+
+def _turn_indices(turns, size: int, name: str = "turns") -> np.ndarray:
+    """``turns`` as strictly increasing sample indices in [0, size); ParameterError naming ``name`` otherwise (an
+    empty sequence is valid: no turning point)."""
+    if isinstance(turns, list | tuple) and len(turns) == 0:
+        return np.empty(0, dtype=int)
+    arr = check_samples(name, turns) if not (isinstance(turns, np.ndarray) and turns.size == 0) else turns.ravel()
+    if arr.size and (np.any(arr != np.round(arr)) or arr[0] < 0 or arr[-1] >= size or np.any(np.diff(arr) <= 0)):
+        raise ParameterError(name, f"{arr.size} value(s) from {arr.min():g} to {arr.max():g}",
+                             f"strictly increasing sample indices in [0, {size - 1}]")
+    return arr.astype(int)
 
 
 def _extremes_at_turns(x: np.ndarray, turns: np.ndarray, reach: int) -> np.ndarray:
@@ -168,14 +190,25 @@ def default_window(turns: np.ndarray, period: float, dt: float) -> int:
     Not the fitted model's period alone: a hysteretic isolator's is its post-yield stiffness's (4.44 s for the
     lead-rubber example, whose loops run at 1.5 to 3 s): a window of 57 samples at 100 Hz, most of a half-cycle,
     whose quadratic extrapolated to the turning points overshot them (D 28 standard errors high on average, EDC
-    1.3, on independent records of that building; 19 samples, the record's own, are unbiased)."""
-    if turns.size >= 3:
-        n = int(round(float(np.median(np.diff(turns))) / 4.0))
-    elif math.isfinite(period) and period > 0 and dt > 0:
-        n = int(round(period / 8.0 / dt))
+    1.3, on independent records of that building; 19 samples, the record's own, are unbiased).
+
+    ParameterError unless ``turns`` is a sequence of strictly increasing sample indices and ``period`` and ``dt``
+    real numbers (nan, inf or <= 0: no period to scale)."""
+    if isinstance(turns, np.ndarray) and turns.size == 0 or isinstance(turns, list | tuple) and len(turns) == 0:
+        turns = np.empty(0, dtype=int)
     else:
-        n = 25
-    return min(max(n, 7), 61) | 1
+        turns = check_samples("turns", turns)
+        if np.any(np.diff(turns) <= 0) or np.any(turns < 0):
+            raise ParameterError("turns", f"{turns.size} value(s)", "strictly increasing sample indices >= 0")
+    period = check_real("period", period, "a real number [s] (nan: none)", "s", test=lambda _: True)
+    dt = check_real("dt", dt, "a real number [s]", "s", test=lambda _: True)
+    if turns.size >= 3:
+        n = float(np.median(np.diff(turns))) / 4.0
+    elif math.isfinite(period) and period > 0 and math.isfinite(dt) and dt > 0:
+        n = period / 8.0 / dt
+    else:
+        n = 25.0
+    return int(round(min(max(n, 7.0), 61.0))) | 1
 
 
 def _median_step(t: np.ndarray) -> float:
@@ -207,10 +240,12 @@ def measured_cycles(fit: IsolationFit, draws: int = 100, window: int | None = No
         None for ``2dof``, for a record without a displacement channel, and where fewer than 32 samples of the
         common clock follow the release; no cycles where the record holds fewer than two half-cycles.
     """
-    if int(draws) < 10:
-        raise ParameterError("draws", draws, "10 or more")
-    if window is not None and not (int(window) >= 7 and int(window) % 2 == 1):
-        raise ParameterError("window", window, "an odd number of samples, 7 or more")
+    draws = check_integer("draws", draws, 10, MOST_DRAWS)
+    if window is not None:
+        window = check_integer("window", window, 7, odd=True)
+    seed = check_seed("seed", seed)
+    if not isinstance(fit, IsolationFit):
+        raise ParameterError("fit", type(fit).__name__, "an IsolationFit (quickrelease.building.fit_isolation)")
     if fit.model == "2dof":
         return None
     xch = next((c for c in fit.channels if c.kind == "x"), None)

@@ -38,6 +38,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from .._results import Summarised
+from .._validate import check_integer, check_real, check_samples, check_seed
 from ..building.effective import cycle_starts
 from ..building.isolation_fit import PARAMETER_BOUNDS, IsolationFit
 from ..building.model import free_vibration
@@ -51,6 +52,8 @@ QUANTITIES = {"keff_N_m": "N/m", "edc_J": "J", "beta_eff": "-", "teff_s": "s"}
 #: Draws of the parameters for the bands (400: the 2.5% and 97.5% quantiles to about 1% of the band's width
 #: (their standard error, sqrt(q (1 - q) / n) / density); a 60 s, 200 Hz record's band in 0.6 s here).
 DRAWS = 400
+#: Most parameter draws (each solves the model's motion again: a million is hours of work).
+MOST_DRAWS = 1_000_000
 #: Gauss-Legendre nodes per interval between the solution's breakpoints.
 _NODES = 16
 #: Sub-intervals of a half-cycle where the solution does not give its pieces (smooth models).
@@ -101,7 +104,10 @@ def model_cycles(isolation, d0: float, horizon: float) -> dict[str, np.ndarray]:
     [s], ``amplitude_m`` [m], ``keff_N_m`` [N/m], ``edc_J`` [J] (nan where a cycle ends where the sliders hold
     and the solution has no ``restoring_force``), ``beta_eff`` [-], ``teff_s`` [s] and ``from_release``
     (the cycle starts at the release). ``isolation`` is any model :func:`quickrelease.building.free_vibration`
-    takes whose solution has ``state``, ``reversal_times`` and ``stop_time``."""
+    takes whose solution has ``state``, ``reversal_times`` and ``stop_time``. ParameterError unless ``d0`` and
+    ``horizon`` are real numbers (d0 finite and non-zero, horizon finite and > 0)."""
+    d0 = check_real("d0", d0, "finite and non-zero", "m", test=lambda v: math.isfinite(v) and v != 0.0)
+    horizon = check_real("horizon", horizon, "(0, inf)", "s", test=lambda v: math.isfinite(v) and v > 0.0)
     fv = free_vibration(isolation, d0, t_end=horizon)
     mass = float(isolation.mass)
     times = np.asarray(fv.reversal_times, dtype=float)
@@ -176,7 +182,7 @@ def _curves(cyc: dict[str, np.ndarray], grid: np.ndarray, mass: float) -> dict[s
     d = cyc["amplitude_m"][keep]
     force = _interpolate(d, cyc["keff_N_m"][keep] * d, grid)  # keff D, the force amplitude
     edc = _interpolate(d, cyc["edc_J"][keep], grid)
-    with np.errstate(invalid="ignore", divide="ignore"):
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):  # amplitudes far beyond the cycles: nan
         keff = force / grid
         return {"keff_N_m": keff, "edc_J": edc, "beta_eff": edc / (2.0 * math.pi * force * grid),
                 "teff_s": 2.0 * math.pi * np.sqrt(mass / keff)}
@@ -215,8 +221,13 @@ class EffectiveCurve(Summarised):
     def at(self, amplitude) -> dict[str, np.ndarray]:
         """Each curve and band end at the given amplitudes [m] (a cubic spline through the grid's points, linear
         where some are nan; nan outside the grid, beyond 2% of its span): keys ``<quantity>``,
-        ``<quantity>_lo``, ``<quantity>_hi``."""
-        a = np.atleast_1d(np.asarray(amplitude, dtype=float))
+        ``<quantity>_lo``, ``<quantity>_hi``. ParameterError unless ``amplitude`` is a number or a 1-D array of
+        numbers (an empty one gives empty arrays)."""
+        if isinstance(amplitude, list | tuple) and len(amplitude) == 0:
+            amplitude = np.empty(0)
+        a = np.atleast_1d(amplitude) if isinstance(amplitude, np.ndarray) and amplitude.size == 0 else \
+            check_samples("amplitude", np.atleast_1d(amplitude) if not isinstance(amplitude, str) else amplitude,
+                          unit="m", finite=False)
         out: dict[str, np.ndarray] = {}
         g = self.amplitude_m
         slack = _SLACK * (g[-1] - g[0]) if g.size else 0.0  # a sampled cycle's D a hair beyond the model's
@@ -307,12 +318,11 @@ def effective_curves(fit: IsolationFit, amplitudes=None, level: float = 0.95, dr
         Empty (no amplitudes) for the 2dof model (its base force is not the isolators' alone) and where the
         fitted motion holds fewer than two cycles after the release's.
     """
-    level = float(level)
-    if not (0.0 < level < 1.0):
-        raise ParameterError("level", level, "(0, 1)")
-    if isinstance(draws, bool) or int(draws) != draws or int(draws) < 20:
-        raise ParameterError("draws", draws, "an integer >= 20")
-    draws = int(draws)
+    if not isinstance(fit, IsolationFit):
+        raise ParameterError("fit", type(fit).__name__, "an IsolationFit (quickrelease.building.fit_isolation)")
+    level = check_real("level", level, "(0, 1)", test=lambda v: 0.0 < v < 1.0)
+    draws = check_integer("draws", draws, 20, MOST_DRAWS)
+    seed = check_seed("seed", seed)
     empty = {q: np.empty(0) for q in QUANTITIES}
     if fit.model == "2dof":
         return EffectiveCurve(fit.model, fit.mass, np.empty(0), empty, empty, empty, level, draws, 0, (), (),
@@ -327,8 +337,9 @@ def effective_curves(fit: IsolationFit, amplitudes=None, level: float = 0.95, dr
     if amplitudes is None:
         grid = np.linspace(float(d.min()), float(d.max()), _GRID)
     else:
-        grid = np.sort(np.atleast_1d(np.asarray(amplitudes, dtype=float)))
-        if grid.size == 0 or not np.all(np.isfinite(grid)) or np.any(grid <= 0):
+        grid = np.sort(check_samples("amplitudes", np.atleast_1d(amplitudes) if not isinstance(amplitudes, str)
+                                     else amplitudes, unit="m"))
+        if np.any(grid <= 0):
             raise ParameterError("amplitudes", f"{grid.size} value(s)", "finite amplitudes > 0", "m")
     curves = _curves(best, grid, fit.mass)
     outside = (grid < d.min()) | (grid > d.max())
@@ -430,11 +441,20 @@ def judge_cycles(cycles, curve: EffectiveCurve, *, keff_tolerance: float = 0.15,
     -------
     CycleJudgement
     """
-    if not (0.0 < float(keff_tolerance) < 1.0):
-        raise ParameterError("keff_tolerance", keff_tolerance, "(0, 1)")
-    if not (0.0 < float(edc_fraction) < 1.0):
-        raise ParameterError("edc_fraction", edc_fraction, "(0, 1)")
-    cycles = list(cycles)
+    keff_tolerance = check_real("keff_tolerance", keff_tolerance, "(0, 1)", test=lambda v: 0.0 < v < 1.0)
+    edc_fraction = check_real("edc_fraction", edc_fraction, "(0, 1)", test=lambda v: 0.0 < v < 1.0)
+    if release_time is not None:
+        release_time = check_real("release_time", release_time, "a finite time [s] or None", "s")
+    if not isinstance(curve, EffectiveCurve):
+        raise ParameterError("curve", type(curve).__name__, "an EffectiveCurve (effective_curves)")
+    try:
+        cycles = list(cycles)
+    except TypeError:
+        raise ParameterError("cycles", type(cycles).__name__, "a sequence of CycleProperties") from None
+    wrong = next((c for c in cycles if not all(hasattr(c, k) for k in ("amplitude_m", "start_s", "keff_N_m",
+                                                                         "edc_J", "beta_eff"))), None)
+    if wrong is not None:
+        raise ParameterError("cycles", f"an item {type(wrong).__name__}", "a sequence of CycleProperties")
     rows = []
     at = curve.at([c.amplitude_m for c in cycles]) if cycles else {}
     for i, c in enumerate(cycles):

@@ -158,6 +158,27 @@ def _measured(channels, clean: dict[str, np.ndarray], offsets: dict[str, float],
     return data
 
 
+def _sampling(channels, table: dict[str, tuple], defaults: dict[str, float], noise: dict[str, float] | None,
+              rate: float, release_time: float, jitter: float, missing: float) -> dict[str, float]:
+    """Check a synthetic record's sampling (rate [Hz] and release_time [s] finite and > 0, jitter and missing in
+    [0, 1)) and return the noise of every channel (``defaults`` updated by ``noise``), each finite and > 0 (the
+    noise weights the fit of the record and its predicted precision), in the unit of ``table[name][1]``;
+    ParameterError naming the first that is not."""
+    if not (math.isfinite(rate) and rate > 0):
+        raise ParameterError("rate", rate, "(0, inf)", "Hz")
+    if not (math.isfinite(release_time) and release_time > 0):
+        raise ParameterError("release_time", release_time, "(0, inf)", "s")
+    if not 0.0 <= jitter < 1.0:
+        raise ParameterError("jitter", jitter, "[0, 1)")
+    if not 0.0 <= missing < 1.0:
+        raise ParameterError("missing", missing, "[0, 1)")
+    noise = {**defaults, **(noise or {})}
+    for name in channels:
+        if not (math.isfinite(noise[name]) and noise[name] > 0):
+            raise ParameterError(f"noise of {name}", noise[name], "(0, inf) (the noise weights a fit)", table[name][1])
+    return noise
+
+
 def synthesize(case: Case, channels: list[str] | tuple[str, ...], *, rate: float, noise: dict[str, float] | None = None,
                release_time: float = 0.5, duration: float | None = None, offsets: dict[str, float] | None = None,
                seed: int = 0, jitter: float = 0.0, missing: float = 0.0) -> SyntheticRecord:
@@ -189,19 +210,7 @@ def synthesize(case: Case, channels: list[str] | tuple[str, ...], *, rate: float
     unknown = [c for c in channels if c not in CHANNELS]
     if unknown or not channels:
         raise ParameterError("channels", ",".join(unknown) or "(none)", f"a list of {', '.join(CHANNELS)}")
-    if not (math.isfinite(rate) and rate > 0):
-        raise ParameterError("rate", rate, "(0, inf)", "Hz")
-    if not (math.isfinite(release_time) and release_time > 0):
-        raise ParameterError("release_time", release_time, "(0, inf)", "s")
-    if not 0.0 <= jitter < 1.0:
-        raise ParameterError("jitter", jitter, "[0, 1)")
-    if not 0.0 <= missing < 1.0:
-        raise ParameterError("missing", missing, "[0, 1)")
-    noise = {**DEFAULT_NOISE, **(noise or {})}
-    for name in channels:  # > 0: the noise weights the fit of the record and its predicted precision
-        if not (math.isfinite(noise[name]) and noise[name] > 0):
-            raise ParameterError(f"noise of {name}", noise[name], "(0, inf) (the noise weights a fit)",
-                                 CHANNELS[name][1])
+    noise = _sampling(channels, CHANNELS, DEFAULT_NOISE, noise, rate, release_time, jitter, missing)
     offsets = {name: float((offsets or {}).get(name, 0.0)) for name in channels}
     for name, value in offsets.items():
         if not math.isfinite(value):
@@ -396,26 +405,32 @@ def describe_truth(truth: dict[str, Any]) -> str:
     """The synthetic building's isolation in its model's terms, for a person (SI values with prefixes): the period
     (pendulum: its radius R and 2 pi sqrt(R / g); Bouc-Wen: Kd, Qd, dy, n), the damper (zeta, or C and alpha) and
     the sliders' friction (the pendulum's mu_slow to mu_fast at rate a)."""
-    from ..report.display import quantity
+    from ..report.display import describe_isolation, quantity
 
     t = truth
-    if t["model"] == "pendulum":
-        text = (f"R = {quantity(t['radius_m'], 'm')} (T = {quantity(t['period_s'], 's')}), friction "
-                f"mu = {quantity(t['friction_slow'])} to {quantity(t['friction_fast'])} (rate "
-                f"{quantity(t['rate_s_m'], 's/m')})")
-    elif t["model"] == "boucwen":
-        text = (f"Kd = {quantity(t['Kd_N_m'], 'N/m')} (T = {quantity(t['period_s'], 's')}), Qd = "
-                f"{quantity(t['Qd_N'], 'N')}, dy = {quantity(t['dy_m'], 'm')}, n = {quantity(t['shape'])}")
-    else:
-        text = f"T = {quantity(t['period_s'], 's')}"
-    if "damping_exponent" in t:
-        text += (f", dampers C = {quantity(t['damping_coefficient'], 'N')} (s/m)^alpha, alpha = "
-                 f"{quantity(t['damping_exponent'])}")
-    else:
-        text += f", zeta = {quantity(t['damping_ratio'])}"
-    if t["model"] != "pendulum":
-        text += f", F_s = {quantity(t['friction_N'], 'N')}"
-    return text
+    render = {
+        "pendulum": lambda radius, period, friction_slow, friction_fast, rate: (
+            f"R = {quantity(radius, 'm')} (T = {quantity(period, 's')}), friction mu = {quantity(friction_slow)} "
+            f"to {quantity(friction_fast)} (rate {quantity(rate, 's/m')})"),
+        "boucwen": lambda post_yield_stiffness, period, characteristic_strength, yield_displacement, shape: (
+            f"Kd = {quantity(post_yield_stiffness, 'N/m')} (T = {quantity(period, 's')}), Qd = "
+            f"{quantity(characteristic_strength, 'N')}, dy = {quantity(yield_displacement, 'm')}, "
+            f"n = {quantity(shape)}"),
+        "period": lambda period: f"T = {quantity(period, 's')}",
+        "power": lambda damping_coefficient, damping_exponent: (
+            f"dampers C = {quantity(damping_coefficient, 'N')} (s/m)^alpha, alpha = {quantity(damping_exponent)}"),
+        "viscous": lambda damping_ratio: f"zeta = {quantity(damping_ratio)}",
+        "friction": lambda friction: f"F_s = {quantity(friction, 'N')}",
+    }
+    power = "damping_exponent" in t
+    return describe_isolation(t["model"], render, period=t["period_s"], radius=t.get("radius_m"),
+                              friction_slow=t.get("friction_slow"), friction_fast=t.get("friction_fast"),
+                              rate=t.get("rate_s_m"), post_yield_stiffness=t.get("Kd_N_m"),
+                              characteristic_strength=t.get("Qd_N"), yield_displacement=t.get("dy_m"),
+                              shape=t.get("shape"), power=power, damping_coefficient=t.get("damping_coefficient"),
+                              damping_exponent=t.get("damping_exponent"),
+                              damping_ratio=t.get("damping_ratio", 0.0) if not power else 0.0,
+                              friction=t.get("friction_N", 0.0))
 
 
 def building_pushed_displacement(case: Case) -> float:
@@ -483,19 +498,7 @@ def synthesize_building(case: Case, channels: list[str] | tuple[str, ...], *, ra
         what = f"unknown channel {unknown[0]!r}" if unknown else "no channel" if not channels else "a channel twice"
         raise QuickReleaseError(f"channels = {','.join(channels)!r}: {what}; valid: distinct channels of the "
                                 f"building's record, {', '.join(BUILDING_CHANNELS)}")
-    if not (math.isfinite(rate) and rate > 0):
-        raise ParameterError("rate", rate, "(0, inf)", "Hz")
-    if not (math.isfinite(release_time) and release_time > 0):
-        raise ParameterError("release_time", release_time, "(0, inf)", "s")
-    if not 0.0 <= jitter < 1.0:
-        raise ParameterError("jitter", jitter, "[0, 1)")
-    if not 0.0 <= missing < 1.0:
-        raise ParameterError("missing", missing, "[0, 1)")
-    noise = {**BUILDING_NOISE, **(noise or {})}
-    for name in channels:
-        if not (math.isfinite(noise[name]) and noise[name] > 0):
-            raise ParameterError(f"noise of {name}", noise[name], "(0, inf) (the noise weights a fit)",
-                                 BUILDING_CHANNELS[name][1])
+    noise = _sampling(channels, BUILDING_CHANNELS, BUILDING_NOISE, noise, rate, release_time, jitter, missing)
     offsets = {name: float((offsets or {}).get(name, 0.0)) for name in channels}
     for name, value in offsets.items():
         if not math.isfinite(value):
@@ -507,9 +510,16 @@ def synthesize_building(case: Case, channels: list[str] | tuple[str, ...], *, ra
         raise ParameterError("d0", d0, "(0, inf) (the push must move the building past its sliders' friction)", "m")
     R0 = pushed_state(iso.rigid() if two else iso, d0)[1]  # 2dof: the isolators hold k d0, the storey no shear
     if abs(R0) <= iso.friction:
+        if spec.friction_coefficient is not None:
+            key = f"friction_coefficient = {spec.friction_coefficient:.6g}"
+        elif spec.model == "pendulum":
+            key = f"friction_slow = {spec.friction_slow:.6g}"
+        else:
+            key = f"friction = {spec.friction_force:.6g} N"
         raise QuickReleaseError(f"{case.source}: [building] d0 = {d0:.6g} m: the sliders' friction F_s = "
                                 f"{iso.friction:.6g} N holds the building there (restoring force {R0:.6g} N <= F_s), "
-                                "so it never moves after the release: push it farther")
+                                f"so it never moves after the release: push it farther, or give less friction "
+                                f"([building] {key})")
     period = iso.period
     motion = free_vibration(iso, d0, t_end=20.0 * period)
     t_stop = motion.stop_time
