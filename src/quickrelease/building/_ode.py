@@ -125,14 +125,15 @@ def _resist(P, s):
 def _quasi(P, push):
     """The quasi-static speed S0 [m/s] at which the sliders and the damper balance the force ``push`` [N] that
     drives the layer on, g(S0) = push (0 where the sliders hold it, push <= f_slow). Closed form for constant
-    friction, ((push - f_slow) / C)^(1 / alpha); else a safeguarded Newton iteration on ln S0 (g increases with
-    the speed: the friction's law strengthens with it)."""
+    friction, ((push - f_slow) / C)^(1 / alpha); else a safeguarded Newton iteration on ln S0 within a bracket."""
     excess = push - P[FSLOW]
     if excess <= 0.0 or P[C] <= 0.0:
         return 0.0
-    hi = (excess / P[C]) ** (1.0 / P[ALPHA])  # g(hi) >= push: the friction is at least f_slow
     if P[RATE] <= 0.0 or P[FFAST] == P[FSLOW]:
-        return hi
+        return (excess / P[C]) ** (1.0 / P[ALPHA])
+    # g(hi) >= push: the friction is at least the smaller of its two levels (a friction that weakens with the
+    # speed makes g rise, fall and rise again: the bracket's iteration finds one of its roots)
+    hi = ((push - min(P[FSLOW], P[FFAST])) / P[C]) ** (1.0 / P[ALPHA])
     u_hi = math.log(hi)
     u_lo = u_hi
     for _ in range(40):  # g -> f_slow < push as the speed vanishes
