@@ -98,11 +98,24 @@ CREEP_TOL = 1e-6
 STEP_RELAX = 0.5
 STEP_STABLE = 3.0
 BAND_TOL = 1e-3
+#: (The helpers called with literal flags from :func:`integrate` are compiled for one signature each: numba
+#: compiled a version per literal argument, five of _locate, each inlining the tableau's step.)
 #: End codes of a record's grid points: the step goes on, or the point starts a piece after an event.
 EV_NONE, EV_RELEASE, EV_REVERSAL, EV_YIELD, EV_ZERO, EV_STICK = 0, 1, 2, 3, 4, 5
 #: The event that ends a creep: the force pushing the layer on falls to what the sliders and the damper resist at
 #: the creep's lowest speed (the quasi-static speed reaches CREEP of the release's: at rest, as :func:`_held`).
 EV_REST = 6
+
+
+@njit(cache=True, nogil=True)
+def _net(P, y):
+    """The force the sliders must hold at rest: k x + f_h [N]."""
+    fh = 0.0
+    if P[HKIND] == H_BOUCWEN:
+        fh = P[Q] * y[2]
+    elif P[HKIND] == H_PLASTIC:
+        fh = y[2]
+    return P[K] * y[0] + fh
 
 
 @njit(cache=True, nogil=True)
@@ -288,7 +301,7 @@ def _step(P, y, h, d, mode, k, tmp, out):
         out[j] = y[j] + h * acc
 
 
-@njit(cache=True, nogil=True)
+@njit("float64[::1](boolean, boolean)", cache=True, nogil=True)
 def _fractions(graded_start, graded_end):
     """The substeps of a step, as fractions of it: one, or graded towards a reversal at its start or end."""
     if not graded_start and not graded_end:
@@ -308,7 +321,8 @@ def _fractions(graded_start, graded_end):
     return g[::-1].copy()
 
 
-@njit(cache=True, nogil=True)
+@njit("void(float64[::1], float64[::1], float64, float64, int64, boolean, boolean, float64[:, ::1], float64[::1], "
+      "float64[::1], float64[::1])", cache=True, nogil=True)
 def _advance(P, y, h, d, mode, graded_start, graded_end, k, tmp, a, out):
     """y advanced by h (substeps graded as asked) into out; a is scratch."""
     fr = _fractions(graded_start, graded_end)
@@ -320,7 +334,7 @@ def _advance(P, y, h, d, mode, graded_start, graded_end, k, tmp, a, out):
             a[j] = out[j]
 
 
-@njit(cache=True, nogil=True)
+@njit("float64(float64[::1], float64[::1], int64, float64, float64)", cache=True, nogil=True)
 def _event_value(P, y, kind, d, level):
     if kind == EV_REST:  # the push -d (k x + f_h) above ``level``
         return -d * _net(P, y) - level
@@ -331,7 +345,8 @@ def _event_value(P, y, kind, d, level):
     return y[2]  # EV_ZERO
 
 
-@njit(cache=True, nogil=True)
+@njit("float64(float64[::1], float64[::1], float64, float64, int64, int64, boolean, boolean, float64[:, ::1], "
+      "float64[::1], float64[::1], float64[::1], float64[::1], float64)", cache=True, nogil=True)
 def _locate(P, y, h, d, mode, kind, graded_start, graded_end, k, tmp, a, out, r, level):
     """The fraction theta in (0, h] of a step where the event's function (:func:`_event_value`) vanishes,
     bracketed by [0, h]; a safeguarded Newton iteration on the tableau's map (derivative from the equation)."""
@@ -478,18 +493,8 @@ def _held(P, net, creep):
     return P[ALPHA] < 1.0 and P[C] > 0.0 and (excess / P[C]) ** (1.0 / P[ALPHA]) < creep
 
 
-@njit(cache=True, nogil=True)
-def _net(P, y):
-    """The force the sliders must hold at rest: k x + f_h [N]."""
-    fh = 0.0
-    if P[HKIND] == H_BOUCWEN:
-        fh = P[Q] * y[2]
-    elif P[HKIND] == H_PLASTIC:
-        fh = y[2]
-    return P[K] * y[0] + fh
-
-
-@njit(cache=True, nogil=True)
+@njit("int64(float64[::1], float64[:, ::1], float64[::1], int64[::1], int64, float64, float64[::1], float64, int64)",
+      cache=True, nogil=True)
 def _put(gt, gy, gd, gf, n, t, y, d, mode):
     gt[n] = t
     for j in range(NY):
@@ -499,7 +504,9 @@ def _put(gt, gy, gd, gf, n, t, y, d, mode):
     return n + 1
 
 
-@njit(cache=True, nogil=True)
+@njit("int64(float64[::1], float64[::1], float64, float64, int64, boolean, boolean, float64, float64[::1], "
+      "float64[:, ::1], float64[::1], int64[::1], int64, float64[:, ::1], float64[::1], float64[::1])",
+      cache=True, nogil=True)
 def _walk(P, y, span, d, mode, graded_start, graded_end, t, gt, gy, gd, gf, n, k, tmp, out):
     """Advance y by span through its (graded) substeps, recording each substep's start after the first as a grid
     point; the end state in out. Returns the grid's count."""
