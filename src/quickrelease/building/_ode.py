@@ -98,8 +98,6 @@ CREEP_TOL = 1e-6
 STEP_RELAX = 0.5
 STEP_STABLE = 3.0
 BAND_TOL = 1e-3
-#: (The helpers called with literal flags from :func:`integrate` are compiled for one signature each: numba
-#: compiled a version per literal argument, five of _locate, each inlining the tableau's step.)
 #: End codes of a record's grid points: the step goes on, or the point starts a piece after an event.
 EV_NONE, EV_RELEASE, EV_REVERSAL, EV_YIELD, EV_ZERO, EV_STICK = 0, 1, 2, 3, 4, 5
 #: The event that ends a creep: the force pushing the layer on falls to what the sliders and the damper resist at
@@ -301,6 +299,8 @@ def _step(P, y, h, d, mode, k, tmp, out):
         out[j] = y[j] + h * acc
 
 
+# The helpers that integrate calls with literal flags are compiled for one signature each (numba compiled a
+# version per literal argument: five of _locate, each inlining the tableau's step).
 @njit("float64[::1](boolean, boolean)", cache=True, nogil=True)
 def _fractions(graded_start, graded_end):
     """The substeps of a step, as fractions of it: one, or graded towards a reversal at its start or end."""
