@@ -51,7 +51,7 @@ fig = fit_figure(result)
 
 # %%
 # The same record, fitted with a linear viscous damper
-# ---------------------------------------------------
+# ----------------------------------------------------
 # A viscous damper's force vanishes with the velocity as v, the fluid damper's as |v|^0.4: relatively it
 # damps the small late cycles harder. A viscous fit must trade the two ends of the decay: it damps the large
 # early half-cycles too much and the small late ones too little, and lends the sliders the difference (their
