@@ -4,7 +4,7 @@ A building with fluid viscous dampers
 
 ``examples/fluid_damper_building.toml``: 800 t on rubber bearings (isolation period 2.5 s) and flat sliders
 (friction 0.5 % of the weight) with fluid viscous dampers in parallel, whose force grows as a power of the
-velocity, F = C |v|^alpha sign(v): C = 100 kN (s/m)^alpha, alpha = 0.4 (``damping = "power"``); pushed 200 mm
+velocity, ``F = C |v|^alpha sign(v)``: C = 100 kN (s/m)^alpha, alpha = 0.4 (``damping = "power"``); pushed 200 mm
 and released. Its record is synthetic, made by the tests' independent simulator
 (``examples/make_isolator_records.py``: solve_ivp with events, no code of the package): an LVDT at 200 Hz and an
 accelerometer at 100 Hz on its own clock. It turns six times and sticks 7.5 s after the release, so the fit uses
@@ -52,7 +52,7 @@ fig = fit_figure(result)
 # %%
 # The same record, fitted with a linear viscous damper
 # ----------------------------------------------------
-# A viscous damper's force vanishes with the velocity as v, the fluid damper's as |v|^0.4: relatively it
+# A viscous damper's force vanishes with the velocity as v, the fluid damper's as ``|v|^0.4``: relatively it
 # damps the small late cycles harder. A viscous fit must trade the two ends of the decay: it damps the large
 # early half-cycles too much and the small late ones too little, and lends the sliders the difference (their
 # friction's drop per half-cycle is the same at every amplitude): its friction comes out 60 % high, its
