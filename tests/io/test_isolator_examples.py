@@ -20,11 +20,14 @@ sys.path.insert(0, str(ROOT / "tests" / "building"))
 import isolator_reference as ref  # noqa: E402
 
 CASES = {"pendulum_building.toml": "pendulum", "lead_rubber_building.toml": "lead_rubber",
-         "lead_rubber_damper_building.toml": "lead_rubber_damper"}
+         "lead_rubber_damper_building.toml": "lead_rubber_damper", "fluid_damper_building.toml": "fluid_damper"}
 G0, RELEASE = 9.80665, 2.05
 
 
 def _reference_system(system):
+    if type(system).__name__ == "Isolation":  # linear bearings and sliders (the fluid dampers' building)
+        assert system.post_yield_stiffness is None
+        return ref.linear(system.mass, system.stiffness, system.damping, system.damping_exponent, system.friction)
     if type(system).__name__ == "Pendulum":
         return ref.pendulum(system.mass, system.radius, system.friction_slow, system.friction_fast, system.rate,
                             system.damping, system.damping_exponent)
