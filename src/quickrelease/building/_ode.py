@@ -232,10 +232,19 @@ def _creep(P, y, d, mode, out):
 
 
 @njit(cache=True, nogil=True)
-def _rhs(P, y, d, mode, out):
+def _rhs_any(P, y, d, mode, out):
+    """The right-hand side of a piece of any mode: on the slow manifold (:func:`_creep`) or the equation of motion
+    (:func:`_rhs`)."""
     if mode & CREEPING:
         _creep(P, y, d, mode, out)
-        return
+    else:
+        _rhs(P, y, d, mode, out)
+
+
+@njit(cache=True, nogil=True)
+def _rhs(P, y, d, mode, out):
+    """The equation of motion's right-hand side (a piece that does not creep). (The creeping pieces' law is kept
+    out of it and of the tableau's loops: a branch to it here made every free vibration twice as slow.)"""
     x, v, z = y[0], y[1], y[2]
     s = d * v
     if s < 0.0:
@@ -285,6 +294,15 @@ def _rhs(P, y, d, mode, out):
 @njit(cache=True, nogil=True)
 def _step(P, y, h, d, mode, k, tmp, out):
     """One step of length h of the tableau from y (stages in k, scratch tmp) into out."""
+    if mode & CREEPING:
+        _tableau_creep(P, y, h, d, mode, k, tmp, out)
+    else:
+        _tableau(P, y, h, d, mode, k, tmp, out)
+
+
+@njit(cache=True, nogil=True)
+def _tableau(P, y, h, d, mode, k, tmp, out):
+    """One step of the tableau on the equation of motion."""
     for i in range(_S):
         for j in range(NY):
             acc = 0.0
@@ -292,6 +310,26 @@ def _step(P, y, h, d, mode, k, tmp, out):
                 acc += _A[i, m] * k[m, j]
             tmp[j] = y[j] + h * acc
         _rhs(P, tmp, d, mode, k[i])
+    for j in range(NY):
+        acc = 0.0
+        for i in range(_S):
+            acc += _B[i] * k[i, j]
+        out[j] = y[j] + h * acc
+
+
+# The helpers that integrate calls with literal flags are compiled for one signature each (numba compiled a
+# version per literal argument: five of _locate, each inlining the tableau's step).
+@njit(cache=True, nogil=True)
+def _tableau_creep(P, y, h, d, mode, k, tmp, out):
+    """One step of the tableau on the slow manifold (:func:`_tableau`, a copy: numba cannot cache a function
+    that takes another as an argument)."""
+    for i in range(_S):
+        for j in range(NY):
+            acc = 0.0
+            for m in range(i):
+                acc += _A[i, m] * k[m, j]
+            tmp[j] = y[j] + h * acc
+        _creep(P, tmp, d, mode, k[i])
     for j in range(NY):
         acc = 0.0
         for i in range(_S):
@@ -371,7 +409,7 @@ def _locate(P, y, h, d, mode, kind, graded_start, graded_end, k, tmp, a, out, r,
             lo, glo = theta, g
         else:
             hi, ghi = theta, g
-        _rhs(P, out, d, mode, r)
+        _rhs_any(P, out, d, mode, r)
         if kind == EV_REVERSAL:
             dg = d * r[1]
         elif kind == EV_YIELD:
@@ -696,6 +734,15 @@ def integrate(P, y0, t_end, capacity, max_steps):
 @njit(cache=True, nogil=True)
 def _dense(P, y, h, d, mode, K, tmp, F, ynew):
     """The coefficients F (7 x NY) of the tableau's continuous extension over the step of length h from y."""
+    if mode & CREEPING:
+        _extension_creep(P, y, h, d, mode, K, tmp, F, ynew)
+    else:
+        _extension(P, y, h, d, mode, K, tmp, F, ynew)
+
+
+@njit(cache=True, nogil=True)
+def _extension(P, y, h, d, mode, K, tmp, F, ynew):
+    """:func:`_dense` on the equation of motion."""
     for i in range(16):
         if i == _S:  # the stage at the step's end
             for j in range(NY):
@@ -711,6 +758,36 @@ def _dense(P, y, h, d, mode, K, tmp, F, ynew):
                 acc += _AX[i, m] * K[m, j]
             tmp[j] = y[j] + h * acc
         _rhs(P, tmp, d, mode, K[i])
+    for j in range(NY):
+        dy = ynew[j] - y[j]
+        F[0, j] = dy
+        F[1, j] = h * K[0, j] - dy
+        F[2, j] = 2.0 * dy - h * (K[_S, j] + K[0, j])
+        for i in range(4):
+            acc = 0.0
+            for m in range(16):
+                acc += _D[i, m] * K[m, j]
+            F[3 + i, j] = h * acc
+
+
+@njit(cache=True, nogil=True)
+def _extension_creep(P, y, h, d, mode, K, tmp, F, ynew):
+    """:func:`_dense` on the slow manifold (a copy of :func:`_extension`)."""
+    for i in range(16):
+        if i == _S:  # the stage at the step's end
+            for j in range(NY):
+                acc = 0.0
+                for m in range(_S):
+                    acc += _B[m] * K[m, j]
+                ynew[j] = y[j] + h * acc
+            _creep(P, ynew, d, mode, K[_S])
+            continue
+        for j in range(NY):
+            acc = 0.0
+            for m in range(i):
+                acc += _AX[i, m] * K[m, j]
+            tmp[j] = y[j] + h * acc
+        _creep(P, tmp, d, mode, K[i])
     for j in range(NY):
         dy = ynew[j] - y[j]
         F[0, j] = dy
@@ -774,7 +851,7 @@ def evaluate(P, gt, gy, gd, gf, n, stop, y_push, t):
                     out[j] *= x if q % 2 == 0 else 1.0 - x
             for j in range(NY):
                 out[j] += gy[p, j]
-        _rhs(P, out, gd[p], mode, r)
+        _rhs_any(P, out, gd[p], mode, r)
         for j in range(NY):
             ys[i, j] = out[j]
         acc[i] = r[1]
