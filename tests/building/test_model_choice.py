@@ -325,6 +325,8 @@ def _chi2_at(fit, estimates: dict[str, float]) -> float:
 
 
 @pytest.mark.slow
+@pytest.mark.skipif(not SLOW, reason="opt-in (QUICKRELEASE_SLOW=1): the one-half-cycle pendulum's fit, ~200 s of "
+                    "CPU on one worker, beyond CI's 900 s budget")
 def test_one_half_cycle_pendulum_fit_warns():
     """What the fit does today on such a record: it reaches the noise level and warns that the fit is
     ill-conditioned (measured: condition number of the correlations 3.1e11); the fitted point moved along the
@@ -340,6 +342,8 @@ HALF_NOT_IDENTIFIED = ("friction_slow", "friction_fast", "d0", "offset_lvdt")
 
 
 @pytest.mark.slow
+@pytest.mark.skipif(not SLOW, reason="opt-in (QUICKRELEASE_SLOW=1): the one-half-cycle pendulum's fit, ~200 s of "
+                    "CPU on one worker, beyond CI's 900 s budget")
 @pytest.mark.xfail(strict=False, reason=(
     "issue 24, lead's isolation_fit.py: on a one-half-cycle pendulum record the shift family (d0, the LVDT's zero, "
     "friction_slow, friction_fast) is exact; since the profile's refits start along the correlations friction_slow's "
