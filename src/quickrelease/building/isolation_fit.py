@@ -1171,9 +1171,12 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
     p0, xch, d0, friction_se = _initial_values(model, mass, channels, t_r0, fixed, noise, superstructure_mass,
                                                (start or {}).get("d0"), damping)
     from_decay = dict(p0)  # the start of the model-free decay analysis, before the caller's start values
-    p0.update(start or {})
     physical = _physical_names(model, damping)
     all_names = _parameter_names(model, channels, damping)
+    # start values of this fit's parameters only: a case's design values of another model or damper law (a
+    # power-law case fitted with viscous damping, --compare's other models) would otherwise enter the model
+    # (a damping_exponent in the values makes the damper a power law, and damping_ratio had no effect)
+    p0.update({n: v for n, v in (start or {}).items() if n in all_names})
     unknown = sorted(set(fixed) - set(all_names))
     if unknown:
         raise ParameterError("fixed", unknown[0], ", ".join(all_names))
