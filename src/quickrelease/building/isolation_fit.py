@@ -932,7 +932,10 @@ def _final_groups(groups, res, names: list[str], values: dict[str, float], misfi
                   cov_se: dict[str, float]) -> list[dict[str, Any]]:
     """The multi-start's basins after the fit's last steps: the final fit heads the group it lies in; every
     basin solved on the whole record gets its chi-square with the final weights; basins that the whole-record
-    solves put in one basin (within ``SAME_BASIN_SE`` final standard errors) merge."""
+    solves put in one basin (within ``SAME_BASIN_SE`` final standard errors) merge. A final fit that the polish
+    (:func:`_polish`) moved out of the multi-start's best basin, into a lower piece of the misfit, was reached by
+    no start: the basin the starts reached is listed as a minimum of its own, and the certificate does not
+    confirm the global minimum."""
     best = {"chi2": 2.0 * float(res.cost), "parameters": _unpack(res.x, names, values), "starts": []}
     se = {n: cov_se[n] for n in _compared(names, model) if n in cov_se}
     out = [best]
@@ -941,7 +944,7 @@ def _final_groups(groups, res, names: list[str], values: dict[str, float], misfi
             r = misfit.residuals(g["x"], names, values)
             g = {**g, "chi2": float(r @ r)}
         for h in out:
-            if same_basin(g["parameters"], h["parameters"], se) or (h is best and g is groups[0]):
+            if same_basin(g["parameters"], h["parameters"], se):
                 h["starts"] += g["starts"]
                 break
         else:
