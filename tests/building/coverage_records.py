@@ -32,3 +32,22 @@ def noisy_channels(rows, seed):
 def binomial_band(n, p=0.95, tail=0.0005):
     """The ``tail`` to ``1 - tail`` range of Binomial(n, p): where a coverage count of n intervals falls."""
     return int(stats.binom.ppf(tail, n, p)), int(stats.binom.isf(tail, n, p))
+
+
+def joint_deviation(fit, truth):
+    """The fit's Mahalanobis distance from ``truth`` (a dict of some of its parameters): ``d^T C^-1 d``, d the
+    estimates less the truth, C the fit's covariance of those parameters (its correlations and standard errors).
+    With honest intervals it follows chi-square with ``len(truth)`` degrees of freedom whatever the correlations,
+    which a count of intervals missed does not: strongly correlated parameters miss together."""
+    names = list(fit.names)
+    idx = [names.index(n) for n in truth]
+    se = np.array([fit.std_errors[n] for n in truth])
+    cov = np.asarray(fit.correlation)[np.ix_(idx, idx)] * np.outer(se, se)
+    d = np.array([fit.estimates[n] - v for n, v in truth.items()])
+    return float(d @ np.linalg.solve(cov, d))
+
+
+def chi2_band(dof, tail=0.0005):
+    """The ``tail`` to ``1 - tail`` range of chi-square with ``dof`` degrees of freedom."""
+    return float(stats.chi2.ppf(tail, dof)), float(stats.chi2.isf(tail, dof))
+
