@@ -260,6 +260,8 @@ _NODES, _WEIGHTS = np.polynomial.legendre.leggauss(64)
 def _boucwen_integrals(shape: float, z: float) -> tuple[float, float]:
     """``B(z) = int_0^z (1 / (1 - s^n) - 1 / (n (1 - s))) ds`` and ``A(z) = int_0^z (1 - s) / (1 - s^n) ds`` (both
     integrands bounded on [0, 1]), by Gauss-Legendre on ``s = z u^2``."""
+    if z <= 0.0:
+        return 0.0, 0.0
     u = 0.5 * (_NODES + 1.0)
     s = z * u * u
     jac = 0.5 * _WEIGHTS * 2.0 * z * u
@@ -410,7 +412,9 @@ def _estimates(release: BuildingRelease, fit: IsolationFit, quantities: tuple[st
         params["d0"] = float(release.d0)
     tq = float(stats.t.ppf(0.975, max(fit.dof, 1)))
     se_all = np.array([fit.std_errors[n] for n in fit.names])
-    blind = ~np.isfinite(se_all)  # not identified by the record: a quantity that depends on one has SE inf
+    # not identified by the record (SE inf, or a profile interval over the parameter's whole range): a quantity
+    # that depends on one has SE inf
+    blind = ~np.isfinite(se_all) | np.array([_whole_range(fit, n) for n in fit.names], dtype=bool)
     se_known = np.where(blind, 0.0, se_all)
     cov = fit.correlation * np.outer(se_known, se_known)
     values, ses, ci, method = {}, {}, {}, {}
@@ -421,7 +425,7 @@ def _estimates(release: BuildingRelease, fit: IsolationFit, quantities: tuple[st
             ci[q] = tuple(fit.ci95[name])
             method[q] = fit.interval_method[name]
             bounds = PARAMETER_BOUNDS[name]
-            if method[q] in ("profile", "covers two minima") and ci[q][0] <= bounds[0] and ci[q][1] >= bounds[1]:
+            if _whole_range(fit, name):
                 method[q] = "not identified"  # its interval is the parameter's whole range: no weight in a law
             if method[q] == "not identified":
                 ses[q] = math.inf
@@ -452,6 +456,15 @@ def _estimates(release: BuildingRelease, fit: IsolationFit, quantities: tuple[st
     return ReleaseEstimates(name=release.name, d0=params["d0"], d0_given=release.d0, force=release.force,
                             values=values, std_errors=ses, ci95=ci, interval_method=method, fit=fit,
                             restarted_from=restarted_from)
+
+
+def _whole_range(fit: IsolationFit, name: str) -> bool:
+    """Whether the fit's interval of parameter ``name`` is a profile (or one widened over two minima) that runs
+    over the parameter's whole range (:data:`PARAMETER_BOUNDS`): the record does not identify it."""
+    if name not in PARAMETER_BOUNDS or fit.interval_method.get(name) not in ("profile", "covers two minima"):
+        return False
+    lo, hi = fit.ci95[name]
+    return lo <= PARAMETER_BOUNDS[name][0] and hi >= PARAMETER_BOUNDS[name][1]
 
 
 def _fixed(release: BuildingRelease, shared: dict[str, float] | None = None) -> dict[str, float] | None:
