@@ -347,3 +347,55 @@ def test_campaign_command_on_a_pendulum_campaign(tmp_path, monkeypatch):
         assert abs(est - MU_P) < 4 * se and rel["units"]["radius"] == "m", rel
     report = (tmp_path / "out" / "report.html").read_text(encoding="utf-8")
     assert "<th>R [m] (95% interval)</th>" in report and '<figure id="campaign_building"><svg' in report
+
+
+def test_each_release_is_fitted_with_the_campaigns_model_damper_and_fixed_keys(tmp_path, monkeypatch):
+    """What `quickrelease campaign` hands fit_isolation for a power-damped pendulum campaign with constant friction:
+    the model, damping = "power", the start values of [building] and the rate held at 0 (each call recorded here)."""
+    building = ('[building]\nmodel = "pendulum"\nmass = "1000 t"\nradius = "2.5 m"\nfriction_coefficient = 0.006\n'
+                'damping = "power"\ndamping_coefficient = "100 kN"\ndamping_exponent = 0.5\n')
+    path = _campaign_file(tmp_path, building, PENDULUM, 2.0, amplitudes=(0.1, 0.2, 0.3))
+    calls = []
+
+    def recorded(channels, mass, model, **kwargs):
+        calls.append((mass, model, kwargs))
+        raise bc.QuickReleaseError("recorded")
+
+    monkeypatch.setattr(bc, "fit_isolation", recorded)
+    monkeypatch.setattr(bc, "CAMPAIGN_WORKERS", 1)
+    with pytest.raises(bc.QuickReleaseError, match="release R1: recorded"):
+        run_campaign(path)
+    (mass, model, kwargs), = calls
+    assert (mass, model, kwargs["damping"]) == (1.0e6, "pendulum", "power")
+    assert kwargs["fixed"] == {"rate": 0.0, "friction_fast": 0.006}
+    assert kwargs["start"] == pytest.approx({"period": 2 * math.pi * math.sqrt(2.5 / G), "friction_slow": 0.006,
+                                             "friction_fast": 0.006, "damping_coefficient": 1.0e5,
+                                             "damping_exponent": 0.5})
+
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+
+
+@pytest.mark.slow
+def test_campaign_command_on_the_shipped_pendulum_campaign(tmp_path):
+    """examples/pendulum_campaign.toml: records made (examples/make_isolator_records.py, by the independent
+    reference) with R = 2.5 m, mu = 0.5 % (constant), zeta = 1 %: no amplitude effect on R, mu or zeta, each
+    release within 4 standard errors of the truth, the equivalent damping zeta + 2 mu R / (pi d0). (~10 s.)"""
+    r = runner.invoke(app, ["campaign", str(EXAMPLES / "pendulum_campaign.toml"), "--json", "--out", str(tmp_path)])
+    assert r.exit_code == 0, r.output
+    data = json.loads(r.stdout)
+    laws = {(law["quantity"], law["variable"]): law for law in data["laws"]}
+    truth = {"radius": 2.5, "friction_coefficient": 0.005, "damping_ratio": 0.01}
+    for q, value in truth.items():
+        assert not laws[(q, "displacement")]["significant_5pct"], laws[(q, "displacement")]
+        for rel in data["releases"]:
+            assert abs(rel["estimates"][q] - value) < 4 * rel["std_errors"][q], (rel["name"], q, rel["estimates"][q])
+    for rel, d0 in zip(data["releases"], (0.10, 0.15, 0.20, 0.25), strict=True):
+        expected = 0.01 + 2 * 0.005 * 2.5 / (math.pi * d0)
+        zeq = rel["estimates"]["equivalent_damping_ratio"]
+        assert abs(zeq - expected) < 4 * rel["std_errors"]["equivalent_damping_ratio"], (rel["name"], zeq, expected)
+    assert {law["quantity"] for law in data["cycle_laws"]} == {"keff_N_m", "beta_eff"}
+    report = (tmp_path / "report.html").read_text(encoding="utf-8")
+    from quality import report_number_faults
+
+    assert report_number_faults(report) == [] and "<th>mu [%] (95% interval)</th>" in report
