@@ -453,3 +453,22 @@ def test_a_release_whose_minimum_is_not_confirmed_is_refitted_from_the_others(mo
     r1 = result.releases[0]
     assert r1.restarted_from in ("R2", "R3") and "friction" in r1.fit.estimates
     assert abs(r1.values["friction"] - 5.0e4) < 4 * r1.std_errors["friction"]
+
+
+def test_the_shipped_pendulum_campaigns_records_hold_their_documented_motion():
+    """examples/records/pendulum_campaign_R*.csv: the reference's motion (R = 2.5 m, mu = 0.5 %, zeta = 1 %, released
+    1.05 s after the record's start, pushed the campaign file's displacement) plus the LVDT's documented zero
+    (+0.8 mm) and noise (0.05 mm), 0.1 % of the samples missing."""
+    import tomllib
+
+    data = tomllib.loads((EXAMPLES / "pendulum_campaign.toml").read_text(encoding="utf-8"))
+    system = ref.pendulum(1.0e6, 2.5, 0.005, damping=2 * 0.01 * math.sqrt(1.0e6 * G / 2.5 * 1.0e6))
+    for test in data["tests"]:
+        d0 = float(test["displacement"].split()[0]) * 1e-3
+        t, x = np.genfromtxt(EXAMPLES / test["record"], delimiter=",", skip_header=1, unpack=True)
+        assert t[1] - t[0] == pytest.approx(0.01) and t[-1] == pytest.approx(11.99)
+        ok = np.isfinite(x)
+        assert 0.0 < np.count_nonzero(~ok) < 0.004 * x.size, test["name"]
+        residual = x[ok] * 1e-3 - ref.simulate(system, d0, t[ok] - 1.05, t_end=12.0).x
+        assert abs(residual.mean() - 0.8e-3) < 1e-5 and abs(residual.std() - 0.05e-3) < 5e-6, (test["name"],
+                                                                                           residual.mean())
