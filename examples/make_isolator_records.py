@@ -35,6 +35,11 @@ The truth of each record (SI), also written in the case files' comments:
   T = 2.5 s) and flat sliders (friction 0.5 % of the weight) with fluid viscous dampers in parallel,
   F = C |v|^alpha sign(v), C = 100 kN (s/m)^alpha, alpha = 0.4, pushed 200 mm. Seeds 30 and 31. Six
   reversals (200 mm, then -159, 120, -84, 51, -22 mm), stuck 7.52 s after the release at -1.9 mm.
+* ``pendulum_campaign_R1.csv`` ... ``_R4.csv`` (examples/pendulum_campaign.toml): a campaign of four releases of
+  one building on friction pendulums with a constant friction coefficient: 1000 t, R = 2.5 m (T = 3.17 s),
+  mu = 0.5 % (constant: no growth with speed), a viscous damping ratio of 1 %
+  referred to W / R, pushed 100, 150, 200 and 250 mm. One LVDT record each (the LVDT above, at 100 Hz, 12 s,
+  released at ``CAMPAIGN_RELEASE`` = 1.05 s); seeds 40-43.
 """
 
 import math
@@ -63,6 +68,11 @@ LEAD_RUBBER = {"mass": 8.0e5, "post_yield_stiffness": 1.6e6, "characteristic_str
 DAMPER = {"damping_coefficient": 2.0e5, "damping_exponent": 0.5}
 FLUID_DAMPER = {"mass": 8.0e5, "period": 2.5, "friction_coefficient": 0.005, "damping_coefficient": 1.0e5,
                 "damping_exponent": 0.4, "d0": 0.2}
+
+
+PENDULUM_CAMPAIGN = {"mass": 1.0e6, "radius": 2.5, "friction_coefficient": 0.005, "damping_ratio": 0.01,
+                     "d0": (0.10, 0.15, 0.20, 0.25), "rate": 100.0, "duration": 12.0, "seeds": (40, 41, 42, 43)}
+CAMPAIGN_RELEASE = 1.05  # s after the LVDT's first sample
 
 
 def systems() -> dict[str, tuple[ref.System, float, tuple[int, int]]]:
@@ -108,6 +118,24 @@ def records(name: str, system: ref.System, d0: float, seeds: tuple[int, int]) ->
     return motion
 
 
+def campaign_records() -> list[ref.Motion]:
+    """Write the pendulum campaign's records (one LVDT record per release); return the reference motions."""
+    c = PENDULUM_CAMPAIGN
+    k = c["mass"] * G0 / c["radius"]
+    system = ref.pendulum(c["mass"], c["radius"], c["friction_coefficient"],
+                          damping=2.0 * c["damping_ratio"] * math.sqrt(k * c["mass"]))
+    tx = np.arange(round(c["duration"] * c["rate"])) / c["rate"]
+    motions = []
+    for i, (d0, seed) in enumerate(zip(c["d0"], c["seeds"], strict=True)):
+        motion = ref.simulate(system, d0, tx - CAMPAIGN_RELEASE, t_end=c["duration"])
+        rng = np.random.default_rng(seed)
+        x = motion.x + LVDT["offset"] + rng.normal(0.0, LVDT["noise"], tx.size)
+        x[rng.random(tx.size) < LVDT["missing"]] = np.nan
+        write_columns(RECORDS / f"pendulum_campaign_R{i + 1}.csv", {"t_s": tx, "x_iso_mm": 1e3 * x})
+        motions.append(motion)
+    return motions
+
+
 def main() -> None:
     RECORDS.mkdir(exist_ok=True)
     for name, (system, d0, seeds) in systems().items():
@@ -115,6 +143,9 @@ def main() -> None:
         print(f"{name}: d0 = {d0} m, reversals at {np.round(motion.reversal_times[:6], 4)} s "
               f"({motion.reversal_times.size - 1} in all), stop {motion.stop_time:.4f} s, "
               f"turning points {np.round(motion.turning_points[:6], 5)} m, seeds {seeds}")
+    for d0, motion in zip(PENDULUM_CAMPAIGN["d0"], campaign_records(), strict=True):
+        print(f"pendulum campaign: d0 = {d0} m, {motion.reversal_times.size - 1} reversals, stop "
+              f"{motion.stop_time:.4f} s, turning points {np.round(motion.turning_points[:8], 5)} m")
 
 
 if __name__ == "__main__":

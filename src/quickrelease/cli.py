@@ -1160,6 +1160,10 @@ def _building_campaign_tables(result) -> None:
                          number(law.p_value, 2), "yes" if law.significant else "no"))
         _table(f"Laws of the cycles' keff and beta_eff in the cycle amplitude D ({len(result.cycles)} cycles of the "
                "releases' fitted models pooled; unweighted)", rows, ("law", "a", "b", "p", "significant at 5%"))
+    for q, names in getattr(result, "left_out", {}).items():
+        no_law = "" if any(k[0] == q for k in result.laws) else "; fewer than three releases identify it: no law"
+        _echo(f"note: {QUANTITIES[q][4]}: release(s) {', '.join(names)} left out of its laws (their records do not "
+              f"identify it){no_law}")
     for r in result.releases:
         if r.restarted_from:
             _echo(f"note: release {r.name} was refitted from the estimates of {r.restarted_from} (its first fit "

@@ -671,6 +671,9 @@ def _building_campaign_section(result, svgs: dict[str, str]) -> list[str]:
         for q in result.columns:
             scale = QUANTITIES[q][2]
             lo, hi = r.ci95[q]
+            if not r.identified(q):  # no interval the record supports: left out of the laws
+                cells.append(f"{_num(r.values[q] * scale)} (not identified)")
+                continue
             cells.append(f"{_num(r.values[q] * scale)} [{_num(lo * scale)}, {_num(hi * scale)}]")
         force = "&ndash;" if r.force is None else _num(r.force / 1e3)
         warn = "; ".join(([f"refitted from {r.restarted_from}'s estimates"] if r.restarted_from else [])
@@ -691,6 +694,10 @@ def _building_campaign_section(result, svgs: dict[str, str]) -> list[str]:
                      _num(law.p_value, ".2g"), verdict, _num(law.chi2_reduced, ".3g")))
     parts.append(_html_table(("quantity", "x", "a", "b", "p (b = 0)", "slope significant at 5%", "reduced χ²"), rows,
                              num=(2, 3, 4, 6)))
+    for q, names in getattr(result, "left_out", {}).items():
+        parts.append(f"<p>{_e(QUANTITIES[q][4])}: release(s) {_e(', '.join(names))} left out of its laws (their "
+                     "records do not identify it)" + ("" if any(k[0] == q for k in result.laws) else
+                                                      "; fewer than three releases identify it: no law") + ".</p>")
     parts.append("<p>Each release fitted on its own; the laws weighted by the releases' standard errors (a "
                  "reduced χ² above 1 inflates the law's covariance). A linear spring with viscous damping and "
                  "Coulomb sliders keeps T, ζ and F_s constant, while its equivalent damping ζ_eq (the cycle's "
