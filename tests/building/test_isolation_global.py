@@ -198,6 +198,21 @@ def test_growing_oscillation_is_refused_at_once():
         fit_isolation([BuildingChannel("x", "x", t, x + rng.normal(0, 2e-4, t.size))], M, "linear")
 
 
+def test_record_that_ends_mid_swing_is_not_refused():
+    """A record that ends before the building settles (5 s of a 2 s building, its last tenth near a turning point)
+    decays: it was refused as growing ("a swing of 0.102 m after a first of 0.0798 m", h28a's finding), its level
+    taken from the last tenth. Now it is fitted, and the independent reference's truth lies within 4 standard
+    errors."""
+    m, k, zeta, fs, d0 = 4.0e5, 4.0e5 * math.pi**2, 0.03, 2.0e4, 0.10
+    t = np.arange(250) / 50.0 - 1.0
+    x = reference(m, k, k, 0.0, 2 * zeta * math.sqrt(k * m), fs, d0, t - 0.0137)[0]
+    x = x + np.random.default_rng(7).normal(0.0, 2e-4, t.size)
+    fit = fit_isolation([BuildingChannel("lvdt", "x", t, x)], m, "linear", profile=False)
+    truth = {"period": 2.0, "damping_ratio": zeta, "friction": fs, "d0": d0}
+    z = {n: (fit.estimates[n] - v) / fit.std_errors[n] for n, v in truth.items()}
+    assert all(abs(v) < 4.0 for v in z.values()), z
+
+
 @pytest.mark.parametrize("period, rate, cycles", [(2.0, 200.0, 8), (3.1, 50.0, 4), (0.9, 100.0, 20)])
 def test_record_period_of_a_sampled_decay(period, rate, cycles):
     """A damped cosine of a known damped period (hand calculation: T_d = T / sqrt(1 - zeta^2)), with noise."""
