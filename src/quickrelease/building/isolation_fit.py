@@ -22,7 +22,9 @@ Uncertainty: the covariance ``(J^T J)^-1`` of the weighted residuals, scaled by 
 unless the noise levels are known (given, or estimated from the quiet pre-release segment; a channel with
 neither is weighted by its own residual scatter, refitted), gives standard errors, 95% intervals (Student
 t) and correlations. J is by central differences guarded against the model's jumps (the acceleration jumps
-at each reversal; where one passes a sample inside the stencil the smaller one-sided difference is kept).
+at each reversal; where one passes a sample inside the stencil the smaller one-sided difference is kept), each
+parameter stepped by 1e-4 of its value (1e-4 absolute at least for those of order 1 and more: periods, the
+release instant; :data:`SMALL_PARAMETERS`).
 Where a parameter sits at its bound (friction 0) or its relative standard error is large, the Jacobian's
 interval is replaced by a profile-likelihood interval
 (the parameter fixed on a grid, the others re-fitted, the interval where the chi-square rises by the
