@@ -225,6 +225,26 @@ def test_constant_friction_pendulum_fit_reaches_its_minimum(d0, seed):
     assert all(abs(v) < 4.0 for v in z.values()), z
 
 
+def test_a_clock_of_the_time_of_day_gives_the_same_fit():
+    """Loggers stamp samples with the time of day (36 000 s at 10 am): the record's time origin carries no physics,
+    so the fit must not depend on it. The Jacobian stepped the release instant by 1e-4 of its clock value, 3.6 s
+    there: a model-choice record (LVDT and accelerometer, the independent reference's) ended 453 above its fit at
+    the origin, the release 0.9 ms off, its standard error 8 times too large. Now every estimate agrees within 1 %
+    of its standard error."""
+    from test_model_choice import draw, record
+
+    case = draw("linear", 3)
+    channels, _ = record(case)
+    shift = 36000.0
+    moved = [BuildingChannel(c.name, c.kind, c.t + shift, c.values, c.noise, c.offset, c.drift) for c in channels]
+    a = fit_isolation(channels, case.mass, "linear", profile=False)
+    b = fit_isolation(moved, case.mass, "linear", profile=False)
+    for n in a.names:
+        lag = shift if n == "release_time" else 0.0
+        assert b.estimates[n] - lag == pytest.approx(a.estimates[n], abs=0.01 * a.std_errors[n]), n
+        assert b.std_errors[n] == pytest.approx(a.std_errors[n], rel=0.01), n
+
+
 def test_record_that_ends_mid_swing_is_not_refused():
     """A record that ends before the building settles (5 s of a 2 s building, its last tenth near a turning point)
     decays: it was refused as growing ("a swing of 0.102 m after a first of 0.0798 m", h28a's finding), its level

@@ -570,10 +570,12 @@ def _refine_extremum(t: np.ndarray, x: np.ndarray, i: int, half: int, noise: flo
         return float(r @ r), coef
 
     def locate(w: np.ndarray) -> float:
-        a, b = float(t[max(i - 1, lo)]), float(t[min(i + 1, hi - 1)])
-        res = minimize_scalar(lambda tp: solve(tp, w)[0], bounds=(a, b), method="bounded",
+        # searched as the offset from the sample t[i]: the bounded search stops within sqrt(eps) |x| of its
+        # minimum, so on a logger's time of day (36 000 s) the turning points came out 0.9 ms off
+        a, b = float(t[max(i - 1, lo)]) - float(t[i]), float(t[min(i + 1, hi - 1)]) - float(t[i])
+        res = minimize_scalar(lambda d: solve(float(t[i]) + d, w)[0], bounds=(a, b), method="bounded",
                               options={"xatol": 1e-13 * max(abs(a), abs(b), scale)})
-        return float(res.x)
+        return float(t[i]) + float(res.x)
 
     w = np.ones_like(tt)
     tp = locate(w)
