@@ -260,11 +260,14 @@ _FITS: dict = {}
 
 
 def _real_fits(real, n):
-    """The releases' real fits, once per module (the planted tests change one of them)."""
-    def fits(*args, **kwargs):
-        if n not in _FITS:
-            _FITS[n] = real(*args, **kwargs)
-        return list(_FITS[n])
+    """The releases' real fits, each release's once per module (the planted tests change one of them; R1-R3 of
+    _linear_releases are the same releases whatever n, and each release is fitted on its own)."""
+    def fits(releases, *args, **kwargs):
+        assert len(releases) == n
+        for r in releases:
+            if r.name not in _FITS:
+                _FITS[r.name] = real([r], *args, **kwargs)[0]
+        return [_FITS[r.name] for r in releases]
     return fits
 
 
