@@ -500,3 +500,20 @@ def test_the_shipped_pendulum_campaigns_records_hold_their_documented_motion():
         residual = x[ok] * 1e-3 - ref.simulate(system, d0, t[ok] - 1.05, t_end=12.0).x
         assert abs(residual.mean() - 0.8e-3) < 1e-5 and abs(residual.std() - 0.05e-3) < 5e-6, (test["name"],
                                                                                            residual.mean())
+
+
+def test_a_release_whose_fit_refuses_a_parameter_names_the_release(monkeypatch):
+    """fit_isolation's ParameterError (a record whose times stop increasing once shifted by release_time = "1e308 s")
+    comes out of the campaign as a ParameterError naming the release, the parameter, its value and the valid range:
+    `quickrelease campaign` exits 2 in one line (it was a TypeError, a traceback)."""
+    from quickrelease.errors import ParameterError
+
+    def refused(*args, **kwargs):
+        raise ParameterError("x.t", "not increasing", "strictly increasing times", "s")
+
+    monkeypatch.setattr(bc, "fit_isolation", refused)
+    ch = [BuildingChannel("x", "x", np.arange(20) * 0.1, np.zeros(20))]
+    with pytest.raises(ParameterError) as exc:
+        bc._fit_one(BuildingRelease("R7", ch, d0=0.1), M_P, "pendulum", None, None)
+    assert str(exc.value) == "release R7: x.t = not increasing s is outside strictly increasing times"
+    assert (exc.value.value, exc.value.valid, exc.value.unit) == ("not increasing", "strictly increasing times", "s")
