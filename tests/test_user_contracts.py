@@ -373,3 +373,18 @@ def test_run_json_lists_the_files_written_and_they_exist(tmp_path):
     figures = ("fig13_response", "fig14_displacements", "fig15_state_diagram", "identification", "strain_energy")
     assert names >= {"summary.json", "identification.json", "timeseries.csv", "timeseries.nc", "report.html",
                      *(f"figures/{f}.{ext}" for f in figures for ext in ("png", "svg"))}
+
+
+def test_the_package_errors_survive_pickling():
+    """A campaign's releases are fitted in other processes: what one raises comes back pickled. ParameterError
+    came back as a TypeError (a traceback from `quickrelease campaign`, release_time = "1e308 s"): each error
+    pickles whole, with its message and fields."""
+    import pickle
+
+    from quickrelease.errors import CaseFileError, ParameterError
+
+    err = pickle.loads(pickle.dumps(ParameterError("x.t", "not increasing", "strictly increasing times", "s")))
+    assert type(err) is ParameterError and str(err) == "x.t = not increasing s is outside strictly increasing times"
+    assert (err.name, err.value, err.valid, err.unit) == ("x.t", "not increasing", "strictly increasing times", "s")
+    assert str(pickle.loads(pickle.dumps(ParameterError("alpha0", 2.0, "(0, pi/2)")))) == "alpha0 = 2 is outside (0, pi/2)"
+    assert str(pickle.loads(pickle.dumps(CaseFileError("c.toml: bad")))) == "c.toml: bad"

@@ -48,6 +48,11 @@ class ParameterError(QuickReleaseError):
             shown = f"{shown} {unit}"
         super().__init__(f"{name} = {shown} is outside {valid}")
 
+    def __reduce__(self):
+        """Pickled with its own arguments: a campaign's release fitted in another process raises it back whole (it
+        came back as a TypeError, a traceback, as ``Exception`` pickles the message alone)."""
+        return type(self), (self.name, self.value, self.valid, self.unit)
+
 
 class DeviceFileError(QuickReleaseError):
     """A device or case file is malformed, or an entry in it is missing, unknown or invalid.

@@ -175,11 +175,8 @@ def parse_quantity(value: object, kind: str, name: str) -> float:
     if kind == "angle":
         expected = ureg.Quantity(1.0, "rad")
     if quantity.dimensionality != expected.dimensionality:
-        want = si_unit or "a dimensionless number"
         got = str(quantity.dimensionality) if quantity.dimensionality else "dimensionless"
-        noun = kind.replace("_", " ")
-        article = "an" if noun[0] in "aeiou" else "a"
-        raise UnitError(f"{name} = {text!r} has dimension {got}; expected {article} {noun} (e.g. in {want})")
+        raise UnitError(f"{name} = {text!r} has dimension {got}; expected {_expected_kind(kind, si_unit)}")
     try:
         converted = float(quantity.to(expected.units).magnitude)
     except OverflowError:
@@ -205,11 +202,18 @@ def quantity_to_si(value: Any, kind: str, name: str) -> Any:
     try:
         magnitude = value.to(_PINT_SI[kind]).magnitude
     except pint.errors.DimensionalityError:
-        noun = kind.replace("_", " ")
-        article = "an" if noun[0] in "aeiou" else "a"
         raise UnitError(f"{name} = {value:~} has dimension {value.dimensionality or 'dimensionless'}; expected "
-                        f"{article} {noun} (e.g. in {DIMENSIONS[kind][0] or 'a dimensionless number'})") from None
+                        f"{_expected_kind(kind, DIMENSIONS[kind][0])}") from None
     return float(magnitude) if np.ndim(magnitude) == 0 else np.asarray(magnitude, dtype=float)
+
+
+def _expected_kind(kind: str, si_unit: str | None) -> str:
+    """What a quantity of ``kind`` is, for a dimension error: "a force (e.g. in N)"; "a dimensionless number (no
+    unit)" where the kind has no unit (it read "a dimensionless (e.g. in a dimensionless number)")."""
+    if not si_unit:
+        return "a dimensionless number (no unit)"
+    noun = kind.replace("_", " ")
+    return f"{'an' if noun[0] in 'aeiou' else 'a'} {noun} (e.g. in {si_unit})"
 
 
 def si(value: Any, kind: str, name: str) -> Any:

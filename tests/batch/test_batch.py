@@ -156,3 +156,27 @@ def test_peak_accelerations_against_dense_single_releases():
         s = simulate(a["E_S"], a["alpha0"], a["F1"], a["F2"], device=d, mass_model=a["c"], n_points=100001).summary()
         assert r.peak_u_ddot[i] == pytest.approx(s["peak_u_ddot_m_s2"], rel=1e-4)
         assert r.peak_v_ddot[i] == pytest.approx(s["peak_v_ddot_m_s2"], rel=1e-4)
+
+
+def test_read_only_inputs_are_copied_not_compiled_for_again():
+    """Read-only arrays (np.broadcast_to views, read-only memory maps, another library's frozen arrays) give the
+    results of writeable copies, bit for bit, and no kernel compiled for them: a read-only array is another type to
+    numba, and a second compilation of the stop-time kernel cost ~4 s (the first call of each kernel here compiles
+    it when the cache is cold, once, for writeable arrays)."""
+    from quickrelease.batch import _fast
+
+    cases = random_releases(40, seed=4)
+    frozen = {key: np.broadcast_to(np.asarray(v, float), (40,)) for key, v in cases.items()}
+    assert not any(a.flags.writeable for a in frozen.values())
+    st, st_w = batch.stop_time(**frozen), batch.stop_time(**cases)
+    assert np.array_equal(st.stop_time, st_w.stop_time) and np.array_equal(st.alpha_final, st_w.alpha_final)
+    fr = st.stopped_by == 0
+    args = [np.broadcast_to(v[fr], (fr.sum(),)) for v in (cases["alpha0"], st.alpha_final, st.stop_time, cases["E_S"],
+                                                          cases["c"], cases["m1"], cases["m2"], cases["L1"])]
+    ident = batch.identify(*args)
+    ident_w = batch.identify(*(v.copy() for v in args))
+    assert np.array_equal(ident.F1, ident_w.F1, equal_nan=True) and np.array_equal(ident.F2, ident_w.F2, equal_nan=True)
+    assert np.all(ident.status == 0)
+    for kernel in (_fast.stop_kernel_sides, _fast.identify_kernel):  # their first seven arguments: the cases'
+        read_only = [sig[:7] for sig in kernel.signatures if not all(a.mutable for a in sig[:7])]
+        assert kernel.signatures and not read_only, (kernel, read_only)

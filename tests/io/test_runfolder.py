@@ -316,3 +316,33 @@ def test_full_disk_through_the_cli_is_one_line(tmp_path, monkeypatch):
                                   "--out", out])[::2])
     assert "no space left" in line
     assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+def test_the_digest_of_a_fifo_or_a_device_node_is_none_at_once(tmp_path):
+    """A campaign's record that is a FIFO (made here) blocked `quickrelease campaign` for ever: the run folder's
+    fingerprint read it, waiting for a writer, before the records' reader could refuse it in one line. The digest
+    of what is no regular file is None (the reader then says what it is); a regular file's is its SHA-256."""
+    import hashlib
+    import os
+    import stat
+    import threading
+
+    from quickrelease.io.runfolder import _file_digest
+
+    fifo, node, regular = tmp_path / "r.csv", tmp_path / "n.csv", tmp_path / "ok.csv"
+    os.mkfifo(fifo)
+    try:
+        os.mknod(node, 0o600 | stat.S_IFCHR, os.makedev(1, 3))  # a node like /dev/null, in the test's own folder
+    except PermissionError:  # not root: a second FIFO in its place
+        os.mkfifo(node)
+    regular.write_bytes(b"t_s,x_mm\n0,1\n" * 100_000)
+    got = {}
+    worker = threading.Thread(target=lambda: got.update(fifo=_file_digest(fifo), node=_file_digest(node)), daemon=True)
+    worker.start()
+    worker.join(10.0)
+    if worker.is_alive():  # blocked in open(): let it go (a writer that closes at once), then fail
+        os.close(os.open(fifo, os.O_WRONLY | os.O_NONBLOCK))
+        pytest.fail("the digest of a FIFO waited for a writer")
+    assert got == {"fifo": None, "node": None}
+    assert _file_digest(regular) == hashlib.sha256(regular.read_bytes()).hexdigest()
+    assert _file_digest(tmp_path / "missing.csv") is None

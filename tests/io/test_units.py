@@ -79,3 +79,17 @@ def test_long_text_is_refused_at_once():
 ])
 def test_good_quantities(text, kind, expected):
     assert parse_quantity(text, kind, "x") == pytest.approx(expected, rel=1e-13)
+
+
+@pytest.mark.parametrize("value", ["2.5 kg", "0.3 m"])
+def test_a_unit_on_a_dimensionless_number_says_so(value):
+    """A friction coefficient or damping exponent given a unit: "expected a dimensionless number (no unit)"; it read
+    "expected a dimensionless (e.g. in a dimensionless number)". A quantity of a unit's kind names its SI unit."""
+    with pytest.raises(UnitError) as exc:
+        parse_quantity(value, "dimensionless", "damping_exponent")
+    assert str(exc.value).endswith("; expected a dimensionless number (no unit)"), str(exc.value)
+    assert str(exc.value).startswith(f"damping_exponent = {value!r} has dimension [")
+    with pytest.raises(UnitError, match=r"has dimension \[mass\]; expected a force \(e\.g\. in N\)$"):
+        parse_quantity("2 kg", "force", "force")
+    with pytest.raises(UnitError, match=r"has dimension \[length\]; expected an angle \(e\.g\. in rad\)$"):
+        parse_quantity("3 m", "angle", "alpha0")

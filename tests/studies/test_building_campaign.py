@@ -523,10 +523,13 @@ def test_2dof_campaign_needs_the_superstructure_mass():
         fit_building_campaign(releases, M, "2dof", superstructure_mass=0.5 * M, quantities=("yield_force",))
 
 
+@pytest.mark.slow
 def test_the_releases_cycles_pooled_and_their_laws_in_the_amplitude(constant, capsys):
     """Every release's cycles after the release's: keff = k + F_s / D of its own fitted model (closed form), and
     the laws of keff and beta_eff in D against numpy's polyfit over the pooled cycles; both fall with D (the
-    sliders' share F_s / D); the command's table and the report's section show them."""
+    sliders' share F_s / D); the command's table and the report's section show them. (Slow: the five releases'
+    fits, shared with the slow tests above; the quick run checks the same on the pendulum campaign's pooled cycles,
+    test_building_campaign_isolators.py::test_the_pendulums_cycles_pooled_and_their_laws.)"""
     cycles = constant.cycles
     # (cycles run from a turning point to the next but one, each half-cycle counted once: 14 over these 5
     # releases; 28 when every turning point started a cycle, overlapping)

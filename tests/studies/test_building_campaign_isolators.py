@@ -73,16 +73,34 @@ damping_ratio = 0.02
 
 
 @pytest.fixture(scope="module")
-def pendulum(tmp_path_factory):
-    """The constant-friction pendulum's campaign read from its file (what `quickrelease campaign` runs), the
-    releases fitted one after the other (parallel processes cost more than these fits here)."""
+def pendulum_command(tmp_path_factory):
+    """`quickrelease campaign --json --out` on the constant-friction pendulum's campaign file, the releases fitted
+    one after the other (parallel processes cost more than these fits here): the command's result, its standard
+    output and folder, and the campaign it fitted (run_campaign's return, taken on its way to the command: one
+    campaign fitted for the command's test and the result's tests)."""
+    import quickrelease.studies.campaign as campaign
+
     folder = tmp_path_factory.mktemp("pendulum")
     path = _campaign_file(folder, PENDULUM_FILE, PENDULUM, 12.0)
-    workers, bc.CAMPAIGN_WORKERS = bc.CAMPAIGN_WORKERS, 1
-    try:
-        return run_campaign(path)
-    finally:
-        bc.CAMPAIGN_WORKERS = workers
+    fitted = []
+
+    def kept(*args, **kwargs):
+        fitted.append(run_campaign(*args, **kwargs))
+        return fitted[-1]
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(bc, "CAMPAIGN_WORKERS", 1)
+        mp.setattr(campaign, "run_campaign", kept)
+        r = runner.invoke(app, ["campaign", str(path), "--json", "--out", str(folder / "out")])
+    assert r.exit_code == 0, r.output
+    (result,) = fitted
+    return r, folder / "out", result
+
+
+@pytest.fixture(scope="module")
+def pendulum(pendulum_command):
+    """The constant-friction pendulum's campaign read from its file (what `quickrelease campaign` runs)."""
+    return pendulum_command[2]
 
 
 def _no_amplitude_effect(result, truth):
@@ -117,9 +135,11 @@ def test_a_constant_friction_pendulum_shows_no_amplitude_effect(pendulum):
     assert law.slope < 0 and law.significant
 
 
-def test_the_pendulums_cycles_pooled_and_their_laws(pendulum):
+def test_the_pendulums_cycles_pooled_and_their_laws(pendulum, capsys):
     """keff = W / R + mu W / D of each release's fitted pendulum (the linear spring on sliders' closed form), and
-    laws of keff and beta_eff in the cycle amplitude, both falling with D (the friction's share)."""
+    laws of keff and beta_eff in the cycle amplitude against numpy's polyfit over the pooled cycles (unweighted),
+    both falling with D (the friction's share); the JSON, the command's table and the report's section show them.
+    (The quick run's check of the pooled cycles: test_building_campaign.py's linear campaign does the same, slow.)"""
     cycles = pendulum.cycles
     assert len(cycles) >= 6 and {c["release"] for c in cycles} == {r.name for r in pendulum.releases}
     for r in pendulum.releases:
@@ -127,9 +147,17 @@ def test_the_pendulums_cycles_pooled_and_their_laws(pendulum):
         k, Fs = W / r.values["radius"], r.values["friction_coefficient"] * W
         mine = [c for c in cycles if c["release"] == r.name]
         assert mine and all(c["keff_N_m"] == pytest.approx(k + Fs / c["amplitude_m"], rel=1e-6) for c in mine)
+    d = np.array([c["amplitude_m"] for c in cycles])
     for q in ("keff_N_m", "beta_eff"):
         law = pendulum.cycle_laws[(q, "displacement")]
         assert law.slope < 0 and law.significant, law.summary()
+        slope, intercept = np.polyfit(d, [c[q] for c in cycles], 1)
+        assert (law.slope, law.intercept) == pytest.approx((slope, intercept), rel=1e-9) and not law.weighted
+    s = json.loads(json.dumps(pendulum.summary()))
+    assert len(s["cycles"]) == len(cycles) and {law["quantity"] for law in s["cycle_laws"]} == {"keff_N_m", "beta_eff"}
+    _building_campaign_tables(pendulum)
+    assert "Laws of the cycles' keff and beta_eff" in capsys.readouterr().out
+    assert 'id="campaign-cycles"' in render_campaign_report(pendulum, {})
 
 
 def test_the_pendulums_quantities_reach_the_json_tables_report_and_figure(pendulum, capsys, monkeypatch):
@@ -232,11 +260,14 @@ _FITS: dict = {}
 
 
 def _real_fits(real, n):
-    """The releases' real fits, once per module (the planted tests change one of them)."""
-    def fits(*args, **kwargs):
-        if n not in _FITS:
-            _FITS[n] = real(*args, **kwargs)
-        return list(_FITS[n])
+    """The releases' real fits, each release's once per module (the planted tests change one of them; R1-R3 of
+    _linear_releases are the same releases whatever n, and each release is fitted on its own)."""
+    def fits(releases, *args, **kwargs):
+        assert len(releases) == n
+        for r in releases:
+            if r.name not in _FITS:
+                _FITS[r.name] = real([r], *args, **kwargs)[0]
+        return [_FITS[r.name] for r in releases]
     return fits
 
 
@@ -362,17 +393,14 @@ def test_a_pendulum_fit_of_a_constant_friction_record_is_what_the_campaign_fits(
 
 # -- the command ---------------------------------------------------------------------------------------------------
 
-def test_campaign_command_on_a_pendulum_campaign(tmp_path, monkeypatch):
-    monkeypatch.setattr(bc, "CAMPAIGN_WORKERS", 1)
-    path = _campaign_file(tmp_path, PENDULUM_FILE, PENDULUM, 12.0)  # the fixture's records
-    r = runner.invoke(app, ["campaign", str(path), "--json", "--out", str(tmp_path / "out")])
-    assert r.exit_code == 0, r.output
+def test_campaign_command_on_a_pendulum_campaign(pendulum_command):
+    r, out, _ = pendulum_command  # the command run once, by the fixture
     data = json.loads(r.stdout)
     assert data["model"] == "pendulum" and data["quantities"][:2] == ["radius", "friction_coefficient"]
     for rel in data["releases"]:
         est, se = rel["estimates"]["friction_coefficient"], rel["std_errors"]["friction_coefficient"]
         assert abs(est - MU_P) < 4 * se and rel["units"]["radius"] == "m", rel
-    report = (tmp_path / "out" / "report.html").read_text(encoding="utf-8")
+    report = (out / "report.html").read_text(encoding="utf-8")
     assert "<th>R [m] (95% interval)</th>" in report and '<figure id="campaign_building"><svg' in report
 
 
@@ -472,3 +500,20 @@ def test_the_shipped_pendulum_campaigns_records_hold_their_documented_motion():
         residual = x[ok] * 1e-3 - ref.simulate(system, d0, t[ok] - 1.05, t_end=12.0).x
         assert abs(residual.mean() - 0.8e-3) < 1e-5 and abs(residual.std() - 0.05e-3) < 5e-6, (test["name"],
                                                                                            residual.mean())
+
+
+def test_a_release_whose_fit_refuses_a_parameter_names_the_release(monkeypatch):
+    """fit_isolation's ParameterError (a record whose times stop increasing once shifted by release_time = "1e308 s")
+    comes out of the campaign as a ParameterError naming the release, the parameter, its value and the valid range:
+    `quickrelease campaign` exits 2 in one line (it was a TypeError, a traceback)."""
+    from quickrelease.errors import ParameterError
+
+    def refused(*args, **kwargs):
+        raise ParameterError("x.t", "not increasing", "strictly increasing times", "s")
+
+    monkeypatch.setattr(bc, "fit_isolation", refused)
+    ch = [BuildingChannel("x", "x", np.arange(20) * 0.1, np.zeros(20))]
+    with pytest.raises(ParameterError) as exc:
+        bc._fit_one(BuildingRelease("R7", ch, d0=0.1), M_P, "pendulum", None, None)
+    assert str(exc.value) == "release R7: x.t = not increasing s is outside strictly increasing times"
+    assert (exc.value.value, exc.value.valid, exc.value.unit) == ("not increasing", "strictly increasing times", "s")

@@ -68,9 +68,16 @@ def _paper_defaults(m1, m2, L1):
 def _flat(*arrays) -> tuple[tuple[int, ...], list[np.ndarray]]:
     arrays = [np.asarray(a, dtype=float) for a in arrays]
     shape = np.broadcast_shapes(*(a.shape for a in arrays))
-    # the compiled kernels take writeable contiguous arrays: broadcast inputs are copied out
-    return shape, [np.ascontiguousarray(a).ravel() if a.shape == shape else np.array(np.broadcast_to(a, shape)).ravel()
-                   for a in arrays]
+    # the compiled kernels take writeable contiguous arrays: broadcast inputs are copied out, and so are read-only
+    # ones (a read-only array is another type to numba: a second compilation of each kernel, seconds, for the same
+    # work)
+    return shape, [_writeable(np.ascontiguousarray(a).ravel()) if a.shape == shape
+                   else np.array(np.broadcast_to(a, shape)).ravel() for a in arrays]
+
+
+def _writeable(a: np.ndarray) -> np.ndarray:
+    """``a`` itself where it is writeable, else a copy."""
+    return a if a.flags.writeable else a.copy()
 
 
 class _Result:

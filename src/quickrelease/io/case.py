@@ -449,12 +449,16 @@ def _fail(source: str, key: str, value: Any, expected: str) -> CaseFileError:
     return CaseFileError(f"{source}: {key} = {shown}: expected {expected}")
 
 
+#: The pushed displacement d0 a building's case or campaign release may give [m]: up to 10 m (isolators' design
+#: displacements are below 2 m; displacement = "1e308 m" was fitted, and a campaign's laws took it as the amplitude).
+DISPLACEMENT_RANGE = (1.0e-6, 10.0, "m")
+
 #: The isolators' design values a case file may give, beyond which they are no isolation system (and the
 #: floats overflow or underflow: radius = 1e308 m makes the restoring force 1e-302 N): the pendulum's radius
 #: [m] (periods 2 pi sqrt(R / g) of 0.2 to 63 s; usual radii 1.5 to 4 m), Constantinou's rate [s/m] (3 / a, the
 #: speed where mu reaches 95% of the way to mu_fast, down to 0.3 mm/s), the Bouc-Wen yield displacement [m].
 ISOLATOR_RANGES = {"radius": (0.01, 1000.0, "m"), "rate": (*RATE_RANGE, "s/m"),
-                   "yield_displacement": (1.0e-5, 1.0, "m")}
+                   "yield_displacement": (1.0e-5, 1.0, "m"), "displacement": DISPLACEMENT_RANGE}
 #: The post-yield period 2 pi sqrt(m / Kd) [s] the Bouc-Wen bearings' post_yield_stiffness may give.
 POST_YIELD_PERIOD_RANGE = (0.1, 100.0)
 #: Most characteristic strength Qd and most damper force at 1 m/s, in weights m g [-].

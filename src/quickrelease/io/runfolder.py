@@ -87,10 +87,23 @@ def fingerprint(inputs: dict[str, Any]) -> str:
 
 
 def _file_digest(path: Path) -> str | None:
+    """SHA-256 of a regular file's bytes (read in pieces); None for what cannot be read or is no regular file (a
+    FIFO, opened without blocking: reading it waited for a writer forever, before the reader of the records could
+    refuse it in one line; a device node)."""
     try:
-        return hashlib.sha256(Path(path).read_bytes()).hexdigest()
-    except OSError:
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
+    except (OSError, ValueError):
         return None
+    with open(fd, "rb") as f:
+        try:
+            if not stat.S_ISREG(os.fstat(f.fileno()).st_mode):
+                return None
+            digest = hashlib.sha256()
+            for piece in iter(lambda: f.read(1 << 20), b""):
+                digest.update(piece)
+        except OSError:
+            return None
+    return digest.hexdigest()
 
 
 def case_inputs(case: Any) -> dict[str, Any]:

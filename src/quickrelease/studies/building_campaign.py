@@ -493,6 +493,8 @@ def _fit_one(r, mass: float, model: str, start, superstructure_mass, damping: st
         return fit_isolation(r.channels, mass, model, release_time=r.release_time, start=start,
                              fixed=_fixed(r, shared), superstructure_mass=superstructure_mass,
                              exclude_spikes=r.exclude_spikes, damping=damping)
+    except ParameterError as exc:  # its own arguments (type(exc)(message) was a TypeError: a traceback)
+        raise type(exc)(f"release {r.name}: {exc.name}", exc.value, exc.valid, exc.unit) from None
     except QuickReleaseError as exc:
         raise type(exc)(f"release {r.name}: {exc}") from None
 
