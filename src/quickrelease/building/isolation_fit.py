@@ -1245,6 +1245,8 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
         _start_points(model, mass, names, record_values, fixed, None, from_decay, friction_se, xch, d0, misfit))]
     if start:
         named.append(("design values", values))
+    if model == "boucwen":
+        named += _boucwen_from_loop(channels, mass, t_r0, noise, hint, names, record_values, fixed, damping)
     if model == "boucwen" and global_search:
         named += _boucwen_from_bilinear(channels, mass, t_r0, fit_release_time, fixed, record_values, damping, seed,
                                         progress)
@@ -1428,6 +1430,39 @@ def _boucwen_from_bilinear(channels, mass: float, t_r0: float, fit_release_time:
     else:
         base["damping_ratio"] = min(c / (2.0 * math.sqrt(k2 * mass)), 0.9)
     return [(f"bilinear fit, shape {n:g}", {**base, "shape": n, **fixed}) for n in BOUCWEN_SHAPES]
+
+
+def _boucwen_from_loop(channels, mass: float, t_r0: float, noise: dict[str, float], hint: float | None,
+                       names: list[str], record_values: dict[str, float], fixed: dict[str, float],
+                       damping: str) -> list[tuple[str, dict[str, float]]]:
+    """The Bouc-Wen fit's start from the measured loop (:func:`quickrelease.building.boucwen_loop.boucwen_loop`:
+    the equation error F = -m a of the displacement and acceleration channels of the layer), where the record
+    has both; none else. Its values are independent of the misfit's basins and of any design value."""
+    from .boucwen_loop import boucwen_loop
+
+    xch = next((c for c in channels if c.kind == "x"), None)
+    ach = next((c for c in channels if c.kind == "a"), None)
+    if xch is None or ach is None:
+        return []
+    period = hint if hint is not None else record_values["period"]
+    loop = boucwen_loop(xch.t, xch.values, ach.t, ach.values, mass, t_r0, noise[xch.name], noise[ach.name],
+                        period, damping=damping)
+    if loop is None:
+        return []
+    kd = loop.post_yield_stiffness
+    trial = {**record_values, "period": 2.0 * math.pi * math.sqrt(mass / kd),
+             "characteristic_strength": loop.characteristic_strength,
+             "yield_displacement": loop.yield_displacement,
+             "shape": float(np.clip(loop.shape, *SHAPE_RANGE)), "friction": loop.friction}
+    if damping == "power":
+        trial.update(damping_coefficient=loop.damping, damping_exponent=float(np.clip(loop.damping_exponent,
+                                                                                      *EXPONENT_RANGE)))
+    else:
+        trial["damping_ratio"] = loop.damping / (2.0 * math.sqrt(kd * mass))
+    if f"offset_{xch.name}" in names and "d0" in names:  # the sensor's zero the loop found, and d0 from it
+        trial[f"offset_{xch.name}"] = loop.zero
+        trial["d0"] = record_values["d0"] - loop.zero
+    return [("hysteresis loop", {**trial, **fixed})]
 
 
 #: The chi-square drop a polish restart must reach to replace the fit (:func:`_polish`).
