@@ -47,17 +47,17 @@ def test_play_operator_by_hand():
 
 
 @cache
-def _motion(damping: float, exponent: float):
+def _motion(damping: float, exponent: float, qd: float = 4.0e5, dy: float = 0.025):
     """The reference's noise-free motion of the example's lead-rubber bearings with dampers (Kd 1.6 MN/m, Qd
     400 kN, dy 25 mm, n 1; 800 t, d0 0.2 m): x at 200 Hz, a at 100 Hz, 10 s after 1 s of rest."""
-    system = ref.boucwen(MASS, 1.6e6, 4.0e5, 0.025, 1.0, damping=damping, damping_exponent=exponent)
+    system = ref.boucwen(MASS, 1.6e6, qd, dy, 1.0, damping=damping, damping_exponent=exponent)
     tx, ta = np.arange(0.0, 11.0, 0.005), np.arange(0.0, 11.0, 0.01)
     return tx, ref.simulate(system, 0.2, tx - 1.0, t_end=10.0).x, ta, ref.simulate(system, 0.2, ta - 1.0, t_end=10.0).a
 
 
-def _record(damping: float, exponent: float, seed: int = 0, noise: bool = True):
+def _record(damping: float, exponent: float, seed: int = 0, noise: bool = True, **bearings):
     """The motion as recorded: LVDT noise 0.05 mm, accelerometer noise 0.002 g0 and a zero of 0.01 m/s^2."""
-    tx, x, ta, a = _motion(damping, exponent)
+    tx, x, ta, a = _motion(damping, exponent, **bearings)
     rng = np.random.default_rng(seed)
     return (tx, x + (rng.normal(0.0, 5e-5, tx.size) if noise else 0.0), ta,
             a + 0.01 + (rng.normal(0.0, 0.002 * 9.80665, ta.size) if noise else 0.0))
@@ -117,6 +117,21 @@ def test_the_loop_start_finds_the_minimum_the_others_miss():
              "yield_displacement": 0.025, "shape": 1.0, "damping_coefficient": 2.0e5, "damping_exponent": 0.5}
     for name, value in truth.items():
         assert abs(fit.parameters[name] - value) < 4.0 * fit.std_errors[name], (name, fit.parameters[name], value)
+
+
+def test_a_record_caught_mid_swing():
+    """A record cut at its first turning point after the release (no rest before it: a logger started late):
+    the first sample is the pushed level, the element's state there saturated against the coming motion.
+    Bearings that yield on every swing after it (Qd 100 kN, dy 5 mm: swings of 50 mm, 10 dy, after the first
+    of 280 mm). Measured over seeds 1-3: Qd 95-101 kN, dy 4.7-5.0 mm, Kd 1.58-1.81 MN/m."""
+    tx, x, ta, a = _record(2.0e4, 1.0, seed=1, qd=1.0e5, dy=0.005)
+    turn = tx[np.argmin(np.where((tx > 1.5) & (tx < 3.5), x, np.inf))]  # the bottom of the first swing
+    kx, ka = tx >= turn, ta >= turn
+    loop = boucwen_loop(tx[kx], x[kx], ta[ka], a[ka] - 0.01, MASS, float(turn), 5e-5, 0.002 * 9.80665, 1.8)
+    assert loop is not None
+    assert loop.characteristic_strength == pytest.approx(1.0e5, rel=0.1)
+    assert loop.yield_displacement == pytest.approx(0.005, rel=0.1)
+    assert loop.post_yield_stiffness == pytest.approx(1.6e6, rel=0.25)
 
 
 def test_too_little_motion_gives_none():

@@ -108,9 +108,11 @@ def boucwen_loop(t, x, t_a, acceleration, mass: float, release_time: float, nois
     Parameters
     ----------
     t, x : array
-        The displacement record [s], [m] (the pre-release rest included: its median is the pushed level).
+        The displacement record [s], [m] (the pre-release rest included: its median is the pushed level; a
+        record without one, caught mid-swing, starts at its first turning point, the release from rest).
     t_a, acceleration : array
-        The acceleration record of the layer [s], [m/s^2] (its median before the release is its zero).
+        The acceleration record of the layer [s], [m/s^2] (its median before the release is its zero; 0
+        without one).
     mass : float
         The mass on the isolators [kg].
     release_time : float
@@ -131,9 +133,11 @@ def boucwen_loop(t, x, t_a, acceleration, mass: float, release_time: float, nois
     t_a, acc = np.asarray(t_a, dtype=float), np.asarray(acceleration, dtype=float)
     t_r = float(release_time)
     pre_x, pre_a = x[t < t_r], acc[t_a < t_r]
-    if pre_x.size < 3 or not (math.isfinite(period) and period > 0):
+    if x.size < 10 or not (math.isfinite(period) and period > 0):
         return None
-    d0 = float(np.median(pre_x))
+    # the pushed level: the rest before the release, or (a record caught mid-swing, cut at its first turning
+    # point) the first sample
+    d0 = float(np.median(pre_x)) if pre_x.size >= 3 else float(x[np.searchsorted(t, t_r)])
     level = float(np.median(x[-max(x.size // 10, 5):]))
     off = np.nonzero(np.abs(x - level) > 8.0 * noise_x)[0]
     t_end = float(t[off[-1]]) if off.size else t_r
@@ -160,8 +164,13 @@ def boucwen_loop(t, x, t_a, acceleration, mass: float, release_time: float, nois
     scale = float(mass) * max(float(noise_a), 1e-12)
     exponents = (1.0,) if damping == "viscous" else LOOP_EXPONENTS
 
+    # the element's state at the release: pushed from 0 to |d0| against the first motion's direction (a record
+    # caught mid-swing: its first turning point, approached against the coming motion)
+    first = np.nonzero(np.abs(xg - d0) > 8.0 * noise_x)[0]
+    sense = math.copysign(1.0, float(xg[first[0]] - d0)) if first.size else -math.copysign(1.0, d0)
+
     def z_of(dy: float, n: float) -> np.ndarray:
-        z0 = float(boucwen_path(np.array([0.0, d0]), dy, n, 0.0)[-1])  # the monotonic push from rest
+        z0 = -sense * float(boucwen_path(np.array([0.0, abs(d0)]), dy, n, 0.0)[-1])  # the monotonic push
         return np.interp(ta, grid, boucwen_path(path, dy, n, z0))
 
     def score(dy: float, n: float, alpha: float, z=None) -> tuple[float, np.ndarray]:

@@ -1441,7 +1441,8 @@ def _boucwen_from_loop(channels, mass: float, t_r0: float, noise: dict[str, floa
     from .boucwen_loop import boucwen_loop
 
     xch = next((c for c in channels if c.kind == "x"), None)
-    ach = next((c for c in channels if c.kind == "a"), None)
+    ach = next((c for c in channels if c.kind == "a"), None) or next((c for c in channels if c.kind == "a_roof"),
+                                                                      None)  # the roof moves with the layer
     if xch is None or ach is None:
         return []
     period = hint if hint is not None else record_values["period"]
