@@ -1245,11 +1245,13 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
         _start_points(model, mass, names, record_values, fixed, None, from_decay, friction_se, xch, d0, misfit))]
     if start:
         named.append(("design values", values))
-    if model == "boucwen":
-        named += _boucwen_from_loop(channels, mass, t_r0, noise, hint, names, record_values, fixed, damping)
-    if model == "boucwen" and global_search:
+    loop = _boucwen_from_loop(channels, mass, t_r0, noise, hint, names, record_values, fixed, damping) \
+        if model == "boucwen" else []
+    named += loop
+    if model == "boucwen" and global_search:  # with the loop's start, the bilinear fit's at shape 1 alone (those
+        # at 2 and 5 reached the best minimum with it or not at all on the benchmark's and the example's records)
         named += _boucwen_from_bilinear(channels, mass, t_r0, fit_release_time, fixed, record_values, damping, seed,
-                                        progress)
+                                        progress, BOUCWEN_SHAPES[:1] if loop else BOUCWEN_SHAPES)
     thin, factor = thin_channels(channels, t_r0)
     thin_misfit = _Misfit(thin, noise, mass, model, superstructure_mass, lower, upper, drift_origin=t_r0,
                           coarse_steps=True)
@@ -1402,10 +1404,10 @@ BOUCWEN_SHAPES = (1.0, 2.0, 5.0)
 
 
 def _boucwen_from_bilinear(channels, mass: float, t_r0: float, fit_release_time: bool, fixed: dict[str, float],
-                           record_values: dict[str, float], damping: str, seed: int, progress) \
-        -> list[tuple[str, dict[str, float]]]:
+                           record_values: dict[str, float], damping: str, seed: int, progress,
+                           shapes: tuple[float, ...] = BOUCWEN_SHAPES) -> list[tuple[str, dict[str, float]]]:
     """Starts of the Bouc-Wen fit from a bilinear fit of the same record (its limit n -> inf: Kd = k2,
-    Qd = F_y (1 - k2 / k1), dy = F_y / k1, the damper's c kept), one per shape of :data:`BOUCWEN_SHAPES`.
+    Qd = F_y (1 - k2 / k1), dy = F_y / k1, the damper's c kept), one per shape of ``shapes``.
 
     The Bouc-Wen misfit has wide regions where the shape and the damping run to their bounds (a chi-square a
     thousand times the noise's from the global stage alone on 5 of 16 independent records); the bilinear
@@ -1429,7 +1431,7 @@ def _boucwen_from_bilinear(channels, mass: float, t_r0: float, fit_release_time:
         base.update(damping_coefficient=c * math.sqrt(v_ref), damping_exponent=0.5)
     else:
         base["damping_ratio"] = min(c / (2.0 * math.sqrt(k2 * mass)), 0.9)
-    return [(f"bilinear fit, shape {n:g}", {**base, "shape": n, **fixed}) for n in BOUCWEN_SHAPES]
+    return [(f"bilinear fit, shape {n:g}", {**base, "shape": n, **fixed}) for n in shapes]
 
 
 def _boucwen_from_loop(channels, mass: float, t_r0: float, noise: dict[str, float], hint: float | None,
