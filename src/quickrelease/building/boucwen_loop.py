@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import lsq_linear, minimize
-from scipy.signal import savgol_filter
+from scipy.signal import savgol_coeffs, savgol_filter
 
 from ._ode import boucwen_path
 
@@ -101,7 +101,7 @@ _LOWER = np.array([0.0, -np.inf, 0.0, 0.0, 0.0])
 _UPPER = np.full(5, np.inf)
 
 
-def boucwen_loop(t, x, t_a, acceleration, mass: float, release_time: float, noise_x: float, noise_a: float,
+def boucwen_loop(t, x, t_a, acceleration, mass: float, release_time: float, noise_x: float, noise_a: float | None,
                  period: float, *, damping: str = "viscous") -> BoucWenLoop | None:
     """Bouc-Wen isolators (with dampers and sliders) from the measured loop, by the equation error (E).
 
@@ -110,15 +110,16 @@ def boucwen_loop(t, x, t_a, acceleration, mass: float, release_time: float, nois
     t, x : array
         The displacement record [s], [m] (the pre-release rest included: its median is the pushed level; a
         record without one, caught mid-swing, starts at its first turning point, the release from rest).
-    t_a, acceleration : array
+    t_a, acceleration : array or None
         The acceleration record of the layer [s], [m/s^2] (its median before the release is its zero; 0
-        without one).
+        without one). None: the displacement's second derivative (cubics through 10 % of the period; an
+        LVDT-only record).
     mass : float
         The mass on the isolators [kg].
     release_time : float
         The release instant [s].
     noise_x, noise_a : float
-        The records' noise levels [m], [m/s^2].
+        The records' noise levels [m], [m/s^2] (noise_a unused without an acceleration record).
     period : float
         The record's apparent period [s]: the velocity is the derivative of a cubic through a window of 5 % of
         it (Savitzky-Golay), and the motion's end is where the displacement stays within 8 noise levels of
@@ -130,9 +131,8 @@ def boucwen_loop(t, x, t_a, acceleration, mass: float, release_time: float, nois
     shape gives positive Kd and Qd.
     """
     t, x = np.asarray(t, dtype=float), np.asarray(x, dtype=float)
-    t_a, acc = np.asarray(t_a, dtype=float), np.asarray(acceleration, dtype=float)
     t_r = float(release_time)
-    pre_x, pre_a = x[t < t_r], acc[t_a < t_r]
+    pre_x = x[t < t_r]
     if x.size < 10 or not (math.isfinite(period) and period > 0):
         return None
     # the pushed level: the rest before the release, or (a record caught mid-swing, cut at its first turning
@@ -153,7 +153,16 @@ def boucwen_loop(t, x, t_a, acceleration, mass: float, release_time: float, nois
     window = min(max(5, int(round(0.05 * period / dt)) | 1), grid.size - (1 - grid.size % 2))  # odd
     vg = savgol_filter(xg, window, 3, deriv=1, delta=dt)
     path = play(np.concatenate([[d0], xg[1:]]), PLAY_NOISE * noise_x)
-    moving = (t_a > t_r) & (t_a <= grid[-1])
+    if acceleration is None:  # the LVDT's own: cubics through 10 % of the period, the samples within half of
+        # that of the release left out (the acceleration jumps there); its noise from the filter's weights
+        wide = min(max(7, int(round(0.1 * period / dt)) | 1), grid.size - (1 - grid.size % 2))
+        t_a, acc = grid, savgol_filter(xg, wide, 3, deriv=2, delta=dt)
+        acc = np.where(grid > t_r + 0.5 * wide * dt, acc, np.nan)
+        noise_a = noise_x * float(np.linalg.norm(savgol_coeffs(wide, 3, deriv=2, delta=dt)))
+    else:
+        t_a, acc = np.asarray(t_a, dtype=float), np.asarray(acceleration, dtype=float)
+    pre_a = acc[t_a < t_r]
+    moving = (t_a > t_r) & (t_a <= grid[-1]) & np.isfinite(acc)
     if np.count_nonzero(moving) < 30:
         return None
     idx = np.nonzero(moving)[0]

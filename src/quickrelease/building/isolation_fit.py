@@ -1438,18 +1438,19 @@ def _boucwen_from_loop(channels, mass: float, t_r0: float, noise: dict[str, floa
                        names: list[str], record_values: dict[str, float], fixed: dict[str, float],
                        damping: str) -> list[tuple[str, dict[str, float]]]:
     """The Bouc-Wen fit's start from the measured loop (:func:`quickrelease.building.boucwen_loop.boucwen_loop`:
-    the equation error F = -m a of the displacement and acceleration channels of the layer), where the record
-    has both; none else. Its values are independent of the misfit's basins and of any design value."""
+    the equation error F = -m a of the displacement and acceleration channels of the layer; the displacement's
+    second derivative without an accelerometer), where the record has a displacement; none else. Its values are
+    independent of the misfit's basins and of any design value."""
     from .boucwen_loop import boucwen_loop
 
     xch = next((c for c in channels if c.kind == "x"), None)
     ach = next((c for c in channels if c.kind == "a"), None) or next((c for c in channels if c.kind == "a_roof"),
                                                                       None)  # the roof moves with the layer
-    if xch is None or ach is None:
+    if xch is None:
         return []
     period = hint if hint is not None else record_values["period"]
-    loop = boucwen_loop(xch.t, xch.values, ach.t, ach.values, mass, t_r0, noise[xch.name], noise[ach.name],
-                        period, damping=damping)
+    loop = boucwen_loop(xch.t, xch.values, None if ach is None else ach.t, None if ach is None else ach.values,
+                        mass, t_r0, noise[xch.name], None if ach is None else noise[ach.name], period, damping=damping)
     if loop is None:
         return []
     kd = loop.post_yield_stiffness
