@@ -150,3 +150,18 @@ def test_a_record_caught_mid_swing():
 def test_too_little_motion_gives_none():
     tx, x, ta, a = _record(2.0e5, 0.5)
     assert boucwen_loop(tx[tx < 1.1], x[tx < 1.1], ta[ta < 1.1], a[ta < 1.1], MASS, 1.0, 5e-5, 0.02, 1.8) is None
+
+
+def test_the_loop_start_of_an_lvdt_alone_reaches_the_minimum():
+    """The same building from its LVDT alone, without the global stage: the loop's start, first solved with dy, n
+    and F_s held at the loop's values (isolation_fit.LOOP_HELD), ends in the truth's basin (chi2/dof 1.01; from
+    the loop's values freed at once it ended at 1.25, F_s 7 standard errors above 0: measured). Seeds 0, 2, 3
+    reach it so; seed 1 ends 140 above (chi2/dof 1.26) and says "not confirmed"."""
+    from quickrelease.building.isolation_fit import BuildingChannel, fit_isolation
+
+    tx, x, _, _ = _record(2.0e5, 0.5, seed=2)
+    fit = fit_isolation([BuildingChannel("x", "x", tx, x, noise=5e-5)], MASS, "boucwen", damping="power",
+                        global_search=False, profile=False)
+    assert fit.chi2_reduced < 1.1
+    assert abs(fit.parameters["friction"]) < 2.0 * fit.std_errors["friction"]
+    assert abs(fit.parameters["damping_exponent"] - 0.5) < 3.0 * fit.std_errors["damping_exponent"]
