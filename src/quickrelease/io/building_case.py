@@ -36,7 +36,7 @@ from typing import TYPE_CHECKING, Any
 from ..building.hysteretic import GRAVITY, BoucWen, Pendulum
 from ..building.model import RECORD_CHANNELS, Isolation, TwoDOF
 from ..errors import ParameterError, QuickReleaseError
-from .records import RecordSpec, load_record, parse_record_spec
+from .records import RecordSpec, check_release_time, load_record, noise_floor, parse_record_spec
 
 if TYPE_CHECKING:
     from ..building.isolation_fit import BuildingChannel
@@ -229,7 +229,8 @@ def load_building(case: Case) -> BuildingData:
         No ``[building]`` table, or no mass for a record to be fitted; one line naming the file and key.
     RecordError
         A record file or column missing, a unit of the wrong dimension, a time column not increasing, a
-        channel with fewer than :data:`MIN_SAMPLES` valid samples; one line naming the file and the column.
+        channel with fewer than :data:`MIN_SAMPLES` valid samples, a noise level above the channel's range,
+        a release time outside the record's time span; one line naming the file and the column or key.
     """
     from ..building.isolation_fit import BuildingChannel
     from ..errors import CaseFileError
@@ -249,6 +250,7 @@ def load_building(case: Case) -> BuildingData:
     jitter: dict[str, float] = {}
     if spec.record is not None:
         record = load_record(spec.record)
+        check_release_time(spec.record, record)
         notes = list(record.notes)
         release_time = record.release_time
         for name, ch in record.channels.items():
@@ -257,6 +259,11 @@ def load_building(case: Case) -> BuildingData:
                 raise RecordError(f"{where}: {ch.values.size} valid sample(s), fewer than {MIN_SAMPLES}")
             if ch.jitter > 0.0:
                 jitter[name] = ch.jitter
+            if ch.spec.noise is not None and not ch.spec.noise >= noise_floor(ch.values):
+                unit = BUILDING_CHANNELS[name][1]
+                raise RecordError(f"{where}: noise = {ch.spec.noise:.3g} {unit}: expected a noise standard deviation "
+                                  f"of at least {noise_floor(ch.values):.3g} {unit}, 1e-14 times the channel's "
+                                  "largest value (weights of 1/noise below it are set by rounding)")
             try:
                 channels.append(BuildingChannel(name=name, kind=name, t=ch.t, values=ch.values,
                                                 noise=ch.spec.noise, offset=ch.spec.offset,

@@ -896,6 +896,7 @@ def load_building_campaign(path, data: dict[str, Any]) -> tuple[str, str, tuple[
 
     from ..io.building_case import load_building
     from ..io.case import CaseFileError, case_from_mapping
+    from ..io.records import RecordError
     from ..units import parse_quantity
 
     path = Path(path)
@@ -949,7 +950,11 @@ def load_building_campaign(path, data: dict[str, Any]) -> tuple[str, str, tuple[
             building["displacement"] = entry["displacement"]
         case = case_from_mapping({"title": name, "building": building}, source=where, base=path.parent,
                                  require_test=False)
-        loaded = load_building(case)
+        try:
+            loaded = load_building(case)
+        except RecordError as exc:  # the record's file and column, and which test's record it is
+            text = str(exc)
+            raise RecordError(text if text.startswith(where) else f"{where}: {text}") from None
         force = None
         if "force" in entry:
             try:
