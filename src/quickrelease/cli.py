@@ -1007,7 +1007,8 @@ def _building_tables(result, summary: dict[str, Any], title: str) -> None:
     fit = result.fit
     rows = []
     for key in ("period_s", "radius_m", "k1_N_m", "k2_N_m", "Fy_N", "Kd_N_m", "Qd_N", "dy_m", "shape",
-                "friction_slow", "friction_fast", "rate_s_m", "damping_ratio", "damping_coefficient",
+                "friction_slow", "friction_fast", "rate_s_m", "friction_coefficient", "damping_ratio",
+                "damping_coefficient",
                 "damping_exponent", "friction_N"):
         if summary.get(key) is not None:
             name, unit, _ = split_key(key)

@@ -130,6 +130,8 @@ def identified_building(spec, building) -> tuple[Any, str]:
     bilinear or 2-DOF fit on a spec that only knows the linear building), the assumed values stay and the
     note says so.
     """
+    from .studies.building_analysis import holds_constant_friction
+
     fit = building.fit
     est = fit.parameters
     d0 = abs(float(fit.parameters["d0"])) if "d0" in fit.parameters else spec.displacement
@@ -149,6 +151,8 @@ def identified_building(spec, building) -> tuple[Any, str]:
         changes.update(period=None, radius=float(iso.radius), friction_slow=float(iso.friction_slow),
                        friction_fast=float(iso.friction_fast), rate=float(iso.rate), friction=None,
                        friction_coefficient=float(iso.friction_slow))
+        if holds_constant_friction(fit):  # one coefficient mu, as a case's friction_coefficient reads
+            changes.update(friction_fast=None, rate=None)
     elif fit.model == "boucwen" and "post_yield_stiffness" in fields:
         iso = fit.isolation()
         changes.update(period=None, post_yield_stiffness=float(iso.k2),
@@ -166,7 +170,10 @@ def identified_building(spec, building) -> tuple[Any, str]:
                        damping_exponent=float(est["damping_exponent"]))
     changes = {k: v for k, v in changes.items() if k in fields}
     identified = dataclasses.replace(spec, **changes)
-    words = clearance_words(changes, fit.std_errors)
+    # the pendulum's friction named once: mu for a constant coefficient, else Constantinou's mu_slow (to mu_fast)
+    shown = {k: v for k, v in changes.items() if fit.model != "pendulum" or k != ("friction_slow" if
+             holds_constant_friction(fit) else "friction_coefficient")}
+    words = clearance_words(shown, fit.std_errors)
     return identified, (f"clearance checked with the building identified from its record ({fit.model} model: "
                         f"{words}), not the assumed [building] values")
 
@@ -177,6 +184,7 @@ _NOTE_VALUES = {
     "friction": ("slider friction F_s", "friction", "kN", 1e-3), "k1": ("initial stiffness k1", None, "kN/m", 1e-3),
     "k2": ("post-yield stiffness k2", None, "kN/m", 1e-3), "yield_force": ("yield force F_y", None, "kN", 1e-3),
     "radius": ("radius R", None, "m", 1.0), "friction_slow": ("friction mu_slow", "friction_slow", "", 1.0),
+    "friction_coefficient": ("friction coefficient mu", "friction_slow", "", 1.0),
     "friction_fast": ("friction mu_fast", "friction_fast", "", 1.0), "rate": ("rate a", "rate", "s/m", 1.0),
     "post_yield_stiffness": ("post-yield stiffness Kd", None, "kN/m", 1e-3),
     "characteristic_strength": ("characteristic strength Qd", "characteristic_strength", "kN", 1e-3),

@@ -5,7 +5,7 @@ The ranges, written here by hand: radius [0.01, 1000] m, rate [0, 1e4] s/m, yiel
 friction_slow and friction_fast [0, 1], shape [0.5, 25], damping_exponent [0.05, 2], the pushed displacement
 [1e-6, 10] m (displacement = "1e308 m" was fitted); with the mass m = 1000 t:
 post_yield_stiffness in [m (2 pi / 100 s)^2, m (2 pi / 0.1 s)^2] = [3947.84, 3.94784e9] N/m,
-characteristic_strength in [0, m g] = [0, 9.80665e6] N, damping_coefficient in [0, 10 m g] = [0, 9.80665e7].
+characteristic_strength in (0, m g] = (0, 9.80665e6] N (Qd > 0), damping_coefficient in [0, 10 m g] = [0, 9.80665e7].
 """
 
 import re
@@ -50,7 +50,7 @@ RANGES = {
     "damping_coefficient": (PENDULUM, ("1e308", "9.81e7"), "[0, 9.80665e+07]"),
     "damping_exponent": (BOUCWEN, ("1e308",), "[0.05, 2]"),
     "post_yield_stiffness": (BOUCWEN, ("1e308", "3947.0", "3.95e9"), "[3947.84, 3.94784e+09] N/m"),
-    "characteristic_strength": (BOUCWEN, ("1e308", "9.81e6"), "[0, 9.80665e+06] N"),
+    "characteristic_strength": (BOUCWEN, ("1e308", "9.81e6"), "(0, 9.80665e+06] N"),
     "yield_displacement": (BOUCWEN, ("1e308", "1e-300", "1.01"), "[1e-05, 1] m"),
     "shape": (BOUCWEN, ("1e308", "25.01"), "[0.5, 25]"),
     "displacement": (PENDULUM, ("1e308", "10.01", "1e-7"), "[1e-06, 10] m"),

@@ -281,7 +281,7 @@ def test_plan_needs_a_push_force(tmp_path):
 
 
 @pytest.mark.parametrize("table, message", [
-    ('[building]\nperiod = "-2 s"\ndisplacement = "0.1 m"', r"\[building\] period = '-2 s': expected a positive period"),
+    ('[building]\nperiod = "-2 s"\ndisplacement = "0.1 m"', r"\[building\] period = '-2 s': expected an isolation period in \[0.01, 1000\] s"),
     ('[building]\nperiod = "2 s"\ndamping_ratio = -0.1\ndisplacement = "0.1 m"',
      r"\[building\] damping_ratio = -0.1: expected a damping ratio in \[0, 1\)"),
     ('[building]\nperiod = "2 s"\ndamping_ratio = 1.2\ndisplacement = "0.1 m"',

@@ -36,20 +36,37 @@ from typing import TYPE_CHECKING, Any
 from ..building.hysteretic import GRAVITY, BoucWen, Pendulum
 from ..building.model import RECORD_CHANNELS, Isolation, TwoDOF
 from ..errors import ParameterError, QuickReleaseError
-from .records import RecordSpec, load_record, parse_record_spec
+from .records import RecordSpec, check_release_time, load_record, noise_floor, parse_record_spec
 
 if TYPE_CHECKING:
     from ..building.isolation_fit import BuildingChannel
     from .case import BuildingSpec, Case
 
 __all__ = ["BUILDING_CHANNELS", "BuildingData", "load_building", "parse_building_record", "spec_building",
-           "spec_isolation", "pushed_displacement"]
+           "spec_isolation", "pushed_displacement", "constant_friction", "constant_friction_fixed"]
 
 #: Channel name -> (quantity kind, SI unit, description) of the building's record (the table of
 #: :data:`quickrelease.building.model.RECORD_CHANNELS`).
 BUILDING_CHANNELS: dict[str, tuple[str, str, str]] = RECORD_CHANNELS
 #: Fewest valid samples of a channel (a fit needs the rest before the release and the motion after it).
 MIN_SAMPLES = 10
+
+
+def constant_friction(spec: BuildingSpec) -> bool:
+    """Whether ``[building]`` gives the friction pendulum a constant friction coefficient (``model = "pendulum"``
+    with ``friction_coefficient``, not Constantinou's friction_slow, friction_fast and rate): its fits hold
+    the rate at 0 (:func:`constant_friction_fixed`)."""
+    return spec.model == "pendulum" and spec.friction_coefficient is not None
+
+
+def constant_friction_fixed(start: dict[str, float] | None = None) -> dict[str, float]:
+    """The parameters a fit of the friction pendulum holds fixed (``fit_isolation(fixed=...)``) for a constant
+    friction coefficient mu: Constantinou's rate a at 0 [s/m], so that ``mu(v) = mu_slow`` at every speed and the
+    fit's friction_slow is mu, and mu_fast, which then plays no part, at the start's friction_slow (0 without
+    one). A free decay at constant friction does not identify mu_fast and a: fitted, their profiles run over
+    their whole ranges (the rate "not identified" in [0, 1000] s/m) and the fit costs several times more.
+    Building campaigns and ``quickrelease building`` both call this."""
+    return {"rate": 0.0, "friction_fast": float((start or {}).get("friction_slow", 0.0))}
 
 
 def parse_building_record(table: Any, source: str, base: Path) -> RecordSpec:
@@ -155,6 +172,9 @@ class BuildingData:
     jitter: dict[str, float] = field(default_factory=dict)
     """Per channel, how far its time stamps scatter about a uniform clock [s] where the record says so
     (:func:`quickrelease.io.timebase.time_base`; for :func:`quickrelease.building.decay.analyse_decay`'s ``jitter``)."""
+    constant_friction: bool = False
+    """The pendulum's friction is a constant coefficient (``[building] friction_coefficient``,
+    :func:`constant_friction`): its fit holds the rate at 0 (:func:`constant_friction_fixed`)."""
 
 
 def _start(spec: BuildingSpec) -> dict[str, float]:
@@ -209,7 +229,8 @@ def load_building(case: Case) -> BuildingData:
         No ``[building]`` table, or no mass for a record to be fitted; one line naming the file and key.
     RecordError
         A record file or column missing, a unit of the wrong dimension, a time column not increasing, a
-        channel with fewer than :data:`MIN_SAMPLES` valid samples; one line naming the file and the column.
+        channel with fewer than :data:`MIN_SAMPLES` valid samples, a noise level above the channel's range,
+        a release time outside the record's time span; one line naming the file and the column or key.
     """
     from ..building.isolation_fit import BuildingChannel
     from ..errors import CaseFileError
@@ -229,6 +250,7 @@ def load_building(case: Case) -> BuildingData:
     jitter: dict[str, float] = {}
     if spec.record is not None:
         record = load_record(spec.record)
+        check_release_time(spec.record, record)
         notes = list(record.notes)
         release_time = record.release_time
         for name, ch in record.channels.items():
@@ -237,6 +259,11 @@ def load_building(case: Case) -> BuildingData:
                 raise RecordError(f"{where}: {ch.values.size} valid sample(s), fewer than {MIN_SAMPLES}")
             if ch.jitter > 0.0:
                 jitter[name] = ch.jitter
+            if ch.spec.noise is not None and not ch.spec.noise >= noise_floor(ch.values):
+                unit = BUILDING_CHANNELS[name][1]
+                raise RecordError(f"{where}: noise = {ch.spec.noise:.3g} {unit}: expected a noise standard deviation "
+                                  f"of at least {noise_floor(ch.values):.3g} {unit}, 1e-14 times the channel's "
+                                  "largest value (weights of 1/noise below it are set by rounding)")
             try:
                 channels.append(BuildingChannel(name=name, kind=name, t=ch.t, values=ch.values,
                                                 noise=ch.spec.noise, offset=ch.spec.offset,
@@ -252,7 +279,8 @@ def load_building(case: Case) -> BuildingData:
     return BuildingData(model=spec.model, mass=float(spec.mass), isolation=isolation, start=start,
                         d0=spec.displacement, channels=channels, release_time=release_time, notes=notes,
                         source=case.source, superstructure_mass=spec.superstructure_mass, spec=spec, jitter=jitter,
-                        exclude_spikes=spec.record is not None and spec.record.spikes == "exclude")
+                        exclude_spikes=spec.record is not None and spec.record.spikes == "exclude",
+                        constant_friction=constant_friction(spec))
 
 
 def pushed_displacement(push_force: float, building: BuildingSpec) -> float:

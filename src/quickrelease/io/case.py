@@ -41,6 +41,7 @@ from typing import Any
 
 from .._validate import check_size
 from ..building.hysteretic import RATE_RANGE
+from ..building.isolation_fit import SUPERSTRUCTURE_PERIOD_MIN
 from ..device.dynamics import mass_factor
 from ..device.parameters import Device, load_device, preset, read_toml_text
 from ..device.statics import StrainEnergy, strain_energy
@@ -304,7 +305,7 @@ CASE_SCHEMA: dict[str, dict[str, tuple[str, str]]] = {
                                     "e.g. '300 kN'"),
         "yield_displacement": ("length", "the Bouc-Wen bearings' yield displacement dy in [1e-5, 1] m, e.g. '10 mm'"),
         "shape": ("dimensionless", "the Bouc-Wen shape exponent n in [0.5, 25], e.g. 1.0"),
-        "period": ("time", "a positive period, e.g. '2.5 s'"),
+        "period": ("time", "an isolation period in [0.01, 1000] s, e.g. '2.5 s'"),
         "damping_ratio": ("dimensionless", "a damping ratio in [0, 1), e.g. 0.1"),
         "mass": ("mass", "a positive mass, e.g. '1500 t'"),
         "weight": ("force", "a positive weight, e.g. '14700 kN'"),
@@ -315,7 +316,8 @@ CASE_SCHEMA: dict[str, dict[str, tuple[str, str]]] = {
         "k2": ("stiffness", "a positive post-yield stiffness below k1, e.g. '4 MN/m'"),
         "yield_force": ("force", "a positive yield force of the bilinear bearings, e.g. '120 kN'"),
         "superstructure_mass": ("mass", "a positive mass below [building] mass (lumped at the roof), e.g. '500 t'"),
-        "superstructure_period": ("time", "a positive fixed-base period of the superstructure, e.g. '0.5 s'"),
+        "superstructure_period": ("time", "a fixed-base period of the superstructure in [0.02, 1000] s, e.g. "
+                                  "'0.5 s'"),
         "superstructure_damping_ratio": ("dimensionless", "a damping ratio in [0, 1), e.g. 0.02"),
     },
     "report": {
@@ -456,9 +458,13 @@ DISPLACEMENT_RANGE = (1.0e-6, 10.0, "m")
 #: The isolators' design values a case file may give, beyond which they are no isolation system (and the
 #: floats overflow or underflow: radius = 1e308 m makes the restoring force 1e-302 N): the pendulum's radius
 #: [m] (periods 2 pi sqrt(R / g) of 0.2 to 63 s; usual radii 1.5 to 4 m), Constantinou's rate [s/m] (3 / a, the
-#: speed where mu reaches 95% of the way to mu_fast, down to 0.3 mm/s), the Bouc-Wen yield displacement [m].
+#: speed where mu reaches 95% of the way to mu_fast, down to 0.3 mm/s), the Bouc-Wen yield displacement [m],
+#: the isolation period [s] (within the fit's bounds of 1e-3 to 1e3 s; period = "1e308 s" made the stiffness
+#: 0 N/m, refused in a line that named neither the file nor the key) and the superstructure's (from the fit's
+#: lower bound, a storey stiffer than that is rigid).
 ISOLATOR_RANGES = {"radius": (0.01, 1000.0, "m"), "rate": (*RATE_RANGE, "s/m"),
-                   "yield_displacement": (1.0e-5, 1.0, "m"), "displacement": DISPLACEMENT_RANGE}
+                   "yield_displacement": (1.0e-5, 1.0, "m"), "displacement": DISPLACEMENT_RANGE,
+                   "period": (0.01, 1000.0, "s"), "superstructure_period": (SUPERSTRUCTURE_PERIOD_MIN, 1000.0, "s")}
 #: The post-yield period 2 pi sqrt(m / Kd) [s] the Bouc-Wen bearings' post_yield_stiffness may give.
 POST_YIELD_PERIOD_RANGE = (0.1, 100.0)
 #: Most characteristic strength Qd and most damper force at 1 m/s, in weights m g [-].
@@ -476,6 +482,13 @@ def _check_isolator_ranges(values: dict[str, Any], table: Any, source: str, mass
     if mass is None:
         return
     weight = mass * STANDARD_GRAVITY
+    t_lo, t_hi = ISOLATOR_RANGES["period"][:2]  # the bilinear bearings' stiffnesses give periods in that range
+    k_lo, k_hi = mass * (2.0 * math.pi / t_hi) ** 2, mass * (2.0 * math.pi / t_lo) ** 2
+    for key in ("k1", "k2"):  # k1 = "1e308 N/m" made the damping inf, refused naming neither file nor key
+        value = values.get(f"building.{key}")
+        if value is not None and not k_lo <= value <= k_hi:
+            raise _fail(source, f"[building] {key}", table[key], f"{key} in [{k_lo:.6g}, {k_hi:.6g}] N/m (periods "
+                        f"2 pi sqrt(m / {key}) of {t_lo:g} to {t_hi:g} s for the mass {mass:.6g} kg)")
     kd = values.get("building.post_yield_stiffness")
     t_lo, t_hi = POST_YIELD_PERIOD_RANGE
     k_lo, k_hi = mass * (2.0 * math.pi / t_hi) ** 2, mass * (2.0 * math.pi / t_lo) ** 2
@@ -487,7 +500,8 @@ def _check_isolator_ranges(values: dict[str, Any], table: Any, source: str, mass
                             ("damping_coefficient", MOST_DAMPER_WEIGHTS, "N (s/m)^alpha")):
         value = values.get(f"building.{key}")
         if value is not None and not value <= most * weight:
-            raise _fail(source, f"[building] {key}", table[key], f"{key} in [0, {most * weight:.6g}] {what} "
+            low = "(0" if key == "characteristic_strength" else "[0"  # Qd > 0 (_VALID), C >= 0
+            raise _fail(source, f"[building] {key}", table[key], f"{key} in {low}, {most * weight:.6g}] {what} "
                         f"(at most {most:g} m g, the weight m g = {weight:.6g} N)")
 
 

@@ -840,10 +840,55 @@ def load_record(spec: RecordSpec) -> Record:
                        f"about {1.0 + (floor / cs.noise) ** 2:.3g}") if cs.noise else ""
             notes.append(f"{path.name}: column {cs.column!r} (channel {name}): the time stamps' scatter of "
                          f"{jitter:.3g} s moves its samples by {floor:.3g} rms (jitter |d{name}/dt|){against}")
+        _check_noise(cs, values[idx], path, name)
         channels[name] = Channel(spec=cs, t=axis[idx], values=values[idx], index=idx, missing=missing, own_axis=own,
                                  clipped=clipped, jitter=jitter)
     return Record(file=spec.file, t=t, channels=channels, dropped_rows=dropped, release_time=spec.release_time,
                   notes=notes)
+
+
+#: Smallest noise of a channel relative to its largest value: about 50 ulp of double precision. A smaller
+#: noise (e.g. 1e-300 m) would weight residuals that are rounding errors, and overflow the Jacobian (the device's
+#: fit, :mod:`quickrelease.studies.fit`, and the building's record, :func:`noise_floor`).
+NOISE_FLOOR = 1e-14
+
+
+def noise_floor(values: np.ndarray) -> float:
+    """The smallest noise level a channel of these values may be weighted by [its SI unit]: :data:`NOISE_FLOOR`
+    times its largest magnitude, at least 1e-150 (1 / noise^2 stays a float)."""
+    return max(NOISE_FLOOR * float(np.max(np.abs(values))), 1e-150)
+
+
+def _check_noise(cs: ChannelSpec, values: np.ndarray, path: Path, name: str) -> None:
+    """RecordError where a channel's given noise standard deviation exceeds its range in the record (largest less
+    smallest value): noise of that size would scatter the samples wider than they lie (n samples of noise sigma
+    span about 3 sigma at n = 10, 6 sigma at n = 500), so the level is not the sensor's (``noise = "1e308 mm"``
+    was fitted, every standard error infinite). A channel of one value is left to the fit's own checks."""
+    if cs.noise is None or values.size < 2:
+        return
+    span = float(np.max(values) - np.min(values))
+    if span > 0.0 and not cs.noise <= span:
+        unit = abs(cs.factor)
+        raise RecordError(f"{path}: column {cs.column!r} (channel {name}): noise = {cs.noise / unit:.6g} {cs.unit}: "
+                          f"expected a noise standard deviation in (0, {span / unit:.6g}] {cs.unit}, at most the "
+                          "channel's range in the record (its largest less its smallest value)")
+
+
+def check_release_time(spec: RecordSpec, record: Record) -> None:
+    """RecordError where the given release instant lies outside the record's time span (its first to its last
+    time stamp, every channel's own axis included): the fit looks for the release near it, and a release
+    before the first sample or after the last is nowhere in the record (a building's ``release_time = "-5 s"``
+    was fitted, ``"1e308 s"`` ended in a traceback). The device's fit has its own check of a record that starts
+    after the fitted release (:func:`quickrelease.studies.fit.fit_record`, naming why)."""
+    rt = spec.release_time
+    if rt is None:
+        return
+    axes = [record.t] + [ch.own_axis for ch in record.channels.values() if ch.own_axis is not None]
+    lo = min(float(a[0]) for a in axes if a.size)
+    hi = max(float(a[-1]) for a in axes if a.size)
+    if not lo <= rt <= hi:
+        raise RecordError(f"{spec.source}: release_time = {rt:.6g} s: expected a release instant within the time "
+                          f"span of the record {spec.file.name}, [{lo:.6g}, {hi:.6g}] s")
 
 
 def record_origin(record: Record) -> float:

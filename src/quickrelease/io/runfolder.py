@@ -89,15 +89,20 @@ def fingerprint(inputs: dict[str, Any]) -> str:
 def _file_digest(path: Path) -> str | None:
     """SHA-256 of a regular file's bytes (read in pieces); None for what cannot be read or is no regular file (a
     FIFO, opened without blocking: reading it waited for a writer forever, before the reader of the records could
-    refuse it in one line; a device node)."""
+    refuse it in one line; a folder; a device node)."""
     try:
         fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
     except (OSError, ValueError):
         return None
+    try:  # before open(): a folder's descriptor made open() raise IsADirectoryError naming the descriptor, 3
+        regular = stat.S_ISREG(os.fstat(fd).st_mode)
+    except OSError:
+        regular = False
+    if not regular:
+        os.close(fd)
+        return None
     with open(fd, "rb") as f:
         try:
-            if not stat.S_ISREG(os.fstat(f.fileno()).st_mode):
-                return None
             digest = hashlib.sha256()
             for piece in iter(lambda: f.read(1 << 20), b""):
                 digest.update(piece)
@@ -247,8 +252,10 @@ def check_target(out: str | Path, kind: str, option: str = "--out") -> Path:
     return path
 
 
-def _short_path(path: str | Path, limit: int = 120) -> str:
-    """A path for a message: long ones cut in the middle."""
+def _short_path(path: str | Path | int, limit: int = 120) -> str:
+    """A path for a message: long ones cut in the middle (an OSError's file descriptor as such)."""
+    if isinstance(path, int):
+        return f"file descriptor {path}"
     text = os.fspath(path)
     return text if len(text) <= limit else f"{text[:limit // 2 - 2]}...{text[-(limit // 2 - 2):]}"
 

@@ -85,6 +85,7 @@ PARAMETERS: dict[str, tuple[str, str]] = {
     "Fy": ("yield force F_y", "N"),
     "damping_ratio": ("damping ratio zeta", ""),
     "friction": ("slider friction F_s", "N"),
+    "friction_coefficient": ("friction coefficient mu", ""),
     "d0": ("initial displacement d0", "m"),
     "superstructure_period": ("superstructure period T_s", "s"),
     "superstructure_damping_ratio": ("superstructure damping ratio zeta_s", ""),

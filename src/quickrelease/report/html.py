@@ -345,6 +345,11 @@ _BUILDING_PARAMS = {  # fit parameter: label, unit, scale to the unit shown
 }
 _ENGINEERING = {"period_s": ("period T", "s", 1.0), "k1_N_m": ("initial stiffness k1", "kN/m", 1e-3),
                 "k2_N_m": ("post-yield stiffness k2", "kN/m", 1e-3), "Fy_N": ("yield force F_y", "kN", 1e-3),
+                "radius_m": ("radius of the sliding surface R", "m", 1.0),
+                "friction_coefficient": ("friction coefficient μ (constant)", "–", 1.0),
+                "friction_slow": ("friction coefficient at low speed μ_slow", "–", 1.0),
+                "friction_fast": ("friction coefficient at speed μ_fast", "–", 1.0),
+                "rate_s_m": ("friction's rate a (Constantinou)", "s/m", 1.0),
                 "damping_ratio": ("viscous damping ratio ζ", "–", 1.0),
                 "friction_N": ("slider friction F_s", "kN", 1e-3)}
 

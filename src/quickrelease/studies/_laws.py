@@ -146,12 +146,21 @@ def fit_line(x, y, se=None, *, quantity: str = "y", variable: str = "x", law_typ
 
 def iter_tests(tests: list[Any], source: str, prefix: str):
     """Each ``[[tests]]`` table of a campaign file as (name, where, table): a table, named (default: prefix
-    and its number) once only; ``where`` names the file and the test for messages. CaseFileError else."""
+    and its number; a string or an integer, not empty nor only spaces; line breaks and escapes are shown
+    harmless where the name is written) once only; ``where`` names the file and the test for messages.
+    CaseFileError else."""
     names = set()
     for i, entry in enumerate(tests):
         if not isinstance(entry, dict):
             raise CaseFileError(f"{source}: tests[{i}] is not a table")
-        name = str(entry.get("name", f"{prefix}{i + 1}"))
+        name = entry.get("name", f"{prefix}{i + 1}")
+        if isinstance(name, bool) or not isinstance(name, str | int):
+            raise CaseFileError(f"{source}: tests[{i}] name = {name!r}: expected a test name (a string), e.g. "
+                                f"'{prefix}{i + 1}'")
+        name = str(name)
+        if not name.strip():  # the name heads the test's lines in messages, tables and the report: it is seen
+            raise CaseFileError(f"{source}: tests[{i}] name = {name!r}: expected a test name with a character "
+                                f"other than a space, e.g. '{prefix}{i + 1}'")
         where = f"{source}: test {name}"
         if name in names:
             raise CaseFileError(f"{where}: the name is used twice")

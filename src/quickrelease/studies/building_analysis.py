@@ -38,10 +38,11 @@ from ..building.isolation_fit import (
 )
 from ..building.model import free_vibration
 from ..errors import ParameterError, QuickReleaseError
+from ..io.building_case import constant_friction_fixed
 from ..io.export import jsonable
 from .building_effective import CycleJudgement, EffectiveCurve, effective_curves, judge_cycles
 
-__all__ = ["BuildingResult", "analyse_building", "MODELS", "physical_estimates"]
+__all__ = ["BuildingResult", "analyse_building", "MODELS", "physical_estimates", "holds_constant_friction"]
 
 #: The models of the isolation layer the command knows (``2dof`` where the fit supports it).
 MODELS = ("linear", "bilinear", "2dof", "pendulum", "boucwen")
@@ -104,6 +105,8 @@ class BuildingResult(Summarised):
         AIC/BIC, residual RMS per channel, convergence, warnings, notes, the comparison and the decay
         cross-check; the full fit under ``fit``."""
         out: dict[str, Any] = {"model": self.model, "source": self.source}
+        if self.model == "pendulum":  # one friction_coefficient, or Constantinou's three
+            out["constant_friction"] = holds_constant_friction(self.fit)
         out.update(physical_estimates(self.fit))
         out.update({"aic": self.fit.aic, "bic": self.fit.bic, "residual_rms": dict(self.fit.residual_rms),
                     "converged": self.fit.converged, "global_minimum_confirmed": self.fit.global_minimum_confirmed,
@@ -177,9 +180,13 @@ def physical_estimates(fit: IsolationFit) -> dict[str, Any]:
 
     ``linear``/``2dof``: ``period_s``; ``bilinear``: ``k1_N_m = m (2 pi / T1)^2`` (its interval the image
     of T1's, k1 decreasing in T1), ``k2_N_m = (k2/k1) k1`` (interval by the delta method on ln k2 with the
-    correlation of k2/k1 and T1), ``Fy_N``; all: ``damping_ratio``, ``friction_N``. A parameter held fixed
-    has its value and no interval (None), and so has one the record does not identify (its key listed in
-    ``not_identified``).
+    correlation of k2/k1 and T1), ``Fy_N``; ``pendulum``: ``period_s``, ``radius_m`` (the image of T's
+    interval) and either Constantinou's ``friction_slow``, ``friction_fast``, ``rate_s_m`` or, for a fit
+    that held the rate at 0 (:func:`holds_constant_friction`), the one ``friction_coefficient`` mu (the fit's
+    friction_slow, with its interval; as building campaigns name it);
+    all: ``damping_ratio`` (or the power-law damper's ``damping_coefficient``, ``damping_exponent``),
+    ``friction_N`` (not the pendulum). A parameter held fixed has its value and no interval (None), and so has
+    one the record does not identify (its key listed in ``not_identified``).
     """
     est, ci, model = fit.estimates, fit.ci95, fit.model
     iso = fit.isolation()
@@ -188,8 +195,8 @@ def physical_estimates(fit: IsolationFit) -> dict[str, Any]:
     blind = {n for n, how in fit.interval_method.items() if how == "not identified"}
     out["not_identified"] = []
 
-    def put(name: str, value: float | None = None) -> None:
-        key = JSON_KEYS[name]
+    def put(name: str, value: float | None = None, key: str | None = None) -> None:
+        key = key or JSON_KEYS[name]
         out[key] = float(est[name]) if name in est else value
         out[f"{key}_ci95"] = [float(v) for v in ci[name]] if name in ci and name not in blind else None
         if name in blind:
@@ -217,8 +224,11 @@ def physical_estimates(fit: IsolationFit) -> dict[str, Any]:
         out["radius_m"] = float(iso.radius)  # R = g (T / 2 pi)^2, increasing in T: its interval the image of T's
         out["radius_m_ci95"] = (None if "period" not in ci or "period" in blind
                                 else [9.80665 * (v / (2.0 * math.pi)) ** 2 for v in ci["period"]])
-        for name in ("friction_slow", "friction_fast", "rate"):
-            put(name, float(getattr(iso, name)))
+        if holds_constant_friction(fit):  # mu(v) = mu_slow at every speed: mu_fast plays no part
+            put("friction_slow", float(iso.friction_slow), key="friction_coefficient")
+        else:
+            for name in ("friction_slow", "friction_fast", "rate"):
+                put(name, float(getattr(iso, name)))
     elif model == "boucwen":
         put("period", float(iso.period))
         out["Kd_N_m"] = float(iso.k2)  # Kd = m (2 pi / T)^2, decreasing in T
@@ -239,6 +249,12 @@ def physical_estimates(fit: IsolationFit) -> dict[str, Any]:
         put("friction", float(iso.friction))
     out["interval_method"] = dict(fit.interval_method)
     return {k: jsonable(v) for k, v in out.items()}
+
+
+def holds_constant_friction(fit: IsolationFit) -> bool:
+    """Whether ``fit`` is of the friction pendulum with a constant friction coefficient: Constantinou's rate held
+    at 0 (:func:`quickrelease.io.building_case.constant_friction_fixed`), so that its friction_slow is mu."""
+    return fit.model == "pendulum" and getattr(fit, "fixed", {}).get("rate") == 0.0
 
 
 def _k2_interval(fit: IsolationFit) -> list[float] | None:
@@ -272,7 +288,7 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
                      start: dict[str, float] | None = None, release_time: float | None = None,
                      compare: bool = False, source: str = "", superstructure_mass: float | None = None,
                      progress=None, global_search: bool = True, exclude_spikes: bool | None = None,
-                     damping: str | None = None) -> BuildingResult:
+                     damping: str | None = None, constant_friction: bool | None = None) -> BuildingResult:
     """Fit the isolation model to the building's record and cross-check it (see the module docstring).
 
     Parameters
@@ -295,6 +311,11 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
     exclude_spikes : bool, optional
         Leave out the samples the residuals show as spikes (``fit_isolation(exclude_spikes=True)``; default:
         the data's ``[building.record] spikes``, else False).
+    constant_friction : bool, optional
+        The friction pendulum's friction is a constant coefficient mu: every pendulum fit (the chosen model's,
+        and the compared one's) holds Constantinou's rate at 0 and reports mu alone
+        (:func:`quickrelease.io.building_case.constant_friction_fixed`, as building campaigns do); default: the
+        data's (``[building] friction_coefficient`` with ``model = "pendulum"``), else False.
 
     Raises
     ------
@@ -317,6 +338,8 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
             exclude_spikes = bool(getattr(data, "exclude_spikes", False))
         if damping is None and getattr(data, "spec", None) is not None:
             damping = data.spec.damping
+        if constant_friction is None:
+            constant_friction = bool(getattr(data, "constant_friction", False))
     exclude_spikes = bool(exclude_spikes)
     damping = damping or "viscous"
     model = model or "linear"
@@ -326,8 +349,9 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
     if mass is None:
         raise ParameterError("mass", None, "(0, inf), the mass carried by the isolators", "kg")
     prefix = f"{source}: " if source else ""
+    held = constant_friction_fixed(start) if constant_friction else None  # the pendulum's fits only
     fit = _fit(channels, mass, model, start, release_time, prefix, superstructure_mass, progress, global_search,
-               exclude_spikes, damping)
+               exclude_spikes, damping, held if model == "pendulum" else None)
     _check_long_enough(fit, prefix)
     if fit.excluded:  # the decay analysis, the loop and the other models see what the fit saw
         channels = drop_excluded(channels, fit.excluded)
@@ -353,7 +377,8 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
                                               tolerance=COMPARE_TOLERANCE, progress=progress,
                                               exclude_spikes=exclude_spikes, damping=damping,
                                               superstructure_mass=superstructure_mass if other == "2dof" else None,
-                                              start={k: v for k, v in (start or {}).items() if k in shared} or None))
+                                              start={k: v for k, v in (start or {}).items() if k in shared} or None,
+                                              fixed=held if other == "pendulum" else None))
             except QuickReleaseError as exc:  # e.g. 2dof, whose dampers are viscous only
                 why = (f'it takes no {damping}-law damper (damping = "{damping}")'
                        if isinstance(exc, ParameterError) and exc.name == "damping" else str(exc))
@@ -475,9 +500,9 @@ def decay_envelope(decay: DecayAnalysis) -> dict[str, np.ndarray]:
 
 
 def _fit(channels, mass, model, start, release_time, prefix, superstructure_mass=None, progress=None,
-         global_search=True, exclude_spikes=False, damping="viscous") -> IsolationFit:
+         global_search=True, exclude_spikes=False, damping="viscous", fixed=None) -> IsolationFit:
     try:
-        return fit_isolation(channels, mass, model, release_time=release_time, start=start or None,
+        return fit_isolation(channels, mass, model, release_time=release_time, start=start or None, fixed=fixed,
                              superstructure_mass=superstructure_mass if model == "2dof" else None, progress=progress,
                              global_search=global_search, exclude_spikes=exclude_spikes, damping=damping)
     except ParameterError:

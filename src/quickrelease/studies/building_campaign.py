@@ -117,6 +117,7 @@ from ..building.hysteretic import GRAVITY
 from ..building.isolation_fit import PARAMETER_BOUNDS, BuildingChannel, IsolationFit, _isolation, fit_isolation
 from ..building.model import pushed_state
 from ..errors import ParameterError, QuickReleaseError
+from ..io.building_case import constant_friction_fixed
 from ..io.export import jsonable
 from ..report._style import styled
 from ._laws import LinearLaw, fit_line, iter_tests, law_panel, weights_or_none
@@ -726,10 +727,7 @@ def fit_building_campaign(releases, mass: float, model: str = "linear", *, varia
     if damping != "viscous" and model == "2dof":
         raise ParameterError("damping", damping, "'viscous' for model = '2dof' (its dampers are viscous)")
     constant_friction = bool(constant_friction) and model == "pendulum"
-    shared = None
-    if constant_friction:
-        mu = float((start or {}).get("friction_slow", 0.0))
-        shared = {"rate": 0.0, "friction_fast": mu}
+    shared = constant_friction_fixed(start) if constant_friction else None
     defaults = default_quantities(model, damping, constant_friction)
     quantities = tuple(quantities) if quantities is not None else defaults
     allowed = defaults + EXTRA_QUANTITIES.get(model, ()) + REPORTED.get(model, ())
@@ -898,6 +896,7 @@ def load_building_campaign(path, data: dict[str, Any]) -> tuple[str, str, tuple[
 
     from ..io.building_case import load_building
     from ..io.case import CaseFileError, case_from_mapping
+    from ..io.records import RecordError
     from ..units import parse_quantity
 
     path = Path(path)
@@ -951,7 +950,11 @@ def load_building_campaign(path, data: dict[str, Any]) -> tuple[str, str, tuple[
             building["displacement"] = entry["displacement"]
         case = case_from_mapping({"title": name, "building": building}, source=where, base=path.parent,
                                  require_test=False)
-        loaded = load_building(case)
+        try:
+            loaded = load_building(case)
+        except RecordError as exc:  # the record's file and column, and which test's record it is
+            text = str(exc)
+            raise RecordError(text if text.startswith(where) else f"{where}: {text}") from None
         force = None
         if "force" in entry:
             try:
@@ -971,7 +974,7 @@ def load_building_campaign(path, data: dict[str, Any]) -> tuple[str, str, tuple[
         raise CaseFileError(f"{source}: {len(releases)} test(s): an amplitude law needs at least 3 releases")
     title = str(data.get("title", path.stem))
     model = str(template.get("model", "linear"))
-    constant = model == "pendulum" and "friction_coefficient" in template
+    constant = loaded.constant_friction  # the last release's: [building] is every release's
     return title, str(data.get("notes", "")), tuple(variables), model, mass, start, releases, superstructure_mass, \
         str(template.get("damping", "viscous")), constant
 

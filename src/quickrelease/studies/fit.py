@@ -40,11 +40,13 @@ from ..io.case import Case, FitOptions
 from ..io.export import jsonable
 from ..io.records import (
     DISPLACEMENT_CHANNELS,
+    NOISE_FLOOR,
     Record,
     RecordError,
     ReleaseChannels,
     detect_release,
     load_record,
+    noise_floor,
     record_origin,
     release_channels,
     shifted_record,
@@ -436,11 +438,6 @@ def _rest_value(name: str, alpha0: float) -> float:
     return alpha0 if name == "alpha" else 0.0
 
 
-#: Smallest noise of a channel relative to its largest value: about 50 ulp of double precision. A smaller
-#: noise (e.g. 1e-300 m) would weight residuals that are rounding errors, and overflow the Jacobian.
-NOISE_FLOOR = 1e-14
-
-
 def _noise(problem: _Problem, t_release: float) -> None:
     """Each channel's sigma: given, or the scatter of its pre-release samples (at rest), and at least
     :data:`NOISE_FLOOR` times the channel's largest value."""
@@ -460,7 +457,7 @@ def _noise(problem: _Problem, t_release: float) -> None:
                               "release, so no noise level to weight it by: give its noise in [record.channels]")
         problem.sigma[name], problem.sigma_source[name] = s, "pre-release segment"
     for name, ch in problem.channels.items():
-        floor = max(NOISE_FLOOR * float(np.max(np.abs(ch.values))), 1e-150)
+        floor = noise_floor(ch.values)
         if not problem.sigma[name] >= floor:
             raise RecordError(f"{rec.file}: column {ch.spec.column!r} (channel {name}): noise = "
                               f"{problem.sigma[name]:.3g} ({problem.sigma_source[name]}) is below {floor:.3g}, "
