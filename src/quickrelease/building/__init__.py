@@ -11,6 +11,8 @@ Modules, one question each:
   (``Pendulum``, ``BoucWen``, ``HystereticVibration``), integrated by the event-located scheme of ``_ode``;
 - :mod:`~quickrelease.building.decay`: the decay of the free vibration (turning points, decrement laws,
   hysteresis loop; ``analyse_decay``);
+- :mod:`~quickrelease.building.boucwen_loop`: Bouc-Wen isolators and dampers read off the measured loop by the
+  equation error (``boucwen_loop``, ``BoucWenLoop``: the Bouc-Wen fit's start that depends on no basin);
 - :mod:`~quickrelease.building.isolation_fit`: the isolation system fitted to records (``fit_isolation``,
   ``compare_models``, ``IsolationFit``, ``BuildingChannel``); ``isolation_search``: its global start search;
 - :mod:`~quickrelease.building.effective`: the quantities engineers report per cycle of an isolator's loop

@@ -137,7 +137,7 @@ def boucwen_loop(t, x, t_a, acceleration, mass: float, release_time: float, nois
         return None
     # the pushed level: the rest before the release, or (a record caught mid-swing, cut at its first turning
     # point) the first sample
-    d0 = float(np.median(pre_x)) if pre_x.size >= 3 else float(x[np.searchsorted(t, t_r)])
+    d0 = float(np.median(pre_x)) if pre_x.size >= 3 else float(x[min(int(np.searchsorted(t, t_r)), x.size - 1)])
     level = float(np.median(x[-max(x.size // 10, 5):]))
     off = np.nonzero(np.abs(x - level) > 8.0 * noise_x)[0]
     t_end = float(t[off[-1]]) if off.size else t_r
@@ -159,16 +159,18 @@ def boucwen_loop(t, x, t_a, acceleration, mass: float, release_time: float, nois
         t_a, acc = grid, savgol_filter(xg, wide, 3, deriv=2, delta=dt)
         acc = np.where(grid > t_r + 0.5 * wide * dt, acc, np.nan)
         noise_a = noise_x * float(np.linalg.norm(savgol_coeffs(wide, 3, deriv=2, delta=dt)))
+        zero = 0.0
     else:
         t_a, acc = np.asarray(t_a, dtype=float), np.asarray(acceleration, dtype=float)
-    pre_a = acc[t_a < t_r]
+        pre_a = acc[t_a < t_r]
+        zero = float(np.median(pre_a)) if pre_a.size >= 3 else 0.0
     moving = (t_a > t_r) & (t_a <= grid[-1]) & np.isfinite(acc)
     if np.count_nonzero(moving) < 30:
         return None
     idx = np.nonzero(moving)[0]
     idx = idx[:: max(1, math.ceil(idx.size / LOOP_SAMPLES))]
     ta = t_a[idx]
-    force = -float(mass) * (acc[idx] - (float(np.median(pre_a)) if pre_a.size >= 3 else 0.0))
+    force = -float(mass) * (acc[idx] - zero)
     xa, va = np.interp(ta, grid, xg), np.interp(ta, grid, vg)
     scale = float(mass) * max(float(noise_a), 1e-12)
     exponents = (1.0,) if damping == "viscous" else LOOP_EXPONENTS
