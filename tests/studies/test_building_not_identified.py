@@ -55,3 +55,10 @@ def test_a_rate_over_its_whole_range_is_not_identified_in_the_json_as_in_campaig
     release = _estimates(BuildingRelease("R1", channels, d0=D0), fit, ("rate", "friction_slow"))
     assert not release.identified("rate") and release.interval_method["rate"] == "not identified"
     assert release.identified("friction_slow")
+    # an interval cut by one bound alone is the likelihood's on its other side: identified (planted, [0, 500] s/m)
+    from dataclasses import replace
+
+    from quickrelease.building.identified import parameter_identified
+
+    one_side = replace(fit, ci95={**fit.ci95, "rate": (0.0, 500.0)})
+    assert parameter_identified(one_side, "rate") and physical_estimates(one_side)["not_identified"] == []
