@@ -15,6 +15,8 @@ Modules, one question each:
   equation error (``boucwen_loop``, ``BoucWenLoop``: the Bouc-Wen fit's start that depends on no basin);
 - :mod:`~quickrelease.building.isolation_fit`: the isolation system fitted to records (``fit_isolation``,
   ``compare_models``, ``IsolationFit``, ``BuildingChannel``); ``isolation_search``: its global start search;
+- :mod:`~quickrelease.building.identified`: whether a record identifies a fitted parameter (the one rule of the
+  building's ``not_identified`` and of building campaigns; ``parameter_identified``);
 - :mod:`~quickrelease.building.effective`: the quantities engineers report per cycle of an isolator's loop
   (keff, EDC, beta_eff, Qd, Kd, Teff, mu; ``loop_cycles``, ``CycleProperties``).
 

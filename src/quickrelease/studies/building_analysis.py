@@ -27,6 +27,7 @@ from scipy import stats
 from .._results import Summarised
 from ..building.decay import DecayAnalysis, analyse_decay, hysteresis_loop
 from ..building.effective import CycleProperties, loop_cycles
+from ..building.identified import parameter_identified
 from ..building.isolation_fit import (
     JSON_KEYS,
     BuildingChannel,
@@ -192,7 +193,9 @@ def physical_estimates(fit: IsolationFit) -> dict[str, Any]:
     iso = fit.isolation()
     out: dict[str, Any] = {}
 
-    blind = {n for n, how in fit.interval_method.items() if how == "not identified"}
+    # the record does not identify it (found so by the fit, or an interval over its whole range): the rule of
+    # building campaigns (building.identified)
+    blind = {n for n in fit.interval_method if not parameter_identified(fit, n)}
     out["not_identified"] = []
 
     def put(name: str, value: float | None = None, key: str | None = None) -> None:

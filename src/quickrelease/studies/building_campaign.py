@@ -90,8 +90,9 @@ covariance). The laws weight each release by ``1 / sigma^2``, where sigma is the
 
 A release whose record does not identify a quantity (the fit's ``not identified``: standard error inf, no
 interval; a profile interval over the parameter's whole range, e.g. Constantinou's rate of a slow record; or a
-derived quantity that depends on such a parameter) gives no weight to that quantity's laws: it is left out of
-them (``left_out``; standard error inf, shown "not identified" in the tables and as a hollow point in the
+derived quantity that depends on such a parameter; the rule of the building's JSON too:
+:func:`quickrelease.building.identified.parameter_identified`) gives no weight to that quantity's laws: it is left
+out of them (``left_out``; standard error inf, shown "not identified" in the tables and as a hollow point in the
 figure), and a quantity that fewer than three releases identify has no law. (It once made the law unweighted,
 every release then weighing the same, the unidentified one included.)
 
@@ -114,6 +115,7 @@ import numpy as np
 from scipy import stats
 
 from ..building.hysteretic import GRAVITY
+from ..building.identified import parameter_identified
 from ..building.isolation_fit import PARAMETER_BOUNDS, BuildingChannel, IsolationFit, _isolation, fit_isolation
 from ..building.model import pushed_state
 from ..errors import ParameterError, QuickReleaseError
@@ -417,7 +419,7 @@ def _estimates(release: BuildingRelease, fit: IsolationFit, quantities: tuple[st
     se_all = np.array([fit.std_errors[n] for n in fit.names])
     # not identified by the record (SE inf, or a profile interval over the parameter's whole range): a quantity
     # that depends on one has SE inf
-    blind = ~np.isfinite(se_all) | np.array([_whole_range(fit, n) for n in fit.names], dtype=bool)
+    blind = np.array([not parameter_identified(fit, n) for n in fit.names], dtype=bool)
     se_known = np.where(blind, 0.0, se_all)
     cov = fit.correlation * np.outer(se_known, se_known)
     values, ses, ci, method = {}, {}, {}, {}
@@ -428,7 +430,7 @@ def _estimates(release: BuildingRelease, fit: IsolationFit, quantities: tuple[st
             ci[q] = tuple(fit.ci95[name])
             method[q] = fit.interval_method[name]
             bounds = PARAMETER_BOUNDS[name]
-            if _whole_range(fit, name):
+            if not parameter_identified(fit, name):
                 method[q] = "not identified"  # its interval is the parameter's whole range: no weight in a law
             if method[q] == "not identified":
                 ses[q] = math.inf
@@ -459,15 +461,6 @@ def _estimates(release: BuildingRelease, fit: IsolationFit, quantities: tuple[st
     return ReleaseEstimates(name=release.name, d0=params["d0"], d0_given=release.d0, force=release.force,
                             values=values, std_errors=ses, ci95=ci, interval_method=method, fit=fit,
                             restarted_from=restarted_from)
-
-
-def _whole_range(fit: IsolationFit, name: str) -> bool:
-    """Whether the fit's interval of parameter ``name`` is a profile (or one widened over two minima) that runs
-    over the parameter's whole range (:data:`PARAMETER_BOUNDS`): the record does not identify it."""
-    if name not in PARAMETER_BOUNDS or fit.interval_method.get(name) not in ("profile", "covers two minima"):
-        return False
-    lo, hi = fit.ci95[name]
-    return lo <= PARAMETER_BOUNDS[name][0] and hi >= PARAMETER_BOUNDS[name][1]
 
 
 def _fixed(release: BuildingRelease, shared: dict[str, float] | None = None) -> dict[str, float] | None:

@@ -45,11 +45,12 @@ import numpy as np
 
 from .._results import Summarised
 from ..device.parameters import read_toml
-from ..errors import QuickReleaseError
+from ..errors import ParameterError, QuickReleaseError
 from ..io.case import Case, CaseFileError, case_from_mapping, load_case
+from ..io.records import Record
 from ..report._style import styled
 from ._laws import LinearLaw, _p_value, _wls, fit_line, iter_tests, law_panel, weights_or_none
-from .fit import FitResult, fit_record, observation_sigma
+from .fit import FitResult, fit_record, load_case_record, observation_sigma
 
 __all__ = ["CampaignTest", "LinearLaw", "Law", "JointLaw", "CampaignResult", "load_campaign", "run_campaign",
            "fit_law", "fit_line", "weights_or_none", "law_panel", "VARIABLES"]
@@ -236,9 +237,9 @@ def load_campaign(path: str | Path) -> tuple[str, str, tuple[str, ...], list[tup
     return str(data.get("title", path.stem)), str(data.get("notes", "")), tuple(variables), cases
 
 
-def _identify_test(name: str, case: Case) -> CampaignTest:
+def _identify_test(name: str, case: Case, record: Record | None = None) -> CampaignTest:
     if case.record is not None or observation_sigma(case):
-        fit = fit_record(case)
+        fit = fit_record(case, record)
         method = "fit to record" if case.record is not None else "stop observations with scatter"
         return CampaignTest(name=name, case=case, F1=fit.F1, F2=fit.F2, F1_se=fit.std_errors["F1"],
                             F2_se=fit.std_errors["F2"], method=method, fit=fit)
@@ -248,6 +249,20 @@ def _identify_test(name: str, case: Case) -> CampaignTest:
                               device=case.device, mass_model=case.mass_model)
     return CampaignTest(name=name, case=case, F1=ident.F1, F2=ident.F2, F1_se=None, F2_se=None,
                         method="stop observations")
+
+
+def _named(exc: QuickReleaseError, path, name: str) -> QuickReleaseError:
+    """``exc`` with the campaign file and the test in front of its message (once: a test's inline keys already
+    name them, as the source of its case)."""
+    where, text = f"{path}: test {name}", str(exc)
+    if text.startswith(where):
+        return exc
+    if isinstance(exc, ParameterError):  # its own arguments (type(exc)(message) is a TypeError: a traceback)
+        return type(exc)(f"{where}: {exc.name}", exc.value, exc.valid, exc.unit)
+    try:
+        return type(exc)(f"{where}: {text}")
+    except TypeError:  # an error of other arguments (InfeasibleObservationError): the message kept
+        return QuickReleaseError(f"{where}: {text}")
 
 
 def run_campaign(path: str | Path):
@@ -278,12 +293,18 @@ def run_campaign(path: str | Path):
     check_optional(files=[f for _, case in cases for f in record_files(case.record)])  # before the first fit
     if len(cases) < 3:
         raise QuickReleaseError(f"{path}: {len(cases)} test(s): a friction law needs at least 3")
+    records = {}
+    for name, case in cases:  # every record read before the first fit: a record's problem at once, with its test
+        try:
+            records[name] = load_case_record(case)
+        except QuickReleaseError as exc:
+            raise _named(exc, path, name) from None
     tests = []
     for name, case in cases:
         try:
-            tests.append(_identify_test(name, case))
+            tests.append(_identify_test(name, case, records[name]))
         except QuickReleaseError as exc:
-            raise type(exc)(f"test {name}: {exc}") from None
+            raise _named(exc, path, name) from None
     laws = {(f, v): fit_law(tests, f, v) for f in ("F1", "F2") for v in variables}
     joint = {}
     if len(variables) > 1 and len(tests) >= len(variables) + 2:

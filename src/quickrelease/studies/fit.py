@@ -44,6 +44,7 @@ from ..io.records import (
     Record,
     RecordError,
     ReleaseChannels,
+    check_release_time,
     detect_release,
     load_record,
     noise_floor,
@@ -52,7 +53,7 @@ from ..io.records import (
     shifted_record,
 )
 
-__all__ = ["FitResult", "fit_record", "case_friction", "observation_sigma", "CORRELATION_WARNING",
+__all__ = ["FitResult", "fit_record", "load_case_record", "case_friction", "observation_sigma", "CORRELATION_WARNING",
            "RELATIVE_SE_WARNING"]
 
 #: |correlation(F1, F2)| above which a poorly determined F1 or F2 is explained as indistinguishable from the other.
@@ -659,6 +660,22 @@ def _solve(problem: _Problem, x0: np.ndarray, lower: np.ndarray, upper: np.ndarr
     return res, problem.size()
 
 
+def load_case_record(case: Case) -> Record | None:
+    """The case's ``[record]`` read (:func:`quickrelease.io.records.load_record`), its ``release_time`` checked
+    against the record's time span at once (:func:`quickrelease.io.records.check_release_time`: one line naming
+    the case file, the key, its value and the span, as the building's ``load_building`` does); None without one.
+
+    Raises
+    ------
+    RecordError
+        For a record that cannot be read, or a release_time outside its first to last time stamp."""
+    if case.record is None:
+        return None
+    record = load_record(case.record)
+    check_release_time(case.record, record)
+    return record
+
+
 def fit_record(case: Case, record: Record | None = None, *, options: FitOptions | None = None) -> FitResult:
     """Fit the release model to a measured record (and/or stop observations with a scatter).
 
@@ -668,7 +685,7 @@ def fit_record(case: Case, record: Record | None = None, *, options: FitOptions 
         The test: device, E_S, alpha0, mass model; ``[record]`` (read here unless ``record`` is given),
         ``[fit]`` options, and optionally ``[observations]``.
     record : Record, optional
-        An already loaded record (default: ``load_record(case.record)`` when the case has one).
+        An already loaded record (default: :func:`load_case_record` when the case has one).
     options : FitOptions, optional
         Override the case's ``[fit]`` table.
 
@@ -687,7 +704,7 @@ def fit_record(case: Case, record: Record | None = None, *, options: FitOptions 
 
     options = options or case.fit
     if record is None and case.record is not None:
-        record = load_record(case.record)
+        record = load_case_record(case)
     given, origin = record, 0.0
     if record is not None:  # record-relative time: a Unix-time clock (1.7e9 s) would drown the release in rounding
         origin = record_origin(record)

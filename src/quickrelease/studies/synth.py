@@ -20,6 +20,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from .._validate import BYTES_PER_SAMPLE, check_seed, check_size
+from ..building.isolation_fit import IsolationPrecision
 from ..building.model import RECORD_CHANNELS
 from ..device.solvers import FirstIntegral
 from ..errors import ParameterError, QuickReleaseError
@@ -29,7 +30,7 @@ from .fit import case_friction
 
 __all__ = ["DEFAULT_NOISE", "SyntheticRecord", "synthesize", "predicted_errors", "parse_channel_values", "case_toml",
            "BUILDING_NOISE", "SyntheticBuildingRecord", "synthesize_building", "building_case_toml",
-           "predicted_building_errors"]
+           "predicted_building_errors", "ConstantFrictionPrecision"]
 
 #: Default noise standard deviations [SI]: video angle, gyroscope, draw-wire or LVDT displacements,
 #: velocity transducers, accelerometers (about 5 mg).
@@ -338,6 +339,9 @@ class SyntheticBuildingRecord(_Synthetic):
     """The building (model, mass_kg, period_s, damping_ratio, friction_N; bilinear k1_N_m, k2_N_m, Fy_N; 2dof
     superstructure_mass_kg, superstructure_period_s, superstructure_damping_ratio),
     d0_m, release_time_s and stop_time_s (after the release; None: still moving at the end of the record)."""
+    constant_friction: bool = False
+    """The pendulum's friction is a constant coefficient (``[building] friction_coefficient``): its fit holds the
+    rate at 0 and mu_fast at mu (:func:`quickrelease.io.building_case.constant_friction_fixed`)."""
 
     _CHANNELS: ClassVar[dict[str, tuple[str, str, str]]] = RECORD_CHANNELS
     _SECTION: ClassVar[str] = "building.record"
@@ -382,23 +386,47 @@ class SyntheticBuildingRecord(_Synthetic):
         return {k: float(v) for k, v in p.items()}
 
 
-def predicted_building_errors(synthetic: SyntheticBuildingRecord):
+@dataclass(frozen=True, eq=False)
+class ConstantFrictionPrecision(IsolationPrecision):
+    """The precision of the constant-friction pendulum's fit (rate and mu_fast held): its mu_slow row is the one
+    friction coefficient mu, keyed ``friction_coefficient`` as in the fit's JSON
+    (:func:`quickrelease.studies.building_analysis.physical_estimates`)."""
+
+    def physical(self) -> dict[str, dict[str, Any]]:
+        return {("friction_coefficient" if key == "friction_slow" else key): row
+                for key, row in super().physical().items()}
+
+
+def predicted_building_errors(synthetic: SyntheticBuildingRecord) -> IsolationPrecision:
     """Standard errors a fit to such a record of the building would have: the Cramer-Rao bound at the truth.
 
     :func:`quickrelease.building.isolation_fit.predicted_isolation_errors` on the record's channels (its sample times,
     missing samples left out, and its noise levels as the known weights, an offset on every channel) at the
-    true parameters of the synthetic record's model: ``(J^T W J)^-1`` with W = 1 / noise^2.
+    true parameters of the synthetic record's model: ``(J^T W J)^-1`` with W = 1 / noise^2. A pendulum of constant
+    friction (``[building] friction_coefficient``) is predicted as ``quickrelease building`` fits it, the rate
+    held at 0 and mu_fast at mu (:func:`quickrelease.io.building_case.constant_friction_fixed`): one row
+    ``friction_coefficient``, not Constantinou's three (:class:`ConstantFrictionPrecision`).
 
     Returns
     -------
     quickrelease.building.isolation_fit.IsolationPrecision
     """
+    from dataclasses import fields
+
     from ..building.isolation_fit import predicted_isolation_errors
+    from ..io.building_case import constant_friction_fixed
 
     t = synthetic.truth
-    return predicted_isolation_errors(synthetic.building_channels(noise_free=True), t["mass_kg"], t["model"],
-                                      synthetic.fit_parameters(),
-                                      superstructure_mass=t.get("superstructure_mass_kg"))
+    parameters, fixed = synthetic.fit_parameters(), {}
+    if synthetic.constant_friction:
+        fixed = constant_friction_fixed(parameters)
+        parameters.update(fixed)
+    pred = predicted_isolation_errors(synthetic.building_channels(noise_free=True), t["mass_kg"], t["model"],
+                                      parameters, superstructure_mass=t.get("superstructure_mass_kg"),
+                                      fixed=tuple(fixed))
+    if not synthetic.constant_friction:
+        return pred
+    return ConstantFrictionPrecision(**{f.name: getattr(pred, f.name) for f in fields(pred)})
 
 
 def describe_truth(truth: dict[str, Any]) -> str:
@@ -488,7 +516,7 @@ def synthesize_building(case: Case, channels: list[str] | tuple[str, ...], *, ra
         Share of samples missing (NaN) in each channel, in [0, 1).
     """
     from ..building.model import TwoDOF, free_vibration, pushed_state
-    from ..io.building_case import BUILDING_CHANNELS, spec_building
+    from ..io.building_case import BUILDING_CHANNELS, constant_friction, spec_building
 
     spec = case.building
     if spec is None:
@@ -545,7 +573,8 @@ def synthesize_building(case: Case, channels: list[str] | tuple[str, ...], *, ra
     truth = {**iso.summary(), "d0_m": float(d0), "release_time_s": float(release_time), "stop_time_s": stop}
     notes = [] if spec.mass is not None else ["no [building] mass: a unit mass (the motion depends on F_s / m only)"]
     return SyntheticBuildingRecord(t=t, data=data, clean=clean, truth=truth, noise={c: noise[c] for c in channels},
-                                   offsets=offsets, rate=float(rate), seed=int(seed), notes=notes)
+                                   offsets=offsets, rate=float(rate), seed=int(seed), notes=notes,
+                                   constant_friction=constant_friction(spec))
 
 
 def building_case_toml(case: Case, synthetic: SyntheticBuildingRecord, record_table: str, title: str) -> str:
