@@ -97,12 +97,14 @@ def test_an_epoch_clock_gives_the_same_friction(tmp_path, history):
 
 
 def test_a_record_that_starts_after_the_release_is_refused(tmp_path, history):
-    """Given the release instant (0.5 s) of a record that starts at 0.75 s: refused, naming both."""
+    """Given the release instant (0.5 s) of a record that starts at 0.75 s: refused where the record loads
+    (io.records.check_release_time), naming the key, its value, the record and its time span."""
     case = _write(tmp_path, history, start=RELEASE + 0.25, name="late", release_time=RELEASE)
-    with pytest.raises(RecordError, match=r"late.csv: the record starts at 0.75 s, at or after the release"):
+    with pytest.raises(RecordError, match=r"release_time = 0.5 s: expected a release instant within the time span "
+                                          r"of the record late.csv, \[0.75, "):
         fit_record(case)
     case = _write(tmp_path, history, start=RELEASE + 0.25, name="late", release_time=RELEASE + EPOCH, shift=EPOCH)
-    with pytest.raises(RecordError, match=r"starts at 1\.7e\+09 s, at or after the release"):
+    with pytest.raises(RecordError, match=r"release_time = 1\.7\d*e\+09 s: .* late.csv, \[1\.7\d*e\+09, "):
         fit_record(case)
 
 
