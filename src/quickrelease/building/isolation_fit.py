@@ -1463,9 +1463,13 @@ def _boucwen_from_loop(channels, mass: float, t_r0: float, noise: dict[str, floa
     if xch is None:
         return []
     period = hint if hint is not None else record_values["period"]
-    loop = boucwen_loop(xch.t, xch.values, None if ach is None else ach.t, None if ach is None else ach.values,
-                        mass, t_r0, noise[xch.name], None if ach is None else noise[ach.name], period, damping=damping)
-    if loop is None:
+    try:  # a start: a record it cannot read (too short, degenerate) leaves the others
+        loop = boucwen_loop(xch.t, xch.values, None if ach is None else ach.t, None if ach is None else ach.values,
+                            mass, t_r0, noise[xch.name], None if ach is None else noise[ach.name], period,
+                            damping=damping)
+    except (ValueError, ArithmeticError, np.linalg.LinAlgError):
+        loop = None
+    if loop is None or not all(math.isfinite(v) for v in (loop.post_yield_stiffness, loop.zero, loop.damping)):
         return []
     kd = loop.post_yield_stiffness
     trial = {**record_values, "period": 2.0 * math.pi * math.sqrt(mass / kd),
