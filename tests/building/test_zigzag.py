@@ -37,3 +37,40 @@ def test_the_scan_is_the_one_effective_and_decay_use_and_decay_does_not_import_e
     tree = ast.parse((SRC / "decay.py").read_text(encoding="utf-8"))
     imported = {node.module for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)}
     assert "effective" not in imported and "_zigzag" in imported
+
+
+def _scan_by_hand(x, threshold, direction, best):
+    """The scan sample by sample, written here: a strictly larger sample (in ``direction``) is the new extreme, a
+    sample back from the extreme by more than the threshold turns the swing."""
+    out = []
+    for k in range(best + 1, len(x)):
+        if direction * (x[k] - x[best]) > 0.0:
+            best = k
+        elif direction * (x[best] - x[k]) > threshold:
+            out.append(best)
+            direction, best = -direction, k
+    return out, direction, best
+
+
+def test_the_scan_is_the_sample_by_sample_scan_on_noisy_quantised_and_flat_records():
+    """The scan (one numpy pass per swing) against the loop above on 3000 drawn records: decays with noise, the
+    same quantised (equal samples: the first of equal extremes is the turning point), integer steps, -0.0 among
+    0.0, samples of +-1e308 (differences overflow to inf), NaN and inf, thresholds 0 and negative."""
+    rng = np.random.default_rng(7)
+    for trial in range(3000):
+        n = int(rng.integers(0, 120))
+        t = np.linspace(0.0, rng.uniform(1.0, 30.0), n)
+        x = rng.uniform(0.01, 1.0) * np.exp(-0.1 * t) * np.cos(rng.uniform(0.5, 5.0) * t) + rng.normal(0.0, 0.05, n)
+        kind = trial % 6
+        if kind == 1:
+            x = np.round(x * 100.0) / 100.0
+        elif kind == 2:
+            x = rng.integers(-3, 4, n).astype(float)
+        elif kind == 3 and n:
+            x[rng.integers(0, n, 3)] = rng.choice([np.nan, np.inf, -np.inf, 1e308, -1e308])
+        elif kind == 4:
+            x = np.where(rng.uniform(size=n) < 0.3, -0.0, np.round(x))
+        threshold = float(rng.choice([0.0, 0.02, 0.3, -0.1]))
+        direction, best = float(rng.choice([1.0, -1.0])), int(rng.integers(0, max(n, 1)))
+        with np.errstate(invalid="ignore", over="ignore"):
+            assert zigzag_scan(x, threshold, direction, best) == _scan_by_hand(x, threshold, direction, best), trial

@@ -5,6 +5,8 @@ the record has come back by more than a threshold. One scan for the cycles of a 
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 __all__ = ["zigzag", "zigzag_scan"]
@@ -28,6 +30,30 @@ def zigzag_scan(x: np.ndarray, threshold: float, direction: float, best: int) ->
     ``threshold`` [x's unit]. Returns the turning points' samples, and the direction and running extreme at
     the end (the last swing's, not yet a turning point). Shared by
     :func:`quickrelease.building.effective.cycle_turns` and :func:`quickrelease.building.decay.turning_points`."""
+    x = np.asarray(x, dtype=float)
+    if direction not in (1.0, -1.0) or not threshold >= 0.0 or not math.isfinite(threshold) \
+            or not np.all(np.isfinite(x[best:])):
+        return _scan_loop(x, threshold, direction, best)
+    out: list[int] = []
+    # per swing, one pass of numpy over the rest of the record: y = direction x (exact), the running extreme so far,
+    # the first sample that came back from it by more than the threshold (a sample that equals the extreme is no new
+    # extreme: the first of equal extremes is the turning point, as in the sample-by-sample scan of _scan_loop)
+    while best + 1 < x.size:
+        y = direction * x[best:]
+        peak = np.maximum.accumulate(y)
+        back = np.nonzero(peak[:-1] - y[1:] > threshold)[0]
+        if back.size == 0:
+            best += int(np.argmax(y))
+            break
+        k = int(back[0]) + 1  # the sample (from best) that turns the swing
+        out.append(best + int(np.argmax(y[:k])))
+        direction = -direction
+        best += k
+    return out, direction, best
+
+
+def _scan_loop(x: np.ndarray, threshold: float, direction: float, best: int) -> tuple[list[int], float, int]:
+    """:func:`zigzag_scan` sample by sample (for records with NaN or inf, and any threshold)."""
     out: list[int] = []
     for k in range(best + 1, x.size):
         if direction * (x[k] - x[best]) > 0.0:

@@ -160,10 +160,17 @@ class FirstIntegral:
         """
         t = np.asarray(t, dtype=float)
         t_stop = self.stop_time()
-        w = self.w_at_times(t)
-        alpha = self.alpha(w)
-        alpha_dot = self._rel.rate_at(w)
         before, after = t <= 0.0, t > t_stop
+        moving = ~(before | after)
+        if np.all(moving):
+            w = self.w_at_times(t)
+            alpha = self.alpha(w)
+            alpha_dot = self._rel.rate_at(w)
+        else:  # the time map inverted at the times of the motion only: a record's rests cost nothing
+            alpha, alpha_dot = np.empty(t.shape), np.empty(t.shape)
+            w = self.w_at_times(t[moving])
+            alpha[moving] = self.alpha(w)
+            alpha_dot[moving] = self._rel.rate_at(w)
         alpha[before], alpha_dot[before] = self.alpha0, 0.0
         alpha[after], alpha_dot[after] = self.alpha_final, 0.0
         if self.creeps:  # past the horizon, the exponential creep towards pi/2 (leading order in pi/2 - alpha)

@@ -290,7 +290,7 @@ def _window_accelerations(names, s, fi, window: float) -> dict[str, np.ndarray]:
     weight (1 - y) gives the average with error of order (Delta / T)^8 (T the time scale of the motion),
     free of the cancellation that makes the second difference lose ``eps / Delta^2`` (1e-6 of the range at
     50 kHz). Samples whose window reaches across the release or the stop (a jump of x'', or of x' at the
-    geometric limit) are integrated piecewise (:func:`_edge_acceleration`).
+    geometric limit) are integrated piecewise (:func:`_edge_accelerations`).
     """
     y, weights = _triangle_rule()
     t_stop = fi.stop_time()
@@ -310,10 +310,11 @@ def _window_accelerations(names, s, fi, window: float) -> dict[str, np.ndarray]:
         full = np.empty(n)
         full[smooth] = acc
         out[name] = full
-    for i in np.nonzero(edge)[0]:
-        values = _edge_acceleration(names, float(s[i]), fi, window)
+    rows = np.nonzero(edge)[0]
+    if rows.size:
+        values = _edge_accelerations(names, s[rows], fi, window)
         for name in names:
-            out[name][i] = values[name]
+            out[name][rows] = values[name]
     return out
 
 
@@ -321,33 +322,39 @@ def _window_accelerations(names, s, fi, window: float) -> dict[str, np.ndarray]:
 _GL8_Y, _GL8_W = (lambda x, w: (0.5 * (x + 1.0), 0.5 * w))(*np.polynomial.legendre.leggauss(8))
 
 
-def _edge_acceleration(names, s: float, fi, window: float) -> dict[str, float]:
-    """The window average of :func:`_window_accelerations` for a sample whose window reaches across the
-    release or the stop: each half of the window is cut at them and each smooth piece integrated by
+def _edge_accelerations(names, s: np.ndarray, fi, window: float) -> dict[str, np.ndarray]:
+    """The window average of :func:`_window_accelerations` for samples at times ``s`` whose window reaches across
+    the release or the stop: each half of a sample's window is cut at them and each smooth piece integrated by
     8-point Gauss-Legendre (the weight (1 - y) included); at the geometric limit the velocity drops to 0 at
-    the stop, a Dirac impulse of x'' whose weight is the velocity just before it."""
+    the stop, a Dirac impulse of x'' whose weight is the velocity just before it. The states of every sample's
+    nodes come from one evaluation of the motion (a few samples per call, each once its own evaluation)."""
     t_stop = fi.stop_time()
-    pieces_t, pieces_w = [], []
-    for side in (1.0, -1.0):
-        cuts = sorted({0.0, 1.0} | {y for y in ((0.0 - s) * side / window, (t_stop - s) * side / window)
-                                    if 0.0 < y < 1.0})
-        for a, b in zip(cuts[:-1], cuts[1:], strict=False):
-            y = a + (b - a) * _GL8_Y
-            pieces_t.append(s + side * window * y)
-            pieces_w.append((b - a) * _GL8_W * (1.0 - y))
+    pieces_t, pieces_w, bounds = [], [], [0]
+    for si in s.tolist():
+        for side in (1.0, -1.0):
+            cuts = sorted({0.0, 1.0} | {y for y in ((0.0 - si) * side / window, (t_stop - si) * side / window)
+                                        if 0.0 < y < 1.0})
+            for a, b in zip(cuts[:-1], cuts[1:], strict=False):
+                y = a + (b - a) * _GL8_Y
+                pieces_t.append(si + side * window * y)
+                pieces_w.append((b - a) * _GL8_W * (1.0 - y))
+        bounds.append(sum(p.size for p in pieces_t))
     times, weights = np.concatenate(pieces_t), np.concatenate(pieces_w)
     moving = (times > 0.0) & (times <= t_stop)
     alpha, alpha_dot = fi.state_at(times)
     alpha_ddot = np.where(moving, angular_acceleration(alpha, np.maximum(alpha_dot, 1e-300), fi.F1, fi.F2, fi.m1,
                                                        fi.m2, fi.L1, fi.c), 0.0)
+    impulse = fi.geometric_limit and bool(np.any(np.abs(t_stop - s) < window))
+    if impulse:  # the velocity's drop to 0 at the flat rhombus
+        a_F, ad_F = fi.state_at(np.array([t_stop]))
     out = {}
     for name in names:
         inst = np.where(moving, channel_model(name, alpha, alpha_dot, alpha_ddot, fi.alpha0, fi.L1), 0.0)
-        value = float(weights @ inst)
-        if fi.geometric_limit and abs(t_stop - s) < window:  # the velocity's drop to 0 at the flat rhombus
-            a_F, ad_F = fi.state_at(np.array([t_stop]))
+        value = np.array([float(weights[lo:hi] @ inst[lo:hi]) for lo, hi in zip(bounds[:-1], bounds[1:], strict=True)])
+        if impulse:
             v_F = float(channel_model(RATE_OF[name] + "_dot", a_F, ad_F, 0.0, fi.alpha0, fi.L1)[0])
-            value -= (1.0 - abs(t_stop - s) / window) / window * v_F
+            near = np.abs(t_stop - s) < window
+            value[near] -= (1.0 - np.abs(t_stop - s[near]) / window) / window * v_F
         out[name] = value
     return out
 

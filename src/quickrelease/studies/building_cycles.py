@@ -41,6 +41,7 @@ standard errors) and its EDC 0.9 % (0.7 standard errors) from the fitted model's
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 from dataclasses import dataclass
@@ -95,11 +96,16 @@ class MeasuredCycles(Summarised):
                 "cycles": len(rows), "effective": rows}
 
 
+@functools.cache
 def _poly_weights(window: int) -> tuple[np.ndarray, np.ndarray]:
-    """The local quadratic's least-squares map from a window's samples to its coefficients, and the offsets."""
+    """The local quadratic's least-squares map from a window's samples to its coefficients, and the offsets
+    (computed once per window: every half-cycle of every bootstrap copy smooths with them; read-only)."""
     half = window // 2
     j = np.arange(window, dtype=float) - half
-    return np.linalg.pinv(np.vander(j, ORDER + 1, increasing=True)), j
+    hat = np.linalg.pinv(np.vander(j, ORDER + 1, increasing=True))
+    hat.setflags(write=False)
+    j.setflags(write=False)
+    return hat, j
 
 
 def _smooth_run(z: np.ndarray, window: int, before: int, after: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -29,6 +29,7 @@ reversal's, so it lies off the curve by construction (for a slider, keff = k ins
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 from dataclasses import dataclass, field
@@ -87,9 +88,19 @@ def _physical_or_start(name: str) -> bool:
     return not (name.startswith("offset_") or name.startswith("drift_") or name == "release_time")
 
 
+@functools.cache
+def _gauss_legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss-Legendre nodes and weights of ``n`` points on [-1, 1] (computed once: every parameter draw of the
+    bands integrates with them)."""
+    nodes, weights = np.polynomial.legendre.leggauss(n)
+    nodes.setflags(write=False)
+    weights.setflags(write=False)
+    return nodes, weights
+
+
 def _gauss_integral(fv, edges: np.ndarray, mass: float) -> np.ndarray:
     """``integral F dx = integral -m a v dt`` over each interval between consecutive ``edges`` [J]."""
-    nodes, weights = np.polynomial.legendre.leggauss(_NODES)
+    nodes, weights = _gauss_legendre(_NODES)
     lo, hi = edges[:-1], edges[1:]
     half = 0.5 * (hi - lo)
     t = (0.5 * (hi + lo))[:, None] + half[:, None] * nodes[None, :]
