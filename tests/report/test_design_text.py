@@ -18,8 +18,10 @@ POWER = dict(damping_coefficient=2e5, damping_exponent=0.5)
     ({**PEND, "friction_slow": 0.02, "friction_fast": 0.06, "rate_s_m": 30.0, "damping_ratio": 0.01},
      "R = 2.5 m (T = 3.1716 s), friction mu = 0.02 to 0.06 (rate 30 s/m), zeta = 0.01"),
     ({**PEND, "friction_slow": 0.04, "friction_fast": 0.04, "rate_s_m": 0.0, **POWER},
-     "R = 2.5 m (T = 3.1716 s), friction mu = 0.04 to 0.04 (rate 0 s/m), dampers C = 200 kN (s/m)^alpha, "
-     "alpha = 0.5"),
+     "R = 2.5 m (T = 3.1716 s), friction mu = 0.04 (constant), dampers C = 200 kN (s/m)^alpha, "
+     "alpha = 0.5"),  # a constant-friction case's truth (rate 0): one mu, as the planned spec's text below
+    ({**PEND, "friction_slow": 0.02, "friction_fast": 0.06, "rate_s_m": 0.0, "damping_ratio": 0.01},
+     "R = 2.5 m (T = 3.1716 s), friction mu = 0.02 (constant), zeta = 0.01"),  # rate 0: mu(v) is mu_slow
     ({**BW, "damping_ratio": 0.02, "friction_N": 0.0},
      "Kd = 1600 kN/m (T = 4.4429 s), Qd = 400 kN, dy = 0.025 m, n = 1, zeta = 0.02, F_s = 0 N"),
     ({**BW, **POWER, "friction_N": 1.5e4},

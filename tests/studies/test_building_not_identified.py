@@ -51,6 +51,8 @@ def test_a_rate_over_its_whole_range_is_not_identified_in_the_json_as_in_campaig
     assert lo < MU < hi and hi - lo < 0.1 * MU  # the record does bound mu_fast: listed only what it does not
     data = physical_estimates(fit)
     assert data["not_identified"] == ["rate_s_m"]
+    assert data["interval_method"]["rate"] == "not identified"  # labelled as campaigns label it
+    assert data["interval_method"]["friction_fast"] == fit.interval_method["friction_fast"]
     assert data["rate_s_m_ci95"] is None and data["rate_s_m"] == fit.estimates["rate"]
     assert data["friction_fast_ci95"] == [lo, hi] and data["friction_slow_ci95"] is None  # mu_slow held
     # a campaign of this one release says the same of the rate, and of mu_fast

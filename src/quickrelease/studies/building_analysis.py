@@ -250,7 +250,8 @@ def physical_estimates(fit: IsolationFit) -> dict[str, Any]:
         put("damping_ratio", float(est.get("damping_ratio", fit.parameters.get("damping_ratio"))))
     if model != "pendulum":
         put("friction", float(iso.friction))
-    out["interval_method"] = dict(fit.interval_method)
+    # as building campaigns label it: a parameter the record does not identify has no interval, whatever method
+    out["interval_method"] = {n: "not identified" if n in blind else m for n, m in fit.interval_method.items()}
     return {k: jsonable(v) for k, v in out.items()}
 
 

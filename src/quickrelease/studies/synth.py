@@ -432,14 +432,16 @@ def predicted_building_errors(synthetic: SyntheticBuildingRecord) -> IsolationPr
 def describe_truth(truth: dict[str, Any]) -> str:
     """The synthetic building's isolation in its model's terms, for a person (SI values with prefixes): the period
     (pendulum: its radius R and 2 pi sqrt(R / g); Bouc-Wen: Kd, Qd, dy, n), the damper (zeta, or C and alpha) and
-    the sliders' friction (the pendulum's mu_slow to mu_fast at rate a)."""
+    the sliders' friction (the pendulum's mu_slow to mu_fast at rate a; one mu where the two are equal or the rate
+    is 0: constant friction)."""
     from ..report.display import describe_isolation, quantity
 
     t = truth
     render = {
         "pendulum": lambda radius, period, friction_slow, friction_fast, rate: (
             f"R = {quantity(radius, 'm')} (T = {quantity(period, 's')}), friction mu = {quantity(friction_slow)} "
-            f"to {quantity(friction_fast)} (rate {quantity(rate, 's/m')})"),
+            + ("(constant)" if friction_fast == friction_slow or not rate else
+               f"to {quantity(friction_fast)} (rate {quantity(rate, 's/m')})")),
         "boucwen": lambda post_yield_stiffness, period, characteristic_strength, yield_displacement, shape: (
             f"Kd = {quantity(post_yield_stiffness, 'N/m')} (T = {quantity(period, 's')}), Qd = "
             f"{quantity(characteristic_strength, 'N')}, dy = {quantity(yield_displacement, 'm')}, "
