@@ -39,9 +39,15 @@ def zigzag_scan(x: np.ndarray, threshold: float, direction: float, best: int) ->
     # the first sample that came back from it by more than the threshold (a sample that equals the extreme is no new
     # extreme: the first of equal extremes is the turning point, as in the sample-by-sample scan of _scan_loop)
     while best + 1 < x.size:
-        y = direction * x[best:]
-        peak = np.maximum.accumulate(y)
-        back = np.nonzero(peak[:-1] - y[1:] > threshold)[0]
+        span = 256  # a window that grows until the swing turns: each pass over the samples of its swing (and as
+        while True:  # many again at most), not over the rest of the record (quadratic in a chattering record)
+            end = min(x.size, best + span)
+            y = direction * x[best:end]
+            peak = np.maximum.accumulate(y)
+            back = np.nonzero(peak[:-1] - y[1:] > threshold)[0]
+            if back.size or end == x.size:
+                break
+            span *= 4
         if back.size == 0:
             best += int(np.argmax(y))
             break
