@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
-import numpy as np
+import math
 
-__all__ = ["jacobian_covariance", "unidentified", "identified_covariance"]
+import numpy as np
+from scipy.optimize import OptimizeResult, least_squares
+
+__all__ = ["jacobian_covariance", "unidentified", "identified_covariance", "bounded_least_squares"]
 
 #: Relative cut-off of the eigenvalues of the scaled normal matrix ``Js^T Js`` (diagonal 1): a direction below
 #: it is one the record does not see (the pseudo-inverse drops it).
@@ -66,3 +69,133 @@ def identified_covariance(J) -> tuple[np.ndarray, np.ndarray]:
         cov[np.ix_(good, good)] = jacobian_covariance(J[:, good])
     cov[bad, bad] = np.inf
     return cov, bad
+
+
+#: A parameter is held at a bound once the distance to it has shrunk by a ratio in CRAWL_RATIO over CRAWL_STEPS
+#: consecutive iterations (:func:`bounded_least_squares`).
+CRAWL_STEPS = 3
+CRAWL_RATIO = (0.05, 0.8)
+#: A held parameter is freed where a step inwards would lower the chi-square (2 cost) by more than this many
+#: reduced chi-squares (the residual variance): about 0.014 of its conditional standard error.
+RELEASE_GAIN = 1e-4
+#: Rounds of holding and freeing at most.
+ACTIVE_ROUNDS = 4
+
+
+class _Crawl(Exception):
+    """Raised inside the Jacobian: parameter ``index`` crawls towards ``bound`` from the iterate ``x``."""
+
+    def __init__(self, index: int, bound: float, x: np.ndarray) -> None:
+        super().__init__(index)
+        self.index, self.bound, self.x = index, bound, x
+
+
+def _crawls(history: list[np.ndarray], k: int, bound: float) -> bool:
+    """Whether coordinate k of the last CRAWL_STEPS + 1 iterates approached ``bound`` geometrically."""
+    d = [abs(h[k] - bound) for h in history[-CRAWL_STEPS - 1:]]
+    return all(d[m] > 0.0 and CRAWL_RATIO[0] < d[m + 1] / d[m] < CRAWL_RATIO[1] for m in range(CRAWL_STEPS))
+
+
+def _gauss_newton(J: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """The unconstrained Gauss-Newton step ``-J^+ f`` (columns scaled to unit norm first)."""
+    norms = np.linalg.norm(J, axis=0)
+    norms = np.where(norms > 0.0, norms, 1.0)
+    return -np.linalg.lstsq(J / norms, f, rcond=None)[0] / norms
+
+
+def bounded_least_squares(fun, x0, jac, lower, upper, *, args=(), tol: float = 1e-8, max_nfev: int | None = None,
+                          **options) -> OptimizeResult:
+    """scipy's bounded ``least_squares`` (trust-region reflective) with an active set: a parameter whose optimum
+    lies at its bound is held there instead of approached geometrically.
+
+    TRF's Coleman-Li scaling shortens every step towards a bound in proportion to the distance left: where the
+    minimum lies at the bound (a sliders' force of 0, a shape exponent at its limit) the parameter halves its
+    distance each iteration, each iteration a Jacobian (2 n residual evaluations by central differences): tens of
+    iterations, and on a misfit that is flat along the parameter (0.1 s an evaluation) tens of minutes. Here the
+    Jacobian's iterates are watched: a parameter whose distance to a bound shrank by a ratio in ``CRAWL_RATIO``
+    over ``CRAWL_STEPS`` iterations, and whose unconstrained Gauss-Newton step from there would cross the bound,
+    is set to the bound and held, and the others are solved on; at their solution
+    the full gradient ``g = J^T f`` decides, for each held parameter, whether a step inwards lowers the cost: the
+    predicted drop ``g_i^2 / (2 J_i^T J_i)`` (chi-square units: twice that) above ``RELEASE_GAIN`` residual
+    variances frees it again (from the Newton step inwards), else the bound is the optimum (the Karush-Kuhn-Tucker
+    condition up to a drop no estimate would notice). At most ``ACTIVE_ROUNDS`` rounds; a freed parameter is not
+    held again.
+
+    Returns scipy's OptimizeResult over all the parameters (``x``, ``fun``, ``cost``, ``jac`` (the full Jacobian at
+    ``x`` where a parameter was held), ``nfev`` and ``njev`` over every round, ``status``, ``success``, ``message``)
+    and ``held``, the indices held at a bound at the end.
+    """
+    lo, hi = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+    x = np.asarray(x0, dtype=float).copy()
+    n = x.size
+    held: dict[int, float] = {}
+    freed: set[int] = set()
+    nfev = njev = 0
+    for round_ in range(ACTIVE_ROUNDS + 1):
+        free = np.array([i for i in range(n) if i not in held], dtype=int)
+        history: list[np.ndarray] = []
+        calls: list = [0]
+        start = x.copy()
+
+        def full(y, free=free, base=start):
+            z = base.copy()
+            z[free] = y
+            return z
+
+        def f(y, *a, full=full, calls=calls):
+            calls[0] += 1
+            calls[1:] = [np.array(y), fun(full(y), *a)]  # the residuals of the last iterate (TRF asks the
+            return calls[2]  # Jacobian where it has just evaluated them)
+
+        def j(y, *a, full=full, free=free, history=history, calls=calls, watch=round_ < ACTIVE_ROUNDS):
+            z = full(y)
+            history.append(z)
+            J = jac(z, *a)[:, free]
+            if watch and len(history) > CRAWL_STEPS and len(calls) == 3 and np.array_equal(calls[1], y):
+                crawling = [(k, b) for k, i in enumerate(free) if i not in freed for b in (lo[i], hi[i])
+                            if math.isfinite(b) and _crawls(history, i, b)]
+                if crawling:  # held only where the Gauss-Newton step would cross the bound (else it converges)
+                    step = _gauss_newton(J, calls[2])
+                    for k, b in crawling:
+                        if (y[k] + step[k] - b) * (y[k] - b) <= 0.0:
+                            raise _Crawl(int(free[k]), float(b), z)
+            return J
+
+        budget = None if max_nfev is None else max(max_nfev - nfev, 1)
+        try:
+            r = least_squares(f, x[free], jac=j, bounds=(lo[free], hi[free]), args=args, xtol=tol, ftol=tol,
+                              gtol=tol, max_nfev=budget, **options)
+        except _Crawl as c:
+            njev += len(history)
+            nfev += calls[0]
+            x = c.x.copy()
+            x[c.index] = c.bound
+            held[c.index] = c.bound
+            continue
+        nfev += r.nfev
+        njev += r.njev or 0
+        x = full(r.x)
+        if not held:
+            r.x, r.held, r.nfev, r.njev = x, [], nfev, njev
+            return r
+        J = jac(x, *args)
+        njev += 1
+        g = J.T @ r.fun
+        variance = 2.0 * float(r.cost) / max(r.fun.size - n, 1)
+        out = []
+        for i, b in held.items():
+            inward = 1.0 if b == lo[i] else -1.0
+            h = float(J[:, i] @ J[:, i])
+            if g[i] * inward < 0.0 and h > 0.0 and g[i] ** 2 / h > RELEASE_GAIN * max(variance, 1e-300):
+                x[i] = min(max(b - g[i] / h, lo[i]), hi[i])
+                out.append(i)
+        if not out or round_ == ACTIVE_ROUNDS:
+            return OptimizeResult(x=x, fun=r.fun, cost=r.cost, jac=J, grad=g, nfev=nfev, njev=njev, status=r.status,
+                                  success=r.success, message=r.message, optimality=r.optimality,
+                                  active_mask=np.array([0 if i not in held else (-1 if held[i] == lo[i] else 1)
+                                                        for i in range(n)]),
+                                  held=sorted(held))
+        for i in out:
+            del held[i]
+            freed.add(i)
+    raise AssertionError("unreachable")  # pragma: no cover

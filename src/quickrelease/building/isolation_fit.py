@@ -43,9 +43,9 @@ from typing import Any
 
 import numpy as np
 from scipy import stats
-from scipy.optimize import brentq, least_squares
+from scipy.optimize import brentq
 
-from .._lsq import identified_covariance, jacobian_covariance
+from .._lsq import bounded_least_squares, identified_covariance, jacobian_covariance
 from ..errors import ParameterError, QuickReleaseError
 from .hysteretic import EXPONENT_RANGE, GRAVITY, SHAPE_RANGE, BoucWen, Pendulum
 from .isolation_search import (
@@ -1232,11 +1232,11 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
         lo = np.array([lower.get(n, -math.inf) for n in free])
         hi = np.array([upper.get(n, math.inf) for n in free])
         x0 = np.clip(np.asarray(x0, dtype=float), lo, hi)
-        # central differences over a relative step of 1e-4: the misfit jumps where a piece boundary (a
-        # stick, a yield) passes a sample, so a step near the rounding level would see those jumps
-        return least_squares(on.residuals, x0, bounds=(lo, hi), args=(free, base), x_scale="jac", jac=on.jacobian,
-                             diff_step=1e-4, xtol=tol, ftol=tol, gtol=tol,
-                             max_nfev=max_nfev or 400 * max(len(free), 1))
+        # the Jacobian by central differences over a relative step of 1e-4 (_Misfit.jacobian): the misfit jumps
+        # where a piece boundary (a stick, a yield) passes a sample, so a step near the rounding level would see
+        # those jumps; a parameter whose optimum is its bound is held there (bounded_least_squares)
+        return bounded_least_squares(on.residuals, x0, on.jacobian, lo, hi, args=(free, base), tol=tol,
+                                     max_nfev=max_nfev or 400 * max(len(free), 1), x_scale="jac")
 
     # the starts: the record's own (decay analysis or hysteresis loop, and splits of the dissipation), the
     # design values where given (one start among several, never a restriction), and the global search's
@@ -1251,7 +1251,8 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
     if model == "boucwen" and global_search:  # with the loop's start, the bilinear fit's at shape 1 alone (those
         # at 2 and 5 reached the best minimum with it or not at all on the benchmark's and the example's records)
         named += _boucwen_from_bilinear(channels, mass, t_r0, fit_release_time, fixed, record_values, damping, seed,
-                                        progress, BOUCWEN_SHAPES[:1] if loop else BOUCWEN_SHAPES)
+                                        progress, BOUCWEN_SHAPES[:1] if loop else BOUCWEN_SHAPES,
+                                        global_search=not loop)
     thin, factor = thin_channels(channels, t_r0)
     thin_misfit = _Misfit(thin, noise, mass, model, superstructure_mass, lower, upper, drift_origin=t_r0,
                           coarse_steps=True)
@@ -1411,7 +1412,8 @@ BOUCWEN_SHAPES = (1.0, 2.0, 5.0)
 
 def _boucwen_from_bilinear(channels, mass: float, t_r0: float, fit_release_time: bool, fixed: dict[str, float],
                            record_values: dict[str, float], damping: str, seed: int, progress,
-                           shapes: tuple[float, ...] = BOUCWEN_SHAPES) -> list[tuple[str, dict[str, float]]]:
+                           shapes: tuple[float, ...] = BOUCWEN_SHAPES, global_search: bool = True) \
+        -> list[tuple[str, dict[str, float]]]:
     """Starts of the Bouc-Wen fit from a bilinear fit of the same record (its limit n -> inf: Kd = k2,
     Qd = F_y (1 - k2 / k1), dy = F_y / k1, the damper's c kept), one per shape of ``shapes``.
 
@@ -1422,7 +1424,7 @@ def _boucwen_from_bilinear(channels, mass: float, t_r0: float, fit_release_time:
     try:
         bl = _fit_isolation(channels, mass, "bilinear", release_time=t_r0, fit_release_time=fit_release_time,
                             start=None, fixed=keep, profile=False, superstructure_mass=None, tolerance=1e-6,
-                            global_search=True, seed=seed, progress=progress)
+                            global_search=global_search, seed=seed, progress=progress)
     except QuickReleaseError:
         return []
     e = bl.parameters
