@@ -62,9 +62,10 @@ _D = np.ascontiguousarray(_dop.D, dtype=np.float64)
 #: The state: x [m], x_dot [m/s], z (Bouc-Wen: [-]; plastic element: [N]), and the work so far [J] of the
 #: sliders' friction, of the damper and of the hysteresis.
 NY = 6
-#: The parameter vector's slots.
-(M, K, HKIND, Q, DY, N, KP, FP, FSLOW, FFAST, RATE, C, ALPHA) = range(13)
-NP = 13
+#: The parameter vector's slots (COARSE: the steps' lengths times this where it is above 1, e.g. 2 for half as
+#: many steps in a fit's search on a thinned record; 0, the default, is 1).
+(M, K, HKIND, Q, DY, N, KP, FP, FSLOW, FFAST, RATE, C, ALPHA, COARSE) = range(14)
+NP = 14
 #: Hysteretic element: none, Bouc-Wen, elastic-perfectly-plastic.
 H_NONE, H_BOUCWEN, H_PLASTIC = 0, 1, 2
 #: A piece's mode (its grid points' flag): the plastic element elastic (0) or yielding (1); the Bouc-Wen element
@@ -442,7 +443,7 @@ def _stored(P, y):
 def _step_size(P, y, d, mode):
     """The piece's step [s]: a fraction of the period of its stiffness (the initial one, or the post-yield one where
     the Bouc-Wen element is saturated), of the Bouc-Wen transition while loading, and of the friction law's
-    velocity scale.
+    velocity scale; times ``P[COARSE]`` where that is above 1.
 
     The transition: ``dy / (n v)`` over :data:`STEPS_TRANSITION`, v the largest velocity the piece can reach
     before it saturates: from the piece's start ``v0`` with at most the acceleration ``a_max`` the piece's
@@ -454,7 +455,8 @@ def _step_size(P, y, d, mode):
         k1 += P[Q] / P[DY]
     elif P[HKIND] == H_PLASTIC:  # (the plastic element's steps: its initial stiffness's throughout)
         k1 += P[KP]
-    h = 2.0 * math.pi * math.sqrt(P[M] / k1) / STEPS_PERIOD
+    coarse = max(P[COARSE], 1.0)
+    h = 2.0 * math.pi * math.sqrt(P[M] / k1) * coarse / STEPS_PERIOD
     energy = 0.5 * P[M] * y[1] * y[1] + _stored(P, y)
     vmax = math.sqrt(2.0 * energy / P[M])
     xmax = math.sqrt(2.0 * energy / P[K])
@@ -462,9 +464,9 @@ def _step_size(P, y, d, mode):
     if P[HKIND] == H_BOUCWEN and mode == LOADING and vmax > 0.0:
         reach = P[DY] * (1.0 - d * y[2] + math.log(1.0 / SATURATION) / P[N])
         v = min(vmax, math.sqrt(y[1] * y[1] + 2.0 * (amax + P[C] * vmax ** P[ALPHA] / P[M]) * reach))
-        h = min(h, P[DY] / (max(P[N], 1.0) * v * STEPS_TRANSITION))
+        h = min(h, coarse * P[DY] / (max(P[N], 1.0) * v * STEPS_TRANSITION))
     if P[RATE] > 0.0 and P[FFAST] != P[FSLOW]:
-        h = min(h, 1.0 / (P[RATE] * amax * STEPS_RATE))
+        h = min(h, coarse / (P[RATE] * amax * STEPS_RATE))
     return h
 
 
