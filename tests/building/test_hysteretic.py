@@ -143,6 +143,26 @@ def test_state_against_the_reference(solved, cls, kw, kind, d0):
     np.testing.assert_array_equal(channels["a"], a)
 
 
+@pytest.mark.parametrize("cls, kw, kind, d0", list(_cases()))
+def test_coarse_steps_against_the_reference(solved, cls, kw, kind, d0):
+    """The fit's search integrates with steps twice as long (``coarse=2``): the same reference to the same
+    tolerance, on a grid of 0.50-0.82 of the default's points (0.50 where the stiffness's period sets the steps;
+    the graded steps next to a power-law damper's reversals stay)."""
+    system, motion, r = solved(cls, kw, kind, d0)
+    coarse = free_vibration(system, d0, t_end=T_END, coarse=2.0)
+    x, v, a = coarse.state(T)
+    w, amp = _omega(system), abs(d0)
+    gaps = (np.max(np.abs(x - r.x)) / amp, np.max(np.abs(v - r.v)) / (amp * w), np.max(np.abs(a - r.a)) / (amp * w * w))
+    assert max(gaps) < TOL, f"relative gaps x, v, a: {gaps}"
+    assert coarse._grid[4] <= 0.85 * motion._grid[4]  # 0.50-0.82 (the graded steps near reversals stay)
+
+
+@pytest.mark.parametrize("coarse", [math.nan, 0.5, 0.0, -1.0, 4.5, math.inf])
+def test_bad_coarse_is_named(coarse):
+    with pytest.raises(ParameterError, match="coarse"):
+        free_vibration(BoucWen(**BOUCWEN_OK), 0.2, t_end=5.0, coarse=coarse)
+
+
 @pytest.mark.parametrize("cls, kw, kind, d0", list(_cases_stop()))
 def test_reversals_and_stop_against_the_reference(solved, cls, kw, kind, d0):
     system, motion, r = solved(cls, kw, kind, d0)
