@@ -533,6 +533,46 @@ def _held(P, net, creep):
     return P[ALPHA] < 1.0 and P[C] > 0.0 and (excess / P[C]) ** (1.0 / P[ALPHA]) < creep
 
 
+@njit(cache=True, nogil=True)
+def _finish(P, y, h, d, mode, k, K, tmp, F, ynew):
+    """The coefficients F (7 x NY) of the continuous extension over the step of length h from y whose 12 stages
+    are ``k`` (the step just taken): the same as :func:`_dense` without computing them again (stages 12-15 only)."""
+    for i in range(_S):
+        for j in range(NY):
+            K[i, j] = k[i, j]
+    for i in range(_S, 16):
+        if i == _S:  # the stage at the step's end
+            for j in range(NY):
+                acc = 0.0
+                for m in range(_S):
+                    acc += _B[m] * K[m, j]
+                ynew[j] = y[j] + h * acc
+            if mode & CREEPING:
+                _creep(P, ynew, d, mode, K[_S])
+            else:
+                _rhs(P, ynew, d, mode, K[_S])
+            continue
+        for j in range(NY):
+            acc = 0.0
+            for m in range(i):
+                acc += _AX[i, m] * K[m, j]
+            tmp[j] = y[j] + h * acc
+        if mode & CREEPING:
+            _creep(P, tmp, d, mode, K[i])
+        else:
+            _rhs(P, tmp, d, mode, K[i])
+    for j in range(NY):
+        dy = ynew[j] - y[j]
+        F[0, j] = dy
+        F[1, j] = h * K[0, j] - dy
+        F[2, j] = 2.0 * dy - h * (K[_S, j] + K[0, j])
+        for i in range(4):
+            acc = 0.0
+            for m in range(16):
+                acc += _D[i, m] * K[m, j]
+            F[3 + i, j] = h * acc
+
+
 @njit("int64(float64[::1], float64[:, ::1], float64[::1], int64[::1], int64, float64, float64[::1], float64, int64)",
       cache=True, nogil=True)
 def _put(gt, gy, gd, gf, n, t, y, d, mode):
@@ -545,11 +585,12 @@ def _put(gt, gy, gd, gf, n, t, y, d, mode):
 
 
 @njit("int64(float64[::1], float64[::1], float64, float64, int64, boolean, boolean, float64, float64[::1], "
-      "float64[:, ::1], float64[::1], int64[::1], int64, float64[:, ::1], float64[::1], float64[::1])",
-      cache=True, nogil=True)
-def _walk(P, y, span, d, mode, graded_start, graded_end, t, gt, gy, gd, gf, n, k, tmp, out):
+      "float64[:, ::1], float64[::1], int64[::1], int64, float64[:, ::1], float64[::1], float64[::1], "
+      "float64[:, :, ::1], float64[:, ::1], float64[::1])", cache=True, nogil=True)
+def _walk(P, y, span, d, mode, graded_start, graded_end, t, gt, gy, gd, gf, n, k, tmp, out, gF, K, ynew):
     """Advance y by span through its (graded) substeps, recording each substep's start after the first as a grid
-    point; the end state in out. Returns the grid's count."""
+    point and each substep's continuous extension (``gF`` at its start's index, the grid point n - 1 on entry for
+    the first); the end state in out. Returns the grid's count."""
     fr = _fractions(graded_start, graded_end)
     a = y.copy()
     tt = t
@@ -557,6 +598,7 @@ def _walk(P, y, span, d, mode, graded_start, graded_end, t, gt, gy, gd, gf, n, k
         if i > 0:
             n = _put(gt, gy, gd, gf, n, tt, a, d, mode)
         _step(P, a, fr[i] * span, d, mode, k, tmp, out)
+        _finish(P, a, fr[i] * span, d, mode, k, K, tmp, gF[n - 1], ynew)
         tt += fr[i] * span
         for j in range(NY):
             a[j] = out[j]
@@ -567,11 +609,12 @@ def _walk(P, y, span, d, mode, graded_start, graded_end, t, gt, gy, gd, gf, n, k
 def integrate(P, y0, t_end, capacity, max_steps):
     """The free vibration from the state y0 at rest (t = 0) to t_end [s] (inf: until the sliders stick).
 
-    Returns (grid_t, grid_y, grid_d, grid_flags, n, stop_time, status): the grid's times [s], states, the
-    direction d of the piece each point starts a step of (0 at rest), the piece's mode (:data:`ELASTIC`,
-    :data:`YIELDING`, :data:`LOADING`, plus :data:`CREEPING` on the slow manifold), the count of points, the stop
-    time (inf if it never sticks) and a status (0 done, 1 the grid's capacity is too small, 2 more than max_steps
-    steps).
+    Returns (grid_t, grid_y, grid_d, grid_flags, grid_dense, n, stop_time, status): the grid's times [s], states,
+    the direction d of the piece each point starts a step of (0 at rest), the piece's mode (:data:`ELASTIC`,
+    :data:`YIELDING`, :data:`LOADING`, plus :data:`CREEPING` on the slow manifold), the continuous extension's
+    coefficients of the step each point starts (7 x NY, from the step's own stages: evaluating the record does not
+    take the steps again), the count of points, the stop time (inf if it never sticks) and a status (0 done, 1 the
+    grid's capacity is too small, 2 more than max_steps steps).
 
     With a power-law damper the steps next to a reversal are graded towards it: the step after it from the
     reversal on, the one before it from the start of the step before the one that holds it (so that every
@@ -580,6 +623,9 @@ def integrate(P, y0, t_end, capacity, max_steps):
     gy = np.empty((capacity, NY))
     gd = np.empty(capacity)
     gf = np.empty(capacity, dtype=np.int64)
+    gF = np.empty((capacity, 7, NY))  # each grid step's continuous extension (evaluate, motion)
+    K = np.empty((16, NY))
+    ynew = np.empty(NY)
     k = np.empty((_S, NY))
     tmp = np.empty(NY)
     a = np.empty(NY)
@@ -595,7 +641,7 @@ def integrate(P, y0, t_end, capacity, max_steps):
     rest = _resist(P, creep)[0] if creep > 0.0 and P[ALPHA] < 1.0 and P[C] > 0.0 else 0.0  # a creep's end (EV_REST)
     if _held(P, net, creep):  # held where it was pushed
         n = _put(gt, gy, gd, gf, n, 0.0, y, 0.0, ELASTIC)
-        return gt, gy, gd, gf, n, 0.0, 0
+        return gt, gy, gd, gf, gF, n, 0.0, 0
     d = -1.0 if net > 0.0 else 1.0
     mode = _mode(P, y, d)
     if P[HKIND] == H_BOUCWEN and mode == YIELDING:
@@ -611,10 +657,10 @@ def integrate(P, y0, t_end, capacity, max_steps):
     n = _put(gt, gy, gd, gf, n, t, y, d, mode)
     while True:
         if n + 4 * GRADES + 8 >= capacity:
-            return gt, gy, gd, gf, n, stop, 1
+            return gt, gy, gd, gf, gF, n, stop, 1
         steps += 1
         if steps > max_steps:
-            return gt, gy, gd, gf, n, stop, 2
+            return gt, gy, gd, gf, gF, n, stop, 2
         here = n - 1  # the grid point the step starts from (at t, state y)
         _advance(P, y, h, d, mode, graded, False, k, tmp, a, y1)
         # the first event in the step (if any)
@@ -653,7 +699,9 @@ def integrate(P, y0, t_end, capacity, max_steps):
                 theta = th
         if kind == EV_NONE:
             if graded:
-                n = _walk(P, y, h, d, mode, True, False, t, gt, gy, gd, gf, n, k, tmp, out)
+                n = _walk(P, y, h, d, mode, True, False, t, gt, gy, gd, gf, n, k, tmp, out, gF, K, ynew)
+            else:  # the step's stages are still in k (no event was located in it)
+                _finish(P, y, h, d, mode, k, K, tmp, gF[here], ynew)
             prev, t_prev, graded_prev = here, t, graded
             t += h
             for j in range(NY):
@@ -684,11 +732,11 @@ def integrate(P, y0, t_end, capacity, max_steps):
             n = prev + 1
             for j in range(NY):
                 a[j] = gy[prev, j]
-            n = _walk(P, a, theta, d, mode, graded_prev, True, t_prev, gt, gy, gd, gf, n, k, tmp, out)
+            n = _walk(P, a, theta, d, mode, graded_prev, True, t_prev, gt, gy, gd, gf, n, k, tmp, out, gF, K, ynew)
             t = t_prev + theta
         else:
             n = _walk(P, y, theta, d, mode, graded, kind == EV_REVERSAL and powered, t, gt, gy, gd, gf, n, k,
-                      tmp, out)
+                      tmp, out, gF, K, ynew)
             t += theta
         for j in range(NY):
             y[j] = out[j]
@@ -730,7 +778,7 @@ def integrate(P, y0, t_end, capacity, max_steps):
         n = _put(gt, gy, gd, gf, n, t, y, d, mode)
         if t >= t_end:
             break
-    return gt, gy, gd, gf, n, stop, 0
+    return gt, gy, gd, gf, gF, n, stop, 0
 
 
 @njit(cache=True, nogil=True)
@@ -803,21 +851,16 @@ def _extension_creep(P, y, h, d, mode, K, tmp, F, ynew):
 
 
 @njit(cache=True, nogil=True)
-def evaluate(P, gt, gy, gd, gf, n, stop, y_push, t):
+def evaluate(P, gt, gy, gd, gf, gF, n, stop, y_push, t):
     """The state (x, v, z and the three works) and the acceleration at times t [s] (any order; sorted is
-    fastest): the continuous extension of the grid step that holds each time (computed once per step), the
+    fastest): the continuous extension of the grid step that holds each time (``gF``, stored by the integration), the
     acceleration from the equation at that state; before the release the pushed state at rest, after the stop
     the last point at rest (the value after an instant where the acceleration jumps)."""
     m = t.size
     ys = np.empty((m, NY))
     acc = np.empty(m)
-    K = np.empty((16, NY))
-    tmp = np.empty(NY)
-    F = np.empty((7, NY))
-    ynew = np.empty(NY)
     out = np.empty(NY)
     r = np.empty(NY)
-    cached = -1
     for i in range(m):
         ti = t[i]
         if ti < 0.0 or n == 1:
@@ -841,9 +884,7 @@ def evaluate(P, gt, gy, gd, gf, n, stop, y_push, t):
             for j in range(NY):
                 out[j] = gy[p, j]
         else:
-            if p != cached:
-                _dense(P, gy[p], h, gd[p], mode, K, tmp, F, ynew)
-                cached = p
+            F = gF[p]
             x = tau / h
             for j in range(NY):
                 out[j] = 0.0
@@ -875,17 +916,14 @@ def _accel(P, x, v, z, d):
 
 
 @njit(cache=True, nogil=True)
-def motion(P, gt, gy, gd, gf, n, stop, y_push, t):
+def motion(P, gt, gy, gd, gf, gF, n, stop, y_push, t):
     """x [m], x_dot [m/s] and x_ddot [m/s^2] at sorted times t [s]: what a record's channels need, as
     :func:`evaluate` gives them (the same continuous extension), without the works, the grid walked once."""
     m = t.size
     out = np.empty((3, m))
-    K = np.empty((16, NY))
     tmp = np.empty(NY)
-    F = np.empty((7, NY))
     ynew = np.empty(NY)
     p = 0
-    cached = -1
     for i in range(m):
         ti = t[i]
         if ti < 0.0 or n == 1:
@@ -905,9 +943,7 @@ def motion(P, gt, gy, gd, gf, n, stop, y_push, t):
         if tau <= 0.0 or h <= 0.0:
             x, v, z = gy[p, 0], gy[p, 1], gy[p, 2]
         else:
-            if p != cached:
-                _dense(P, gy[p], h, gd[p], gf[p], K, tmp, F, ynew)
-                cached = p
+            F = gF[p]
             u = tau / h
             w = 1.0 - u
             x = 0.0

@@ -290,6 +290,7 @@ class HystereticVibration:
     _P: np.ndarray = field(repr=False)
     _grid: tuple = field(repr=False)
     _push: np.ndarray = field(repr=False)
+    _dense: np.ndarray = field(repr=False)  # each grid step's continuous extension (7 x NY coefficients)
 
     @property
     def rest(self) -> tuple[float, float]:
@@ -314,8 +315,8 @@ class HystereticVibration:
     def _evaluate(self, t) -> tuple[np.ndarray, np.ndarray]:
         t = np.asarray(t, dtype=float)
         gt, gy, gd, gf, n = self._grid
-        ys, acc = _ode.evaluate(self._P, gt, gy, gd, gf, n, self.stop_time, self._push, np.ascontiguousarray(
-            t.ravel()))
+        ys, acc = _ode.evaluate(self._P, gt, gy, gd, gf, self._dense, n, self.stop_time, self._push,
+                                np.ascontiguousarray(t.ravel()))
         return ys.reshape(t.shape + (_ode.NY,)), acc.reshape(t.shape)
 
     def state(self, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -333,7 +334,7 @@ class HystereticVibration:
 
     def _motion(self, t: np.ndarray) -> np.ndarray:
         gt, gy, gd, gf, n = self._grid
-        return _ode.motion(self._P, gt, gy, gd, gf, n, self.stop_time, self._push, t)
+        return _ode.motion(self._P, gt, gy, gd, gf, self._dense, n, self.stop_time, self._push, t)
 
     def channels(self, t) -> dict[str, np.ndarray]:
         """Every channel of the building's record at times t [s] (the roof moves with the rigid layer)."""
@@ -400,7 +401,7 @@ def hysteretic_vibration(system, P: np.ndarray, z0: float, d0: float, t_end: flo
     y0 = np.array([d0, 0.0, z0, 0.0, 0.0, 0.0])
     capacity = 4096
     while True:
-        gt, gy, gd, gf, n, stop, status = _ode.integrate(P, y0, horizon, capacity, MAX_STEPS)
+        gt, gy, gd, gf, gF, n, stop, status = _ode.integrate(P, y0, horizon, capacity, MAX_STEPS)
         if status == 0:
             break
         if status == 2:
@@ -408,4 +409,4 @@ def hysteretic_vibration(system, P: np.ndarray, z0: float, d0: float, t_end: flo
         capacity *= 4
     grid = (gt[:n].copy(), gy[:n].copy(), gd[:n].copy(), gf[:n].copy(), int(n))
     return HystereticVibration(isolation=system, d0=d0, stop_time=float(stop), horizon=horizon, _P=P, _grid=grid,
-                               _push=y0)
+                               _dense=gF[:n].copy(), _push=y0)

@@ -1658,7 +1658,11 @@ def _profile_interval(name, names, est, lo_b, hi_b, se, target, solve, slope=Non
     done = {est[name]: [est[n] for n in others]}  # refits so far: each starts from the nearest one
     slopes = np.array([(slope or {}).get(n, 0.0) for n in others])
 
+    known: dict[float, float] = {}  # each value refitted once (brentq's bracket repeats the last two)
+
     def profile_chi2(value: float) -> float:
+        if value in known:
+            return known[value]
         base = dict(est)
         base[name] = value
         near = min(done, key=lambda v: abs(v - value))
@@ -1666,7 +1670,8 @@ def _profile_interval(name, names, est, lo_b, hi_b, se, target, solve, slope=Non
         # the chi-square is compared with a target ~ chi2 + 4: a relative tolerance of 1e-10 is ample
         res = solve(others, base, start, tol=1e-10)
         done[value] = list(res.x)
-        return float(res.fun @ res.fun)
+        known[value] = float(res.fun @ res.fun)
+        return known[value]
 
     def edge(direction: int) -> float:
         bound = hi_b if direction > 0 else lo_b
