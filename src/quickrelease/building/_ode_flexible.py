@@ -78,6 +78,8 @@ EV_NONE, EV_REVERSAL, EV_YIELD, EV_ZERO, EV_SLIP, EV_DIP, EV_PEAK = 0, 2, 3, 4, 
 #: A slide whose speed falls below this fraction of the release's scale with the holding force within the
 #: sliders' limit is stuck (the rigid kernel's creep into the holding limit).
 CREEP = _ode.CREEP
+#: Most events in a row without a plain step between them (a base that chatters without end: status 3).
+MAX_CHAIN = 10_000
 
 
 @njit(cache=True, nogil=True)
@@ -279,7 +281,7 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
 
     Returns (grid_t, grid_y, grid_d, grid_flags, n, stop_time, status) as ``_ode.integrate``: d = 0 marks a stuck
     piece; stop_time is when the base is held for good (inf: not within the horizon); status 0 done, 1 the grid's
-    capacity is too small, 2 more than max_steps steps."""
+    capacity is too small, 2 more than max_steps steps, 3 more than MAX_CHAIN events in a row."""
     gt = np.empty(capacity)
     gy = np.empty((capacity, NY))
     gd = np.empty(capacity)
@@ -302,6 +304,7 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
     h = _step_size(P, S, y, d, mode)
     fresh = True  # the first step of a slide that starts at rest (its d x_b'' starts at 0)
     steps = 0
+    chain = 0  # events since the last plain step
     n = _put(gt, gy, gd, gf, n, t, y, d, mode)
     while True:
         if n + 4 >= capacity:
@@ -349,6 +352,7 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
             if kind == EV_SLIP:
                 theta = _locate(P, S, y, theta, d, mode, EV_SLIP, 1.0, k, tmp, out, r)
         if kind == EV_NONE:
+            chain = 0
             t += h
             for j in range(NY):
                 y[j] = y1[j]
@@ -366,6 +370,9 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
             if t >= t_end:
                 break
             continue
+        chain += 1
+        if chain > MAX_CHAIN:
+            return gt, gy, gd, gf, n, stop, 3
         t += theta
         for j in range(NY):
             y[j] = out[j]

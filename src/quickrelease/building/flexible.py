@@ -287,6 +287,9 @@ def free_vibration_flexible(building: FlexibleBuilding, d0: float, t_end: float 
             break
         if status == 2:
             raise ParameterError("t_end", horizon, f"a span of at most {MAX_STEPS} integration steps", "s")
+        if status == 3:
+            raise ParameterError("t_end", horizon, f"a span where the base's events make progress (more than "
+                                 f"{_ode_flexible.MAX_CHAIN} reversals, sticks or slips in a row)", "s")
         capacity *= 4
     grid = (gt[:n].copy(), gy[:n].copy(), gd[:n].copy(), gf[:n].copy(), int(n))
     return FlexibleVibration(building=building, d0=d0, stop_time=float(stop), horizon=horizon, _P=P, _S=S,
