@@ -170,6 +170,36 @@ def test_the_linear_cases_exercise_breakaways():
     assert motion.slip_times.size >= 1 and math.isfinite(motion.stop_time)
 
 
+# d0 where the closed form's count of turning points changes (bisected on free_vibration_2dof to 1e-16): a dip of the
+# base's speed to zero, or a peak of the holding force to the sliders' limit, grazes there
+GRAZES = [((0.03, 0.02, 0.5, 0.02, 0.75), 0.05942062737774091), ((0.0, 0.03, 0.4, 0.0, 0.75), 0.08070202067218014),
+          ((0.02, 0.05, 0.8, 0.01, 0.75), 0.11827119387409957), ((0.0, 0.03, 0.4, 0.0, 0.75), 0.08703031041165057)]
+
+
+def _events(closed):
+    turns = [p.t1 for p in closed.pieces if p.kind == "slide" and p.end in ("reversal", "stick")]
+    slips = [p.t1 for p in closed.pieces if p.kind == "stick" and p.end == "breakaway"]
+    return np.array(turns), np.array(slips)
+
+
+@pytest.mark.parametrize("params, d0", GRAZES)
+def test_grazing_events_within_a_step_are_not_missed(params, d0):
+    """Just past a d0 where a new turn or re-slip appears (its dip or peak lasting far less than a step), every
+    reversal, stick and re-slip is the closed form's: the dips of the base's speed and the peaks of the holding force
+    inside a step are looked into."""
+    zeta, mu, Ts, zs, ratio = params
+    counts = set()
+    for x in (d0 * (1 - 1e-9), d0 * (1 + 1e-9)):
+        closed = free_vibration_2dof(TwoDOF(M, ratio * M, 2.0, Ts, zeta, mu * M * G, zs), x, t_end=8.0)
+        motion = free_vibration_flexible(FlexibleBuilding(Isolation.linear(M, 2.0, zeta, mu * M * G), ratio * M, Ts,
+                                                          zs), x, t_end=8.0)
+        turns, slips = _events(closed)
+        counts.add(turns.size)
+        np.testing.assert_allclose(motion.reversal_times[1:], turns, rtol=0, atol=1e-6)
+        np.testing.assert_allclose(motion.slip_times, slips, rtol=0, atol=1e-6)
+    assert len(counts) == 2  # a threshold of the closed form indeed
+
+
 # -- the rigid limits ---------------------------------------------------------------------------------------------
 
 BW = BoucWen(8.0e5, 1.6e6, 4.0e5, 0.025, shape=2.0, damping=1.4e4, friction=3.0e4)

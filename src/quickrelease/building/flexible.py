@@ -143,9 +143,15 @@ class FlexibleVibration:
         y = self._grid[1][self._grid[4] - 1]
         return float(y[0]), float(y[2])
 
+    def _changes(self, before, after) -> np.ndarray:
+        """Grid indices where the piece's direction changes as asked, within the horizon (the last step may
+        run past it)."""
+        gt, _, gd, _, n = self._grid
+        i = np.flatnonzero(before(gd[: n - 1]) & after(gd[1:n]) & (gd[1:n] != gd[: n - 1])) + 1
+        return i[gt[i] <= self.horizon]
+
     def _turns(self) -> np.ndarray:
-        _, _, gd, _, n = self._grid
-        return np.flatnonzero((gd[1:n] != gd[: n - 1]) & (gd[: n - 1] != 0.0)) + 1
+        return self._changes(lambda d: d != 0.0, lambda d: np.ones(d.shape, bool))
 
     @property
     def reversal_times(self) -> np.ndarray:
@@ -160,14 +166,12 @@ class FlexibleVibration:
     @property
     def stick_times(self) -> np.ndarray:
         """Times where the sliders start to hold the base [s] (a re-slip may follow)."""
-        gt, _, gd, _, n = self._grid
-        return gt[np.flatnonzero((gd[1:n] == 0.0) & (gd[: n - 1] != 0.0)) + 1]
+        return self._grid[0][self._changes(lambda d: d != 0.0, lambda d: d == 0.0)]
 
     @property
     def slip_times(self) -> np.ndarray:
         """Times where the storey's force breaks the held base away again [s]."""
-        gt, _, gd, _, n = self._grid
-        return gt[np.flatnonzero((gd[1:n] != 0.0) & (gd[: n - 1] == 0.0)) + 1]
+        return self._grid[0][self._changes(lambda d: d == 0.0, lambda d: d != 0.0)]
 
     def _evaluate(self, t) -> tuple[np.ndarray, np.ndarray]:
         t = np.asarray(t, dtype=float)
