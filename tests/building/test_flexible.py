@@ -173,7 +173,8 @@ def test_the_linear_cases_exercise_breakaways():
 # d0 where the closed form's count of turning points changes (bisected on free_vibration_2dof to 1e-16): a dip of the
 # base's speed to zero, or a peak of the holding force to the sliders' limit, grazes there
 GRAZES = [((0.03, 0.02, 0.5, 0.02, 0.75), 0.05942062737774091), ((0.0, 0.03, 0.4, 0.0, 0.75), 0.08070202067218014),
-          ((0.02, 0.05, 0.8, 0.01, 0.75), 0.11827119387409957), ((0.0, 0.03, 0.4, 0.0, 0.75), 0.08703031041165057)]
+          ((0.02, 0.05, 0.8, 0.01, 0.75), 0.11827119387409957), ((0.0, 0.03, 0.4, 0.0, 0.75), 0.08703031041165057),
+          ((0.03, 0.02, 0.5, 0.02, 0.75), 0.07020401790156264), ((0.05, 0.01, 0.7, 0.01, 0.85), 0.06491775554763926)]
 
 
 def _events(closed):
