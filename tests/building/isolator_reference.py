@@ -279,3 +279,185 @@ def simulate(system: System, d0: float, t_out, t_end: float | None = None) -> Mo
                   kinetic=0.5 * m * v**2, stored=system.stored(x, z), initial=initial,
                   reversal_times=np.array(reversals), turning_points=np.array(turning), stop_time=stop,
                   pieces=pieces)
+
+
+# -- the same layer under a flexible superstructure (2-DOF) -----------------------------------------------------
+
+@dataclass(frozen=True)
+class Motion2:
+    """The reference 2-DOF free vibration sampled at ``t`` (SI): base (x, v, a), roof (xs, vs, as_), the layer's
+    z and works, the storey damper's work, the energies."""
+
+    t: np.ndarray
+    x: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+    xs: np.ndarray
+    vs: np.ndarray
+    as_: np.ndarray
+    z: np.ndarray
+    friction: np.ndarray
+    viscous: np.ndarray
+    """Work of the layer's damper so far [J]."""
+    hysteretic: np.ndarray
+    storey_viscous: np.ndarray
+    """Work of the storey's damper so far [J]."""
+    kinetic: np.ndarray
+    stored: np.ndarray
+    """The layer's stored energy and the storey spring's [J]."""
+    initial: float
+    reversal_times: np.ndarray
+    """The release (0) and every instant where the sliding base's velocity vanishes (reversals, sticks) [s]."""
+    stick_times: np.ndarray
+    slip_times: np.ndarray
+    """Where the storey's force breaks the held base away [s]."""
+
+
+def simulate_2dof(system: System, superstructure_mass: float, storey_stiffness: float, storey_damping: float,
+                  d0: float, t_out, t_end: float | None = None) -> Motion2:
+    """The free vibration of the layer ``system`` (its mass the whole building's m: the weight on the sliders; the
+    base's mass m_b = m - m_s) under a roof mass m_s on the storey (k_s [N/m], c_s [N s/m]), from base and roof at
+    rest at d0 [m] (the storey undeformed), sampled at t_out [s], followed to t_end (default the last of t_out).
+
+    Sliding (direction s): ``m_b x_b'' = -(spring + s friction(|v|) + s C |v|^alpha) + k_s u + c_s u'``; stuck
+    (the base at rest): ``|G| <= static friction`` with ``G = spring - k_s u - c_s u'``, the roof on the fixed base.
+    solve_ivp events: the reversal (v_b = 0; then stuck where |G| <= static friction, else it turns, s = -sign(G)),
+    z's zero crossing and the plastic yield as :func:`simulate`, and while stuck G reaching +- the static friction
+    (the re-slip, s = -sign(G)). The stuck phase is followed to the horizon unless it slips (no "held for good"
+    shortcut). Steps at most 1/40 of the fastest period, so that no event is stepped over."""
+    t_out = np.asarray(t_out, dtype=float)
+    m, C, alpha, p = system.mass, system.damping, system.exponent, system.params
+    ms, ks, cs = superstructure_mass, storey_stiffness, storey_damping
+    mb = m - ms
+    horizon = float(t_end) if t_end is not None else float(t_out.max())
+    z0 = system.pushed_z(d0)
+    initial = float(system.stored(d0, z0))
+    rows = np.full((9,) + t_out.shape, np.nan)  # x, v, z, friction, viscous, hysteretic, xs, vs, storey viscous
+    acc = np.full((2,) + t_out.shape, np.nan)
+    rows[:, t_out < 0] = np.array([[d0], [0.0], [z0], [0.0], [0.0], [0.0], [d0], [0.0], [0.0]])
+    acc[:, t_out < 0] = 0.0
+    k1 = {"pendulum": m * GRAVITY / p.get("radius", 1.0), "boucwen": p.get("Kd", 0.0) + p.get("Qd", 0.0) / p.get(
+        "dy", 1.0), "bilinear": p.get("k1", 0.0), "linear": p.get("k", 0.0)}[system.kind]
+    fastest = math.sqrt((k1 + ks) / mb + ks / ms)
+    max_step = 2.0 * math.pi / fastest / 40.0
+    static = system.static_friction
+    reversals, sticks, slips = [0.0], [], []
+    t, y = 0.0, np.array([d0, 0.0, z0, 0.0, 0.0, 0.0, d0, 0.0, 0.0])
+
+    def holding(q):
+        return system.spring(q[0], q[2]) - ks * (q[6] - q[0]) - cs * (q[7] - q[1])
+
+    G0 = holding(y)
+    stuck = abs(G0) <= static
+    s = -math.copysign(1.0, G0)
+    regime = _regime(system, s, z0)
+    pieces = 0
+    while t < horizon:
+        pieces += 1
+        if pieces > MAX_PIECES:
+            raise RuntimeError("too many pieces")
+
+        def zrate(v, z, regime=regime):
+            if regime == "loading":
+                return v * (1.0 - np.abs(z) ** p["n"]) / p["dy"]
+            if regime == "unloading":
+                return v / p["dy"]
+            if regime == "elastic":
+                return (p["k1"] - p["k2"]) * v
+            return 0.0 * v
+
+        def accels(q, s=s, stuck=stuck):
+            x, v, z, xs, vs = q[0], q[1], q[2], q[6], q[7]
+            storey = ks * (xs - x) + cs * (vs - v)
+            if stuck:
+                return 0.0 * x, -storey / ms
+            layer = system.spring(x, z) + s * system.friction(np.abs(v)) + s * C * np.abs(v) ** alpha
+            return (-layer + storey) / mb, -storey / ms
+
+        def rhs(_, q, regime=regime, stuck=stuck):
+            v, z = q[1], q[2]
+            ab, as_ = accels(q)
+            du = q[7] - q[1]
+            if stuck:
+                return [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, q[7], as_, cs * du * du]
+            speed = abs(v)
+            hyst = 0.0
+            if regime == "loading":
+                hyst = p["Qd"] * abs(z) ** p["n"] * z * v
+            elif regime == "yielding":
+                hyst = z * v
+            return [v, ab, zrate(v, z), system.friction(speed) * speed, C * speed ** (alpha + 1.0), hyst, q[7], as_,
+                    cs * du * du]
+
+        events = []
+        if stuck:
+            def up(_, q):
+                return holding(q) - static
+
+            def down(_, q):
+                return holding(q) + static
+
+            up.terminal, up.direction = True, 1
+            down.terminal, down.direction = True, -1
+            events = [up, down]
+        else:
+            def reversal(_, q):
+                return q[1]
+
+            reversal.terminal, reversal.direction = True, -s
+            events.append(reversal)
+            if regime == "unloading":
+                def crossing(_, q):
+                    return q[2]
+
+                crossing.terminal, crossing.direction = True, s
+                events.append(crossing)
+            elif regime == "elastic":
+                def yields(_, q, s=s):
+                    return s * q[2] - p["fp"]
+
+                yields.terminal, yields.direction = True, 1
+                events.append(yields)
+        scale = np.array([abs(d0), abs(d0), 1.0, initial, initial, initial, abs(d0), abs(d0), initial])
+        sol = solve_ivp(rhs, (t, horizon), y, method="DOP853", rtol=RTOL, atol=1e-15 * scale, events=events,
+                        dense_output=True, max_step=max_step)
+        if sol.status < 0:
+            raise RuntimeError(sol.message)
+        t1 = float(sol.t[-1])
+        seg = (t_out >= t) & (t_out <= t1)
+        if seg.any():
+            q = sol.sol(t_out[seg])
+            if stuck:
+                q[0], q[1], q[2] = y[0], 0.0, y[2]
+            rows[:, seg] = q
+            ab, as_ = accels(q)
+            acc[0, seg], acc[1, seg] = ab, as_
+        t, y = t1, sol.y[:, -1].copy()
+        if sol.status != 1:  # reached the horizon
+            break
+        if stuck:  # G reached +- the static friction: the base slides, along -G
+            slips.append(t)
+            stuck = False
+            s = -math.copysign(1.0, holding(y))
+            regime = _regime(system, s, y[2])
+        elif sol.t_events[0].size:  # a reversal: stick, or turn
+            y[1] = 0.0
+            reversals.append(t)
+            G = holding(y)
+            if abs(G) <= static:
+                stuck = True
+                sticks.append(t)
+            else:
+                s = -math.copysign(1.0, G)
+                regime = _regime(system, s, y[2])
+        elif regime == "unloading":
+            y[2] = 0.0
+            regime = "loading"
+        else:
+            y[2] = s * p["fp"]
+            regime = "yielding"
+    x, v, z, xs, vs = rows[0], rows[1], rows[2], rows[6], rows[7]
+    return Motion2(t=t_out, x=x, v=v, a=acc[0], xs=xs, vs=vs, as_=acc[1], z=z, friction=rows[3], viscous=rows[4],
+                   hysteretic=rows[5], storey_viscous=rows[8], kinetic=0.5 * mb * v**2 + 0.5 * ms * vs**2,
+                   stored=system.stored(x, z) + 0.5 * ks * (xs - x) ** 2, initial=initial,
+                   reversal_times=np.array(reversals), stick_times=np.array(sticks), slip_times=np.array(slips))

@@ -9,6 +9,9 @@ Modules, one question each:
 - :mod:`~quickrelease.building.hysteretic`: the isolation systems without a closed form, friction pendulum
   (Constantinou's mu(v)), Bouc-Wen bearings (lead-rubber, high-damping rubber) and power-law dampers
   (``Pendulum``, ``BoucWen``, ``HystereticVibration``), integrated by the event-located scheme of ``_ode``;
+- :mod:`~quickrelease.building.flexible`: a flexible superstructure (2-DOF) on any of those isolation layers,
+  hysteretic ones included (``FlexibleBuilding``, ``FlexibleVibration``, ``free_vibration_flexible``),
+  integrated by the event-located scheme of ``_ode_flexible``;
 - :mod:`~quickrelease.building.decay`: the decay of the free vibration (turning points, decrement laws,
   hysteresis loop; ``analyse_decay``);
 - :mod:`~quickrelease.building.boucwen_loop`: Bouc-Wen isolators and dampers read off the measured loop by the
@@ -26,6 +29,7 @@ in ``pyproject.toml``). The package re-exports :mod:`~quickrelease.building.mode
 
 from __future__ import annotations
 
+from .flexible import FlexibleBuilding, FlexibleVibration, free_vibration_flexible
 from .hysteretic import GRAVITY, BoucWen, HystereticVibration, Pendulum
 from .model import (
     MODELS,
@@ -40,4 +44,5 @@ from .model import (
 )
 
 __all__ = ["Isolation", "FreeVibration", "free_vibration", "pushed_state", "MODELS", "TwoDOF", "TwoDOFVibration",
-           "free_vibration_2dof", "RECORD_CHANNELS", "Pendulum", "BoucWen", "HystereticVibration", "GRAVITY"]
+           "free_vibration_2dof", "RECORD_CHANNELS", "Pendulum", "BoucWen", "HystereticVibration", "GRAVITY",
+           "FlexibleBuilding", "FlexibleVibration", "free_vibration_flexible"]

@@ -462,9 +462,11 @@ def free_vibration(isolation: Isolation | Pendulum | BoucWen, d0: float, t_end: 
 
     Parameters
     ----------
-    isolation : Isolation or TwoDOF
-        The isolation layer (:meth:`Isolation.linear` or :meth:`Isolation.bilinear`); a :class:`TwoDOF`
-        building is handed to :func:`free_vibration_2dof` (its result's ``state`` is the base's).
+    isolation : Isolation, Pendulum, BoucWen, TwoDOF or FlexibleBuilding
+        The isolation layer (:meth:`Isolation.linear` or :meth:`Isolation.bilinear`, or a hysteretic one); a
+        :class:`TwoDOF` building is handed to :func:`free_vibration_2dof`, a
+        :class:`~quickrelease.building.flexible.FlexibleBuilding` to its own solver (their results' ``state`` is
+        the base's).
     d0 : float
         Displacement of the isolation layer at the release [m] (reached by a monotonic push).
     t_end : float, optional
@@ -485,6 +487,9 @@ def free_vibration(isolation: Isolation | Pendulum | BoucWen, d0: float, t_end: 
         raise ParameterError("coarse", coarse, "[1, 4]")
     if isinstance(isolation, TwoDOF):
         return free_vibration_2dof(isolation, d0, t_end)
+    flexible = getattr(isolation, "free_vibration", None)  # a FlexibleBuilding (building.flexible) solves itself
+    if flexible is not None:
+        return flexible(d0, t_end)
     if isinstance(isolation, Pendulum) and isolation.constant_friction and isolation.damping_exponent == 1.0:
         # linear + Coulomb exactly, k = W / R, F_s = mu W: its closed form (the result's isolation is that)
         p = isolation

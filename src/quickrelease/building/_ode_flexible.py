@@ -1,0 +1,508 @@
+"""The compiled integrator of a flexible superstructure on a hysteretic isolation layer (2-DOF; SI units).
+
+Two degrees of freedom: the base (isolation layer) x_b and the roof x_s, the storey drift u = x_s - x_b:
+
+    m_b x_b'' + F_iso(x_b, x_b', z) - c_s u' - k_s u = 0,     m_s x_s'' + c_s u' + k_s u = 0,
+
+F_iso the layer's force of :mod:`quickrelease.building._ode` (spring, hysteretic element, sliders' friction with its
+law, damper), evaluated by that module's own functions (:func:`quickrelease.building._ode._rhs` on the layer's part
+of the state, with ``P[M] = m_b``; ``_net``, ``_mode``, ``_slope``, ``_stored``), the storey's force added here.
+The integration is the rigid kernel's: the tableau of DOP853 on a fixed step per piece, every event located on the
+tableau's own step map to machine precision (a bracketed Illinois iteration), no smoothed sign function. A piece
+either slides (direction d = sign(x_b') = +-1, the element's mode as in ``_ode``) or is stuck (d = 0: the sliders
+hold the base, ``x_b' = 0``, the roof vibrates on the fixed base). Events:
+
+- sliding: the reversal (``d x_b' = 0``: the base sticks where the holding force ``G = k x_b + f_h - k_s u - c_s u'``
+  is within the sliders' static limit, ``|G| <= f_slow``, else it turns, d = -sign(G)); the plastic element's
+  yield, the Bouc-Wen element's saturation and zero crossing of z (as ``_ode``). The base's velocity is not
+  monotone between reversals here (the storey pushes and pulls it): a step where ``d x_b''`` turns from negative
+  to positive has its minimum of ``d x_b'`` located, and a reversal looked for before it (so a dip to zero within
+  a step is not missed);
+- stuck: the re-slip, where ``|G|`` reaches ``f_slow`` (likewise with the maxima of ``|G|`` inside a step); the
+  base is held for good where ``|k x_b + f_h| + E <= f_slow``, E the envelope of the storey's force
+  ``k_s u + c_s u'`` on the fixed base (a damped oscillation: it never exceeds E again). From then on the roof
+  rings on in closed form (:func:`_ringing`).
+
+Only the viscous damper (alpha = 1) is solved here (a power-law damper's |v|^alpha needs the graded steps of
+``_ode`` at every reversal and re-slip). The works of the layer's friction, damper and hysteresis are the layer's
+states of ``_ode``; the storey damper's work is one more state, so the energy balance closes to the integrator's
+accuracy.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from . import _ode
+from ._ode import (
+    _A,
+    _AX,
+    _B,
+    _D,
+    _S,
+    ALPHA,
+    DY,
+    FFAST,
+    FP,
+    FSLOW,
+    H_BOUCWEN,
+    H_PLASTIC,
+    HKIND,
+    KP,
+    LOADING,
+    RATE,
+    SATURATION,
+    STEPS_PERIOD,
+    STEPS_RATE,
+    STEPS_TRANSITION,
+    YIELDING,
+    C,
+    K,
+    M,
+    N,
+    Q,
+)
+
+#: The state: the layer's six of :mod:`~quickrelease.building._ode` (x_b, x_b', z and the works of friction,
+#: damper and hysteresis [J]), then x_s [m], x_s' [m/s] and the storey damper's work [J].
+NY = 9
+XS, VS, WS = 6, 7, 8
+#: The storey's vector: m_s [kg], k_s [N/m], c_s [N s/m].
+MS, KS, CS = 0, 1, 2
+#: Events: none, a reversal, a yield (saturation), z's zero crossing, the re-slip of a stuck base; the two
+#: extrema looked for inside a step (the base's slowest speed, the holding force's largest magnitude).
+EV_NONE, EV_REVERSAL, EV_YIELD, EV_ZERO, EV_SLIP, EV_DIP, EV_PEAK = 0, 2, 3, 4, 7, 8, 9
+#: A slide whose speed falls below this fraction of the release's scale with the holding force within the
+#: sliders' limit is stuck (the rigid kernel's creep into the holding limit).
+CREEP = _ode.CREEP
+#: Most events in a row without a plain step between them (a base that chatters without end: status 3).
+MAX_CHAIN = 10_000
+
+
+@njit(cache=True, nogil=True)
+def holding(P, S, y):
+    """The force the sliders must resist to hold the base, ``G = k x_b + f_h - k_s u - c_s u'`` [N]."""
+    return _ode._net(P, y) - S[KS] * (y[XS] - y[0]) - S[CS] * (y[VS] - y[1])
+
+
+@njit(cache=True, nogil=True)
+def _rhs(P, S, y, d, mode, out):
+    """The right-hand side: the layer's of ``_ode`` plus the storey's force on the base (sliding, d = +-1), the base
+    at rest (stuck, d = 0); the roof on the storey."""
+    fs = S[KS] * (y[XS] - y[0]) + S[CS] * (y[VS] - y[1])
+    if d == 0.0:
+        for j in range(6):
+            out[j] = 0.0
+    else:
+        _ode._rhs(P, y[:6], d, mode, out[:6])
+        out[1] += fs / P[M]
+    out[XS] = y[VS]
+    out[VS] = -fs / S[MS]
+    du = y[VS] - y[1]
+    out[WS] = S[CS] * du * du
+
+
+@njit(cache=True, nogil=True)
+def _step(P, S, y, h, d, mode, k, tmp, out):
+    """One step of length h of the tableau from y (stages in k, scratch tmp) into out."""
+    for i in range(_S):
+        for j in range(NY):
+            acc = 0.0
+            for m in range(i):
+                acc += _A[i, m] * k[m, j]
+            tmp[j] = y[j] + h * acc
+        _rhs(P, S, tmp, d, mode, k[i])
+    for j in range(NY):
+        acc = 0.0
+        for i in range(_S):
+            acc += _B[i] * k[i, j]
+        out[j] = y[j] + h * acc
+
+
+@njit(cache=True, nogil=True)
+def _value(P, S, y, kind, d, r):
+    """The event's function at y, positive before the event (r: scratch for the right-hand side)."""
+    if kind == EV_REVERSAL:
+        return d * y[1]
+    if kind == EV_YIELD:
+        return (1.0 - SATURATION if P[HKIND] == H_BOUCWEN else P[FP]) - d * y[2]
+    if kind == EV_ZERO:
+        return y[2]
+    if kind == EV_SLIP:
+        return P[FSLOW] - abs(holding(P, S, y))
+    # EV_PEAK: |G| still growing: sign(G) G', G' = -(k_s u' + c_s u'') on the fixed base
+    _rhs(P, S, y, 0.0, 0, r)
+    g = holding(P, S, y)
+    dg = -(S[KS] * (y[VS] - y[1]) + S[CS] * r[VS])
+    return dg if g > 0.0 else -dg
+
+
+@njit(cache=True, nogil=True)
+def _locate(P, S, y, h, d, mode, kind, sign, k, tmp, out, r):
+    """The instant theta in (0, h] where the event's function (:func:`_value`, times ``sign``) falls from >= 0 at
+    the step's start to <= 0 at its end, on the tableau's map, by the Illinois iteration to machine precision;
+    the state there in out. (EV_DIP's function is evaluated in the piece's own mode.)"""
+    lo, hi = 0.0, h
+    flo = sign * _value_in(P, S, y, kind, d, mode, r)
+    _step(P, S, y, h, d, mode, k, tmp, out)
+    fhi = sign * _value_in(P, S, out, kind, d, mode, r)
+    if flo < 0.0:
+        flo = 0.0
+    side = 0
+    for _ in range(200):
+        if flo > 0.0 and fhi < 0.0:
+            theta = lo + (hi - lo) * flo / (flo - fhi)
+        else:
+            theta = 0.5 * (lo + hi)
+        if not (lo < theta < hi):
+            theta = 0.5 * (lo + hi)
+        if not (lo < theta < hi):
+            break
+        _step(P, S, y, theta, d, mode, k, tmp, out)
+        f = sign * _value_in(P, S, out, kind, d, mode, r)
+        if f > 0.0:
+            lo, flo = theta, f
+            if side == 1:
+                fhi *= 0.5
+            side = 1
+        elif f < 0.0:
+            hi, fhi = theta, f
+            if side == -1:
+                flo *= 0.5
+            side = -1
+        else:
+            return theta
+        if hi - lo <= 4e-16 * hi:
+            break
+    _step(P, S, y, hi, d, mode, k, tmp, out)
+    return hi
+
+
+@njit(cache=True, nogil=True)
+def _value_in(P, S, y, kind, d, mode, r):
+    """:func:`_value`, EV_DIP's in the piece's mode."""
+    if kind == EV_DIP:
+        _rhs(P, S, y, d, mode, r)
+        return -d * r[1]
+    return _value(P, S, y, kind, d, r)
+
+
+@njit(cache=True, nogil=True)
+def _energy(P, S, y):
+    """The mechanical energy [J]: both masses' kinetic, the layer's stored and the storey spring's."""
+    u = y[XS] - y[0]
+    return (0.5 * P[M] * y[1] * y[1] + 0.5 * S[MS] * y[VS] * y[VS] + _ode._stored(P, y)
+            + 0.5 * S[KS] * u * u)
+
+
+@njit(cache=True, nogil=True)
+def _step_size(P, S, y, d, mode):
+    """The piece's step [s]: STEPS_PERIOD a period of the faster mode of the two masses on the layer's initial (or
+    post-yield, saturated) stiffness and the storey's (the roof's on the fixed base while stuck); over the Bouc-Wen
+    transition and the friction law's velocity scale as ``_ode._step_size``, with the storey's force in the bound
+    on the base's acceleration and the whole energy in the bound on its speed."""
+    ms, ks, cs = S[MS], S[KS], S[CS]
+    if d == 0.0:
+        return 2.0 * math.pi * math.sqrt(ms / ks) / STEPS_PERIOD
+    mb = P[M]
+    base = mode & 3
+    k1 = P[K]
+    if P[HKIND] == H_BOUCWEN and base != YIELDING:
+        k1 += P[Q] / P[DY]
+    elif P[HKIND] == H_PLASTIC:
+        k1 += P[KP]
+    a11, a22 = (k1 + ks) / mb, ks / ms
+    half = 0.5 * (a11 + a22)
+    lam = half + math.sqrt(max(half * half - k1 * ks / (mb * ms), 0.0))
+    h = 2.0 * math.pi / math.sqrt(lam) / STEPS_PERIOD
+    energy = _energy(P, S, y)
+    vmax = math.sqrt(2.0 * energy / mb)
+    xmax = math.sqrt(2.0 * energy / P[K])
+    storey = math.sqrt(2.0 * ks * energy) + cs * (vmax + math.sqrt(2.0 * energy / ms))
+    amax = (P[K] * xmax + P[Q] + P[FP] + max(P[FFAST], P[FSLOW]) + storey) / mb + 1e-300
+    if P[HKIND] == H_BOUCWEN and base == LOADING and vmax > 0.0:
+        reach = P[DY] * (1.0 - d * y[2] + math.log(1.0 / SATURATION) / P[N])
+        v = min(vmax, math.sqrt(y[1] * y[1] + 2.0 * (amax + P[C] * vmax ** P[ALPHA] / mb) * reach))
+        h = min(h, P[DY] / (max(P[N], 1.0) * v * STEPS_TRANSITION))
+    if P[RATE] > 0.0 and P[FFAST] != P[FSLOW]:
+        h = min(h, 1.0 / (P[RATE] * amax * STEPS_RATE))
+    return h
+
+
+@njit(cache=True, nogil=True)
+def envelope(S, u, du):
+    """The largest magnitude the storey's force ``k_s u + c_s u'`` [N] reaches from now on while the base is held
+    (the roof a damped oscillator on the fixed base, zeta_s < 1): ``E = sqrt(h0^2 + ((h0' + a h0) / w)^2)``."""
+    ms, ks, cs = S[MS], S[KS], S[CS]
+    a = cs / (2.0 * ms)
+    w = math.sqrt(ks / ms - a * a)
+    h0 = ks * u + cs * du
+    dh0 = ks * du - cs * h0 / ms
+    return math.sqrt(h0 * h0 + ((dh0 + a * h0) / w) ** 2)
+
+
+@njit(cache=True, nogil=True)
+def held(P, S, y):
+    """Whether the stuck base at y is held for good: ``|k x_b + f_h| + E <= f_slow`` (:func:`envelope`)."""
+    return abs(_ode._net(P, y)) + envelope(S, y[XS] - y[0], y[VS] - y[1]) <= P[FSLOW]
+
+
+@njit(cache=True, nogil=True)
+def _put(gt, gy, gd, gf, n, t, y, d, mode):
+    gt[n] = t
+    for j in range(NY):
+        gy[n, j] = y[j]
+    gd[n] = d
+    gf[n] = mode
+    return n + 1
+
+
+@njit(cache=True, nogil=True)
+def _start(P, S, y, slip):
+    """The direction (0: stuck) and mode of a piece starting at y with the base at rest (``slip``: at a re-slip,
+    where |G| has reached the limit: it slides); the base's velocity and a saturated Bouc-Wen element's z set."""
+    y[1] = 0.0
+    g = holding(P, S, y)
+    if abs(g) <= P[FSLOW] and not slip:
+        return 0.0, 0
+    d = -1.0 if g > 0.0 else 1.0
+    mode = _ode._mode(P, y, d)
+    if P[HKIND] == H_BOUCWEN and mode == YIELDING:
+        y[2] = d
+    return d, mode
+
+
+@njit(cache=True, nogil=True)
+def integrate(P, S, y0, t_end, capacity, max_steps):
+    """The free vibration from the state y0 at rest (t = 0) to t_end [s] (inf: until the base is held for good).
+
+    Returns (grid_t, grid_y, grid_d, grid_flags, n, stop_time, status) as ``_ode.integrate``: d = 0 marks a stuck
+    piece; stop_time is when the base is held for good (inf: not within the horizon); status 0 done, 1 the grid's
+    capacity is too small, 2 more than max_steps steps, 3 more than MAX_CHAIN events in a row."""
+    gt = np.empty(capacity)
+    gy = np.empty((capacity, NY))
+    gd = np.empty(capacity)
+    gf = np.empty(capacity, dtype=np.int64)
+    k = np.empty((_S, NY))
+    tmp = np.empty(NY)
+    out = np.empty(NY)
+    y1 = np.empty(NY)
+    ym = np.empty(NY)
+    r = np.empty(NY)
+    y = y0.copy()
+    t = 0.0
+    n = 0
+    stop = math.inf
+    creep = CREEP * math.sqrt(2.0 * _energy(P, S, y) / (P[M] + S[MS]))
+    d, mode = _start(P, S, y, False)
+    if d == 0.0 and held(P, S, y):
+        n = _put(gt, gy, gd, gf, n, 0.0, y, 0.0, 0)
+        return gt, gy, gd, gf, n, 0.0, 0
+    h = _step_size(P, S, y, d, mode)
+    fresh = True  # the first step of a slide that starts at rest (its d x_b'' starts at 0)
+    steps = 0
+    chain = 0  # events since the last plain step
+    n = _put(gt, gy, gd, gf, n, t, y, d, mode)
+    while True:
+        if n + 4 >= capacity:
+            return gt, gy, gd, gf, n, stop, 1
+        steps += 1
+        if steps > max_steps:
+            return gt, gy, gd, gf, n, stop, 2
+        _step(P, S, y, h, d, mode, k, tmp, y1)
+        kind = EV_NONE
+        theta = h
+        if d != 0.0:
+            if d * y1[1] <= 0.0:
+                kind = EV_REVERSAL
+            elif not fresh:  # a dip of the speed to zero inside the step
+                _rhs(P, S, y, d, mode, r)
+                a0 = d * r[1]
+                _rhs(P, S, y1, d, mode, r)
+                if a0 < 0.0 and d * r[1] > 0.0:
+                    tm = _locate(P, S, y, h, d, mode, EV_DIP, 1.0, k, tmp, ym, r)
+                    if d * ym[1] <= 0.0:
+                        kind, theta = EV_REVERSAL, tm
+            if kind == EV_REVERSAL:
+                theta = _locate(P, S, y, theta, d, mode, EV_REVERSAL, 1.0, k, tmp, out, r)
+            base = mode & 3
+            ev = EV_NONE
+            if ((P[HKIND] == H_PLASTIC and base == 0 and d * y1[2] >= P[FP])
+                    or (P[HKIND] == H_BOUCWEN and base == LOADING and d * y1[2] >= 1.0 - SATURATION)):
+                ev = EV_YIELD
+            if P[HKIND] == H_BOUCWEN and base == 0 and (y1[2] == 0.0 or (y1[2] > 0.0) != (y[2] > 0.0)):
+                ev = EV_ZERO
+            if ev != EV_NONE:
+                th = _locate(P, S, y, h, d, mode, ev, 1.0 if ev != EV_ZERO or y[2] > 0.0 else -1.0, k, tmp, ym, r)
+                if kind == EV_NONE or th < theta:
+                    kind, theta = ev, th
+                    for j in range(NY):
+                        out[j] = ym[j]
+        else:
+            if P[FSLOW] - abs(holding(P, S, y1)) < 0.0:
+                kind = EV_SLIP
+            else:  # a peak of |G| past the limit inside the step
+                if _value(P, S, y, EV_PEAK, 0.0, r) > 0.0 and _value(P, S, y1, EV_PEAK, 0.0, r) < 0.0:
+                    tm = _locate(P, S, y, h, d, mode, EV_PEAK, 1.0, k, tmp, ym, r)
+                    if P[FSLOW] - abs(holding(P, S, ym)) < 0.0:
+                        kind, theta = EV_SLIP, tm
+            if kind == EV_SLIP:
+                theta = _locate(P, S, y, theta, d, mode, EV_SLIP, 1.0, k, tmp, out, r)
+        if kind == EV_NONE:
+            chain = 0
+            t += h
+            for j in range(NY):
+                y[j] = y1[j]
+            fresh = False
+            if d == 0.0 and held(P, S, y):
+                stop = t
+                n = _put(gt, gy, gd, gf, n, t, y, 0.0, 0)
+                break
+            if d != 0.0 and d * y[1] < creep and abs(holding(P, S, y)) <= P[FSLOW] * (1.0 + 1e-9):
+                # creeping into the sliders' holding limit: stuck from here
+                y[1] = 0.0
+                d, mode = 0.0, 0
+                h = _step_size(P, S, y, d, mode)
+            n = _put(gt, gy, gd, gf, n, t, y, d, mode)
+            if t >= t_end:
+                break
+            continue
+        chain += 1
+        if chain > MAX_CHAIN:
+            return gt, gy, gd, gf, n, stop, 3
+        t += theta
+        for j in range(NY):
+            y[j] = out[j]
+        if kind == EV_YIELD and P[HKIND] == H_PLASTIC:
+            y[2] = d * P[FP]
+            mode = YIELDING
+        elif kind == EV_YIELD:
+            y[2] = d
+            mode = YIELDING
+        elif kind == EV_ZERO:
+            y[2] = 0.0
+            mode = LOADING
+        else:  # a reversal or a re-slip: the base at rest, the holding force decides
+            d, mode = _start(P, S, y, kind == EV_SLIP)
+            fresh = True
+            if d == 0.0 and held(P, S, y):
+                stop = t
+                n = _put(gt, gy, gd, gf, n, t, y, 0.0, 0)
+                break
+        h = _step_size(P, S, y, d, mode)
+        n = _put(gt, gy, gd, gf, n, t, y, d, mode)
+        if t >= t_end:
+            break
+    return gt, gy, gd, gf, n, stop, 0
+
+
+@njit(cache=True, nogil=True)
+def _dense(P, S, y, h, d, mode, K, tmp, F, ynew):
+    """The coefficients F (7 x NY) of the tableau's continuous extension over the step of length h from y."""
+    for i in range(16):
+        if i == _S:  # the stage at the step's end
+            for j in range(NY):
+                acc = 0.0
+                for m in range(_S):
+                    acc += _B[m] * K[m, j]
+                ynew[j] = y[j] + h * acc
+            _rhs(P, S, ynew, d, mode, K[_S])
+            continue
+        for j in range(NY):
+            acc = 0.0
+            for m in range(i):
+                acc += _AX[i, m] * K[m, j]
+            tmp[j] = y[j] + h * acc
+        _rhs(P, S, tmp, d, mode, K[i])
+    for j in range(NY):
+        dy = ynew[j] - y[j]
+        F[0, j] = dy
+        F[1, j] = h * K[0, j] - dy
+        F[2, j] = 2.0 * dy - h * (K[_S, j] + K[0, j])
+        for i in range(4):
+            acc = 0.0
+            for m in range(16):
+                acc += _D[i, m] * K[m, j]
+            F[3 + i, j] = h * acc
+
+
+@njit(cache=True, nogil=True)
+def _ringing(S, y, tau, out):
+    """The roof ringing on the base held for good, tau [s] after the state y: the closed form of
+    ``m_s u'' + c_s u' + k_s u = 0`` (zeta_s < 1); the storey damper's work grows by the drop of the roof's energy.
+    Returns the roof's acceleration."""
+    ms, ks, cs = S[MS], S[KS], S[CS]
+    a = cs / (2.0 * ms)
+    w = math.sqrt(ks / ms - a * a)
+    u0, du0 = y[XS] - y[0], y[VS]
+    e = math.exp(-a * tau)
+    c, s = math.cos(w * tau), math.sin(w * tau) / w
+    u = e * (c * u0 + s * (du0 + a * u0))
+    du = e * (c * du0 - s * (a * du0 + (ks / ms) * u0))
+    for j in range(NY):
+        out[j] = y[j]
+    out[XS] = y[0] + u
+    out[VS] = du
+    out[WS] = y[WS] + 0.5 * (ms * du0 * du0 + ks * u0 * u0) - 0.5 * (ms * du * du + ks * u * u)
+    return -(ks * u + cs * du) / ms
+
+
+@njit(cache=True, nogil=True)
+def evaluate(P, S, gt, gy, gd, gf, n, stop, y_push, t):
+    """The state and the accelerations of base and roof at times t [s] (any order; sorted is fastest): the
+    continuous extension of the grid step that holds each time (computed once per step), the accelerations from
+    the equation there; before the release the pushed state at rest; after the stop the base at rest and the roof
+    ringing (:func:`_ringing`). At an instant where an acceleration jumps, the value after it."""
+    m = t.size
+    ys = np.empty((m, NY))
+    acc = np.zeros((m, 2))
+    K = np.empty((16, NY))
+    tmp = np.empty(NY)
+    F = np.empty((7, NY))
+    ynew = np.empty(NY)
+    out = np.empty(NY)
+    r = np.empty(NY)
+    cached = -1
+    for i in range(m):
+        ti = t[i]
+        if ti < 0.0 or n == 1:
+            src = y_push if ti < 0.0 else gy[0]
+            for j in range(NY):
+                ys[i, j] = src[j]
+            continue
+        if ti >= stop:
+            acc[i, 1] = _ringing(S, gy[n - 1], ti - stop, out)
+            for j in range(NY):
+                ys[i, j] = out[j]
+            continue
+        p = np.searchsorted(gt[:n], ti, side="right") - 1
+        if p >= n - 1:
+            p = n - 2
+        mode = gf[p]
+        h = gt[p + 1] - gt[p]
+        tau = ti - gt[p]
+        if tau == 0.0 or h <= 0.0:
+            for j in range(NY):
+                out[j] = gy[p, j]
+        else:
+            if p != cached:
+                _dense(P, S, gy[p], h, gd[p], mode, K, tmp, F, ynew)
+                cached = p
+            x = tau / h
+            for j in range(NY):
+                out[j] = 0.0
+            for q in range(7):
+                for j in range(NY):
+                    out[j] += F[6 - q, j]
+                    out[j] *= x if q % 2 == 0 else 1.0 - x
+            for j in range(NY):
+                out[j] += gy[p, j]
+        _rhs(P, S, out, gd[p], mode, r)
+        for j in range(NY):
+            ys[i, j] = out[j]
+        acc[i, 0] = r[1]
+        acc[i, 1] = r[VS]
+    return ys, acc

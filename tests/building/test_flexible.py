@@ -1,0 +1,299 @@
+"""The flexible superstructure on the hysteretic isolation layers (building.flexible) against independent references.
+
+References: the reference simulator of tests/building/isolator_reference.py (solve_ivp with events, stick and re-slip
+by events, no package code: ``simulate_2dof``) with its own integrals of the dissipated powers; the closed-form 2-DOF
+building (``free_vibration_2dof``: eigen-decomposition per piece, a different method) for the linear layer; the
+rigid hysteretic model in the limits T_s -> 0 and m_s -> 0. The heavier matrix of cases runs with QUICKRELEASE_SLOW=1.
+"""
+
+import math
+import os
+
+import isolator_reference as ref
+import numpy as np
+import pytest
+
+from quickrelease.building import FlexibleBuilding, free_vibration_flexible
+from quickrelease.building.hysteretic import BoucWen, Pendulum
+from quickrelease.building.model import RECORD_CHANNELS, Isolation, TwoDOF, free_vibration, free_vibration_2dof
+from quickrelease.errors import ParameterError
+
+G = 9.80665
+SLOW = os.environ.get("QUICKRELEASE_SLOW") == "1"
+HORIZON = 25.0
+T = np.linspace(-0.5, HORIZON, 2601)
+
+# (label, package isolation, reference system, m_s, T_s, zeta_s, d0): each sticks and is broken away again by the
+# storey while the roof rings (checked below), then is held for good; the roof rings on to the horizon
+CASES = [
+    ("pendulum", Pendulum(1.0e6, 3.0, 0.01, 0.025, rate=40.0, damping=2.0e4),
+     ref.pendulum(1.0e6, 3.0, 0.01, 0.025, rate=40.0, damping=2.0e4), 7.0e5, 0.6, 0.03, 0.30),
+    ("boucwen", BoucWen(8.0e5, 1.6e6, 4.0e5, 0.025, shape=1.0, damping=1.4e4, friction=3.0e4),
+     ref.boucwen(8.0e5, 1.6e6, 4.0e5, 0.025, shape=1.0, damping=1.4e4, friction=3.0e4), 6.0e5, 0.5, 0.02, 0.20),
+]
+SLOW_CASES = [
+    ("boucwen-n2-pulled", BoucWen(8.0e5, 1.2e6, 3.0e5, 0.02, shape=2.0, damping=3.0e4, friction=2.0e4),
+     ref.boucwen(8.0e5, 1.2e6, 3.0e5, 0.02, shape=2.0, damping=3.0e4, friction=2.0e4), 5.0e5, 0.4, 0.0, -0.15),
+    ("boucwen-n10-no-sliders", BoucWen(6.0e5, 1.0e6, 2.0e5, 0.01, shape=10.0, damping=2.0e4),
+     ref.boucwen(6.0e5, 1.0e6, 2.0e5, 0.01, shape=10.0, damping=2.0e4), 4.0e5, 0.7, 0.05, 0.25),
+    ("bilinear", Isolation.bilinear(5.0e5, 8.0e6, 1.0e6, 1.2e5, 0.02, 1.5e4),
+     ref.bilinear(5.0e5, 8.0e6, 1.0e6, 1.2e5, damping=2 * 0.02 * math.sqrt(8.0e6 * 5.0e5), friction=1.5e4),
+     3.5e5, 0.5, 0.02, 0.12),
+    ("pendulum-constant", Pendulum(1.0e6, 2.5, 0.04), ref.pendulum(1.0e6, 2.5, 0.04), 8.0e5, 0.8, 0.01, 0.25),
+    ("pendulum-stiff-roof", Pendulum(1.0e6, 3.0, 0.02, 0.06, rate=25.0), ref.pendulum(1.0e6, 3.0, 0.02, 0.06,
+                                                                                        rate=25.0),
+     7.0e5, 0.15, 0.02, 0.35),
+]
+
+
+def _solve(case):
+    _, iso, system, ms, Ts, zs, d0 = case
+    building = FlexibleBuilding(iso, ms, Ts, zs)
+    motion = free_vibration_flexible(building, d0, t_end=HORIZON)
+    reference = ref.simulate_2dof(system, ms, building.superstructure_stiffness, building.superstructure_damping,
+                                  d0, T, HORIZON)
+    return building, motion, reference
+
+
+_SOLVED = {}
+
+
+def _solved(case):
+    if case[0] not in _SOLVED:
+        _SOLVED[case[0]] = _solve(case)
+    return _SOLVED[case[0]]
+
+
+def _check_against_reference(case):
+    building, motion, r = _solved(case)
+    d0 = abs(case[-1])
+    s = motion.states(T)
+    for key, want in (("x_b", r.x), ("x_s", r.xs)):
+        assert np.max(np.abs(s[key] - want)) < 1e-6 * d0, key
+    for key, want in (("v_b", r.v), ("v_s", r.vs), ("a_b", r.a), ("a_s", r.as_)):
+        assert np.max(np.abs(s[key] - want)) < 1e-6 * np.max(np.abs(want)), key
+    # every event at the reference's instant
+    np.testing.assert_allclose(motion.stick_times, r.stick_times, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(motion.slip_times, r.slip_times, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(motion.reversal_times, r.reversal_times, rtol=0, atol=1e-9)
+    # the works against the reference's own integrals of the dissipated powers
+    e = motion.energies(T[T >= 0])
+    after = T >= 0
+    for key, want in (("friction", r.friction), ("hysteretic", r.hysteretic), ("storey_viscous", r.storey_viscous),
+                      ("viscous", r.viscous + r.storey_viscous)):
+        assert np.max(np.abs(e[key] - want[after])) < 1e-8 * r.initial, key
+
+
+@pytest.mark.parametrize("case", CASES, ids=[c[0] for c in CASES])
+def test_against_the_independent_reference(case):
+    """Base and roof displacement to 1e-6 of d0, velocities and accelerations to 1e-6 of their largest, over 25 s;
+    every reversal, stick and re-slip at the reference's instant (1e-9 s); each work to 1e-8 of the energy."""
+    _check_against_reference(case)
+
+
+@pytest.mark.parametrize("case", CASES, ids=[c[0] for c in CASES])
+def test_the_storey_breaks_the_stuck_base_away_while_the_roof_rings(case):
+    """Each case sticks and slips again (the storey's force beats the sliders' static limit) before it is held for
+    good; held, the base stays put while the roof rings on (in closed form)."""
+    building, motion, _ = _solved(case)
+    assert motion.slip_times.size >= 1 and motion.stick_times.size >= 2
+    assert motion.stick_times[0] < motion.slip_times[0] < motion.stick_times[-1] <= motion.stop_time < HORIZON
+    tail = np.linspace(motion.stop_time, HORIZON, 200)
+    x, v, a = motion.state(tail)
+    assert np.all(x == motion.rest[0]) and np.all(v == 0.0) and np.all(a == 0.0)
+    assert np.ptp(motion.roof_state(tail)[0]) > 1e-4 * abs(case[-1])
+
+
+@pytest.mark.skipif(not SLOW, reason="set QUICKRELEASE_SLOW=1 for the wider matrix against the reference")
+@pytest.mark.parametrize("case", SLOW_CASES, ids=[c[0] for c in SLOW_CASES])
+def test_against_the_independent_reference_wider(case):
+    """The same checks on sharper Bouc-Wen elements, without sliders, a bilinear layer, a pendulum of constant
+    friction and one under a stiff storey (T_s = 0.15 s)."""
+    _check_against_reference(case)
+
+
+def _balance(e):
+    return e["kinetic"] + e["stored"] + e["hysteretic"] + e["friction"] + e["viscous"]
+
+
+@pytest.mark.parametrize("case", CASES, ids=[c[0] for c in CASES])
+def test_energy_balance(case):
+    """kinetic (both masses) + stored (the layer's and the storey spring's) + the works of friction, hysteresis and
+    both dampers = the energy at the push, to 1e-8 of it, over the motion and the roof's ringing after the stop;
+    the storey's parts are those written here from the states."""
+    building, motion, r = _solved(case)
+    t = T[T >= 0]
+    e = motion.energies(t)
+    assert e["initial"][0] == pytest.approx(r.initial, rel=1e-12)
+    np.testing.assert_allclose(_balance(e), e["initial"], rtol=0, atol=1e-8 * r.initial)
+    s = motion.states(t)
+    u = s["x_s"] - s["x_b"]
+    np.testing.assert_allclose(e["storey_stored"], 0.5 * building.superstructure_stiffness * u**2, rtol=1e-12,
+                               atol=1e-14 * r.initial)
+    kinetic = 0.5 * building.base_mass * s["v_b"] ** 2 + 0.5 * building.superstructure_mass * s["v_s"] ** 2
+    np.testing.assert_allclose(e["kinetic"], kinetic, rtol=1e-12, atol=1e-14 * r.initial)
+    assert e["storey_viscous"][-1] > 1e-3 * r.initial  # the storey's damper works
+
+
+# -- the linear layer: the closed-form 2-DOF building ---------------------------------------------------------------
+
+M = 4.0e5
+# (zeta, mu, T_s, zeta_s, m_s / m, d0): TwoDOF's test cases (stick-slip with breakaways, undamped, pulled)
+LINEAR = [(0.03, 0.02, 0.5, 0.02, 0.75, 0.15), (0.0, 0.03, 0.4, 0.0, 0.75, 0.15), (0.02, 0.05, 0.8, 0.01, 0.75, -0.15)]
+
+
+@pytest.mark.parametrize("zeta, mu, Ts, zs, ratio, d0", LINEAR)
+def test_a_linear_layer_is_the_closed_form_two_dof_building(zeta, mu, Ts, zs, ratio, d0):
+    """A linear layer with viscous damping and Coulomb sliders equals free_vibration_2dof(TwoDOF(...)), the exact
+    piecewise closed form: base and roof to 1e-9 of d0 (velocity, acceleration: of d0 w, d0 w^2), the turning
+    points, sticks and breakaways to 1e-9."""
+    t = np.linspace(-0.5, 12.0, 2501)
+    closed = free_vibration_2dof(TwoDOF(M, ratio * M, 2.0, Ts, zeta, mu * M * G, zs), d0, t_end=12.0)
+    motion = free_vibration_flexible(FlexibleBuilding(Isolation.linear(M, 2.0, zeta, mu * M * G), ratio * M, Ts, zs),
+                                     d0, t_end=12.0)
+    a, b = closed.states(t), motion.states(t)
+    w = 2 * math.pi / min(Ts, 2.0) * 2.5
+    for key in a:
+        scale = abs(d0) * w ** "xva".index(key[0])
+        assert np.max(np.abs(a[key] - b[key])) < 1e-9 * scale, key
+    np.testing.assert_allclose(motion.turning_points, closed.turning_points, rtol=0, atol=1e-9 * abs(d0))
+    sticks = [p.t1 for p in closed.pieces if p.kind == "slide" and p.end == "stick"]
+    slips = [p.t1 for p in closed.pieces if p.kind == "stick" and p.end == "breakaway"]
+    np.testing.assert_allclose(motion.stick_times, sticks, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(motion.slip_times, slips, rtol=0, atol=1e-9)
+
+
+def test_the_linear_cases_exercise_breakaways():
+    zeta, mu, Ts, zs, ratio, d0 = LINEAR[0]
+    motion = free_vibration_flexible(FlexibleBuilding(Isolation.linear(M, 2.0, zeta, mu * M * G), ratio * M, Ts, zs),
+                                     d0)
+    assert motion.slip_times.size >= 1 and math.isfinite(motion.stop_time)
+
+
+# d0 where the closed form's count of turning points changes (bisected on free_vibration_2dof to 1e-16): a dip of the
+# base's speed to zero, or a peak of the holding force to the sliders' limit, grazes there
+GRAZES = [((0.03, 0.02, 0.5, 0.02, 0.75), 0.05942062737774091), ((0.0, 0.03, 0.4, 0.0, 0.75), 0.08070202067218014),
+          ((0.02, 0.05, 0.8, 0.01, 0.75), 0.11827119387409957), ((0.0, 0.03, 0.4, 0.0, 0.75), 0.08703031041165057),
+          ((0.03, 0.02, 0.5, 0.02, 0.75), 0.07020401790156264), ((0.05, 0.01, 0.7, 0.01, 0.85), 0.06491775554763926)]
+
+
+def _events(closed):
+    turns = [p.t1 for p in closed.pieces if p.kind == "slide" and p.end in ("reversal", "stick")]
+    slips = [p.t1 for p in closed.pieces if p.kind == "stick" and p.end == "breakaway"]
+    return np.array(turns), np.array(slips)
+
+
+@pytest.mark.parametrize("params, d0", GRAZES)
+def test_grazing_events_within_a_step_are_not_missed(params, d0):
+    """Just past a d0 where a new turn or re-slip appears (its dip or peak lasting far less than a step), every
+    reversal, stick and re-slip is the closed form's: the dips of the base's speed and the peaks of the holding force
+    inside a step are looked into."""
+    zeta, mu, Ts, zs, ratio = params
+    counts = set()
+    for x in (d0 * (1 - 1e-9), d0 * (1 + 1e-9)):
+        closed = free_vibration_2dof(TwoDOF(M, ratio * M, 2.0, Ts, zeta, mu * M * G, zs), x, t_end=8.0)
+        motion = free_vibration_flexible(FlexibleBuilding(Isolation.linear(M, 2.0, zeta, mu * M * G), ratio * M, Ts,
+                                                          zs), x, t_end=8.0)
+        turns, slips = _events(closed)
+        counts.add(turns.size)
+        np.testing.assert_allclose(motion.reversal_times[1:], turns, rtol=0, atol=1e-6)
+        np.testing.assert_allclose(motion.slip_times, slips, rtol=0, atol=1e-6)
+    assert len(counts) == 2  # a threshold of the closed form indeed
+
+
+# -- the rigid limits ---------------------------------------------------------------------------------------------
+
+BW = BoucWen(8.0e5, 1.6e6, 4.0e5, 0.025, shape=2.0, damping=1.4e4, friction=3.0e4)
+
+
+def _rigid_gap(building, t):
+    rigid = free_vibration(building.isolation, 0.2, t_end=t[-1]).state(t)[0]
+    return float(np.max(np.abs(free_vibration_flexible(building, 0.2, t_end=t[-1]).state(t)[0] - rigid))) / 0.2
+
+
+def test_a_stiff_storey_tends_to_the_rigid_model():
+    """T_s -> 0: the base's motion tends to the rigid Bouc-Wen building's (free_vibration(BoucWen)), the gap falling
+    as T_s^2 (the storey's quasi-static drift m_s a / k_s)."""
+    t = np.linspace(0.0, 15.0, 1501)
+    gaps = [_rigid_gap(FlexibleBuilding(BW, 6.0e5, Ts, 0.05), t) for Ts in (0.2, 0.1, 0.05)]
+    assert gaps[2] < 1e-3
+    assert 3.0 < gaps[0] / gaps[1] < 5.0 and 3.0 < gaps[1] / gaps[2] < 5.0
+
+
+def test_a_light_roof_tends_to_the_rigid_model():
+    """m_s -> 0: the gap to the rigid model falls in proportion to m_s."""
+    t = np.linspace(0.0, 15.0, 1501)
+    gaps = [_rigid_gap(FlexibleBuilding(BW, ms, 0.5, 0.05), t) for ms in (1.0e4, 1.0e3, 1.0e2)]
+    assert gaps[2] < 3e-5
+    assert 7.0 < gaps[0] / gaps[1] < 13.0 and 7.0 < gaps[1] / gaps[2] < 13.0
+
+
+# -- the interface and the inputs ---------------------------------------------------------------------------------
+
+def test_interface_of_the_two_dof_vibrations():
+    """free_vibration dispatches to it; the channels are the record's (the base's and the roof's), the state is the
+    base's, before the release both rest at d0; the summary names the isolation and the storey."""
+    building = FlexibleBuilding(BW, 6.0e5, 0.5, 0.05)
+    motion = free_vibration(building, 0.2, t_end=5.0)
+    t = np.array([-1.0, 0.0, 0.7, 2.5, 4.9])
+    ch = motion.channels(t)
+    assert set(ch) == set(RECORD_CHANNELS)
+    s = motion.states(t)
+    for a, b in (("x", "x_b"), ("v", "v_b"), ("a", "a_b"), ("x_roof", "x_s"), ("v_roof", "v_s"), ("a_roof", "a_s")):
+        np.testing.assert_array_equal(ch[a], s[b])
+    np.testing.assert_array_equal(motion.state(t)[0], s["x_b"])
+    np.testing.assert_array_equal(motion.roof_state(t)[0], s["x_s"])
+    assert s["x_b"][0] == s["x_s"][0] == 0.2 and s["v_s"][0] == s["a_s"][0] == 0.0
+    shuffled = t[::-1]
+    np.testing.assert_array_equal(motion.state(shuffled)[0], s["x_b"][::-1])
+    summary = motion.summary()
+    assert summary["model"] == "flexible" and summary["isolation_model"] == "boucwen"
+    assert summary["superstructure_period_s"] == 0.5 and summary["d0_m"] == 0.2
+    assert motion.turning_points[0] == 0.2 and motion.reversal_times[0] == 0.0
+
+
+def test_held_where_it_was_pushed():
+    """The sliders hold the pushed layer (|W d0 / R| <= mu W) and the storey is undeformed: nothing moves."""
+    motion = free_vibration_flexible(FlexibleBuilding(Pendulum(1.0e6, 3.0, 0.05), 7.0e5, 0.5), 0.1)
+    assert motion.stop_time == 0.0
+    s = motion.states(np.array([0.0, 1.0, 10.0]))
+    assert np.all(s["x_b"] == 0.1) and np.all(s["x_s"] == 0.1) and np.all(s["a_s"] == 0.0)
+
+
+GOOD = dict(isolation=BW, superstructure_mass=6.0e5, superstructure_period=0.5, superstructure_damping_ratio=0.02)
+BAD = [("superstructure_mass", v) for v in (0.0, -1.0, math.nan, math.inf, 8.0e5, 9.0e5)] + \
+      [("superstructure_period", v) for v in (0.0, -0.5, math.nan, math.inf)] + \
+      [("superstructure_damping_ratio", v) for v in (-0.01, 1.0, math.nan)] + \
+      [("isolation", TwoDOF(M, 3.0e5, 2.0, 0.5)), ("isolation", "pendulum")]
+
+
+@pytest.mark.parametrize("name, value", BAD)
+def test_each_bad_parameter_is_named(name, value):
+    with pytest.raises(ParameterError) as info:
+        FlexibleBuilding(**{**GOOD, name: value})
+    msg = str(info.value)  # the parameter, its value and the valid range
+    assert name in msg and (f"{value:g}" if isinstance(value, float) else type(value).__name__) in msg
+    assert any(c in msg.split(name, 1)[1] for c in "([") or "a FlexibleBuilding" in msg or "an Isolation" in msg
+
+
+def test_a_power_law_damper_is_refused_by_name():
+    with pytest.raises(ParameterError, match="damping_exponent.*0.5"):
+        FlexibleBuilding(BoucWen(8.0e5, 1.6e6, 4.0e5, 0.025, damping=1e4, damping_exponent=0.5), 6.0e5, 0.5)
+
+
+@pytest.mark.parametrize("d0", [0.0, math.nan, math.inf])
+def test_bad_d0(d0):
+    with pytest.raises(ParameterError, match="d0"):
+        free_vibration_flexible(FlexibleBuilding(**GOOD), d0, t_end=1.0)
+
+
+@pytest.mark.parametrize("t_end", [0.0, -1.0, math.nan])
+def test_bad_t_end(t_end):
+    with pytest.raises(ParameterError, match="t_end"):
+        free_vibration_flexible(FlexibleBuilding(**GOOD), 0.1, t_end=t_end)
+
+
+def test_no_end_without_friction_needs_t_end():
+    building = FlexibleBuilding(BoucWen(8.0e5, 1.6e6, 4.0e5, 0.025), 6.0e5, 0.5)
+    with pytest.raises(ParameterError, match="t_end"):
+        free_vibration_flexible(building, 0.1)
