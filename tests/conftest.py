@@ -19,10 +19,23 @@ if str(Path(__file__).resolve().parent) not in sys.path:
 _RC_BASELINE: dict = {}
 
 
-def _rc_changed(before: dict) -> list[str]:
+def _rc_now() -> dict:
+    """matplotlib's settings as stored (``dict.items``: no validation, no backend resolution, no sorting of the
+    keys: 0.04 ms instead of 2 ms through ``rcParams.items()``; every setting goes through ``__setitem__`` into
+    the stored dict, so a change shows here as it does there)."""
     import matplotlib
 
-    return sorted(k for k, v in matplotlib.rcParams.items() if before.get(k) != v)
+    return dict(dict.items(matplotlib.rcParams))
+
+
+def _rc_changed(before: dict) -> list[str]:
+    now = _rc_now()
+    if now == before:
+        return []
+    return sorted(k for k in now.keys() | before.keys() if before.get(k, _MISSING) != now.get(k, _MISSING))
+
+
+_MISSING = object()
 
 
 @pytest.fixture(autouse=True, scope="session")
@@ -30,8 +43,9 @@ def _matplotlib_settings_unchanged_by_the_session():
     """Taken before any other session fixture: the baseline; checked again after the last teardown."""
     import matplotlib
 
+    matplotlib.rcParams["backend"]  # resolved now (the first read of an automatic backend picks one), not by a test
     _RC_BASELINE.clear()
-    _RC_BASELINE.update(matplotlib.rcParams)
+    _RC_BASELINE.update(_rc_now())
     yield
     changed = _rc_changed(_RC_BASELINE)
     assert not changed, f"rcParams changed by the end of the session (a session-scoped fixture?): {changed}"
@@ -40,9 +54,7 @@ def _matplotlib_settings_unchanged_by_the_session():
 @pytest.fixture(autouse=True, scope="module")
 def _matplotlib_settings_unchanged_by_the_module(_matplotlib_settings_unchanged_by_the_session):
     """A module's fixtures (set up after this one, torn down before it) leave the settings as they were."""
-    import matplotlib
-
-    before = dict(matplotlib.rcParams)
+    before = _rc_now()
     yield
     changed = _rc_changed(before)
     assert not changed, f"rcParams changed by this module (a module-scoped fixture?): {changed}"
@@ -53,11 +65,9 @@ def _matplotlib_settings_unchanged(_matplotlib_settings_unchanged_by_the_module)
     """Every test: the package's figure functions draw in their own style and leave the user's matplotlib
     settings (rcParams) exactly as they found them (issue 11), and so did every fixture set up before the test
     (module- and session-scoped ones included: those run before this check's own snapshot)."""
-    import matplotlib
-
     changed = _rc_changed(_RC_BASELINE)
     assert not changed, f"rcParams changed before this test, by a fixture of a wider scope: {changed}"
-    before = dict(matplotlib.rcParams)
+    before = _rc_now()
     yield
     changed = _rc_changed(before)
     assert not changed, f"rcParams changed: {changed}"

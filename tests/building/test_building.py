@@ -31,14 +31,29 @@ def test_linear_coulomb_against_solve_ivp(zeta, mu):
 
 
 @pytest.mark.parametrize("zeta, Fs, d0", [(0.05, 2.0e4, 0.15), (0.0, 0.0, 0.2), (0.1, 5.0e4, -0.12),
-                                          (0.02, 1.0e4, 0.01)])
+                                          (0.02, 1.0e4, 0.01), (0.5, 2.0e4, 0.15)])
 def test_bilinear_against_solve_ivp(zeta, Fs, d0):
+    """zeta = 0.5 of k1: the yielding pieces (k2 = k1 / 10) are overdamped (cosh and sinh)."""
     m, k1, k2, Fy = 4.0e5, 4.0e7, 4.0e6, 8.0e4
     iso = Isolation.bilinear(m, k1, k2, Fy, zeta, Fs)
     t = np.linspace(0.0, 4.0, 1601)
     fv = free_vibration(iso, d0, t_end=4.0)
     ref, _ = _reference(m, k1, k2, iso.plastic_yield, iso.damping, Fs, d0, t)
     assert np.max(np.abs(fv.state(t)[0] - ref)) < 1e-9 * abs(d0)
+
+
+@pytest.mark.parametrize("q", [75.0, -15.0, 0.0])
+def test_a_piece_at_one_time_is_its_state_there_bit_for_bit(q):
+    """_Piece.at (floats, the hot path of free_vibration's piece ends) is _Piece.state's arithmetic (0-d arrays)
+    exactly, for an underdamped (q > 0), overdamped (q < 0) and critically damped (q = 0) piece."""
+    from quickrelease.building.model import _Piece
+
+    a = 5.0
+    piece = _Piece(t0=0.37, x0=0.15, v0=-0.8, z0=0.0, direction=-1.0, yielding=False, k=4.0e7, x_eq=-0.002, a=a,
+                   b=q + a * a, q=q)
+    for t in np.linspace(0.37, 9.0, 401):
+        x, v = piece.state(float(t))
+        assert piece.at(float(t)) == (float(x), float(v)), t
 
 
 def test_coulomb_decay_law():

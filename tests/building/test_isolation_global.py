@@ -225,19 +225,27 @@ def test_constant_friction_pendulum_fit_reaches_its_minimum(d0, seed):
     assert all(abs(v) < 4.0 for v in z.values()), z
 
 
+@cache
+def _model_choice_fit(model: str):
+    """(case, channels, fit) of test_model_choice's record ``draw(model, 3)`` fitted as it is (profile=False): the
+    reference fit of the two symmetry tests below, made once (fit_isolation is deterministic, and neither test
+    changes it)."""
+    from test_model_choice import draw, record
+
+    case = draw(model, 3)
+    channels, _ = record(case)
+    return case, channels, fit_isolation(channels, case.mass, model, profile=False)
+
+
 def test_a_clock_of_the_time_of_day_gives_the_same_fit():
     """Loggers stamp samples with the time of day (36 000 s at 10 am): the record's time origin carries no physics,
     so the fit must not depend on it. The Jacobian stepped the release instant by 1e-4 of its clock value, 3.6 s
     there: a model-choice record (LVDT and accelerometer, the independent reference's) ended 453 above its fit at
     the origin, the release 0.9 ms off, its standard error 8 times too large. Now every estimate agrees within 1 %
     of its standard error."""
-    from test_model_choice import draw, record
-
-    case = draw("linear", 3)
-    channels, _ = record(case)
+    case, channels, a = _model_choice_fit("linear")
     shift = 36000.0
     moved = [BuildingChannel(c.name, c.kind, c.t + shift, c.values, c.noise, c.offset, c.drift) for c in channels]
-    a = fit_isolation(channels, case.mass, "linear", profile=False)
     b = fit_isolation(moved, case.mass, "linear", profile=False)
     for n in a.names:
         lag = shift if n == "release_time" else 0.0
@@ -253,11 +261,7 @@ def test_a_mirrored_record_and_a_scaled_mass_give_the_same_fit(model):
     unit mass, so a mass 1000 times smaller gives forces 1000 times smaller and the same period, damping, d0 and
     release. Each estimate within 1e-6 of its standard error (measured 2026-11-27: 2e-7 at worst; pendulum and
     Bouc-Wen likewise, 1e-7 and 9e-10, left out here for time)."""
-    from test_model_choice import draw, record
-
-    case = draw(model, 3)
-    channels, _ = record(case)
-    base = fit_isolation(channels, case.mass, model, profile=False)
+    case, channels, base = _model_choice_fit(model)
     mirrored = fit_isolation([BuildingChannel(c.name, c.kind, c.t, -c.values, c.noise, c.offset, c.drift)
                               for c in channels], case.mass, model, profile=False)
     light = fit_isolation(channels, 1e-3 * case.mass, model, profile=False)

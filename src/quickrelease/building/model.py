@@ -229,6 +229,22 @@ def _ec_es(a: float, q: float, tau):
     return e, e * tau
 
 
+def _ec_es_at(a: float, q: float, tau: float) -> tuple[float, float]:
+    """:func:`_ec_es` at one time, as Python floats: the same numpy functions (exp, cos, sin, expm1: numpy's, not
+    libm's, so the same bits) and the same IEEE arithmetic, without the 0-d arrays (a hot path of fits)."""
+    if q > 0.0:
+        w = math.sqrt(q)
+        e = float(np.exp(-a * tau))
+        return e * float(np.cos(w * tau)), e * float(np.sin(w * tau)) / w
+    if q < 0.0:
+        w = math.sqrt(-q)
+        slow = float(np.exp((w - a) * tau))
+        fast = float(np.exp(-(w + a) * tau))
+        return 0.5 * (slow + fast), -slow * float(np.expm1(-2.0 * w * tau)) / (2.0 * w)
+    e = float(np.exp(-a * tau))
+    return e, e * tau
+
+
 @dataclass(frozen=True)
 class _Piece:
     t0: float
@@ -259,6 +275,13 @@ class _Piece:
         v = ec * self.v0 - es * (self.a * self.v0 + self.b * y0)
         return x, v
 
+    def at(self, t: float) -> tuple[float, float]:
+        """x, v at one time t (a float) as floats: :meth:`state`'s arithmetic, without numpy's 0-d arrays."""
+        tau = float(t) - self.t0
+        y0 = self.x0 - self.x_eq
+        ec, es = _ec_es_at(self.a, self.q, tau)
+        return self.x_eq + ec * y0 + es * (self.v0 + self.a * y0), ec * self.v0 - es * (self.a * self.v0 + self.b * y0)
+
     def first_reversal(self) -> float:
         """The first tau > 0 where the velocity vanishes (inf if it never does)."""
         p = self.v0
@@ -288,8 +311,10 @@ def _piece(iso: Isolation, t0: float, x0: float, v0: float, z0: float, direction
     x_eq = -(offset + iso.friction * direction) / k
     a = iso.damping / (2.0 * iso.mass)
     b = k / iso.mass
-    return _Piece(t0=t0, x0=x0, v0=v0, z0=z0, direction=direction, yielding=yielding, k=k, x_eq=x_eq, a=a, b=b,
-                  q=b - a * a)
+    out = object.__new__(_Piece)  # the frozen dataclass's __init__ without its per-field setattr (a hot path of fits)
+    out.__dict__.update(t0=t0, x0=x0, v0=v0, z0=z0, direction=direction, yielding=yielding, k=k, x_eq=x_eq, a=a, b=b,
+                        q=b - a * a, t1=math.inf, end="")
+    return out
 
 
 def _plastic_force(iso: Isolation, piece: _Piece, x):
@@ -530,8 +555,10 @@ def free_vibration(isolation: Isolation | Pendulum | BoucWen, d0: float, t_end: 
             if math.isfinite(horizon):
                 rest = (rest[0], float(_plastic_force(iso, piece, rest[0])))
             break
-        x1, v1 = (float(s) for s in piece.state(t1))
-        z1 = float(_plastic_force(iso, piece, x1))
+        x1, v1 = piece.at(t1)
+        # _plastic_force at one point, in Python floats (the same IEEE operations as on its 0-d arrays)
+        z1 = piece.z0 if piece.yielding or iso.model == "linear" else \
+            piece.z0 + (iso.stiffness - iso.k2) * (x1 - piece.x0)
         if end == "yield":
             z1 = direction * iso.plastic_yield
             pieces.append(_with_end(piece, t1, "yield"))
@@ -565,13 +592,13 @@ def _time_to_reach(piece: _Piece, level: float, tau_max: float) -> float | None:
         if d * (piece.x_eq - level) <= 0.0:
             return None
         hi = 1.0 / math.sqrt(piece.b)
-        while d * (float(piece.state(piece.t0 + hi)[0]) - level) < 0.0:
+        while d * (piece.at(piece.t0 + hi)[0] - level) < 0.0:
             hi *= 2.0
-    if d * (float(piece.state(piece.t0 + hi)[0]) - level) < 0.0:
+    if d * (piece.at(piece.t0 + hi)[0] - level) < 0.0:
         return None
 
     def gap(tau: float) -> float:
-        return float(piece.state(piece.t0 + tau)[0]) - level
+        return piece.at(piece.t0 + tau)[0] - level
 
     return brentq(gap, 0.0, hi, xtol=1e-300, rtol=4.0 * np.finfo(float).eps, maxiter=200)
 
