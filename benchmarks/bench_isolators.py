@@ -14,7 +14,7 @@ is not given, no design values:
   recentres (one swing to 0.07 m, then a creep towards 0.04 m over the minute), a test pushed short of the
   bearings' restoring range; the hard case (not part of the default run): its global minimum was found by no
   start until the Bouc-Wen fit started from the measured loop (``building.boucwen_loop``, 2026-11-27); now
-  ~22 s, chi2_red the noise's, the minimum reached by the loop's start alone ("not confirmed");
+  ~22-29 s (load), chi2_red the noise's, the minimum reached by the loop's start alone ("not confirmed");
 * ``power``: 800 t, linear bearings T = 2.5 s with sliders (0.8 % of W) and fluid dampers C = 300 kN at 1 m/s,
   alpha = 0.4, d0 = 0.15 m;
 * the baseline: the linear model's fit of a linear record of the same length (viscous 5 %, sliders 0.8 %).
