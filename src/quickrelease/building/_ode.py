@@ -536,7 +536,7 @@ def _held(P, net, creep):
 @njit(cache=True, nogil=True)
 def _finish(P, y, h, d, mode, k, K, tmp, F, ynew):
     """The coefficients F (7 x NY) of the continuous extension over the step of length h from y whose 12 stages
-    are ``k`` (the step just taken): the same as :func:`_dense` without computing them again (stages 12-15 only)."""
+    are ``k`` (the step just taken), without computing those again (stages 12-15 only)."""
     for i in range(_S):
         for j in range(NY):
             K[i, j] = k[i, j]
@@ -561,7 +561,14 @@ def _finish(P, y, h, d, mode, k, K, tmp, F, ynew):
             _creep(P, tmp, d, mode, K[i])
         else:
             _rhs(P, tmp, d, mode, K[i])
-    for j in range(NY):
+    coefficients(y, ynew, h, K, F)
+
+
+@njit(cache=True, nogil=True)
+def coefficients(y, ynew, h, K, F):
+    """The 7 coefficient rows F of the tableau's continuous extension (Hairer, Norsett and Wanner's dense output of
+    DOP853) over a step of length h from y to ynew whose 16 stages are K (any state size)."""
+    for j in range(y.size):
         dy = ynew[j] - y[j]
         F[0, j] = dy
         F[1, j] = h * K[0, j] - dy
@@ -779,75 +786,6 @@ def integrate(P, y0, t_end, capacity, max_steps):
         if t >= t_end:
             break
     return gt, gy, gd, gf, gF, n, stop, 0
-
-
-@njit(cache=True, nogil=True)
-def _dense(P, y, h, d, mode, K, tmp, F, ynew):
-    """The coefficients F (7 x NY) of the tableau's continuous extension over the step of length h from y."""
-    if mode & CREEPING:
-        _extension_creep(P, y, h, d, mode, K, tmp, F, ynew)
-    else:
-        _extension(P, y, h, d, mode, K, tmp, F, ynew)
-
-
-@njit(cache=True, nogil=True)
-def _extension(P, y, h, d, mode, K, tmp, F, ynew):
-    """:func:`_dense` on the equation of motion."""
-    for i in range(16):
-        if i == _S:  # the stage at the step's end
-            for j in range(NY):
-                acc = 0.0
-                for m in range(_S):
-                    acc += _B[m] * K[m, j]
-                ynew[j] = y[j] + h * acc
-            _rhs(P, ynew, d, mode, K[_S])
-            continue
-        for j in range(NY):
-            acc = 0.0
-            for m in range(i):
-                acc += _AX[i, m] * K[m, j]
-            tmp[j] = y[j] + h * acc
-        _rhs(P, tmp, d, mode, K[i])
-    for j in range(NY):
-        dy = ynew[j] - y[j]
-        F[0, j] = dy
-        F[1, j] = h * K[0, j] - dy
-        F[2, j] = 2.0 * dy - h * (K[_S, j] + K[0, j])
-        for i in range(4):
-            acc = 0.0
-            for m in range(16):
-                acc += _D[i, m] * K[m, j]
-            F[3 + i, j] = h * acc
-
-
-@njit(cache=True, nogil=True)
-def _extension_creep(P, y, h, d, mode, K, tmp, F, ynew):
-    """:func:`_dense` on the slow manifold (a copy of :func:`_extension`)."""
-    for i in range(16):
-        if i == _S:  # the stage at the step's end
-            for j in range(NY):
-                acc = 0.0
-                for m in range(_S):
-                    acc += _B[m] * K[m, j]
-                ynew[j] = y[j] + h * acc
-            _creep(P, ynew, d, mode, K[_S])
-            continue
-        for j in range(NY):
-            acc = 0.0
-            for m in range(i):
-                acc += _AX[i, m] * K[m, j]
-            tmp[j] = y[j] + h * acc
-        _creep(P, tmp, d, mode, K[i])
-    for j in range(NY):
-        dy = ynew[j] - y[j]
-        F[0, j] = dy
-        F[1, j] = h * K[0, j] - dy
-        F[2, j] = 2.0 * dy - h * (K[_S, j] + K[0, j])
-        for i in range(4):
-            acc = 0.0
-            for m in range(16):
-                acc += _D[i, m] * K[m, j]
-            F[3 + i, j] = h * acc
 
 
 @njit(cache=True, nogil=True)

@@ -41,7 +41,6 @@ from ._ode import (
     _A,
     _AX,
     _B,
-    _D,
     _S,
     ALPHA,
     DY,
@@ -417,16 +416,7 @@ def _dense(P, S, y, h, d, mode, K, tmp, F, ynew):
                 acc += _AX[i, m] * K[m, j]
             tmp[j] = y[j] + h * acc
         _rhs(P, S, tmp, d, mode, K[i])
-    for j in range(NY):
-        dy = ynew[j] - y[j]
-        F[0, j] = dy
-        F[1, j] = h * K[0, j] - dy
-        F[2, j] = 2.0 * dy - h * (K[_S, j] + K[0, j])
-        for i in range(4):
-            acc = 0.0
-            for m in range(16):
-                acc += _D[i, m] * K[m, j]
-            F[3 + i, j] = h * acc
+    _ode.coefficients(y, ynew, h, K, F)
 
 
 @njit(cache=True, nogil=True)
