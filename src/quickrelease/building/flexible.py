@@ -30,6 +30,8 @@ from .._validate import finite_positive
 from ..errors import ParameterError
 from . import _ode, _ode_flexible
 from .hysteretic import MAX_STEPS, BoucWen, Pendulum
+from .hysteretic import _ode_net as _net
+from .hysteretic import _ode_stored as _stored
 from .model import Isolation, pushed_state
 
 __all__ = ["FlexibleBuilding", "FlexibleVibration", "free_vibration_flexible"]
@@ -233,24 +235,6 @@ class FlexibleVibration:
         return {**self.building.summary(), "d0_m": self.d0, "stop_time_s": self.stop_time,
                 "rest_displacement_m": self.rest[0], "half_cycles": int(peaks.size - 1),
                 "first_peak_m": float(peaks[1]) if peaks.size > 1 else None}
-
-
-def _net(P: np.ndarray, ys: np.ndarray) -> np.ndarray:
-    fh = np.zeros(ys.shape[:-1])
-    if P[_ode.HKIND] == _ode.H_BOUCWEN:
-        fh = P[_ode.Q] * ys[..., 2]
-    elif P[_ode.HKIND] == _ode.H_PLASTIC:
-        fh = ys[..., 2]
-    return P[_ode.K] * ys[..., 0] + fh
-
-
-def _stored(P: np.ndarray, ys: np.ndarray) -> np.ndarray:
-    e = 0.5 * P[_ode.K] * ys[..., 0] ** 2
-    if P[_ode.HKIND] == _ode.H_BOUCWEN:
-        e = e + 0.5 * P[_ode.Q] * P[_ode.DY] * ys[..., 2] ** 2
-    elif P[_ode.HKIND] == _ode.H_PLASTIC:
-        e = e + 0.5 * ys[..., 2] ** 2 / P[_ode.KP]
-    return e
 
 
 def free_vibration_flexible(building: FlexibleBuilding, d0: float, t_end: float | None = None) -> FlexibleVibration:
