@@ -583,12 +583,11 @@ def test_a_push_storing_more_than_1e300_joules_is_named():
 
 
 def test_a_horizon_beyond_1e4_periods_without_sliders_is_named():
-    """Without the sliders' friction the motion never ends: t_end = 1e308 s ran to MAX_STEPS (minutes, gigabytes).
-    At most 1e4 periods on the initial stiffness, 2 pi sqrt(m / k1) by hand; with sliders t_end is free (the
+    """Without the sliders' friction the motion never ends: t_end = 1e308 s ran 111 s and 14.9 GB to MAX_STEPS.
+    At most 1e4 periods on the post-yield stiffness, 2 pi sqrt(m / Kd) by hand; with sliders t_end is free (the
     motion stops on its own)."""
     kw = {**BOUCWEN_OK, "friction": 0.0}
-    k1 = kw["post_yield_stiffness"] + kw["characteristic_strength"] / kw["yield_displacement"]
-    most = 1.0e4 * 2.0 * math.pi * math.sqrt(kw["mass"] / k1)
+    most = 1.0e4 * 2.0 * math.pi * math.sqrt(kw["mass"] / kw["post_yield_stiffness"])
     for t_end in (1.0001 * most, 1.0e308):
         with pytest.raises(ParameterError, match=re.escape(f"s is outside (0, {most:.6g}] s, 10000 periods")) as info:
             free_vibration(BoucWen(**kw), 0.2, t_end=t_end)

@@ -28,7 +28,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from . import _ode, _ode_flexible
-from .hysteretic import MAX_STEPS, BoucWen, Pendulum, checked_d0, checked_horizon, real_number, shortest_period
+from .hysteretic import MAX_STEPS, BoucWen, Pendulum, checked_d0, checked_horizon, natural_period, real_number
 from .model import Isolation, pushed_state
 
 __all__ = ["FlexibleBuilding", "FlexibleVibration", "free_vibration_flexible"]
@@ -279,10 +279,7 @@ def free_vibration_flexible(building: FlexibleBuilding, d0: float, t_end: float 
         raise ParameterError("building", type(building).__name__, "a FlexibleBuilding")
     d0 = checked_d0(building.isolation, d0)
     P, S = building.vector()
-    # the shortest period: the base's on the layer's initial stiffness, or the storey's
-    period = min(shortest_period(building.isolation) * math.sqrt(building.base_mass / building.mass),
-                 building.superstructure_period)
-    horizon = checked_horizon(t_end, P[_ode.FSLOW], period)
+    horizon = checked_horizon(t_end, P[_ode.FSLOW], natural_period(building.isolation))  # the layer's, whole m
     z0 = pushed_state(building.isolation, d0)[0]
     y0 = np.array([d0, 0.0, z0, 0.0, 0.0, 0.0, d0, 0.0, 0.0])
     capacity = 4096

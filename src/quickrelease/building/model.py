@@ -501,10 +501,12 @@ def free_vibration(isolation: Isolation | Pendulum | BoucWen, d0: float, t_end: 
         :class:`~quickrelease.building.flexible.FlexibleBuilding` to its own solver (their results' ``state`` is
         the base's).
     d0 : float
-        Displacement of the isolation layer at the release [m] (reached by a monotonic push).
+        Displacement of the isolation layer at the release [m] (reached by a monotonic push); for the layers without a
+        closed form within a pendulum's radius and storing at most 1e300 J (:func:`~.hysteretic.checked_d0`).
     t_end : float, optional
         Follow the motion up to this time [s]; by default until the sliders stick for good (which needs
-        F_s > 0: without friction the motion never ends, and t_end is required).
+        F_s > 0: without friction the motion never ends, and t_end is required; for the layers without a closed
+        form at most :data:`~.hysteretic.MAX_PERIODS` natural periods).
     coarse : float
         Where the layer has no closed form (pendulum, Bouc-Wen, a power-law damper: the integrator of
         :mod:`quickrelease.building._ode`), its steps this many times longer, in [1, 4] (default 1). The fit's search
