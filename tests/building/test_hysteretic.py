@@ -17,7 +17,7 @@ pytest.importorskip("quickrelease.building.hysteretic")
 import isolator_reference as ref  # noqa: E402
 
 from quickrelease.building.hysteretic import BoucWen, Pendulum  # noqa: E402
-from quickrelease.building.model import Isolation, free_vibration  # noqa: E402
+from quickrelease.building.model import Isolation, TwoDOF, free_vibration  # noqa: E402
 from quickrelease.errors import ParameterError  # noqa: E402
 
 TOL = 1e-7  # of the amplitude (x), of the amplitude times omega (v), times omega^2 (a)
@@ -594,3 +594,15 @@ def test_a_horizon_beyond_1e4_periods_without_sliders_is_named():
         assert info.value.name == "t_end"
     stops = free_vibration(BoucWen(**{**kw, "friction": 5.0e4}), 0.2, t_end=1.0e308)
     assert math.isfinite(stops.stop_time) and stops.horizon == 1.0e308
+
+
+def test_the_closed_forms_worst_values_are_named_too():
+    """The linear layer's closed form: d0 = 1e308 m returned overflowed accelerations (k1 d0^2 / 2 > 1e300 J, by
+    hand); the closed-form TwoDOF took d0 = True as 1 m."""
+    k = 4.0e6
+    bound = math.sqrt(2.0e300 / k)
+    with pytest.raises(ParameterError, match=re.escape(f"|d0| < {bound:.6g} m")):
+        free_vibration(Isolation(1.0e6, k, 3.0e5, 0.0), 1.0e308, 5.0)
+    with pytest.raises(ParameterError) as info:
+        free_vibration(TwoDOF(1.0e6, 3.0e5, 2.0, 0.5), True, 5.0)
+    assert info.value.name == "d0"

@@ -501,8 +501,8 @@ def free_vibration(isolation: Isolation | Pendulum | BoucWen, d0: float, t_end: 
         :class:`~quickrelease.building.flexible.FlexibleBuilding` to its own solver (their results' ``state`` is
         the base's).
     d0 : float
-        Displacement of the isolation layer at the release [m] (reached by a monotonic push); for the layers without a
-        closed form within a pendulum's radius and storing at most 1e300 J (:func:`~.hysteretic.checked_d0`).
+        Displacement of the isolation layer at the release [m] (reached by a monotonic push), within a pendulum's
+        radius and storing at most 1e300 J in the layer (:func:`~.hysteretic.checked_d0`).
     t_end : float, optional
         Follow the motion up to this time [s]; by default until the sliders stick for good (which needs
         F_s > 0: without friction the motion never ends, and t_end is required; for the layers without a closed
@@ -518,6 +518,7 @@ def free_vibration(isolation: Isolation | Pendulum | BoucWen, d0: float, t_end: 
     FreeVibration
     """
     coarse = real_number("coarse", coarse, "[1, 4]", test=lambda v: 1.0 <= v <= 4.0)
+    d0 = real_number("d0", d0, "finite and non-zero", "m", test=lambda v: math.isfinite(v) and v != 0.0)
     if isinstance(isolation, TwoDOF):
         return free_vibration_2dof(isolation, d0, t_end)
     flexible = getattr(isolation, "free_vibration", None)  # a FlexibleBuilding (building.flexible) solves itself
@@ -526,13 +527,12 @@ def free_vibration(isolation: Isolation | Pendulum | BoucWen, d0: float, t_end: 
     if not isinstance(isolation, Isolation | Pendulum | BoucWen):
         raise ParameterError("isolation", type(isolation).__name__,
                              "an Isolation, Pendulum, BoucWen, TwoDOF or FlexibleBuilding")
-    d0 = real_number("d0", d0, "finite and non-zero", "m", test=lambda v: math.isfinite(v) and v != 0.0)
+    d0 = checked_d0(isolation, d0)  # 1e308 m: the closed form's accelerations overflowed too
     if isinstance(isolation, Pendulum) and isolation.constant_friction and isolation.damping_exponent == 1.0:
         # linear + Coulomb exactly, k = W / R, F_s = mu W: its closed form (the result's isolation is that)
         p = isolation
         return free_vibration(Isolation(p.mass, p.stiffness, p.damping, p.friction), d0, t_end)
     if isinstance(isolation, Pendulum | BoucWen) or isolation.damping_exponent != 1.0:
-        d0 = checked_d0(isolation, d0)
         z0 = pushed_state(isolation, d0)[0] if isinstance(isolation, Isolation) else isolation.pushed(d0)
         P = isolation.vector()
         P[_ode.COARSE] = coarse
