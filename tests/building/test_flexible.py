@@ -8,6 +8,7 @@ rigid hysteretic model in the limits T_s -> 0 and m_s -> 0. The heavier matrix o
 
 import math
 import os
+import re
 
 import isolator_reference as ref
 import numpy as np
@@ -297,3 +298,70 @@ def test_no_end_without_friction_needs_t_end():
     building = FlexibleBuilding(BoucWen(8.0e5, 1.6e6, 4.0e5, 0.025), 6.0e5, 0.5)
     with pytest.raises(ParameterError, match="t_end"):
         free_vibration_flexible(building, 0.1)
+
+
+# -- worst values as a user of the Python API gives them: a ParameterError naming the parameter --------------------
+
+NOT_NUMBERS = {"bool": True, "str": "abc", "empty": np.array([]), "array": np.array([0.2, 0.3])}
+
+
+@pytest.mark.parametrize("name", ["superstructure_mass", "superstructure_period", "superstructure_damping_ratio"])
+@pytest.mark.parametrize("label", list(NOT_NUMBERS))
+def test_a_building_value_that_is_not_a_number_is_named(name, label):
+    """True was taken as 1 kg, 1 s; a string or an empty array raised float()'s ValueError or TypeError."""
+    with pytest.raises(ParameterError) as info:
+        FlexibleBuilding(**{**GOOD, name: NOT_NUMBERS[label]})
+    assert info.value.name == name and "outside" in str(info.value)
+
+
+@pytest.mark.parametrize("Ts", [1.0e308, 1.0e-200])
+def test_a_storey_period_whose_stiffness_is_not_finite_and_positive_is_named(Ts):
+    """k_s = m_s (2 pi / T_s)^2 underflowed to 0 (T_s = 1e308 s: the roof not held, built silently) or overflows
+    to inf."""
+    with pytest.raises(ParameterError, match="superstructure_period.*storey's stiffness") as info:
+        FlexibleBuilding(**{**GOOD, "superstructure_period": Ts})
+    assert info.value.name == "superstructure_period"
+
+
+def test_0d_arrays_are_their_numbers():
+    b = FlexibleBuilding(BW, np.array(6.0e5), np.array(0.5), np.array(0.02))
+    assert type(b.superstructure_mass) is float and b == FlexibleBuilding(**GOOD)
+    a = free_vibration_flexible(b, np.array(0.2), np.array(1.0))
+    np.testing.assert_array_equal(a.states(np.linspace(0, 1, 5))["x_s"],
+                                  free_vibration_flexible(b, 0.2, 1.0).states(np.linspace(0, 1, 5))["x_s"])
+
+
+@pytest.mark.parametrize("name", ["d0", "t_end"])
+@pytest.mark.parametrize("label", list(NOT_NUMBERS))
+def test_a_motion_value_that_is_not_a_number_is_named(name, label):
+    args = {"d0": 0.2, "t_end": 1.0, name: NOT_NUMBERS[label]}
+    for solve in (free_vibration_flexible, free_vibration):
+        with pytest.raises(ParameterError) as info:
+            solve(FlexibleBuilding(**GOOD), args["d0"], args["t_end"])
+        assert info.value.name == name and "outside" in str(info.value)
+
+
+def test_a_push_storing_more_than_1e300_joules_is_named():
+    """d0 = 1e308 m returned a motion of NaN. The bound by hand: the layer's k1 d0^2 / 2 <= 1e300 J."""
+    k1 = BW.post_yield_stiffness + BW.characteristic_strength / BW.yield_displacement
+    bound = math.sqrt(2.0e300 / k1)
+    for d0 in (1.0e308, -1.001 * bound):
+        with pytest.raises(ParameterError, match=re.escape(f"|d0| < {bound:.6g} m")) as info:
+            free_vibration_flexible(FlexibleBuilding(**GOOD), d0, t_end=1.0)
+        assert info.value.name == "d0"
+
+
+def test_a_horizon_beyond_1e4_periods_without_sliders_is_named():
+    """Without the sliders' friction the motion never ends: t_end = 1e308 s ran to MAX_STEPS (minutes). At most
+    1e4 of the layer's period on its post-yield stiffness with the whole mass, 2 pi sqrt(m / Kd), by hand; with
+    sliders t_end = 1e308 s is followed until the base is held."""
+    building = FlexibleBuilding(BoucWen(8.0e5, 1.6e6, 4.0e5, 0.025), 6.0e5, 1.0)
+    most = 1.0e4 * 2.0 * math.pi * math.sqrt(8.0e5 / 1.6e6)
+    with pytest.raises(ParameterError, match=re.escape(f"(0, {most:.6g}] s")) as info:
+        free_vibration_flexible(building, 0.1, t_end=1.0e308)
+    assert info.value.name == "t_end"
+    with pytest.raises(ParameterError, match="t_end"):
+        free_vibration_flexible(building, 0.1, t_end=1.001 * most)
+    free_vibration_flexible(building, 0.1, t_end=1.0)
+    held = free_vibration_flexible(FlexibleBuilding(**GOOD), 0.2, t_end=1.0e308)
+    assert math.isfinite(held.stop_time)

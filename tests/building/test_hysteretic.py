@@ -6,6 +6,7 @@ is the viscous damper.
 """
 
 import math
+import re
 from functools import cache
 
 import numpy as np
@@ -16,7 +17,7 @@ pytest.importorskip("quickrelease.building.hysteretic")
 import isolator_reference as ref  # noqa: E402
 
 from quickrelease.building.hysteretic import BoucWen, Pendulum  # noqa: E402
-from quickrelease.building.model import Isolation, free_vibration  # noqa: E402
+from quickrelease.building.model import Isolation, TwoDOF, free_vibration  # noqa: E402
 from quickrelease.errors import ParameterError  # noqa: E402
 
 TOL = 1e-7  # of the amplitude (x), of the amplitude times omega (v), times omega^2 (a)
@@ -502,3 +503,106 @@ def test_a_power_law_damper_holds_a_creep_past_the_holding_limit():
     assert motion.stop_time == pytest.approx(r.reversal_times[-1], abs=1e-8)
     assert abs(float(motion.state(np.array([6.4]))[0][0]) - float(r.x[0])) < 1e-10
     assert motion._grid[4] < 1000
+
+
+# -- the horizon cuts the turning points (the integration's last step may run past t_end) ----------------------
+
+@pytest.mark.parametrize("t_end, before", [(1.0912, 1), (1.7667, 2)])
+def test_turning_points_end_at_the_horizon(t_end, before):
+    """A Bouc-Wen layer without sliders reverses at 1.1024 s and 1.7798 s; followed to 11-13 ms before either, the
+    integration's last step ran past t_end and listed that reversal. The reference, followed to t_end, lists the
+    release and the reversals before it (``before`` of them with the release), at the same instants and places."""
+    kw = dict(mass=8.0e5, post_yield_stiffness=1.6e6, characteristic_strength=4.0e5, yield_displacement=0.025)
+    motion = free_vibration(BoucWen(**kw), 0.2, t_end=t_end)
+    r = ref.simulate(ref.boucwen(**kw), 0.2, np.array([t_end]), t_end=t_end)
+    assert r.reversal_times.size == before and np.all(r.reversal_times <= t_end)
+    assert motion.reversal_times.size == motion.turning_points.size == before
+    np.testing.assert_allclose(motion.reversal_times, r.reversal_times, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(motion.turning_points, r.turning_points, rtol=0, atol=1e-8)
+    assert motion.summary()["half_cycles"] == before - 1
+    # the next reversal is just past the horizon (the case is the one the cut is for)
+    assert t_end < free_vibration(BoucWen(**kw), 0.2, t_end=t_end + 0.1).reversal_times[before] < t_end + 0.02
+
+
+# -- worst values as a user of the Python API gives them: a ParameterError naming the parameter --------------------
+
+NOT_NUMBERS = [True, "abc", np.array([]), np.array([0.2, 0.3])]
+
+
+@pytest.mark.parametrize("system", [Pendulum(**PENDULUM_OK), BoucWen(**BOUCWEN_OK)], ids=["pendulum", "boucwen"])
+@pytest.mark.parametrize("name", ["d0", "t_end", "coarse"])
+@pytest.mark.parametrize("value", NOT_NUMBERS, ids=["bool", "str", "empty", "array"])
+def test_a_value_that_is_not_a_number_is_named(system, name, value):
+    """A bool (True was taken as 1 m, 1 s, coarse 1), a string, an empty or a longer array (a ValueError or TypeError
+    from float() deep in the call): a ParameterError naming the parameter and the valid range."""
+    args = {"d0": 0.2, "t_end": 2.0, "coarse": 1.0, name: value}
+    with pytest.raises(ParameterError) as info:
+        free_vibration(system, args["d0"], args["t_end"], coarse=args["coarse"])
+    assert info.value.name == name and "outside" in str(info.value)
+
+
+def test_a_0d_array_is_its_number():
+    system = BoucWen(**BOUCWEN_OK)
+    a = free_vibration(system, np.array(0.2), np.array(2.0), coarse=np.array(1.0))
+    b = free_vibration(system, 0.2, 2.0)
+    np.testing.assert_array_equal(a.state(np.linspace(0, 2, 9))[0], b.state(np.linspace(0, 2, 9))[0])
+
+
+@pytest.mark.parametrize("value", [math.nan, 1.0e308, "pendulum", None, np.array(1.0)])
+def test_what_is_not_an_isolation_is_named(value):
+    """It was an AttributeError (``'float' object has no attribute 'damping_exponent'``)."""
+    with pytest.raises(ParameterError) as info:
+        free_vibration(value, 0.2, 2.0)
+    assert info.value.name == "isolation" and "Pendulum" in str(info.value)
+
+
+def test_a_push_beyond_the_pendulum_radius_is_named():
+    """|d0| < R (a point of the spherical surface, x = R sin theta): d0 = 1e308 m ran into MAX_STEPS (minutes; the
+    steps resolving mu(v) shrink as the speed grows: 1e4 m took more than 20 s)."""
+    system = Pendulum(**PENDULUM_OK)
+    R = PENDULUM_OK["radius"]
+    free_vibration(system, -0.999 * R, t_end=0.5)
+    for d0 in (R, -R, 1.0e4, 1.0e308):
+        with pytest.raises(ParameterError, match=rf"d0 = .* m is outside non-zero, \|d0\| < {R:g} m") as info:
+            free_vibration(system, d0, t_end=0.5)
+        assert info.value.name == "d0"
+
+
+def test_a_push_storing_more_than_1e300_joules_is_named():
+    """d0 = 1e153 m on a Bouc-Wen layer overflowed its forces and works: the integration ran on NaN (a hang) and
+    1e308 m returned NaN motion. The bound by hand: k1 d0^2 / 2 <= 1e300 J, k1 = Kd + Qd / dy."""
+    kw = {**BOUCWEN_OK, "friction": 0.0}
+    k1 = kw["post_yield_stiffness"] + kw["characteristic_strength"] / kw["yield_displacement"]
+    bound = math.sqrt(2.0e300 / k1)
+    motion = free_vibration(BoucWen(**kw), 0.5 * bound, t_end=0.5)
+    assert np.all(np.isfinite(motion.state(np.linspace(0.0, 0.5, 5))[0]))
+    for d0 in (1.001 * bound, -1.0e153, 1.0e308):
+        with pytest.raises(ParameterError, match=re.escape(f"|d0| < {bound:.6g} m (the push's energy")) as info:
+            free_vibration(BoucWen(**kw), d0, t_end=0.5)
+        assert info.value.name == "d0"
+
+
+def test_a_horizon_beyond_1e4_periods_without_sliders_is_named():
+    """Without the sliders' friction the motion never ends: t_end = 1e308 s ran 111 s and 14.9 GB to MAX_STEPS.
+    At most 1e4 periods on the post-yield stiffness, 2 pi sqrt(m / Kd) by hand; with sliders t_end is free (the
+    motion stops on its own)."""
+    kw = {**BOUCWEN_OK, "friction": 0.0}
+    most = 1.0e4 * 2.0 * math.pi * math.sqrt(kw["mass"] / kw["post_yield_stiffness"])
+    for t_end in (1.0001 * most, 1.0e308):
+        with pytest.raises(ParameterError, match=re.escape(f"s is outside (0, {most:.6g}] s, 10000 periods")) as info:
+            free_vibration(BoucWen(**kw), 0.2, t_end=t_end)
+        assert info.value.name == "t_end"
+    stops = free_vibration(BoucWen(**{**kw, "friction": 5.0e4}), 0.2, t_end=1.0e308)
+    assert math.isfinite(stops.stop_time) and stops.horizon == 1.0e308
+
+
+def test_the_closed_forms_worst_values_are_named_too():
+    """The linear layer's closed form: d0 = 1e308 m returned overflowed accelerations (k1 d0^2 / 2 > 1e300 J, by
+    hand); the closed-form TwoDOF took d0 = True as 1 m."""
+    k = 4.0e6
+    bound = math.sqrt(2.0e300 / k)
+    with pytest.raises(ParameterError, match=re.escape(f"|d0| < {bound:.6g} m")):
+        free_vibration(Isolation(1.0e6, k, 3.0e5, 0.0), 1.0e308, 5.0)
+    with pytest.raises(ParameterError) as info:
+        free_vibration(TwoDOF(1.0e6, 3.0e5, 2.0, 0.5), True, 5.0)
+    assert info.value.name == "d0"

@@ -8,17 +8,15 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from analysis_capture import invoke_keeping_analysis
 from matplotlib.figure import Figure
-from typer.testing import CliRunner
 
 from quickrelease import simulate
-from quickrelease.cli import app
 from quickrelease.errors import QuickReleaseError
 
 pytestmark = pytest.mark.usefixtures("few_band_draws")  # the bands' width is not looked at here
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
-runner = CliRunner()
 
 
 @pytest.fixture(scope="module")
@@ -30,19 +28,8 @@ def response():
 def building_run(tmp_path_factory):
     """``quickrelease building examples/building.toml --out <tmp>/b`` and the analysis behind it (analyse_building's
     return, taken on its way to the command: the fit made once)."""
-    import quickrelease.studies.building_analysis as analysis
-
     out = tmp_path_factory.mktemp("building") / "b"
-    made = []
-
-    def kept(*args, **kwargs):
-        made.append(real(*args, **kwargs))
-        return made[-1]
-
-    real = analysis.analyse_building
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(analysis, "analyse_building", kept)
-        r = runner.invoke(app, ["building", str(EXAMPLES / "building.toml"), "--out", str(out)])
+    r, made = invoke_keeping_analysis(["building", str(EXAMPLES / "building.toml"), "--out", str(out)])
     assert r.exit_code == 0, r.output
     (result,) = made
     return out, r, result

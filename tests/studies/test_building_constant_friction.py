@@ -15,15 +15,15 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from typer.testing import CliRunner
 
 import quickrelease.studies.building_analysis as ba
 from quickrelease.building import Pendulum
-from quickrelease.cli import _building_tables, app
+from quickrelease.cli import _building_tables
 from quickrelease.report.html import building_section
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "building"))
 import isolator_reference as ref  # noqa: E402
+from analysis_capture import invoke_keeping_analysis  # noqa: E402
 
 pytestmark = pytest.mark.usefixtures("few_band_draws")  # the bands' width is not looked at here
 
@@ -31,7 +31,6 @@ G = ref.GRAVITY
 M, R, MU, ZETA, D0 = 1.0e6, 2.5, 0.01, 0.01, 0.2
 K = M * G / R
 RATE, PRE, RELEASE, DURATION, NOISE = 50.0, 1.0, 0.0137, 8.0, 2e-4  # Hz, s, s, s, m
-runner = CliRunner()
 
 # design values a little off the truth (start values of the fit)
 BUILDING = """[building]
@@ -66,16 +65,7 @@ def command(tmp_path_factory):
     (analyse_building's return, taken on its way to the command)."""
     folder = tmp_path_factory.mktemp("constant")
     path = _case(folder)
-    kept = []
-
-    def keep(*args, **kwargs):
-        kept.append(analyse(*args, **kwargs))
-        return kept[-1]
-
-    analyse = ba.analyse_building
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(ba, "analyse_building", keep)
-        r = runner.invoke(app, ["building", str(path), "--json"])
+    r, kept = invoke_keeping_analysis(["building", str(path), "--json"])
     assert r.exit_code == 0, r.output
     return json.loads(r.stdout), kept[0]
 

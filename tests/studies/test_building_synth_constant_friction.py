@@ -90,3 +90,40 @@ def test_constantinou_s_law_keeps_its_three_rows(tmp_path):
     law = PENDULUM.replace(f"friction_coefficient = {MU}", "friction_slow = 0.03\nfriction_fast = 0.06\nrate = 30.0")
     rows = predicted_building_errors(_synth(tmp_path, law)).physical()
     assert {"friction_slow", "friction_fast", "rate_s_m"} <= set(rows) and "friction_coefficient" not in rows
+
+
+def test_the_json_truth_is_the_one_coefficient_the_case_says(tmp_path):
+    """`synth --building --json` of a constant-friction pendulum: its truth is what the case says and the fit
+    reports (studies.building_analysis.physical_estimates): ``constant_friction`` True and one
+    ``friction_coefficient`` mu, not Constantinou's friction_slow, friction_fast and a rate of 0. The case file it
+    writes says so too (read back by the case grammar: a constant friction coefficient mu); Constantinou's law keeps
+    its three."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from quickrelease.cli import app
+    from quickrelease.io.building_case import constant_friction
+
+    runner = CliRunner()
+    args = ["--building", "--channels", "x", "--rate", "50 Hz", "--release-time", "1 s", "--duration", "4 s",
+            "--overwrite", "--json"]
+    law = PENDULUM.replace(f"friction_coefficient = {MU}", "friction_slow = 0.03\nfriction_fast = 0.06\nrate = 30.0")
+    for name, building in (("constant", PENDULUM), ("law", law)):
+        path = tmp_path / f"{name}.toml"
+        path.write_text("[building]\n" + building + f'displacement = "{D0 * 1e3:g} mm"\n', encoding="utf-8")
+        r = runner.invoke(app, ["synth", str(path), *args, "--out", str(tmp_path / f"{name}.csv"), "--case-out",
+                                str(tmp_path / f"{name}_case.toml")])
+        assert r.exit_code == 0, r.output
+        truth = json.loads(r.stdout)["truth"]
+        assert truth["model"] == "pendulum" and truth["radius_m"] == R and truth["friction_N"] == pytest.approx(
+            {"constant": MU, "law": 0.03}[name] * W, rel=1e-15)
+        spec = load_case(tmp_path / f"{name}_case.toml", require_test=False).building
+        if name == "constant":
+            assert truth["constant_friction"] is True and truth["friction_coefficient"] == MU
+            assert not {"friction_slow", "friction_fast", "rate_s_m"} & set(truth)
+            assert constant_friction(spec) and spec.friction_coefficient == MU
+        else:
+            assert "friction_coefficient" not in truth and "constant_friction" not in truth
+            assert (truth["friction_slow"], truth["friction_fast"], truth["rate_s_m"]) == (0.03, 0.06, 30.0)
+            assert not constant_friction(spec) and spec.friction_fast == 0.06

@@ -26,10 +26,9 @@ from typing import Any
 
 import numpy as np
 
-from .._validate import finite_positive
 from ..errors import ParameterError
 from . import _ode, _ode_flexible
-from .hysteretic import MAX_STEPS, BoucWen, Pendulum
+from .hysteretic import MAX_STEPS, BoucWen, Pendulum, checked_d0, checked_horizon, natural_period, real_number
 from .hysteretic import _ode_net as _net
 from .hysteretic import _ode_stored as _stored
 from .model import Isolation, pushed_state
@@ -57,13 +56,20 @@ class FlexibleBuilding:
         if iso.damping_exponent != 1.0:
             raise ParameterError("damping_exponent", iso.damping_exponent,
                                  "1 (a viscous damper) under a flexible superstructure")
-        ms = finite_positive("superstructure_mass", self.superstructure_mass, "kg")
-        if not ms < iso.mass:
-            raise ParameterError("superstructure_mass", ms, f"(0, mass) = (0, {iso.mass:.6g}) kg", "kg")
-        finite_positive("superstructure_period", self.superstructure_period, "s")
-        zs = float(self.superstructure_damping_ratio)
-        if not (math.isfinite(zs) and 0.0 <= zs < 1.0):
-            raise ParameterError("superstructure_damping_ratio", zs, "[0, 1)")
+        ms = real_number("superstructure_mass", self.superstructure_mass, f"(0, mass) = (0, {iso.mass:.6g}) kg",
+                         "kg", test=lambda v: 0.0 < v < iso.mass)
+        Ts = real_number("superstructure_period", self.superstructure_period, "(0, inf)", "s",
+                         test=lambda v: math.isfinite(v) and v > 0.0)
+        w = 2.0 * math.pi / Ts
+        ks = ms * w * w  # (not ** 2: a float's power raises OverflowError where a product is inf)
+        if not (math.isfinite(ks) and ks > 0.0):  # 1e308 s: k_s = 0, the roof not held; 1e-200: inf
+            raise ParameterError("superstructure_period", Ts, f"(0, inf) s with the storey's stiffness "
+                                 f"m_s (2 pi / T_s)^2 finite and > 0 (it is {ks:.6g} N/m)", "s")
+        zs = real_number("superstructure_damping_ratio", self.superstructure_damping_ratio, "[0, 1)",
+                         test=lambda v: 0.0 <= v < 1.0)
+        object.__setattr__(self, "superstructure_mass", ms)  # a 0-d array or numpy scalar given: a float kept
+        object.__setattr__(self, "superstructure_period", Ts)
+        object.__setattr__(self, "superstructure_damping_ratio", zs)
 
     model = "flexible"
 
@@ -255,17 +261,9 @@ def free_vibration_flexible(building: FlexibleBuilding, d0: float, t_end: float 
     """
     if not isinstance(building, FlexibleBuilding):
         raise ParameterError("building", type(building).__name__, "a FlexibleBuilding")
-    d0 = float(d0)
-    if not math.isfinite(d0) or d0 == 0.0:
-        raise ParameterError("d0", d0, "finite and non-zero", "m")
+    d0 = checked_d0(building.isolation, d0)
     P, S = building.vector()
-    if t_end is None:
-        if P[_ode.FSLOW] == 0.0:
-            raise ParameterError("t_end", None, "a finite time in (0, inf) s when the isolation has no sliders' "
-                                 "friction (the motion never ends)")
-        horizon = math.inf
-    else:
-        horizon = finite_positive("t_end", t_end, "s")
+    horizon = checked_horizon(t_end, P[_ode.FSLOW], natural_period(building.isolation))  # the layer's, whole m
     z0 = pushed_state(building.isolation, d0)[0]
     y0 = np.array([d0, 0.0, z0, 0.0, 0.0, 0.0, d0, 0.0, 0.0])
     capacity = 4096

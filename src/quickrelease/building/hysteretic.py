@@ -28,11 +28,12 @@ from typing import Any
 
 import numpy as np
 
-from .._validate import finite_nonnegative, finite_positive
+from .._validate import check_real, finite_nonnegative, finite_positive
 from ..errors import ParameterError
 from . import _ode
 
-__all__ = ["GRAVITY", "Pendulum", "BoucWen", "HystereticVibration", "SHAPE_RANGE", "EXPONENT_RANGE"]
+__all__ = ["GRAVITY", "Pendulum", "BoucWen", "HystereticVibration", "SHAPE_RANGE", "EXPONENT_RANGE", "MAX_PERIODS",
+           "MAX_PUSH_ENERGY"]
 
 #: Standard gravity [m/s^2]: the weight W = m g on the sliders.
 GRAVITY = 9.80665
@@ -49,6 +50,61 @@ PUSH_STEPS = 4
 RATE_RANGE = (0.0, 1.0e4)
 #: Most steps one free vibration may take.
 MAX_STEPS = 20_000_000
+#: Most of its natural periods on the post-yield stiffness (:func:`natural_period`) a free vibration without the
+#: sliders' friction (one that never ends) may be followed: a horizon of 1e308 s ran 111 s and 14.9 GB into
+#: :data:`MAX_STEPS` (a Bouc-Wen layer of 4.4 s: 1e4 periods are ~1.3 million steps, ~15 s).
+MAX_PERIODS = 10_000
+#: Largest energy [J] the push may store in the layer, ``k1 d0^2 / 2`` (its initial stiffness k1): beyond ~1e308
+#: the forces and works overflow and the integration ran on NaN (d0 = 1e153 m).
+MAX_PUSH_ENERGY = 1.0e300
+
+
+def real_number(name: str, value, valid: str, unit: str = "", test=math.isfinite) -> float:
+    """``float(value)``; ParameterError (naming ``name``, its value and ``valid``) unless ``value`` is a real number
+    (an int, float, numpy scalar or 0-d numeric array; not a bool, a string or an array) for which ``test`` holds."""
+    if isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "iuf":
+        value = value[()]
+    return check_real(name, value, valid, unit, test=test)
+
+
+def checked_d0(system, d0) -> float:
+    """The release displacement d0 [m] as a float: ParameterError unless it is a real number, finite, non-zero,
+    within a pendulum's radius R (a point of its spherical surface) and storing at most :data:`MAX_PUSH_ENERGY`
+    in the layer's initial stiffness (``k1 d0^2 / 2``)."""
+    d0 = real_number("d0", d0, "finite and non-zero", "m", test=lambda v: math.isfinite(v) and v != 0.0)
+    reach = math.sqrt(2.0 * MAX_PUSH_ENERGY / float(system.stiffness))
+    if isinstance(system, Pendulum):
+        reach = min(reach, float(system.radius))
+    if not abs(d0) < reach:
+        what = "the radius R" if isinstance(system, Pendulum) and reach == float(system.radius) else \
+            f"the push's energy k1 d0^2 / 2 <= {MAX_PUSH_ENERGY:g} J"
+        raise ParameterError("d0", d0, f"non-zero, |d0| < {reach:.6g} m ({what})", "m")
+    return d0
+
+
+def checked_horizon(t_end, friction: float, period: float) -> float:
+    """How long to follow a free vibration [s]: ``t_end`` (a real number, finite and > 0), or with None until the
+    sliders hold it for good (inf), which needs their ``friction`` [N] > 0; without friction (the motion never
+    ends) at most :data:`MAX_PERIODS` of the system's natural ``period`` [s]. ParameterError naming t_end
+    otherwise."""
+    if t_end is None:
+        if friction == 0.0:
+            raise ParameterError("t_end", None, "a finite time in (0, inf) s when the isolation has no sliders' "
+                                 "friction (the motion never ends)")
+        return math.inf
+    horizon = real_number("t_end", t_end, "(0, inf)", "s", test=lambda v: math.isfinite(v) and v > 0.0)
+    if friction == 0.0 and not horizon <= MAX_PERIODS * period:
+        raise ParameterError("t_end", horizon, f"(0, {MAX_PERIODS * period:.6g}] s, {MAX_PERIODS} periods of "
+                             f"{period:.6g} s, when the isolation has no sliders' friction (the motion never ends)",
+                             "s")
+    return horizon
+
+
+def natural_period(system) -> float:
+    """The layer's period on its post-yield stiffness k2, ``2 pi sqrt(m / k2)`` [s] (the pendulum's W / R, the
+    Bouc-Wen element's Kd, the linear model's k): the longest of its elastic motions, the scale of
+    :data:`MAX_PERIODS` (generous: the steps follow the shorter ones)."""
+    return 2.0 * math.pi * math.sqrt(float(system.mass) / float(system.k2))
 
 
 def viscous_damping_ratio(system) -> float:
@@ -298,19 +354,22 @@ class HystereticVibration:
         y = self._grid[1][self._grid[4] - 1]
         return float(y[0]), float(y[2])
 
+    def _turns(self) -> np.ndarray:
+        """Grid indices of the turning points after the release, within the horizon (the integration's last step
+        may run past it and find an event there)."""
+        gt, _, gd, _, n = self._grid
+        turns = np.flatnonzero((gd[1:n] != gd[: n - 1]) & (gd[: n - 1] != 0.0)) + 1
+        return turns[gt[turns] <= self.horizon]
+
     @property
     def reversal_times(self) -> np.ndarray:
-        """Times of the turning points, the release instant first [s]."""
-        gt, gy, gd, _, n = self._grid
-        turns = np.flatnonzero((gd[1:n] != gd[: n - 1]) & (gd[: n - 1] != 0.0)) + 1
-        return np.concatenate(([0.0], gt[turns]))
+        """Times of the turning points within the horizon, the release instant first [s]."""
+        return np.concatenate(([0.0], self._grid[0][self._turns()]))
 
     @property
     def turning_points(self) -> np.ndarray:
-        """Displacements at the turning points, d0 first [m]."""
-        gt, gy, gd, _, n = self._grid
-        turns = np.flatnonzero((gd[1:n] != gd[: n - 1]) & (gd[: n - 1] != 0.0)) + 1
-        return np.concatenate(([self.d0], gy[turns, 0]))
+        """Displacements at the turning points within the horizon, d0 first [m]."""
+        return np.concatenate(([self.d0], self._grid[1][self._turns(), 0]))
 
     def _evaluate(self, t) -> tuple[np.ndarray, np.ndarray]:
         t = np.asarray(t, dtype=float)
@@ -388,16 +447,8 @@ def _ode_stored(P: np.ndarray, ys: np.ndarray) -> np.ndarray:
 def hysteretic_vibration(system, P: np.ndarray, z0: float, d0: float, t_end: float | None) -> HystereticVibration:
     """The free vibration of ``system`` (parameter vector P, hysteretic variable z0 after the push to d0 [m]) up
     to t_end [s] (None: until the sliders stick, which needs friction)."""
-    d0 = float(d0)
-    if not math.isfinite(d0) or d0 == 0.0:
-        raise ParameterError("d0", d0, "finite and non-zero", "m")
-    if t_end is None:
-        if P[_ode.FSLOW] == 0.0:
-            raise ParameterError("t_end", None, "a finite time in (0, inf) s when the isolation has no sliders' "
-                                 "friction (the motion never ends)")
-        horizon = math.inf
-    else:
-        horizon = finite_positive("t_end", t_end, "s")
+    d0 = checked_d0(system, d0)
+    horizon = checked_horizon(t_end, P[_ode.FSLOW], natural_period(system))
     y0 = np.array([d0, 0.0, z0, 0.0, 0.0, 0.0])
     capacity = 4096
     while True:

@@ -37,7 +37,15 @@ from scipy.optimize import brentq
 from .._validate import finite_nonnegative, finite_positive
 from ..errors import ParameterError
 from . import _ode
-from .hysteretic import BoucWen, HystereticVibration, Pendulum, damping_exponent, hysteretic_vibration
+from .hysteretic import (
+    BoucWen,
+    HystereticVibration,
+    Pendulum,
+    checked_d0,
+    damping_exponent,
+    hysteretic_vibration,
+    real_number,
+)
 
 __all__ = ["Isolation", "FreeVibration", "free_vibration", "pushed_state", "MODELS", "TwoDOF", "TwoDOFVibration",
            "free_vibration_2dof", "RECORD_CHANNELS"]
@@ -474,7 +482,7 @@ def _horizon(t_end: float | None, friction: float) -> float:
     """How long to follow a free vibration [s]: ``t_end`` (finite and > 0), or with None until the sliders hold it
     for good (inf), which needs their ``friction`` [N] > 0; ParameterError naming t_end otherwise."""
     if t_end is not None:
-        return finite_positive("t_end", t_end, "s")
+        return real_number("t_end", t_end, "(0, inf)", "s", test=lambda v: math.isfinite(v) and v > 0.0)
     if friction == 0.0:
         raise ParameterError("t_end", None, "a finite time in (0, inf) s when the sliders have no friction "
                              "(the motion never ends)")
@@ -493,10 +501,12 @@ def free_vibration(isolation: Isolation | Pendulum | BoucWen, d0: float, t_end: 
         :class:`~quickrelease.building.flexible.FlexibleBuilding` to its own solver (their results' ``state`` is
         the base's).
     d0 : float
-        Displacement of the isolation layer at the release [m] (reached by a monotonic push).
+        Displacement of the isolation layer at the release [m] (reached by a monotonic push), within a pendulum's
+        radius and storing at most 1e300 J in the layer (:func:`~.hysteretic.checked_d0`).
     t_end : float, optional
         Follow the motion up to this time [s]; by default until the sliders stick for good (which needs
-        F_s > 0: without friction the motion never ends, and t_end is required).
+        F_s > 0: without friction the motion never ends, and t_end is required; for the layers without a closed
+        form at most :data:`~.hysteretic.MAX_PERIODS` natural periods).
     coarse : float
         Where the layer has no closed form (pendulum, Bouc-Wen, a power-law damper: the integrator of
         :mod:`quickrelease.building._ode`), its steps this many times longer, in [1, 4] (default 1). The fit's search
@@ -507,22 +517,22 @@ def free_vibration(isolation: Isolation | Pendulum | BoucWen, d0: float, t_end: 
     -------
     FreeVibration
     """
-    coarse = float(coarse)
-    if not 1.0 <= coarse <= 4.0:
-        raise ParameterError("coarse", coarse, "[1, 4]")
+    coarse = real_number("coarse", coarse, "[1, 4]", test=lambda v: 1.0 <= v <= 4.0)
+    d0 = real_number("d0", d0, "finite and non-zero", "m", test=lambda v: math.isfinite(v) and v != 0.0)
     if isinstance(isolation, TwoDOF):
         return free_vibration_2dof(isolation, d0, t_end)
     flexible = getattr(isolation, "free_vibration", None)  # a FlexibleBuilding (building.flexible) solves itself
-    if flexible is not None:
+    if flexible is not None and not isinstance(isolation, type):
         return flexible(d0, t_end)
+    if not isinstance(isolation, Isolation | Pendulum | BoucWen):
+        raise ParameterError("isolation", type(isolation).__name__,
+                             "an Isolation, Pendulum, BoucWen, TwoDOF or FlexibleBuilding")
+    d0 = checked_d0(isolation, d0)  # 1e308 m: the closed form's accelerations overflowed too
     if isinstance(isolation, Pendulum) and isolation.constant_friction and isolation.damping_exponent == 1.0:
         # linear + Coulomb exactly, k = W / R, F_s = mu W: its closed form (the result's isolation is that)
         p = isolation
         return free_vibration(Isolation(p.mass, p.stiffness, p.damping, p.friction), d0, t_end)
     if isinstance(isolation, Pendulum | BoucWen) or isolation.damping_exponent != 1.0:
-        d0 = float(d0)
-        if not math.isfinite(d0) or d0 == 0.0:
-            raise ParameterError("d0", d0, "finite and non-zero", "m")
         z0 = pushed_state(isolation, d0)[0] if isinstance(isolation, Isolation) else isolation.pushed(d0)
         P = isolation.vector()
         P[_ode.COARSE] = coarse

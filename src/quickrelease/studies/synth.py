@@ -30,7 +30,7 @@ from .fit import case_friction
 
 __all__ = ["DEFAULT_NOISE", "SyntheticRecord", "synthesize", "predicted_errors", "parse_channel_values", "case_toml",
            "BUILDING_NOISE", "SyntheticBuildingRecord", "synthesize_building", "building_case_toml",
-           "predicted_building_errors", "ConstantFrictionPrecision"]
+           "predicted_building_errors", "ConstantFrictionPrecision", "constant_friction_truth"]
 
 #: Default noise standard deviations [SI]: video angle, gyroscope, draw-wire or LVDT displacements,
 #: velocity transducers, accelerometers (about 5 mg).
@@ -337,8 +337,10 @@ class SyntheticBuildingRecord(_Synthetic):
 
     truth: dict[str, Any]
     """The building (model, mass_kg, period_s, damping_ratio, friction_N; bilinear k1_N_m, k2_N_m, Fy_N; 2dof
-    superstructure_mass_kg, superstructure_period_s, superstructure_damping_ratio),
-    d0_m, release_time_s and stop_time_s (after the release; None: still moving at the end of the record)."""
+    superstructure_mass_kg, superstructure_period_s, superstructure_damping_ratio; pendulum radius_m and
+    Constantinou's friction_slow, friction_fast, rate_s_m, or for a constant coefficient constant_friction True and
+    one friction_coefficient, :func:`constant_friction_truth`), d0_m, release_time_s and stop_time_s (after the
+    release; None: still moving at the end of the record)."""
     constant_friction: bool = False
     """The pendulum's friction is a constant coefficient (``[building] friction_coefficient``): its fit holds the
     rate at 0 and mu_fast at mu (:func:`quickrelease.io.building_case.constant_friction_fixed`)."""
@@ -371,7 +373,11 @@ class SyntheticBuildingRecord(_Synthetic):
         else:
             p["damping_ratio"] = t["damping_ratio"]
         if t["model"] == "pendulum":
-            p.update(friction_slow=t["friction_slow"], friction_fast=t["friction_fast"], rate=t["rate_s_m"])
+            if "friction_coefficient" in t:  # constant friction (constant_friction_truth): mu(v) = mu
+                mu = t["friction_coefficient"]
+                p.update(friction_slow=mu, friction_fast=mu, rate=0.0)
+            else:
+                p.update(friction_slow=t["friction_slow"], friction_fast=t["friction_fast"], rate=t["rate_s_m"])
         else:
             p["friction"] = t["friction_N"]
         if t["model"] == "boucwen":
@@ -429,6 +435,21 @@ def predicted_building_errors(synthetic: SyntheticBuildingRecord) -> IsolationPr
     return ConstantFrictionPrecision(**{f.name: getattr(pred, f.name) for f in fields(pred)})
 
 
+def constant_friction_truth(truth: dict[str, Any]) -> dict[str, Any]:
+    """The truth of a friction pendulum of constant friction (``[building] friction_coefficient``) as its case says
+    it and its fit reports it (:func:`quickrelease.studies.building_analysis.physical_estimates`): one
+    ``friction_coefficient`` mu [-] (the summary's friction_slow) with ``constant_friction`` True, not Constantinou's
+    friction_slow, friction_fast and a rate of 0, in the summary's place."""
+    out: dict[str, Any] = {}
+    for key, value in truth.items():
+        if key == "friction_slow":
+            out["constant_friction"] = True
+            out["friction_coefficient"] = value
+        elif key not in ("friction_fast", "rate_s_m"):
+            out[key] = value
+    return out
+
+
 def describe_truth(truth: dict[str, Any]) -> str:
     """The synthetic building's isolation in its model's terms, for a person (SI values with prefixes): the period
     (pendulum: its radius R and 2 pi sqrt(R / g); Bouc-Wen: Kd, Qd, dy, n), the damper (zeta, or C and alpha) and
@@ -453,9 +474,10 @@ def describe_truth(truth: dict[str, Any]) -> str:
         "friction": lambda friction: f"F_s = {quantity(friction, 'N')}",
     }
     power = "damping_exponent" in t
+    mu = t.get("friction_coefficient")  # a constant friction coefficient (constant_friction_truth)
     return describe_isolation(t["model"], render, period=t["period_s"], radius=t.get("radius_m"),
-                              friction_slow=t.get("friction_slow"), friction_fast=t.get("friction_fast"),
-                              rate=t.get("rate_s_m"), post_yield_stiffness=t.get("Kd_N_m"),
+                              friction_slow=t.get("friction_slow", mu), friction_fast=t.get("friction_fast", mu),
+                              rate=t.get("rate_s_m", 0.0), post_yield_stiffness=t.get("Kd_N_m"),
                               characteristic_strength=t.get("Qd_N"), yield_displacement=t.get("dy_m"),
                               shape=t.get("shape"), power=power, damping_coefficient=t.get("damping_coefficient"),
                               damping_exponent=t.get("damping_exponent"),
@@ -573,6 +595,8 @@ def synthesize_building(case: Case, channels: list[str] | tuple[str, ...], *, ra
     data = _measured(channels, clean, offsets, noise, missing, rng)
     stop = float(motion.stop_time) if motion.stop_time <= duration - release_time else None
     truth = {**iso.summary(), "d0_m": float(d0), "release_time_s": float(release_time), "stop_time_s": stop}
+    if constant_friction(spec):
+        truth = constant_friction_truth(truth)
     notes = [] if spec.mass is not None else ["no [building] mass: a unit mass (the motion depends on F_s / m only)"]
     return SyntheticBuildingRecord(t=t, data=data, clean=clean, truth=truth, noise={c: noise[c] for c in channels},
                                    offsets=offsets, rate=float(rate), seed=int(seed), notes=notes,
@@ -590,6 +614,8 @@ def building_case_toml(case: Case, synthetic: SyntheticBuildingRecord, record_ta
         lines.append(f'mass = "{t["mass_kg"]!r} kg"')
     if t["model"] == "bilinear":
         lines += [f'k1 = "{t["k1_N_m"]!r} N/m"', f'k2 = "{t["k2_N_m"]!r} N/m"', f'yield_force = "{t["Fy_N"]!r} N"']
+    elif t["model"] == "pendulum" and "friction_coefficient" in t:
+        lines += [f'radius = "{t["radius_m"]!r} m"', f"friction_coefficient = {t['friction_coefficient']!r}"]
     elif t["model"] == "pendulum":
         lines += [f'radius = "{t["radius_m"]!r} m"', f"friction_slow = {t['friction_slow']!r}",
                   f"friction_fast = {t['friction_fast']!r}", f'rate = "{t["rate_s_m"]!r} s/m"']
