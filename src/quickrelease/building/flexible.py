@@ -28,10 +28,19 @@ import numpy as np
 
 from ..errors import ParameterError
 from . import _ode, _ode_flexible
-from .hysteretic import MAX_STEPS, BoucWen, Pendulum, checked_d0, checked_horizon, natural_period, real_number
+from .hysteretic import (
+    MAX_STEPS,
+    BoucWen,
+    GridTurns,
+    Pendulum,
+    checked_d0,
+    checked_horizon,
+    natural_period,
+    real_number,
+)
 from .hysteretic import _ode_net as _net
 from .hysteretic import _ode_stored as _stored
-from .model import Isolation, pushed_state
+from .model import BaseAndRoof, Isolation, pushed_state
 
 __all__ = ["FlexibleBuilding", "FlexibleVibration", "free_vibration_flexible"]
 
@@ -123,7 +132,7 @@ _KEYS = ("x_b", "x_s", "v_b", "v_s", "a_b", "a_s")
 
 
 @dataclass(frozen=True, eq=False)
-class FlexibleVibration:
+class FlexibleVibration(GridTurns, BaseAndRoof):
     """The free vibration of a :class:`FlexibleBuilding` from the pushed state (SI units); the interface of
     :class:`~quickrelease.building.model.TwoDOFVibration` (:meth:`state` is the base's, :meth:`roof_state`,
     :meth:`states`, :meth:`channels`, :meth:`energies`, the turning points and the stop) and of
@@ -161,15 +170,6 @@ class FlexibleVibration:
     def _turns(self) -> np.ndarray:
         return self._changes(lambda d: d != 0.0, lambda d: np.ones(d.shape, bool))
 
-    @property
-    def reversal_times(self) -> np.ndarray:
-        """Times where the sliding base's velocity vanishes (reversals and sticks), the release first [s]."""
-        return np.concatenate(([0.0], self._grid[0][self._turns()]))
-
-    @property
-    def turning_points(self) -> np.ndarray:
-        """Base displacements at the turning points, d0 first [m]."""
-        return np.concatenate(([self.d0], self._grid[1][self._turns(), 0]))
 
     @property
     def stick_times(self) -> np.ndarray:
@@ -195,15 +195,6 @@ class FlexibleVibration:
         return {"x_b": ys[..., 0], "x_s": ys[..., _ode_flexible.XS], "v_b": ys[..., 1],
                 "v_s": ys[..., _ode_flexible.VS], "a_b": acc[..., 0], "a_s": acc[..., 1]}
 
-    def state(self, t):
-        """The base (isolation layer): x_b [m], v_b [m/s], a_b [m/s^2] at times t [s]."""
-        s = self.states(t)
-        return s["x_b"], s["v_b"], s["a_b"]
-
-    def roof_state(self, t):
-        """The roof: x_s [m], v_s [m/s], a_s [m/s^2] at times t [s]."""
-        s = self.states(t)
-        return s["x_s"], s["v_s"], s["a_s"]
 
     def channels(self, t) -> dict[str, np.ndarray]:
         """Every channel of the building's record at times t [s] (SI): x, v, a of the base and x_roof, v_roof,

@@ -327,8 +327,23 @@ def _works(ys: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return ys[:, 3], ys[:, 4], ys[:, 5]
 
 
+class GridTurns:
+    """The turning points of an integrated motion, from its grid (``_grid``) and the grid points where it turns
+    (``_turns()``: reversals, and sticks of a sliding base, within the horizon)."""
+
+    @property
+    def reversal_times(self) -> np.ndarray:
+        """Times of the turning points (the layer's velocity vanishes) within the horizon, the release first [s]."""
+        return np.concatenate(([0.0], self._grid[0][self._turns()]))
+
+    @property
+    def turning_points(self) -> np.ndarray:
+        """Displacements of the layer at the turning points within the horizon, d0 first [m]."""
+        return np.concatenate(([self.d0], self._grid[1][self._turns(), 0]))
+
+
 @dataclass(frozen=True, eq=False)
-class HystereticVibration:
+class HystereticVibration(GridTurns):
     """The free vibration of an isolation layer without a closed form, from the pushed state (SI units).
 
     The same interface as :class:`~quickrelease.building.model.FreeVibration`: :meth:`state`, :meth:`channels`,
@@ -361,15 +376,6 @@ class HystereticVibration:
         turns = np.flatnonzero((gd[1:n] != gd[: n - 1]) & (gd[: n - 1] != 0.0)) + 1
         return turns[gt[turns] <= self.horizon]
 
-    @property
-    def reversal_times(self) -> np.ndarray:
-        """Times of the turning points within the horizon, the release instant first [s]."""
-        return np.concatenate(([0.0], self._grid[0][self._turns()]))
-
-    @property
-    def turning_points(self) -> np.ndarray:
-        """Displacements at the turning points within the horizon, d0 first [m]."""
-        return np.concatenate(([self.d0], self._grid[1][self._turns(), 0]))
 
     def _evaluate(self, t) -> tuple[np.ndarray, np.ndarray]:
         t = np.asarray(t, dtype=float)

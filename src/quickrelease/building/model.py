@@ -926,8 +926,22 @@ def _first_rise(FF, f, fp, hi: float, step: float, start_zero: bool, floor: floa
     return None
 
 
+class BaseAndRoof:
+    """The base's and the roof's motion from ``states(t)`` (a 2-DOF vibration's: closed form or integrated)."""
+
+    def state(self, t):
+        """The base (isolation layer): x_b [m], v_b [m/s], a_b [m/s^2] at times t [s]."""
+        s = self.states(t)
+        return s["x_b"], s["v_b"], s["a_b"]
+
+    def roof_state(self, t):
+        """The roof: x_s [m], v_s [m/s], a_s [m/s^2] at times t [s]."""
+        s = self.states(t)
+        return s["x_s"], s["v_s"], s["a_s"]
+
+
 @dataclass(frozen=True, eq=False)
-class TwoDOFVibration:
+class TwoDOFVibration(BaseAndRoof):
     """The free vibration of the 2-DOF building from the pushed state (SI units); exact piecewise closed
     form. :meth:`state` gives the base (the isolation layer, as :meth:`FreeVibration.state`, so planning and
     clearance use it for any model), :meth:`roof_state` the roof, :meth:`states` both."""
@@ -978,15 +992,6 @@ class TwoDOFVibration:
         keys = ("x_b", "x_s", "v_b", "v_s", "a_b", "a_s")
         return {k: v.reshape(shape) for k, v in zip(keys, out, strict=True)}
 
-    def state(self, t):
-        """The base (isolation layer): x_b [m], v_b [m/s], a_b [m/s^2] at times t [s]."""
-        s = self.states(t)
-        return s["x_b"], s["v_b"], s["a_b"]
-
-    def roof_state(self, t):
-        """The roof: x_s [m], v_s [m/s], a_s [m/s^2] at times t [s]."""
-        s = self.states(t)
-        return s["x_s"], s["v_s"], s["a_s"]
 
     def channels(self, t) -> dict[str, np.ndarray]:
         """Every channel of the building's record at times t [s] (SI): x, v, a of the base (isolation
