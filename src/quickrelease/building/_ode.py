@@ -81,6 +81,12 @@ STEPS_TRANSITION = 1.5
 STEPS_RATE = 2.0
 #: Halvings of the steps next to a reversal with a power-law damper (the last substep is 2^-GRADES of a step).
 GRADES = 14
+#: Halvings on coarse steps (a fit's search on a thinned record) after z's zero crossing with a fractional n >= 1,
+#: where |z|^n is continuously differentiable and its error falls as the first substep's length to the n + 1: the
+#: benchmark's Bouc-Wen record (n 1.0007) evaluated in 2.2 ms instead of 4.1 (1 050 of its 2 050 grid points were
+#: the 14 halvings after each crossing), the motion within 1.1e-10 m of the default steps' (5.4e-10 m at n 1.0007,
+#: 1.4e-9 m at 1.3, 1.2e-9 m at 2.5 on a 0.2 m release; n < 1, whose derivative is infinite at z = 0, keeps GRADES).
+COARSE_GRADES = 4
 #: A creep into the sliders' holding limit is at rest below this fraction of the release's largest speed.
 CREEP = 1e-8
 #: A piece's mode bit: creeping (added to the element's mode): the damper (alpha < 1) holds the layer on its slow
@@ -340,20 +346,23 @@ def _tableau_creep(P, y, h, d, mode, k, tmp, out):
 
 # The helpers that integrate calls with literal flags are compiled for one signature each (numba compiled a
 # version per literal argument: five of _locate, each inlining the tableau's step).
-@njit("float64[::1](boolean, boolean)", cache=True, nogil=True)
-def _fractions(graded_start, graded_end):
-    """The substeps of a step, as fractions of it: one, or graded towards a reversal at its start or end."""
+@njit("float64[::1](float64[::1], boolean, boolean)", cache=True, nogil=True)
+def _fractions(P, graded_start, graded_end):
+    """The substeps of a step, as fractions of it: one, or graded towards a reversal at its start or end
+    (:data:`GRADES` halvings; :data:`COARSE_GRADES` on coarse steps, ``P[COARSE]`` above 1, where the grading only
+    follows z's zero crossing with a fractional n above 1: no power-law damper)."""
     if not graded_start and not graded_end:
         return np.ones(1)
-    g = np.empty(GRADES + 1)
-    g[0] = 0.5 ** GRADES
-    for i in range(1, GRADES + 1):
-        g[i] = 0.5 ** (GRADES + 1 - i)
+    grades = COARSE_GRADES if P[COARSE] > 1.0 and P[ALPHA] == 1.0 and P[N] >= 1.0 else GRADES
+    g = np.empty(grades + 1)
+    g[0] = 0.5 ** grades
+    for i in range(1, grades + 1):
+        g[i] = 0.5 ** (grades + 1 - i)
     if graded_start and graded_end:
-        out = np.empty(2 * (GRADES + 1))
-        for i in range(GRADES + 1):
+        out = np.empty(2 * (grades + 1))
+        for i in range(grades + 1):
             out[i] = 0.5 * g[i]
-            out[2 * GRADES + 1 - i] = 0.5 * g[i]
+            out[2 * grades + 1 - i] = 0.5 * g[i]
         return out
     if graded_start:
         return g
@@ -364,7 +373,7 @@ def _fractions(graded_start, graded_end):
       "float64[::1], float64[::1])", cache=True, nogil=True)
 def _advance(P, y, h, d, mode, graded_start, graded_end, k, tmp, a, out):
     """y advanced by h (substeps graded as asked) into out; a is scratch."""
-    fr = _fractions(graded_start, graded_end)
+    fr = _fractions(P, graded_start, graded_end)
     for j in range(NY):
         a[j] = y[j]
     for f in fr:
@@ -598,7 +607,7 @@ def _walk(P, y, span, d, mode, graded_start, graded_end, t, gt, gy, gd, gf, n, k
     """Advance y by span through its (graded) substeps, recording each substep's start after the first as a grid
     point and each substep's continuous extension (``gF`` at its start's index, the grid point n - 1 on entry for
     the first); the end state in out. Returns the grid's count."""
-    fr = _fractions(graded_start, graded_end)
+    fr = _fractions(P, graded_start, graded_end)
     a = y.copy()
     tt = t
     for i in range(fr.size):
