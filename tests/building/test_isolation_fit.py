@@ -111,3 +111,35 @@ def test_bad_input():
         fit_isolation([ch], float("nan"))
     with pytest.raises(ParameterError, match="fixed"):
         fit_isolation([ch], M, fixed={"stiffness": 1.0}, release_time=0.5)
+
+
+def test_the_jacobian_reuses_the_residuals_only_at_the_same_point():
+    """The Jacobian's centre is the last residual evaluation where that was the same point (parameters, free names
+    and fixed values: the solvers ask for the Jacobian where they have just evaluated the residuals); anywhere else
+    it is evaluated. Each Jacobian equals that of a fresh misfit, bit for bit."""
+    from quickrelease.building import isolation_fit as F
+
+    k = M * (2 * math.pi / 2.0) ** 2
+    channels = _record(k, k, math.inf, 2 * 0.04 * math.sqrt(k * M), 1.2e4, 0.15, 1, duration=4.0)
+    noise = {"lvdt": 2e-4, "acc": 0.02}
+    lower, upper = F._bounds(channels, 0.731, 2.0)
+    names = ["period", "damping_ratio", "friction", "d0", "release_time", "offset_lvdt", "offset_acc"]
+    base = {"period": 2.0, "damping_ratio": 0.04, "friction": 1.2e4, "d0": 0.15, "release_time": 0.731,
+            "offset_lvdt": 0.004, "offset_acc": 0.01}
+    a = np.array([base[n] for n in names])
+    b = a * (1.0 + 1e-3)
+
+    def fresh(theta, free=names, at=base):
+        return F._Misfit(channels, noise, M, "linear", None, lower, upper).jacobian(theta, free, at)
+
+    m = F._Misfit(channels, noise, M, "linear", None, lower, upper)
+    m.residuals(a, names, base)
+    np.testing.assert_array_equal(m.jacobian(b, names, base), fresh(b))  # another point
+    m.residuals(b, names, base)
+    np.testing.assert_array_equal(m.jacobian(b, names, base), fresh(b))  # the same point: reused
+    moved = {**base, "offset_acc": 0.02}  # the same free values, another fixed value
+    m.residuals(b[:-1], names[:-1], base)
+    np.testing.assert_array_equal(m.jacobian(b[:-1], names[:-1], moved), fresh(b[:-1], names[:-1], moved))
+    swapped = names[:-2] + names[:-3:-1]  # the same values for other free names (the two zeros swapped)
+    m.residuals(b, names, base)
+    np.testing.assert_array_equal(m.jacobian(b, swapped, base), fresh(b, swapped, base))
