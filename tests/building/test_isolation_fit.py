@@ -143,3 +143,31 @@ def test_the_jacobian_reuses_the_residuals_only_at_the_same_point():
     swapped = names[:-2] + names[:-3:-1]  # the same values for other free names (the two zeros swapped)
     m.residuals(b, names, base)
     np.testing.assert_array_equal(m.jacobian(b, swapped, base), fresh(b, swapped, base))
+
+
+@pytest.mark.parametrize("model", ["linear", "pendulum", "boucwen"])
+def test_the_release_time_column_is_that_of_the_motion_integrated_again(model):
+    """The Jacobian's release-time column evaluates the centre's motion at shifted times (the motion does not depend
+    on when it starts, and its steps not on the horizon): bit for bit the column of the motions integrated again
+    with the release moved, on the whole record and on the coarse steps of the thinned one."""
+    from quickrelease.building import isolation_fit as F
+
+    k = M * (2 * math.pi / 2.0) ** 2
+    channels = _record(k, k, math.inf, 2 * 0.04 * math.sqrt(k * M), 1.2e4, 0.15, 1, duration=4.0)
+    noise = {"lvdt": 2e-4, "acc": 0.02}
+    lower, upper = F._bounds(channels, 0.731, 2.0)
+    base = {"d0": 0.15, "release_time": 0.731, "offset_lvdt": 0.004, "offset_acc": 0.01, "damping_ratio": 0.04,
+            "period": 2.0, "friction": 1.2e4}
+    if model == "pendulum":
+        base.update(friction_slow=0.01, friction_fast=0.02, rate=30.0)
+    if model == "boucwen":
+        base.update(period=2.5, characteristic_strength=0.04 * M * 9.81, yield_displacement=0.01, shape=1.3)
+    names = ["d0", "release_time", "period", "offset_acc"]
+    theta = np.array([base[n] for n in names])
+    for coarse in (False, True):
+        m = F._Misfit(channels, noise, M, model, None, lower, upper, coarse_steps=coarse)
+        J = m.jacobian(theta, names, base)
+        again = F._Misfit(channels, noise, M, model, None, lower, upper, coarse_steps=coarse)
+        again._evaluated_at = lambda th, fr, ba, again=again: (again.residuals(th, fr, ba), None)
+        np.testing.assert_array_equal(J, again.jacobian(theta, names, base))
+        assert np.count_nonzero(J[:, 1]) > 0.5 * J.shape[0]

@@ -568,6 +568,9 @@ def _unpack(theta, free, base) -> dict[str, float]:
 #: the default's (where the layer has no closed form): 2 takes 25 % off a Bouc-Wen evaluation (3.7 -> 2.9 ms on the
 #: benchmark's 60 s record) and moves the state by 2e-12 m (the pendulum's 1e-12 m), far below any record's noise.
 THIN_COARSE = 2.0
+#: The Jacobian's step of the release time, relative to its distance from the record's first sample (at least 1 s),
+#: and how many such steps each motion runs past the record's last sample (for the one-sided stencil's 2 steps).
+RELEASE_STEP, RELEASE_REACH = 1e-4, 3.0
 SMALL_PARAMETERS = frozenset({"friction_slow", "friction_fast", "damping_ratio", "superstructure_damping_ratio",
                               "stiffness_ratio", "damping_exponent", "yield_displacement", "d0"})
 
@@ -604,10 +607,17 @@ class _Misfit:
                 self.ramp[f"drift_{c.name}"] = c.t - self.drift_origin
             i0 += c.t.size
 
-    def model_vector(self, p: dict[str, float]) -> np.ndarray:
+    def motion(self, p: dict[str, float]):
+        """The model's free vibration at ``p``, to the record's last sample and RELEASE_REACH past it: the Jacobian's
+        release-time column evaluates this same motion at shifted times (its steps do not depend on the horizon:
+        the record's samples come out the same to the last bit)."""
         iso = _isolation(self.model, self.mass, p, self.superstructure_mass)
-        fv = free_vibration(iso, p["d0"], t_end=max(self.t_last - p["release_time"], 1e-9),
-                            coarse=THIN_COARSE if self.coarse_steps else 1.0)
+        reach = RELEASE_REACH * RELEASE_STEP * max(1.0, abs(p["release_time"] - self.t_first))
+        return free_vibration(iso, p["d0"], t_end=max(self.t_last - p["release_time"], 1e-9) + reach,
+                              coarse=THIN_COARSE if self.coarse_steps else 1.0)
+
+    def vector(self, fv, p: dict[str, float]) -> np.ndarray:
+        """The channels of the motion ``fv`` released at ``p["release_time"]``, with their offsets and drifts."""
         out = []
         kinds = fv.channels(self.t_all - p["release_time"])
         for c, at in zip(self.channels, self.where, strict=True):
@@ -618,23 +628,31 @@ class _Misfit:
             out.append(y)
         return np.concatenate(out)
 
-    def residuals(self, theta, free, base) -> np.ndarray:
-        theta = np.asarray(theta, dtype=float)
-        try:
-            r = (self.model_vector(_unpack(theta, free, base)) - self.data) / self.sig
-        except ParameterError:  # outside the model's domain (e.g. held by friction at a bound): penalise
-            r = np.full(self.data.size, 1e6)
-        # the last point's residuals, for the Jacobian's centre: the least-squares solvers ask for the Jacobian
-        # where they have just evaluated the residuals (one model evaluation of the 2 n + 1 saved)
-        self._last = (theta.copy(), tuple(free), dict(base), r)
-        return r
+    def model_vector(self, p: dict[str, float]) -> np.ndarray:
+        return self.vector(self.motion(p), p)
 
-    def _residuals_at(self, theta: np.ndarray, free, base) -> np.ndarray:
-        """The residuals at ``theta``: the last evaluation's where it was this point, else evaluated."""
+    def _evaluate(self, theta: np.ndarray, free, base):
+        """The residuals at ``theta`` and the motion (None outside the model's domain), kept as the last point's:
+        the least-squares solvers ask for the Jacobian where they have just evaluated the residuals (one model
+        evaluation of the 2 n + 1 saved)."""
+        p = _unpack(theta, free, base)
+        try:
+            fv = self.motion(p)
+            r = (self.vector(fv, p) - self.data) / self.sig
+        except ParameterError:  # outside the model's domain (e.g. held by friction at a bound): penalise
+            fv, r = None, np.full(self.data.size, 1e6)
+        self._last = (theta.copy(), tuple(free), dict(base), r, fv)
+        return r, fv
+
+    def residuals(self, theta, free, base) -> np.ndarray:
+        return self._evaluate(np.asarray(theta, dtype=float), free, base)[0]
+
+    def _evaluated_at(self, theta: np.ndarray, free, base):
+        """The residuals and the motion at ``theta``: the last evaluation's where it was this point, else evaluated."""
         last = getattr(self, "_last", None)
         if last is not None and last[1] == tuple(free) and np.array_equal(last[0], theta) and last[2] == base:
-            return last[3]
-        return self.residuals(theta, free, base)
+            return last[3], last[4]
+        return self._evaluate(theta, free, base)
 
     def jacobian(self, theta, free, base) -> np.ndarray:
         # Central differences, guarded against the jumps of the record model: where a piece boundary (a
@@ -644,24 +662,28 @@ class _Misfit:
         # and the standard errors far too small, as the optimiser likes to park a jump on a sample).
         theta = np.asarray(theta, dtype=float)
         J = np.zeros((self.data.size, len(free)))
-        f0 = None
+        f0 = motion = None
         for i, n in enumerate(free):
             if n in self.rows_of:
                 J[self.rows_of[n], i] = self.ramp.get(n, 1.0) / self.sig[self.rows_of[n]]
                 continue
             if f0 is None:
-                f0 = self._residuals_at(theta, free, base)
+                f0, motion = self._evaluated_at(theta, free, base)
             x, lo, hi = theta[i], self.lower.get(n, -math.inf), self.upper.get(n, math.inf)
             small = n in SMALL_PARAMETERS and not self.coarse_steps
             if n == "release_time":  # from the record's start, not its clock's origin: a logger's time of day
                 # (36 000 s) stepped the release by 3.6 s, and the fit ended 453 above the unshifted record's
-                h = 1e-4 * max(1.0, abs(x - self.t_first))
+                h = RELEASE_STEP * max(1.0, abs(x - self.t_first))
             else:
                 h = 1e-4 * (max(abs(x), 1e-3) if small else max(1.0, abs(x)))
 
-            def at(value, i=i):
+            def at(value, i=i, n=n, motion=motion):
                 moved = theta.copy()
                 moved[i] = value
+                if n == "release_time" and motion is not None:  # the same motion released earlier or later: no
+                    # integration (the motion does not depend on the instant it starts)
+                    p = _unpack(moved, free, base)
+                    return (self.vector(motion, p) - self.data) / self.sig
                 return self.residuals(moved, free, base)
 
             if x - h < lo or x + h > hi:  # one-sided, second order, into the feasible side
