@@ -161,8 +161,9 @@ def test_coarse_steps_against_the_reference(solved, cls, kw, kind, d0):
 @pytest.mark.parametrize("shape", [0.8, 1.3, 2.5])
 def test_coarse_steps_after_the_zero_crossings_of_a_fractional_shape(shape):
     """|z|^n with a fractional n is not smooth where z leaves 0: the step after each zero crossing of z is graded
-    towards it, by fewer halvings on coarse steps where n > 1 (``_ode.COARSE_GRADES``; n < 1, whose derivative is
-    infinite there, keeps all of them). Viscous damper, no sliders, a dozen crossings: default and coarse steps
+    towards it, where n > 1 and no power-law damper grades the steps too by 8 halvings (``_ode.ZERO_GRADES``) and 4
+    on coarse steps (``_ode.COARSE_GRADES``); n < 1, whose derivative is infinite there, keeps all 14 (mutants:
+    no halvings on either step size, or 4 at n < 1: caught). Viscous damper, no sliders, a dozen crossings: default and coarse steps
     both within the reference's tolerance, the coarse grid at most 0.6 of the default's (0.5 measured; 0.74 at n = 0.8,
     fully graded). (At n = 0.7 the default steps hold the reference only to 1.9e-7 of the amplitude in a, at 0.6 to
     7.9e-7: the graded step's error falls only as its length to the n + 1.)"""
