@@ -686,7 +686,11 @@ def integrate(P, y0, t_end, capacity, max_steps):
         if steps > max_steps:
             return gt, gy, gd, gf, gF, n, stop, 2
         here = n - 1  # the grid point the step starts from (at t, state y)
-        _advance(P, y, h, d, mode, graded, False, k, tmp, a, y1)
+        if graded:  # its substeps recorded at once (a grid point and an extension each); taken back where an
+            # event falls in the step (the grid from here + 1 is written again from the event's walk)
+            n = _walk(P, y, h, d, mode, True, False, t, gt, gy, gd, gf, n, k, tmp, y1, gF, K, ynew)
+        else:
+            _step(P, y, h, d, mode, k, tmp, y1)
         # the first event in the step (if any)
         kind = EV_NONE
         theta = h
@@ -722,9 +726,8 @@ def integrate(P, y0, t_end, capacity, max_steps):
             else:
                 theta = th
         if kind == EV_NONE:
-            if graded:
-                n = _walk(P, y, h, d, mode, True, False, t, gt, gy, gd, gf, n, k, tmp, out, gF, K, ynew)
-            else:  # the step's stages are still in k (no event was located in it)
+            if not graded:  # the step's stages are still in k (no event was located in it; a graded step's
+                # substeps are recorded already)
                 _finish(P, y, h, d, mode, k, K, tmp, gF[here], ynew)
             prev, t_prev, graded_prev = here, t, graded
             t += h
@@ -752,6 +755,7 @@ def integrate(P, y0, t_end, capacity, max_steps):
                 break
             continue
         # the event's instant
+        n = here + 1  # (a graded step's substeps, recorded above, taken back)
         if kind == EV_REVERSAL and powered and prev >= 0 and not graded:
             n = prev + 1
             for j in range(NY):
