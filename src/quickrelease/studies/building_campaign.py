@@ -102,6 +102,9 @@ the sliders stick, or the bilinear model's friction traded against its yield for
 estimates of each release that fits well, and the better fit kept (``restarted_from`` names its start); so is
 a release that fits its noise but whose fit did not confirm its minimum as the global one, from the estimates
 of the :data:`UNCONFIRMED_RESTARTS` best-fitting other releases (a pendulum's local minima can fit the noise).
+A refit takes what the release's first fit computed (its global search, its record's own starts, every solve
+the new start leaves as it was: :class:`~quickrelease.building.isolation_fit.FitMemo`) and gives the fit that
+is computed afresh.
 """
 
 from __future__ import annotations
