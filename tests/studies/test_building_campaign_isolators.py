@@ -496,11 +496,23 @@ def _same_fit(a, b):
 
 def test_a_restart_reuses_what_the_releases_fits_computed(monkeypatch):
     """R1 marked unconfirmed is refitted from R2's and R3's estimates: each restart takes the global stage and
-    the record's own starts from what R1's fit computed (the campaign's FitMemo) and solves what its new start
-    changes only; no global search runs for the restarts (one per release), a restart's least-squares solves
-    are a fraction of the first fit's, and each restart's fit is the one computed afresh (without the memo, to
-    the last bit)."""
+    the record's own starts from what R1's fit computed (its FitMemo, handed back by the worker that fitted it and
+    joined to the campaign's) and solves what its new start changes only; no global search runs for the restarts
+    (one per release), a restart's least-squares solves are a fraction of the first fit's, and each restart's fit
+    is the one computed afresh (without the memo, to the last bit). The workers here run in this process, one
+    after the other (an executor that runs each job as it is submitted), so that the counts are each fit's."""
+    import concurrent.futures
+
     import quickrelease.building.isolation_fit as isf
+
+    class InProcess(concurrent.futures.Executor):
+        def __init__(self, workers, mp_context=None):
+            pass
+
+        def submit(self, fn, *args, **kwargs):
+            done = concurrent.futures.Future()
+            done.set_result(fn(*args, **kwargs))
+            return done
 
     releases = _linear_releases(3)
     counts = {"search": 0, "solve": 0}
@@ -524,40 +536,16 @@ def test_a_restart_reuses_what_the_releases_fits_computed(monkeypatch):
 
     monkeypatch.setattr(bc, "fit_isolation", fit)
     monkeypatch.setattr(bc, "_unconfirmed", lambda f: f is calls[0][2])
-    monkeypatch.setattr(bc, "CAMPAIGN_WORKERS", 1)
+    monkeypatch.setattr(bc, "CAMPAIGN_WORKERS", 2)
+    monkeypatch.setattr(concurrent.futures, "ProcessPoolExecutor", InProcess)
     fit_building_campaign(releases, 4.0e5, "linear", quantities=("friction",))
     first, restarts = calls[:3], calls[3:]
+    assert [c[0][0] for c in first] == [r.channels for r in releases] and all(c[1]["memo"] for c in first)
     assert [c[0][0] for c in restarts] == [releases[0].channels] * 2 and all(c[1]["start"] for c in restarts)
     assert all(c[3]["search"] == 1 for c in first) and all(c[3]["search"] == 0 for c in restarts), calls
     assert all(c[3]["solve"] <= 0.5 * first[0][3]["solve"] for c in restarts), (first[0][3], [c[3] for c in restarts])
     for args, kwargs, out, _ in restarts:
         _same_fit(out, real_fit(*args, **{**kwargs, "memo": None}))
-
-
-def test_the_parallel_fits_hand_their_memos_to_the_restarts(monkeypatch):
-    """Fitted in worker processes (here in threads, the executor replaced), each release's FitMemo comes back
-    and joins the campaign's: a refit of R1 from R2's estimates then runs no global search."""
-    import concurrent.futures
-
-    import quickrelease.building.isolation_fit as isf
-
-    class Inline(concurrent.futures.ThreadPoolExecutor):
-        def __init__(self, workers, mp_context=None):
-            super().__init__(workers)
-
-    monkeypatch.setattr(concurrent.futures, "ProcessPoolExecutor", Inline)
-    monkeypatch.setattr(bc, "CAMPAIGN_WORKERS", 2)
-    releases = _linear_releases(3)
-    memo = isf.FitMemo()
-    fits = bc._fit_releases(releases, 4.0e5, "linear", None, None, memo=memo)
-    searches = []
-    real = isf.global_candidates
-    monkeypatch.setattr(isf, "global_candidates", lambda *a, **k: searches.append(1) or real(*a, **k))
-    start = {n: fits[1].estimates[n] for n in ("period", "damping_ratio", "friction")}
-    refit = fit_isolation(releases[0].channels, 4.0e5, "linear", start=start, fixed=bc._fixed(releases[0]),
-                          memo=memo)
-    assert searches == [] and memo.hits > 0
-    _same_fit(refit, fit_isolation(releases[0].channels, 4.0e5, "linear", start=start, fixed=bc._fixed(releases[0])))
 
 
 def test_the_shipped_pendulum_campaigns_records_hold_their_documented_motion():
