@@ -113,7 +113,7 @@ def test_a_hold_past_the_horizon_is_not_within_it(case):
     it, the stop is the reference's last stick. Held, the base stays put (the last step's rest is kept)."""
     building, motion, full = _solved(case)
     t_stop, d0 = full.stick_times[-1], abs(case[-1])
-    for before in (1e-6, 1e-3, 0.05):
+    for before in (1e-6, 0.05):  # the last step runs past t_end into the stick; and ends before it
         t_end = t_stop - before
         cut = free_vibration_flexible(building, case[-1], t_end=t_end)
         t = np.linspace(0.0, t_end, 401)
