@@ -496,8 +496,8 @@ def _same_fit(a, b):
 
 def test_a_restart_reuses_what_the_releases_fits_computed(monkeypatch):
     """R1 marked unconfirmed is refitted from R2's and R3's estimates: each restart takes the global stage and
-    the record's own starts from what R1's fit computed (its FitMemo, handed back by the worker that fitted it and
-    joined to the campaign's) and solves what its new start changes only; no global search runs for the restarts
+    the record's own starts from what R1's fit computed (its FitMemo, handed back by the worker that fitted it)
+    and solves what its new start changes only; no global search runs for the restarts
     (one per release), a restart's least-squares solves are a fraction of the first fit's, and each restart's fit
     is the one computed afresh (without the memo, to the last bit). The workers here run in this process, one
     after the other (an executor that runs each job as it is submitted), so that the counts are each fit's."""

@@ -734,14 +734,6 @@ class FitMemo:
             self.size += size
         return out
 
-    def update(self, other: FitMemo) -> None:
-        """Keep ``other``'s results too (a fit made in another process), while the budget allows."""
-        for key, value in other._kept.items():
-            size = _nbytes(value)
-            if key not in self._kept and self.size + size <= self.budget:
-                self._kept[key] = value
-                self.size += size
-
 
 def _noise_levels(channels, t_r0: float) -> tuple[dict[str, float], dict[str, str], bool]:
     """The noise level [SI] of each channel and where it came from: given; else the scatter of the quiet
