@@ -171,3 +171,45 @@ def test_the_release_time_column_is_that_of_the_motion_integrated_again(model):
         again._evaluated_at = lambda th, fr, ba, again=again: (again.residuals(th, fr, ba), None)
         np.testing.assert_array_equal(J, again.jacobian(theta, names, base))
         assert np.count_nonzero(J[:, 1]) > 0.5 * J.shape[0]
+def test_a_refit_given_the_memo_solves_only_what_its_start_changes(monkeypatch):
+    """fit_isolation(memo=...): a refit of the same record from other start values takes the global stage and the
+    solves its start leaves as they were from the memo (no global search; one least-squares solve, its start's on
+    the thinned record, where the start leads into the basin the first fit found) and is the fit computed without
+    the memo, to the last bit. An acceleration record's d0 comes from the start (no displacement to read it
+    from): a start with another d0 changes the record's own starts and the search's, which then run again."""
+    import quickrelease.building.isolation_fit as isf
+
+    T, zeta, Fs, d0 = 2.0, 0.04, 1.2e4, 0.15
+    k = M * (2 * math.pi / T) ** 2
+    t = np.arange(-1.0, 4.0, 1 / 50) + 0.0013  # an accelerometer at 50 Hz, 4 s after the release: cheap, enough
+    a = reference(M, k, k, math.inf, 2 * zeta * math.sqrt(k * M), Fs, d0, t - 0.731, with_rates=True)[0][2]
+    channels = [BuildingChannel("acc", "a", t, a + 0.01 + np.random.default_rng(3).normal(0, 0.02, t.size))]
+    counts = {"search": 0, "solve": 0}
+
+    def counted(name, real):
+        def run(*args, **kwargs):
+            counts[name] += 1
+            return real(*args, **kwargs)
+        return run
+
+    monkeypatch.setattr(isf, "global_candidates", counted("search", isf.global_candidates))
+    monkeypatch.setattr(isf, "bounded_least_squares", counted("solve", isf.bounded_least_squares))
+    memo = isf.FitMemo()
+    first = fit_isolation(channels, M, "linear", memo=memo)
+    assert counts["search"] == 1 and memo.hits == 0
+    for start, searches in (({"period": 1.05 * T, "damping_ratio": 0.05, "friction": 1.0e4}, 0),
+                            ({"period": T, "d0": 1.3 * d0}, 1)):
+        before = dict(counts)
+        refit = fit_isolation(channels, M, "linear", start=start, memo=memo)
+        assert counts["search"] - before["search"] == searches, start
+        assert abs(refit.chi2 - first.chi2) < 1.0  # the same minimum
+        if not searches:
+            assert counts["solve"] - before["solve"] == 1
+        again = fit_isolation(channels, M, "linear", start=start)
+        assert refit.chi2 == again.chi2 and refit.estimates == again.estimates and refit.ci95 == again.ci95
+        assert refit.search.summary() == again.search.summary() and refit.warnings == again.warnings
+    # the friction held at two values: the solves from the same start points differ in what they hold
+    fit_isolation(channels, M, "linear", fixed={"friction": 1.0e4}, global_search=False, memo=memo)
+    held = fit_isolation(channels, M, "linear", fixed={"friction": 1.4e4}, global_search=False, memo=memo)
+    again = fit_isolation(channels, M, "linear", fixed={"friction": 1.4e4}, global_search=False)
+    assert held.chi2 == again.chi2 and held.estimates == again.estimates

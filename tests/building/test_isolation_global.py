@@ -420,6 +420,21 @@ def test_progress_says_what_runs():
     assert any(s.startswith("linear: minimum 1 of") for s in said)
 
 
+@cache
+def _motion_without_a_crossing(kind: str):
+    """(t, the reference's motion) of a record without a crossing (kind: creeps, sticks), simulated once for the
+    noise levels below (the reference is deterministic)."""
+    import isolator_reference as ref
+
+    if kind == "creeps":
+        system = ref.boucwen(M, 1.6e6, 4.0e5, 0.025, 1.0, damping=2 * 0.02 * math.sqrt(1.6e6 * M))
+    else:
+        k = M * (2 * math.pi / 2.5) ** 2
+        system = ref.linear(M, k, 2 * 0.05 * math.sqrt(k * M), friction=0.3 * k * 0.2)
+    t = np.arange(0.0, 62.0, 1.0 / RATE)
+    return t, ref.simulate(system, 0.2, t - RELEASE, t_end=61.0)
+
+
 @pytest.mark.parametrize("kind, noise", [("creeps after its first turn", 2e-4), ("sticks at its first turn", 2e-4),
                                          ("creeps after its first turn", 2e-3)])
 def test_record_period_of_a_record_without_a_crossing(kind, noise):
@@ -429,15 +444,7 @@ def test_record_period_of_a_record_without_a_crossing(kind, noise):
     that level, 84 s, and the fit's search box and release window followed it); a linear isolation with sliders
     that stick at the first turn. The noisy record (noise 2 mm): its noise alone turns back by more than half the
     band (5 mm) near the first turning point, but not by ten noise levels (20 mm)."""
-    import isolator_reference as ref
-
-    if kind.startswith("creeps"):
-        system = ref.boucwen(M, 1.6e6, 4.0e5, 0.025, 1.0, damping=2 * 0.02 * math.sqrt(1.6e6 * M))
-    else:
-        k = M * (2 * math.pi / 2.5) ** 2
-        system = ref.linear(M, k, 2 * 0.05 * math.sqrt(k * M), friction=0.3 * k * 0.2)
-    t = np.arange(0.0, 62.0, 1.0 / RATE)
-    motion = ref.simulate(system, 0.2, t - RELEASE, t_end=61.0)
+    t, motion = _motion_without_a_crossing(kind.split()[0])
     first_turn = motion.reversal_times[1]  # (the release's the first)
     assert kind.startswith("sticks") == (motion.stop_time == first_turn)
     x = motion.x + 0.002 + np.random.default_rng(3).normal(0.0, noise, t.size)

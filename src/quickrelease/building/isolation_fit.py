@@ -37,6 +37,8 @@ noise levels, and the residuals are tested for whiteness (Ljung-Box).
 
 from __future__ import annotations
 
+import copy
+import hashlib
 import math
 from dataclasses import dataclass, field, replace
 from typing import Any
@@ -64,7 +66,7 @@ from .isolation_search import (
 from .model import RECORD_CHANNELS, Isolation, TwoDOF, _damping_ratio, free_vibration
 
 __all__ = ["BuildingChannel", "IsolationFit", "fit_isolation", "compare_models", "decay_check", "ljung_box",
-           "CHANNEL_KINDS", "IsolationPrecision", "predicted_isolation_errors"]
+           "CHANNEL_KINDS", "IsolationPrecision", "predicted_isolation_errors", "FitMemo"]
 
 #: Channel kinds of the isolation layer (x, v, a) and of the roof (x_roof, v_roof, a_roof; for the rigid
 #: models the roof moves with the layer), and their SI units (from :data:`quickrelease.building.RECORD_CHANNELS`).
@@ -606,6 +608,23 @@ class _Misfit:
                 self.rows_of[f"drift_{c.name}"] = self.rows_of[f"offset_{c.name}"]
                 self.ramp[f"drift_{c.name}"] = c.t - self.drift_origin
             i0 += c.t.size
+        self._samples = None  # the digest of the channels' samples (fingerprint)
+
+    def fingerprint(self) -> bytes:
+        """A digest of everything the residuals depend on besides the parameters: the model, the mass, the
+        bounds, the steps, the channels' samples and the weights (which the residuals' reweighting changes)."""
+        if self._samples is None:
+            h = hashlib.blake2b(digest_size=16)
+            for c in self.channels:
+                h.update(repr((c.name, c.kind, c.drift, c.t.size)).encode())
+                h.update(np.ascontiguousarray(c.t, dtype=float).tobytes())
+                h.update(np.ascontiguousarray(c.values, dtype=float).tobytes())
+            self._samples = h.digest()
+        h = hashlib.blake2b(self._samples, digest_size=16)
+        h.update(repr((self.model, self.mass, self.superstructure_mass, self.coarse_steps, self.drift_origin,
+                       sorted(self.lower.items()), sorted(self.upper.items()))).encode())
+        h.update(np.ascontiguousarray(self.sig, dtype=float).tobytes())
+        return h.digest()
 
     def motion(self, p: dict[str, float]):
         """The model's free vibration at ``p``, to the record's last sample and RELEASE_REACH past it: the Jacobian's
@@ -697,6 +716,57 @@ class _Misfit:
                 J[:, i] = np.where(np.abs(dp - dm) > 0.5 * (np.abs(dp) + np.abs(dm)),
                                    np.where(np.abs(dp) < np.abs(dm), dp, dm), 0.5 * (dp + dm))
         return J
+
+
+#: The bytes of arrays a :class:`FitMemo` keeps at most (beyond, results are computed and not kept).
+MEMO_BYTES = 256 * 2**20
+
+
+def _held(base: dict[str, float], free) -> tuple:
+    """The values a solve takes from its base: those of the parameters it does not fit, by name."""
+    return tuple(sorted((n, float(v)) for n, v in base.items() if n not in free))
+
+
+def _nbytes(value) -> int:
+    if isinstance(value, np.ndarray):
+        return value.nbytes
+    if isinstance(value, dict):
+        return sum(_nbytes(v) for v in value.values()) + 64 * len(value)
+    if isinstance(value, (list, tuple)):
+        return sum(_nbytes(v) for v in value) + 64
+    return 64
+
+
+class FitMemo:
+    """What fits of a record computed on their way, kept for a later fit of the same record: the global
+    stage's candidates and each step that refines a fit (every least-squares solve: the starts' on the thinned
+    record, the minima's, the polish's and the profiles' on the whole record; the polish and the step search
+    as a whole), each under a key of everything it depends on (the record's samples and weights, the model,
+    the bounds and steps, the parameters held and their values, the start point, the tolerance, the seed).
+    Given to :func:`fit_isolation` (``memo``), a refit from other start values (a campaign's restart from
+    another release's estimates) solves only what its new start changes, and its result is the one without
+    the memo (each kept result is what the same computation gives again: the fit is deterministic). Keeps
+    results up to ``budget`` bytes of arrays; ``hits`` and ``misses`` count the look-ups."""
+
+    def __init__(self, budget: int = MEMO_BYTES) -> None:
+        self.budget = int(budget)
+        self.size = 0
+        self.hits = 0
+        self.misses = 0
+        self._kept: dict[tuple, Any] = {}
+
+    def value(self, key: tuple, compute):
+        """The kept result of ``key`` (a copy), or ``compute()``'s, kept while the budget allows."""
+        if key in self._kept:
+            self.hits += 1
+            return copy.deepcopy(self._kept[key])
+        self.misses += 1
+        out = compute()
+        size = _nbytes(out)
+        if self.size + size <= self.budget:
+            self._kept[key] = copy.deepcopy(out)
+            self.size += size
+        return out
 
 
 def _noise_levels(channels, t_r0: float) -> tuple[dict[str, float], dict[str, str], bool]:
@@ -1084,8 +1154,8 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
                   fit_release_time: bool = True, start: dict[str, float] | None = None,
                   fixed: dict[str, float] | None = None, profile: bool | None = None,
                   superstructure_mass: float | None = None, tolerance: float = 1e-12, global_search: bool = True,
-                  seed: int = 0, progress=None, exclude_spikes: bool = False, damping: str = "viscous") \
-        -> IsolationFit:
+                  seed: int = 0, progress=None, exclude_spikes: bool = False, damping: str = "viscous",
+                  memo: FitMemo | None = None) -> IsolationFit:
     """Fit the isolation system (:mod:`quickrelease.building`) to records of the isolation layer.
 
     Parameters
@@ -1143,6 +1213,11 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
         by the latest fit, until the excluded samples stay the same (``SPIKE_ROUNDS`` fits at most). The
         estimates and intervals are those of ordinary least squares on the kept samples (a clean record
         keeps them all); ``excluded`` lists the times, a warning counts them.
+    memo : FitMemo, optional
+        Filled with what this fit computes (the global stage's candidates, each least-squares solve), and
+        read back where a computation repeats: a later fit of the same record given the same memo (other
+        start values, e.g. a campaign's restart from another release's estimates) solves only what its new
+        start changes and gives the result it gives without the memo.
     tolerance : float
         Relative tolerance of the least-squares solves (scipy's ``ftol``, ``xtol``, ``gtol``). The default, 1e-12,
         settles the estimates to far below their standard errors; a model fitted only to be ranked by AIC/BIC
@@ -1156,7 +1231,7 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
 
     kwargs = dict(release_time=release_time, fit_release_time=fit_release_time, start=start, fixed=fixed,
                   profile=profile, superstructure_mass=superstructure_mass, tolerance=tolerance,
-                  global_search=global_search, seed=seed, progress=progress, damping=damping)
+                  global_search=global_search, seed=seed, progress=progress, damping=damping, memo=memo)
     with threadpool_limits(1, user_api="blas"):  # thin Jacobians: BLAS threads cost more than they give
         fit = _fit_isolation(channels, mass, model, **kwargs)
         if not exclude_spikes:
@@ -1229,7 +1304,7 @@ def _spikes(fit: IsolationFit, channels) -> dict[str, tuple[float, ...]]:
 
 def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_release_time, start, fixed, profile,
                    superstructure_mass, tolerance, global_search, seed, progress=None,
-                   damping: str = "viscous", polish: bool = True) -> IsolationFit:
+                   damping: str = "viscous", memo: FitMemo | None = None, polish: bool = True) -> IsolationFit:
     channels = list(channels)
     if not channels:
         raise ParameterError("channels", "none", "at least one channel of the isolation layer")
@@ -1296,11 +1371,28 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
         lo = np.array([lower.get(n, -math.inf) for n in free])
         hi = np.array([upper.get(n, math.inf) for n in free])
         x0 = np.clip(np.asarray(x0, dtype=float), lo, hi)
-        # the Jacobian by central differences over a relative step of 1e-4 (_Misfit.jacobian): the misfit jumps
-        # where a piece boundary (a stick, a yield) passes a sample, so a step near the rounding level would see
-        # those jumps; a parameter whose optimum is its bound is held there (bounded_least_squares)
-        return bounded_least_squares(on.residuals, x0, on.jacobian, lo, hi, args=(free, base), tol=tol,
-                                     max_nfev=max_nfev or 400 * max(len(free), 1), x_scale="jac")
+        max_nfev = max_nfev or 400 * max(len(free), 1)
+
+        def run():
+            # the Jacobian by central differences over a relative step of 1e-4 (_Misfit.jacobian): the misfit
+            # jumps where a piece boundary (a stick, a yield) passes a sample, so a step near the rounding level
+            # would see those jumps; a parameter whose optimum is its bound is held there (bounded_least_squares)
+            return bounded_least_squares(on.residuals, x0, on.jacobian, lo, hi, args=(free, base), tol=tol,
+                                         max_nfev=max_nfev, x_scale="jac")
+
+        if memo is None:
+            return run()
+        return memo.value(("solve", on.fingerprint(), tuple(free), _held(base, free), x0.tobytes(), float(tol),
+                           int(max_nfev)), run)
+
+    def stage(name, step, res, *args):
+        """A refinement of ``res`` on the whole record (the polish, the step search), kept in the memo."""
+        if memo is None:
+            return step(res, *args)
+        return memo.value((name, misfit.fingerprint(), tuple(names), _held(values, names),
+                           np.asarray(res.x, dtype=float).tobytes(), float(res.cost), int(res.nfev), seed,
+                           float(tolerance)),
+                          lambda: step(res, *args))
 
     # the starts: the record's own (decay analysis or hysteresis loop, and splits of the dissipation), the
     # design values where given (one start among several, never a restriction), and the global search's
@@ -1316,7 +1408,7 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
         # at 2 and 5 reached the best minimum with it or not at all on the benchmark's and the example's records)
         named += _boucwen_from_bilinear(channels, mass, t_r0, fit_release_time, fixed, record_values, damping, seed,
                                         progress, BOUCWEN_SHAPES[:1] if loop else BOUCWEN_SHAPES,
-                                        global_search=not loop)
+                                        global_search=not loop, memo=memo)
     thin, factor = thin_channels(channels, t_r0)
     thin_misfit = _Misfit(thin, noise, mass, model, superstructure_mass, lower, upper, drift_origin=t_r0,
                           coarse_steps=True)
@@ -1336,17 +1428,25 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
             reach = max(20.0 * misfit.dt, 0.06 * (hint if hint is not None else values["period"]))
             release = (max(lower["release_time"], t_r0 - reach), min(upper["release_time"], t_r0 + 2.0 * misfit.dt))
         box = search_box(model, hint, search_d0, release, damping)
-        found, evaluations = global_candidates(model, mass, thin_misfit, box, record_values, record_values["d0"],
-                                               runs=SEARCH_RUNS[model] + search_d0,
-                                               evaluations=SEARCH_EVALUATIONS[model] * (1 + search_d0),
-                                               seed=seed, fixed=fixed, progress=progress, damping=damping)
+        runs, spend = SEARCH_RUNS[model] + search_d0, SEARCH_EVALUATIONS[model] * (1 + search_d0)
+
+        def search():
+            return global_candidates(model, mass, thin_misfit, box, record_values, record_values["d0"], runs=runs,
+                                     evaluations=spend, seed=seed, fixed=fixed, progress=progress, damping=damping)
+
+        if memo is None:
+            found, evaluations = search()
+        else:
+            found, evaluations = memo.value(("search", thin_misfit.fingerprint(), model, mass, damping, repr(box),
+                                             _held(record_values, ()), _held(fixed, ()), runs, spend, seed), search)
         named += [(c["origin"], c["parameters"]) for c in found]
     res, groups = _multistart(named, names, values, solve, thin_misfit, model, factor, progress)
     res = _requiet(res, channels, noise, source, sig, names, values, solve, t_r0)
     if model != "2dof" and polish:
-        res = _polish(res, names, values, solve, misfit.residuals, lower, upper, misfit.dt)
+        res = stage("polish", _polish, res, names, values, solve, misfit.residuals, lower, upper, misfit.dt)
         if not any(c.kind in ("x", "x_roof") for c in channels):  # no smooth channel: the steps rule the misfit
-            res = _step_search(res, names, values, solve, misfit.residuals, lower, upper, seed)
+            res = stage("step search", _step_search, res, names, values, solve, misfit.residuals, lower, upper,
+                        seed)
     if not absolute:
         # a noise level taken from the residuals: weight each such channel by its own residual scatter
         # and refit (twice; the weights settle at once). One global chi-square scale cannot correct
@@ -1476,8 +1576,8 @@ BOUCWEN_SHAPES = (1.0, 2.0, 5.0)
 
 def _boucwen_from_bilinear(channels, mass: float, t_r0: float, fit_release_time: bool, fixed: dict[str, float],
                            record_values: dict[str, float], damping: str, seed: int, progress,
-                           shapes: tuple[float, ...] = BOUCWEN_SHAPES, global_search: bool = True) \
-        -> list[tuple[str, dict[str, float]]]:
+                           shapes: tuple[float, ...] = BOUCWEN_SHAPES, global_search: bool = True,
+                           memo: FitMemo | None = None) -> list[tuple[str, dict[str, float]]]:
     """Starts of the Bouc-Wen fit from a bilinear fit of the same record (its limit n -> inf: Kd = k2,
     Qd = F_y (1 - k2 / k1), dy = F_y / k1, the damper's c kept), one per shape of ``shapes``.
 
@@ -1490,7 +1590,7 @@ def _boucwen_from_bilinear(channels, mass: float, t_r0: float, fit_release_time:
     try:
         bl = _fit_isolation(channels, mass, "bilinear", release_time=t_r0, fit_release_time=fit_release_time,
                             start=None, fixed=keep, profile=False, superstructure_mass=None, tolerance=1e-6,
-                            global_search=global_search, seed=seed, progress=progress, polish=False)
+                            global_search=global_search, seed=seed, progress=progress, memo=memo, polish=False)
     except QuickReleaseError:
         return []
     e = bl.parameters

@@ -102,6 +102,9 @@ the sliders stick, or the bilinear model's friction traded against its yield for
 estimates of each release that fits well, and the better fit kept (``restarted_from`` names its start); so is
 a release that fits its noise but whose fit did not confirm its minimum as the global one, from the estimates
 of the :data:`UNCONFIRMED_RESTARTS` best-fitting other releases (a pendulum's local minima can fit the noise).
+A refit takes what the release's first fit computed (its global search, its record's own starts, every solve
+the new start leaves as it was: :class:`~quickrelease.building.isolation_fit.FitMemo`) and gives the fit that
+is computed afresh.
 """
 
 from __future__ import annotations
@@ -116,7 +119,14 @@ from scipy import stats
 
 from ..building.hysteretic import GRAVITY
 from ..building.identified import parameter_identified
-from ..building.isolation_fit import PARAMETER_BOUNDS, BuildingChannel, IsolationFit, _isolation, fit_isolation
+from ..building.isolation_fit import (
+    PARAMETER_BOUNDS,
+    BuildingChannel,
+    FitMemo,
+    IsolationFit,
+    _isolation,
+    fit_isolation,
+)
 from ..building.model import pushed_state
 from ..errors import ParameterError, QuickReleaseError
 from ..io.building_case import constant_friction_fixed
@@ -482,31 +492,52 @@ def _misfit(fit: IsolationFit) -> bool:
 CAMPAIGN_WORKERS = max(1, min(os.cpu_count() or 1, 8))
 
 
-def _fit_one(r, mass: float, model: str, start, superstructure_mass, damping: str = "viscous", shared=None):
+def _fit_one(r, mass: float, model: str, start, superstructure_mass, damping: str = "viscous", shared=None,
+             memo: FitMemo | None = None):
     try:
         return fit_isolation(r.channels, mass, model, release_time=r.release_time, start=start,
                              fixed=_fixed(r, shared), superstructure_mass=superstructure_mass,
-                             exclude_spikes=r.exclude_spikes, damping=damping)
+                             exclude_spikes=r.exclude_spikes, damping=damping, memo=memo)
     except ParameterError as exc:  # its own arguments (type(exc)(message) was a TypeError: a traceback)
         raise type(exc)(f"release {r.name}: {exc.name}", exc.value, exc.valid, exc.unit) from None
     except QuickReleaseError as exc:
         raise type(exc)(f"release {r.name}: {exc}") from None
 
 
+#: The bytes of arrays each release's :class:`~quickrelease.building.isolation_fit.FitMemo` keeps for the restarts
+#: (the global stage's candidates and the thinned record's solves come first and are small; a long record's
+#: whole-record solves beyond it are solved again where a restart needs them).
+CAMPAIGN_MEMO_BYTES = 64 * 2**20
+
+
+def _fit_kept(r, mass: float, model: str, start, superstructure_mass, damping: str = "viscous", shared=None) \
+        -> tuple[IsolationFit, FitMemo]:
+    """A release's fit, and the memo of what it computed (for the restarts; from a worker process too)."""
+    memo = FitMemo(CAMPAIGN_MEMO_BYTES)
+    return _fit_one(r, mass, model, start, superstructure_mass, damping, shared, memo), memo
+
+
 def _fit_releases(releases, mass: float, model: str, start, superstructure_mass, damping: str = "viscous",
-                  shared=None) -> list[IsolationFit]:
+                  shared=None, memos: dict[str, FitMemo] | None = None) -> list[IsolationFit]:
     """Each release's fit, in parallel processes (``CAMPAIGN_WORKERS``, spawned: each fit is Python-bound, so
     threads would share one core) where there are at least three releases and two cores; the fits are the
-    same as one after the other (each fit is deterministic for its seed)."""
+    same as one after the other (each fit is deterministic for its seed). ``memos`` gets each release's
+    :class:`~quickrelease.building.isolation_fit.FitMemo` (what its fit computed), by name, for
+    :func:`_restart_misfits`."""
     workers = min(CAMPAIGN_WORKERS, len(releases))
     if workers < 2 or len(releases) < 3:
-        return [_fit_one(r, mass, model, start, superstructure_mass, damping, shared) for r in releases]
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
+        out = [_fit_kept(r, mass, model, start, superstructure_mass, damping, shared) for r in releases]
+    else:
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
 
-    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
-        jobs = [pool.submit(_fit_one, r, mass, model, start, superstructure_mass, damping, shared) for r in releases]
-        return [job.result() for job in jobs]
+        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+            jobs = [pool.submit(_fit_kept, r, mass, model, start, superstructure_mass, damping, shared)
+                    for r in releases]
+            out = [job.result() for job in jobs]
+    if memos is not None:
+        memos.update((r.name, kept) for r, (_, kept) in zip(releases, out, strict=True))
+    return [fit for fit, _ in out]
 
 
 #: Other releases' estimates tried as starts of a release whose fit matches its noise but whose global minimum the
@@ -522,7 +553,8 @@ def _unconfirmed(fit: IsolationFit) -> bool:
 
 def _restart_misfits(releases, fits: list[IsolationFit], mass: float, model: str,
                      superstructure_mass: float | None = None, damping: str = "viscous",
-                     shared: dict[str, float] | None = None) -> dict[str, str]:
+                     shared: dict[str, float] | None = None, memos: dict[str, FitMemo] | None = None) \
+        -> dict[str, str]:
     """Refit each release whose misfit exceeds its noise from the estimates of every release that fits
     well (the campaign knows the building: the model's misfit has local minima, e.g. the count of
     half-cycles before the sliders stick), keeping the lowest chi-square; and each release that fits its noise
@@ -531,7 +563,9 @@ def _restart_misfits(releases, fits: list[IsolationFit], mass: float, model: str
     friction, 150 mm release (tests/studies/test_building_campaign_isolators.py): its fit settled at mu_slow =
     0.0025 +- 0.0001 (truth 0.005; chi2/dof 1.01, "reached from 0 of 5 starts"); from the 200 mm release's
     estimates chi-square fell by 37. ``fits`` is updated in place. Returns {release: the release whose estimates
-    started its kept fit}."""
+    started its kept fit}. ``memos``: what each release's fit computed (:func:`_fit_releases`), by name: a restart
+    takes the global stage, the record's own starts and every solve that its new start leaves as it was from its
+    release's, and solves only what the new start changes (the fit is the one computed afresh)."""
     good = [(r.name, f) for r, f in zip(releases, fits, strict=True) if not _misfit(f) and f.converged]
     good.sort(key=lambda pair: (_unconfirmed(pair[1]), pair[1].chi2_reduced))
     restarted = {}
@@ -545,7 +579,8 @@ def _restart_misfits(releases, fits: list[IsolationFit], mass: float, model: str
             try:
                 trial = fit_isolation(r.channels, mass, model, release_time=r.release_time, start=start,
                                       fixed=_fixed(r, shared), superstructure_mass=superstructure_mass,
-                                      exclude_spikes=r.exclude_spikes, damping=damping)
+                                      exclude_spikes=r.exclude_spikes, damping=damping,
+                                      memo=(memos or {}).get(r.name))
             except QuickReleaseError:
                 continue
             if trial.chi2 < fits[i].chi2:
@@ -744,8 +779,9 @@ def fit_building_campaign(releases, mass: float, model: str = "linear", *, varia
             and len({abs(r.d0) for r in releases}) == 1:
         raise QuickReleaseError("every release has the same pushed displacement d0: no law in the amplitude can be "
                                 "fitted")
-    fits = _fit_releases(releases, mass, model, start, superstructure_mass, damping, shared)
-    restarts = _restart_misfits(releases, fits, mass, model, superstructure_mass, damping, shared)
+    memos: dict[str, FitMemo] = {}  # what each fit computes, for the restarts (its global stage, its own starts)
+    fits = _fit_releases(releases, mass, model, start, superstructure_mass, damping, shared, memos=memos)
+    restarts = _restart_misfits(releases, fits, mass, model, superstructure_mass, damping, shared, memos=memos)
     reported = tuple(q for q in REPORTED.get(model, ()) if q not in quantities)
     estimates = [_estimates(r, fit, quantities + reported, restarts.get(r.name))
                  for r, fit in zip(releases, fits, strict=True)]
