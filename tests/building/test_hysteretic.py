@@ -668,3 +668,23 @@ def test_the_closed_forms_worst_values_are_named_too():
     with pytest.raises(ParameterError) as info:
         free_vibration(TwoDOF(1.0e6, 3.0e5, 2.0, 0.5), True, 5.0)
     assert info.value.name == "d0"
+
+
+def test_a_motion_still_moving_is_not_extrapolated_past_its_last_step():
+    """A Bouc-Wen layer still swinging at t_end = 3 s: to the horizon the reference's motion, past its last step NaN
+    (the step's extension extrapolated: 0.505 m at 3 s of a pendulum followed to 1 s, where the layer was at
+    -0.014 m); the DataFrame's default instants end at the horizon, every value finite."""
+    from quickrelease.io.frames import free_vibration_frame
+
+    kw = dict(mass=8.0e5, post_yield_stiffness=3.5e6, characteristic_strength=4.0e5, yield_displacement=0.025,
+              shape=1.0, damping=2 * 0.02 * math.sqrt(3.5e6 * 8.0e5))
+    motion = free_vibration(BoucWen(**kw), 0.2, t_end=3.0)
+    assert motion.stop_time == math.inf
+    t = np.linspace(0.0, 3.0, 301)
+    r = ref.simulate(ref.boucwen(**kw), 0.2, t, t_end=3.0)
+    x, v, a = motion.state(t)
+    assert np.max(np.abs(x - r.x)) < TOL * 0.2 and np.max(np.abs(a - r.a)) < 1e-6
+    x, v, a = motion.state(np.array([3.5, 10.0]))
+    assert np.all(np.isnan(x)) and np.all(np.isnan(v)) and np.all(np.isnan(a))
+    frame = free_vibration_frame(motion)
+    assert frame.index[-1] == pytest.approx(motion.horizon) and np.all(np.isfinite(frame.to_numpy()))

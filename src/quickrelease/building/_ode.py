@@ -814,7 +814,8 @@ def evaluate(P, gt, gy, gd, gf, gF, n, stop, y_push, t):
     """The state (x, v, z and the three works) and the acceleration at times t [s] (any order; sorted is
     fastest): the continuous extension of the grid step that holds each time (``gF``, stored by the integration), the
     acceleration from the equation at that state; before the release the pushed state at rest, after the stop
-    the last point at rest (the value after an instant where the acceleration jumps)."""
+    the last point at rest (the value after an instant where the acceleration jumps); past the last step of a
+    motion that has not stopped, NaN (the horizon's step ends at or after the horizon)."""
     m = t.size
     ys = np.empty((m, NY))
     acc = np.empty(m)
@@ -832,6 +833,12 @@ def evaluate(P, gt, gy, gd, gf, gF, n, stop, y_push, t):
             for j in range(NY):
                 ys[i, j] = gy[n - 1, j]
             acc[i] = 0.0
+            continue
+        if ti > gt[n - 1]:  # past the last step of a motion still moving there: not computed (its extension
+            # would extrapolate, 0.5 m where the layer was at -0.014 m)
+            for j in range(NY):
+                ys[i, j] = math.nan
+            acc[i] = math.nan
             continue
         p = np.searchsorted(gt[:n], ti, side="right") - 1
         if p >= n - 1:
@@ -877,7 +884,8 @@ def _accel(P, x, v, z, d):
 @njit(cache=True, nogil=True)
 def motion(P, gt, gy, gd, gf, gF, n, stop, y_push, t):
     """x [m], x_dot [m/s] and x_ddot [m/s^2] at sorted times t [s]: what a record's channels need, as
-    :func:`evaluate` gives them (the same continuous extension), without the works, the grid walked once."""
+    :func:`evaluate` gives them (the same continuous extension; NaN past the last step of a motion that has not
+    stopped), without the works, the grid walked once."""
     m = t.size
     out = np.empty((3, m))
     tmp = np.empty(NY)
@@ -894,6 +902,11 @@ def motion(P, gt, gy, gd, gf, gF, n, stop, y_push, t):
             out[0, i] = gy[n - 1, 0]
             out[1, i] = 0.0
             out[2, i] = 0.0
+            continue
+        if ti > gt[n - 1]:  # past the last step of a motion still moving there (as evaluate)
+            out[0, i] = math.nan
+            out[1, i] = math.nan
+            out[2, i] = math.nan
             continue
         while p < n - 2 and gt[p + 1] <= ti:
             p += 1

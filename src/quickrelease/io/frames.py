@@ -101,8 +101,10 @@ def _split_column(column: str, kinds: Mapping[str, str]) -> tuple[str, str, str]
 
 def _motion_columns(motion, t) -> dict[str, np.ndarray]:
     if t is None:
-        end = motion.stop_time if np.isfinite(motion.stop_time) else motion.horizon
-        t = np.linspace(0.0, 1.1 * float(end), 2001)
+        if np.isfinite(motion.stop_time):  # a while at rest after the stop
+            t = np.linspace(0.0, 1.1 * float(motion.stop_time), 2001)
+        else:  # still moving: to the horizon (the motion is not computed past it)
+            t = np.linspace(0.0, float(motion.horizon), 2001)
     t = np.asarray(t, dtype=float)
     x, v, a = motion.state(t)
     return {"t_s": t, "x_m": np.asarray(x, dtype=float), "v_m_s": np.asarray(v, dtype=float),
@@ -113,7 +115,7 @@ def free_vibration_frame(motion, t=None):
     """The building's free vibration (:class:`quickrelease.building.model.FreeVibration`) as a DataFrame indexed by
     the time since the release ``t_s``: displacement ``x_m``, velocity ``v_m_s``, acceleration ``a_m_s2`` of
     the isolation layer. ``t`` [s]: the instants (default 2001 from the release to 1.1 times the stop time,
-    or the horizon when it never stops)."""
+    or to the horizon while it still moves there)."""
     import pandas as pd
 
     return pd.DataFrame(_motion_columns(motion, t)).set_index("t_s")
