@@ -80,6 +80,20 @@ CRAWL_RATIO = (0.05, 0.8)
 RELEASE_GAIN = 1e-4
 #: Rounds of holding and freeing at most.
 ACTIVE_ROUNDS = 4
+#: A solve that crawls down a staircase (each iteration a Jacobian, 2 n evaluations) ends where the cost fell by less
+#: than STALL_DROP residual variances over the last STALL_STEPS iterations: a restart of the polish on a pendulum
+#: campaign's record took 1 580 iterations (3.5 s) to lower the chi-square by 0.34, less than any noise would notice.
+STALL_STEPS = 20
+STALL_DROP = 0.01
+
+
+class _Stall(Exception):
+    """Raised inside the Jacobian: the cost fell by less than STALL_DROP residual variances over STALL_STEPS
+    iterations; ``x``, ``f`` and ``J`` are the last iterate's point, residuals and Jacobian (free parameters)."""
+
+    def __init__(self, x: np.ndarray, f: np.ndarray, J: np.ndarray) -> None:
+        super().__init__("stalled")
+        self.x, self.f, self.J = x, f, J
 
 
 class _Crawl(Exception):
@@ -119,7 +133,9 @@ def bounded_least_squares(fun, x0, jac, lower, upper, *, args=(), tol: float = 1
     predicted drop ``g_i^2 / (2 J_i^T J_i)`` (chi-square units: twice that) above ``RELEASE_GAIN`` residual
     variances frees it again (from the Newton step inwards), else the bound is the optimum (the Karush-Kuhn-Tucker
     condition up to a drop no estimate would notice). At most ``ACTIVE_ROUNDS`` rounds; a freed parameter is not
-    held again.
+    held again. A solve whose cost fell by less than ``STALL_DROP`` residual variances over its last ``STALL_STEPS``
+    iterations ends there (status 2, its message says so): on a misfit of steps (a record's samples crossed by
+    a stick or a reversal) TRF can crawl for thousands of iterations, each a Jacobian.
 
     Returns scipy's OptimizeResult over all the parameters (``x``, ``fun``, ``cost``, ``jac`` (the full Jacobian at
     ``x`` where a parameter was held), ``nfev`` and ``njev`` over every round, ``status``, ``success``, ``message``)
@@ -147,10 +163,19 @@ def bounded_least_squares(fun, x0, jac, lower, upper, *, args=(), tol: float = 1
             calls[1:] = [np.array(y), fun(full(y), *a)]  # the residuals of the last iterate (TRF asks the
             return calls[2]  # Jacobian where it has just evaluated them)
 
-        def j(y, *a, full=full, free=free, history=history, calls=calls, watch=round_ < ACTIVE_ROUNDS):
+        costs: list[float] = []
+
+        def j(y, *a, full=full, free=free, history=history, calls=calls, watch=round_ < ACTIVE_ROUNDS, costs=costs):
             z = full(y)
             history.append(z)
             J = jac(z, *a)[:, free]
+            if len(calls) == 3 and np.array_equal(calls[1], y):
+                f = calls[2]
+                costs.append(float(f @ f))
+                if len(costs) > STALL_STEPS:  # (the chi-square's fall over the window, in residual variances)
+                    variance = costs[-1] / max(f.size - n, 1)
+                    if costs[-1 - STALL_STEPS] - costs[-1] < STALL_DROP * max(variance, 1e-300):
+                        raise _Stall(np.array(y), f, J)
             if watch and len(history) > CRAWL_STEPS and len(calls) == 3 and np.array_equal(calls[1], y):
                 crawling = [(k, b) for k, i in enumerate(free) if i not in freed for b in (lo[i], hi[i])
                             if math.isfinite(b) and _crawls(history, i, b)]
@@ -165,6 +190,13 @@ def bounded_least_squares(fun, x0, jac, lower, upper, *, args=(), tol: float = 1
         try:
             r = least_squares(f, x[free], jac=j, bounds=(lo[free], hi[free]), args=args, xtol=tol, ftol=tol,
                               gtol=tol, max_nfev=budget, **options)
+        except _Stall as st:
+            njev += len(history)
+            nfev += calls[0]
+            r = OptimizeResult(x=st.x, fun=st.f, cost=0.5 * float(st.f @ st.f), jac=st.J, grad=st.J.T @ st.f,
+                               nfev=0, njev=0, status=2, success=True, optimality=float(np.max(np.abs(st.J.T @ st.f))),
+                               message=f"the cost fell by less than {STALL_DROP:g} residual variances over "
+                                       f"{STALL_STEPS} iterations (a staircase)")
         except _Crawl as c:
             njev += len(history)
             nfev += calls[0]
