@@ -447,6 +447,24 @@ def _two_dof_start(mass: float, ms: float, channels: list[BuildingChannel], t_r:
     circular frequencies), so w^2 and w_s^2 are the roots of ``z^2 - (S / r) z + P / r = 0``."""
     out = {"superstructure_period": 0.25 * linear["period"], "superstructure_damping_ratio": 0.02}
     w1 = 2.0 * math.pi / linear["period"]
+    w2 = _second_mode(channels, t_r, w1)
+    if w2 is None:
+        return out
+    r = mass / (mass - ms)
+    S, P = w1**2 + w2**2, w1**2 * w2**2
+    disc = (S / r) ** 2 - 4.0 * P / r
+    if disc <= 0.0:
+        return out
+    lo, hi = 0.5 * (S / r - math.sqrt(disc)), 0.5 * (S / r + math.sqrt(disc))
+    if lo > 0.0:
+        out["period"] = 2.0 * math.pi / math.sqrt(lo)
+    out["superstructure_period"] = max(2.0 * math.pi / math.sqrt(hi), 2.0 * SUPERSTRUCTURE_PERIOD_MIN)
+    return out
+
+
+def _second_mode(channels, t_r: float, w1: float) -> float | None:
+    """The circular frequency of the record's spectral peak above 1.5 ``w1`` [rad/s]: of a roof (else base)
+    acceleration, velocity or displacement after the release ``t_r`` (Hann window); None where none shows one."""
     order = ("a_roof", "v_roof", "x_roof", "a", "v")
     pick = sorted((c for c in channels if c.kind in order), key=lambda c: order.index(c.kind))
     for ch in pick:
@@ -461,18 +479,8 @@ def _two_dof_start(mass: float, ms: float, channels: list[BuildingChannel], t_r:
         band = w > 1.5 * w1
         if not np.any(band) or not np.any(spec[band] > 0):
             continue
-        w2 = float(w[band][int(np.argmax(spec[band]))])
-        r = mass / (mass - ms)
-        S, P = w1**2 + w2**2, w1**2 * w2**2
-        disc = (S / r) ** 2 - 4.0 * P / r
-        if disc <= 0.0:
-            break
-        lo, hi = 0.5 * (S / r - math.sqrt(disc)), 0.5 * (S / r + math.sqrt(disc))
-        if lo > 0.0:
-            out["period"] = 2.0 * math.pi / math.sqrt(lo)
-        out["superstructure_period"] = max(2.0 * math.pi / math.sqrt(hi), 2.0 * SUPERSTRUCTURE_PERIOD_MIN)
-        break
-    return out
+        return float(w[band][int(np.argmax(spec[band]))])
+    return None
 
 
 def _layer_acceleration(channels, noise: dict[str, float], mass: float, superstructure_mass: float | None = None) \
@@ -915,6 +923,15 @@ def _start_points(model: str, mass: float, names: list[str], values: dict[str, f
     # also traded against the damping (linear) and against the yield force (bilinear: both act alike on
     # the soft branch). Several splits of the dissipation are tried as starts and the best fit kept.
     starts = [dict(values)]
+    if "superstructure_period" in names and model != "2dof":
+        # a flexible layer's record often ends with the base held by the sliders and the roof ringing on it at
+        # its fixed-base period: the roof's spectral peak read as that (T_s = 2 pi / w_peak), beside the 2dof
+        # start's reading of it as the sliding building's second mode
+        peak = _second_mode(misfit.channels, values["release_time"], 2.0 * math.pi / values["period"])
+        if peak is not None:
+            ts = max(2.0 * math.pi / peak, 2.0 * SUPERSTRUCTURE_PERIOD_MIN)
+            if abs(ts - values["superstructure_period"]) > 0.05 * ts:
+                starts.append({**values, "superstructure_period": ts})
     if model == "linear" and start:  # design values off by 15-25% can lead into the wrong basin: the decay's
         starts.append({**from_decay, **fixed})  # start (cheap for the linear model) is tried beside them
     if "friction" in names:
@@ -1883,7 +1900,7 @@ def _finite(value: float) -> float | None:
 
 def predicted_isolation_errors(channels, mass: float, model: str, parameters: dict[str, float], *,
                                superstructure_mass: float | None = None,
-                               fixed: tuple[str, ...] | list[str] = ()) -> IsolationPrecision:
+                               fixed: tuple[str, ...] | list[str] = (), flexible: bool = False) -> IsolationPrecision:
     """The standard errors a fit of ``model`` (:func:`fit_isolation`, noise levels given) to records on these
     channels would have, at the true ``parameters``: the Cramer-Rao bound.
 
@@ -1907,9 +1924,12 @@ def predicted_isolation_errors(channels, mass: float, model: str, parameters: di
         yield_displacement, shape; the pendulum friction_slow, friction_fast, rate [s/m] instead of friction),
         d0, release_time [s, record time], and offset_<channel> (default 0; they enter linearly).
     superstructure_mass : float, optional
-        2dof: the roof mass [kg].
+        2dof, or a layer under a flexible superstructure (``flexible``): the roof mass [kg].
     fixed : sequence of str
         Parameters the fit would hold fixed (not estimated).
+    flexible : bool
+        The layer (bilinear, pendulum, boucwen) under a flexible superstructure, as ``fit_isolation(flexible=True)``:
+        ``parameters`` hold superstructure_period and superstructure_damping_ratio too.
     """
     channels = list(channels)
     if not channels:
@@ -1917,11 +1937,20 @@ def predicted_isolation_errors(channels, mass: float, model: str, parameters: di
     if model not in FIT_MODELS:
         raise ParameterError("model", model, ", ".join(f"'{m}'" for m in FIT_MODELS))
     damping = "power" if "damping_exponent" in parameters else "viscous"
+    flexible = bool(flexible) and model != "2dof"
+    if flexible and model not in FLEXIBLE_MODELS:
+        raise ParameterError("model", model, f"{', '.join(repr(m) for m in FLEXIBLE_MODELS)} with flexible=True "
+                             "(the linear layer under a flexible superstructure is model='2dof', in closed form)")
+    if (flexible or model == "2dof") and superstructure_mass is None:
+        raise ParameterError("superstructure_mass", None, f"(0, mass) = (0, {float(mass):.6g}) kg (the "
+                             f"{'2dof model' if model == '2dof' else 'flexible superstructure'} needs it)", "kg")
+    if not (flexible or model == "2dof"):
+        superstructure_mass = None
     for ch in channels:
         if ch.noise is None:
             raise ParameterError(f"{ch.name}.noise", None, "given (the noise weights the information)",
                                  CHANNEL_KINDS[ch.kind])
-    all_names = _parameter_names(model, channels, damping)
+    all_names = _parameter_names(model, channels, damping, flexible)
     values = {n: 0.0 for n in all_names if n.startswith(("offset_", "drift_"))}
     values.update({n: float(v) for n, v in parameters.items() if n in all_names})
     missing = [n for n in all_names if n not in values]
