@@ -1998,7 +1998,8 @@ def predicted_isolation_errors(channels, mass: float, model: str, parameters: di
 
 
 def compare_models(fits) -> list[dict[str, Any]]:
-    """AIC and BIC of fits of different models to the same record, best first, with their differences.
+    """AIC and BIC of fits of different models to the same record, best first, with their differences (each row's
+    ``model`` the fit's :attr:`IsolationFit.label`: ``boucwen (flexible)`` beside ``boucwen``).
 
     The fits must share the channels and noise levels (known noise, ``absolute_sigma``) for the criteria
     to be comparable; a difference above about 10 is strong support for the lower one.
@@ -2006,7 +2007,7 @@ def compare_models(fits) -> list[dict[str, Any]]:
     fits = list(fits)
     best_aic = min(f.aic for f in fits)
     best_bic = min(f.bic for f in fits)
-    rows = [{"model": f.model, "parameters": len(f.names), "chi2": f.chi2, "aic": f.aic, "bic": f.bic,
+    rows = [{"model": f.label, "parameters": len(f.names), "chi2": f.chi2, "aic": f.aic, "bic": f.bic,
              "delta_aic": f.aic - best_aic, "delta_bic": f.bic - best_bic,
              "whiteness_p": f.whiteness_p} for f in fits]
     return sorted(rows, key=lambda row: row["bic"])
@@ -2057,7 +2058,7 @@ def decay_check(fit: IsolationFit) -> dict[str, Any]:
                             "with the amplitude or the velocity): compare the equivalent quantities per cycle "
                             "instead")
         return out
-    if fit.model == "2dof":
+    if fit.flexible:
         out["notes"].append("the 2dof base decays in two coupled modes (and the roof can make the sliders stick "
                             "and slip again): the single-mode decay law does not hold; compare the equivalent "
                             "period and damping against the amplitude instead")
