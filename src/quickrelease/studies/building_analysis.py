@@ -139,7 +139,8 @@ def effective_cycles(fit: IsolationFit, points_per_period: int = 20000) -> tuple
     fit (their base force is not the isolators' alone). The force at an extreme is the largest within two samples
     of it, which carries the damper's force of those samples: 4 zeta (2 pi / points_per_period) of keff (3e-5 at
     zeta = 0.03 and the default 20000, within the bands of
-    :func:`~quickrelease.studies.building_effective.effective_curves` on clean records; 3e-4 at 2000); 0.09 s for a 60 s record of 22 cycles."""
+    :func:`~quickrelease.studies.building_effective.effective_curves` on clean records; 3e-4 at 2000); 0.09 s for a
+    60 s record of 22 cycles."""
     if fit.flexible:
         return ()
     iso = fit.isolation()
