@@ -158,21 +158,22 @@ def test_boucwen_record_starts_reach_the_truth():
 
 
 @pytest.mark.slow
-def test_a_rigid_superstructure_sends_the_storey_period_to_its_bound():
-    """A record of the rigid layer (the reference's rigid simulation: the roof moves with the base) fitted with a
-    flexible storey: the storey's period at its lower bound, said in a warning that names the rigid fit, and the
-    layer's parameters those of the rigid fit (within its standard errors), the truth inside their intervals."""
-    channels = _record("pendulum", PENDULUM_MASS, PENDULUM_MS, PENDULUM, seed=5, duration=8.0, rigid=True)
-    rigid = fit_isolation(channels, PENDULUM_MASS, "pendulum", profile=False, global_search=False)
-    fit = fit_isolation(channels, PENDULUM_MASS, "pendulum", flexible=True, superstructure_mass=PENDULUM_MS,
+def test_a_rigid_superstructure_gives_the_rigid_answer():
+    """A record of the rigid layer (the reference's rigid simulation: the roof moves with the base, T_s -> 0) fitted
+    with a flexible storey: the storey's period falls to the stiff end (below 2.5 times its lower bound, far below
+    what a 100 Hz record resolves), the chi-square is the rigid fit's (within 2: two more parameters, a flat valley
+    towards T_s = 0), and the layer's parameters are the rigid fit's (within one of its standard errors), the truth
+    inside their intervals."""
+    channels = _record("boucwen", BOUCWEN_MASS, BOUCWEN_MS, BOUCWEN, seed=5, duration=8.0, rigid=True)
+    rigid = fit_isolation(channels, BOUCWEN_MASS, "boucwen", profile=False, global_search=False)
+    fit = fit_isolation(channels, BOUCWEN_MASS, "boucwen", flexible=True, superstructure_mass=BOUCWEN_MS,
                         profile=False, global_search=False)
-    assert fit.estimates["superstructure_period"] < 2.0 * SUPERSTRUCTURE_PERIOD_MIN
-    assert any("lower bound" in w and "flexible=False" in w for w in fit.warnings)
-    layer = ("period", "damping_ratio", "friction_slow", "friction_fast", "rate", "d0")
+    assert fit.estimates["superstructure_period"] < 2.5 * SUPERSTRUCTURE_PERIOD_MIN
+    assert abs(fit.chi2 - rigid.chi2) < 2.0
+    layer = [n for n in rigid.names if not n.startswith("offset_")]
     for n in layer:
         assert abs(fit.estimates[n] - rigid.estimates[n]) < rigid.std_errors[n], n
-    assert _inside(fit, {n: PENDULUM[n] for n in layer}) == []
-    assert fit.chi2 < rigid.chi2 + 1.0
+    assert _inside(fit, {n: BOUCWEN[n] for n in layer}) == []
 
 
 def _channels():
