@@ -79,3 +79,25 @@ def test_synth_cli_writes_a_flexible_case_that_reads_back(tmp_path, monkeypatch)
     data = load_building(load_case(tmp_path / "back.toml", require_test=False))
     assert data.flexible and data.model == "pendulum" and data.superstructure_mass == 7.0e5
     assert data.isolation.superstructure_period == 0.6 and {c.kind for c in data.channels} == {"x", "a_roof"}
+
+
+def test_planning_a_test_of_a_flexible_building_says_the_clearance_takes_it_rigid(tmp_path):
+    """``plan_case`` with a flexible pendulum building: the clearance check runs on the layer (the whole mass, the
+    pendulum's own motion: the same as the rigid case's) and says the superstructure's mode is left out."""
+    from quickrelease.studies.planning import plan_case
+
+    examples = Path(__file__).parents[2] / "examples"
+    plan = (examples / "plan.toml").read_text()
+    head = plan[:plan.index("[building]")].replace('file = "device_checked.toml"',
+                                                   f'file = "{(examples / "device_checked.toml").as_posix()}"')
+    head = head[:head.index("[friction]")] + '[friction]\nF1 = "420 N"\nF2 = "805 N"\n\n' + head[head.index("[fuse]"):]
+    body = PENDULUM[PENDULUM.index("[building]"):].replace('displacement = "0.3 m"\n', "")
+    results = {}
+    for name, text in (("flexible", body), ("rigid", "\n".join(line for line in body.splitlines()
+                                                                 if not line.startswith(("flexible", "superstructure"))))):
+        path = tmp_path / f"{name}.toml"
+        path.write_text(head + text + "\n[plan]\nsamples = 2\nseed = 0\n")
+        results[name] = plan_case(load_case(path), clearance_samples=2)
+    assert any("flexible pendulum building taken as rigid" in n for n in results["flexible"].notes)
+    assert not any("taken as rigid" in n for n in results["rigid"].notes)
+    assert results["flexible"].clearance.min_gap == results["rigid"].clearance.min_gap
