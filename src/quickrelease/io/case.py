@@ -328,7 +328,8 @@ CASE_SCHEMA: dict[str, dict[str, tuple[str, str]]] = {
                                   "'0.5 s'"),
         "superstructure_damping_ratio": ("dimensionless", "a damping ratio in [0, 1), e.g. 0.02"),
         "flexible": ("bool", "true or false: the bilinear, pendulum or boucwen layer under a flexible superstructure "
-                     "(with superstructure_mass; the linear layer's is model = '2dof')"),
+                     "(with superstructure_mass; the linear layer's is model = '2dof'); false with "
+                     "superstructure_mass: the rigid layer, its flexible variant fitted by --flexible and --compare"),
     },
     "report": {
         "operator": ("str", "who ran the test or the analysis, e.g. 'A. Engineer'"),
@@ -830,7 +831,10 @@ def _building(values: dict[str, Any], table: Any, source: str, base: Path) -> Bu
     if flexible and values.get("building.damping", "viscous") != "viscous":
         raise CaseFileError(f"{source}: [building] damping = {table['damping']!r} with flexible = true: the flexible "
                             "building's dampers are viscous")
-    allowed = set(_MODEL_KEYS[model]) | (set(_STOREY_KEYS) if flexible else set())
+    # the superstructure's mass with a rigid bilinear, pendulum or boucwen layer: for --flexible and --compare's
+    # flexible variant (its period and damping are design values of the flexible building only)
+    allowed = set(_MODEL_KEYS[model]) | (set(_STOREY_KEYS) if flexible else
+                                         {"superstructure_mass"} if model in FLEXIBLE_MODELS else set())
     for key in sorted(given & _MODEL_ONLY - allowed):
         users = " or ".join(m for m, keys in _MODEL_KEYS.items() if key in keys)
         raise CaseFileError(f"{source}: [building] {key} = {table[key]!r} with model = {model!r}: {key} belongs "
