@@ -19,7 +19,7 @@ import isolator_reference as ref  # noqa: E402
 
 runner = CliRunner()
 G0 = 9.80665
-M, MS, T, ZETA, FS, QD, DY, TS, ZS, D0, T_R = 8.0e5, 4.8e5, 3.0, 0.03, 2.0e4, 3.9e5, 0.02, 0.5, 0.02, 0.15, 1.0
+M, MS, T, ZETA, FS, QD, DY, TS, ZS, D0, T_R = 8.0e5, 4.8e5, 3.0, 0.03, 2.0e4, 3.9e5, 0.02, 0.5, 0.02, 0.15, 1.0037
 
 
 def _write_record(folder, duration=11.0, seed=1):
@@ -28,10 +28,11 @@ def _write_record(folder, duration=11.0, seed=1):
     ks = MS * (2 * math.pi / TS) ** 2
     t = np.arange(0.0, duration, 0.01)
     mo = ref.simulate_2dof(system, MS, ks, 2 * ZS * math.sqrt(ks * MS), D0, t - T_R, duration)
+    acc = ref.simulate_2dof(system, MS, ks, 2 * ZS * math.sqrt(ks * MS), D0, t + 0.002 - T_R, duration)  # own clock
     rng = np.random.default_rng(seed)
     x = mo.x + 0.003 + rng.normal(0, 2e-4, t.size)
-    a = mo.a + rng.normal(0, 0.02, t.size)
-    a_roof = mo.as_ + rng.normal(0, 0.02, t.size)
+    a = acc.a + rng.normal(0, 0.02, t.size)
+    a_roof = acc.as_ + rng.normal(0, 0.02, t.size)
     np.savetxt(folder / "x.csv", np.column_stack([t, 1e3 * x]), delimiter=",", header="t_s,x_mm", comments="",
                fmt="%.10g")
     np.savetxt(folder / "acc.csv", np.column_stack([t + 0.002, a / G0, a_roof / G0]), delimiter=",",

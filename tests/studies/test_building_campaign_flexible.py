@@ -22,7 +22,7 @@ M, MS, T, ZETA, FS, QD, DY, TS, ZS = 8.0e5, 4.8e5, 3.0, 0.03, 2.0e4, 3.9e5, 0.02
 KD = M * (2 * math.pi / T) ** 2
 
 
-def _record(path, d0, seed, duration=8.0, t_release=0.7):
+def _record(path, d0, seed, duration=8.0, t_release=0.7037):
     system = ref.boucwen(M, KD, QD, DY, 1.0, damping=2 * ZETA * math.sqrt(KD * M), friction=FS)
     ks = MS * (2 * math.pi / TS) ** 2
     t = np.arange(0.0, duration, 0.01)
