@@ -464,11 +464,17 @@ def _two_dof_start(mass: float, ms: float, channels: list[BuildingChannel], t_r:
 
 def _second_mode(channels, t_r: float, w1: float) -> float | None:
     """The circular frequency of the record's spectral peak above 1.5 ``w1`` [rad/s]: of a roof (else base)
-    acceleration, velocity or displacement after the release ``t_r`` (Hann window); None where none shows one."""
+    acceleration, velocity or displacement from the release ``t_r`` to its last sample more than 8 noise levels
+    off its final level (Hann window); None where none shows one. (Over a whole 60 s record whose roof rang for
+    its first 10 s the window's taper left the ringing under the noise, and the peak was the noise's.)"""
     order = ("a_roof", "v_roof", "x_roof", "a", "v")
     pick = sorted((c for c in channels if c.kind in order), key=lambda c: order.index(c.kind))
     for ch in pick:
         moving = ch.t >= t_r
+        level = float(np.median(ch.values[-max(ch.values.size // 10, 5):]))
+        off = np.nonzero(np.abs(ch.values - level) > 8.0 * noise_scatter(ch.values))[0]
+        if off.size and np.count_nonzero(moving & (ch.t <= ch.t[off[-1]])) >= 64:
+            moving &= ch.t <= ch.t[off[-1]]
         if np.count_nonzero(moving) < 64:
             continue
         y = ch.values[moving] - float(np.mean(ch.values[moving]))
