@@ -230,3 +230,28 @@ def test_the_roofs_peak_is_read_where_the_roof_moves():
     channel = BuildingChannel("roof", "a_roof", t, ring + rng.normal(0.0, 0.02, t.size), 0.02)
     peak = _second_mode([channel], 0.0, 2 * math.pi / 3.0)
     assert peak == pytest.approx(w, abs=2 * math.pi / 10.0)
+
+
+def test_the_loops_read_the_layers_force_from_both_accelerometers():
+    """Under a flexible storey the layer carries both masses: the starts' loops read ``-m a_eff`` with
+    ``a_eff = (m_b a_b + m_s a_s) / m`` (the base's and the roof's accelerometers), which is the reference's own
+    isolator force ``spring(x, z) + sign(v) friction(|v|) + c v`` to 1e-9 of its largest (noise-free channels); the
+    base's ``-m a_b`` alone is off by the roof's inertia (tens of percent)."""
+    from quickrelease.building.isolation_fit import _layer_acceleration
+
+    p, mass, ms = BOUCWEN, BOUCWEN_MASS, BOUCWEN_MS
+    t = np.arange(0.0, 8.0, 0.01) + 0.0031
+    system = _system("boucwen", mass, p)
+    ks = ms * (2 * math.pi / p["superstructure_period"]) ** 2
+    motion = ref.simulate_2dof(system, ms, ks, 2 * p["superstructure_damping_ratio"] * math.sqrt(ks * ms), p["d0"],
+                               t, 8.0)
+    moving = motion.v != 0.0
+    force = system.spring(motion.x, motion.z) + np.sign(motion.v) * system.friction(np.abs(motion.v)) \
+        + system.damping * motion.v
+    channels = [BuildingChannel("a", "a", t, motion.a, 0.02), BuildingChannel("roof", "a_roof", t, motion.as_, 0.02)]
+    combined, level = _layer_acceleration(channels, {"a": 0.02, "roof": 0.02}, mass, ms)
+    scale = np.max(np.abs(force))
+    assert np.max(np.abs(-mass * combined.values[moving] - force[moving])) < 1e-9 * scale
+    assert np.max(np.abs(-mass * motion.a[moving] - force[moving])) > 0.1 * scale
+    assert level == pytest.approx(math.hypot(0.4 * 0.02, 0.6 * 0.02))
+    assert _layer_acceleration(channels, {"a": 0.02, "roof": 0.02}, mass)[0] is channels[0]  # rigid: the base's
