@@ -141,7 +141,7 @@ def effective_cycles(fit: IsolationFit, points_per_period: int = 20000) -> tuple
     zeta = 0.03 and the default 20000, within the bands of
     :func:`~quickrelease.studies.building_effective.effective_curves` on clean records; 3e-4 at 2000); 0.09 s for a
     60 s record of 22 cycles."""
-    if fit.flexible:
+    if getattr(fit, "flexible", fit.model == "2dof"):
         return ()
     iso = fit.isolation()
     span = max(float(np.max(c.t)) for c in fit.channels) - fit.release_time if fit.channels else 0.0
@@ -169,7 +169,7 @@ def characteristic_strength(fit: IsolationFit) -> dict[str, float]:
     model has them (not for 2dof; a flexible fit's layer's)."""
     if fit.model == "2dof":
         return {}
-    iso = fit.isolation().rigid() if fit.flexible else fit.isolation()
+    iso = fit.isolation().rigid() if getattr(fit, "flexible", fit.model == "2dof") else fit.isolation()
     if fit.model == "pendulum":  # the loading branch's force at x = 0 at vanishing velocity: mu_slow W
         return {"Qd_N": float(iso.friction), "Kd_N_m": float(iso.stiffness)}
     if fit.model == "boucwen":
@@ -192,7 +192,8 @@ def physical_estimates(fit: IsolationFit) -> dict[str, Any]:
     one the record does not identify (its key listed in ``not_identified``).
     """
     est, ci, model = fit.estimates, fit.ci95, fit.model
-    iso = fit.isolation().rigid() if fit.flexible and model != "2dof" else fit.isolation()  # the layer's values
+    flexible = getattr(fit, "flexible", False) and model != "2dof"  # a layer under a flexible superstructure
+    iso = fit.isolation().rigid() if flexible else fit.isolation()  # the layer's values
     out: dict[str, Any] = {}
 
     # the record does not identify it (found so by the fit, or an interval over its whole range): the rule of
@@ -252,7 +253,7 @@ def physical_estimates(fit: IsolationFit) -> dict[str, Any]:
         put("damping_ratio", float(est.get("damping_ratio", fit.parameters.get("damping_ratio"))))
     if model != "pendulum":
         put("friction", float(iso.friction))
-    if fit.flexible and model != "2dof":  # the superstructure's, as the 2dof fit names them
+    if flexible:  # the superstructure's, as the 2dof fit names them
         for name in ("superstructure_period", "superstructure_damping_ratio"):
             put(name, float(fit.parameters[name]))
     # as building campaigns label it: a parameter the record does not identify has no interval, whatever method
@@ -461,7 +462,7 @@ def _measured(fit: IsolationFit, notes: list[str]):
 def _effective_curve(fit: IsolationFit, cycles) -> tuple[EffectiveCurve | None, CycleJudgement | None]:
     """The identified model's curves against amplitude with 95% bands and the cycles judged against them (None,
     None for 2dof or a flexible fit, or a motion too short for two cycles after the release's)."""
-    if fit.flexible:
+    if getattr(fit, "flexible", fit.model == "2dof"):
         return None, None
     curve = effective_curves(fit)
     if curve.amplitude_m.size == 0:

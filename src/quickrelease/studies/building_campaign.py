@@ -645,7 +645,7 @@ def pooled_cycles(names, fits) -> tuple[dict[str, Any], ...]:
     the releases' order; none for 2dof (its base force is not the isolators' alone)."""
     out = []
     for name, fit in zip(names, fits, strict=True):
-        if fit.flexible:  # 2dof, or a layer under a flexible superstructure
+        if getattr(fit, "flexible", fit.model == "2dof"):  # 2dof, or a layer under a flexible superstructure
             continue
         cyc = model_cycles(fit.isolation(), fit.parameters["d0"], record_span(fit))
         for i in range(cyc["amplitude_m"].size):

@@ -252,7 +252,7 @@ def measured_cycles(fit: IsolationFit, draws: int = 100, window: int | None = No
     seed = check_seed("seed", seed)
     if not isinstance(fit, IsolationFit):
         raise ParameterError("fit", type(fit).__name__, "an IsolationFit (quickrelease.building.fit_isolation)")
-    if fit.flexible:  # the base's -m a is not the isolators' force (the roof's inertia is in it)
+    if getattr(fit, "flexible", fit.model == "2dof"):  # (the base's -m a holds the roof's inertia)
         return None
     xch = next((c for c in fit.channels if c.kind == "x"), None)
     ach = next((c for c in fit.channels if c.kind == "a"), None)

@@ -335,7 +335,7 @@ def effective_curves(fit: IsolationFit, amplitudes=None, level: float = 0.95, dr
     draws = check_integer("draws", draws, 20, MOST_DRAWS)
     seed = check_seed("seed", seed)
     empty = {q: np.empty(0) for q in QUANTITIES}
-    if fit.flexible:
+    if getattr(fit, "flexible", fit.model == "2dof"):
         return EffectiveCurve(fit.model, fit.mass, np.empty(0), empty, empty, empty, level, draws, 0, (), (),
                               notes=(f"{fit.label}: the base force is not the isolators' alone; no curves",))
     horizon = record_span(fit)
