@@ -132,6 +132,9 @@ def test_held_by_friction_and_bad_input():
         Isolation.linear(1.0e5, float("nan"))
     with pytest.raises(ParameterError, match="d0"):
         free_vibration(Isolation.linear(1.0e5, 2.0, 0.0, 1.0), float("inf"))
+    for bad in (True, "0.1", np.array([0.1])):  # pushed_state called directly: True was 1 m
+        with pytest.raises(ParameterError, match="d0"):
+            pushed_state(Isolation.linear(1.0e5, 2.0, 0.0, 1.0), bad)
 
 
 @pytest.mark.parametrize("t_end", [float("nan"), float("inf"), -1.0, 0.0])

@@ -134,6 +134,26 @@ def test_held_at_release_and_bad_input():
         free_vibration(TwoDOF(M, 0.5 * M, 2.0, 0.5, friction=1.0), 0.0)
 
 
+@pytest.mark.parametrize("d0, valid", [(True, "finite and non-zero"), (False, "finite and non-zero"),
+                                       ("0.1", "finite and non-zero"), (np.array([0.1]), "finite and non-zero"),
+                                       (math.inf, "finite and non-zero"), (0.0, "finite and non-zero"),
+                                       (1.0e200, "1e+300 J")])
+def test_a_bad_d0_given_to_free_vibration_2dof_is_named(d0, valid):
+    """free_vibration_2dof called directly checks d0 as free_vibration does (hysteretic.checked_d0): a bool (True
+    was taken as 1 m), a string or an array is a ParameterError naming d0 and its valid range, and so is a push
+    storing more than 1e300 J in the isolators (1e200 m ran); a 0-d array and a numpy scalar are their number."""
+    b = TwoDOF(M, 0.5 * M, 2.0, 0.5, 0.05, 0.02 * M * G)
+    for call in (free_vibration_2dof, free_vibration):
+        with pytest.raises(ParameterError) as exc:
+            call(b, d0, 5.0)
+        assert exc.value.name == "d0" and valid in exc.value.valid, exc.value
+    t = np.array([0.7, 3.0])
+    for same in (np.array(0.1), np.float64(0.1)):
+        np.testing.assert_array_equal(free_vibration_2dof(b, same, 5.0).state(t), free_vibration_2dof(b, 0.1, 5.0).state(t))
+    with pytest.raises(ParameterError, match="building"):
+        free_vibration_2dof(Isolation(M, 1.0e7), 0.1, 5.0)
+
+
 @pytest.mark.slow
 def test_matrix_exponential_fallback(monkeypatch):
     """Where the eigenvectors are ill-conditioned (near a critically damped mode) a piece is evaluated

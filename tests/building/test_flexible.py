@@ -105,6 +105,31 @@ def test_the_storey_breaks_the_stuck_base_away_while_the_roof_rings(case):
     assert np.ptp(motion.roof_state(tail)[0]) > 1e-4 * abs(case[-1])
 
 
+@pytest.mark.parametrize("case", CASES, ids=[c[0] for c in CASES])
+def test_a_hold_past_the_horizon_is_not_within_it(case):
+    """Followed to a t_end just before the base is held for good (the reference's last stick), the base still
+    slides at the horizon: stop_time is inf (the integration's last step ran past t_end and found the hold there,
+    and stop_time said so), its sticks, slips and state those of the reference run to that t_end; a little past
+    it, the stop is the reference's last stick. Held, the base stays put (the last step's rest is kept)."""
+    building, motion, full = _solved(case)
+    t_stop, d0 = full.stick_times[-1], abs(case[-1])
+    for before in (1e-6, 0.05):  # the last step runs past t_end into the stick; and ends before it
+        t_end = t_stop - before
+        cut = free_vibration_flexible(building, case[-1], t_end=t_end)
+        t = np.linspace(0.0, t_end, 401)
+        r = ref.simulate_2dof(case[2], case[3], building.superstructure_stiffness, building.superstructure_damping,
+                              case[-1], t, t_end)
+        assert cut.stop_time == math.inf, (before, cut.stop_time)
+        np.testing.assert_allclose(cut.stick_times, r.stick_times, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(cut.slip_times, r.slip_times, rtol=0, atol=1e-9)
+        assert np.max(np.abs(cut.states(t)["x_b"] - r.x)) < 1e-6 * d0
+        if before == 1e-6:
+            late = np.array([t_stop + 0.5, HORIZON])
+            assert np.all(cut.state(late)[0] == motion.rest[0]) and np.all(cut.state(late)[1] == 0.0)
+    after = free_vibration_flexible(building, case[-1], t_end=t_stop + 1e-3)
+    assert after.stop_time == pytest.approx(t_stop, abs=1e-9) and after.stop_time <= after.horizon
+
+
 @pytest.mark.skipif(not SLOW, reason="set QUICKRELEASE_SLOW=1 for the wider matrix against the reference")
 @pytest.mark.parametrize("case", SLOW_CASES, ids=[c[0] for c in SLOW_CASES])
 def test_against_the_independent_reference_wider(case):

@@ -111,3 +111,105 @@ def test_bad_input():
         fit_isolation([ch], float("nan"))
     with pytest.raises(ParameterError, match="fixed"):
         fit_isolation([ch], M, fixed={"stiffness": 1.0}, release_time=0.5)
+
+
+def test_the_jacobian_reuses_the_residuals_only_at_the_same_point():
+    """The Jacobian's centre is the last residual evaluation where that was the same point (parameters, free names
+    and fixed values: the solvers ask for the Jacobian where they have just evaluated the residuals); anywhere else
+    it is evaluated. Each Jacobian equals that of a fresh misfit, bit for bit."""
+    from quickrelease.building import isolation_fit as F
+
+    k = M * (2 * math.pi / 2.0) ** 2
+    channels = _record(k, k, math.inf, 2 * 0.04 * math.sqrt(k * M), 1.2e4, 0.15, 1, duration=4.0)
+    noise = {"lvdt": 2e-4, "acc": 0.02}
+    lower, upper = F._bounds(channels, 0.731, 2.0)
+    names = ["period", "damping_ratio", "friction", "d0", "release_time", "offset_lvdt", "offset_acc"]
+    base = {"period": 2.0, "damping_ratio": 0.04, "friction": 1.2e4, "d0": 0.15, "release_time": 0.731,
+            "offset_lvdt": 0.004, "offset_acc": 0.01}
+    a = np.array([base[n] for n in names])
+    b = a * (1.0 + 1e-3)
+
+    def fresh(theta, free=names, at=base):
+        return F._Misfit(channels, noise, M, "linear", None, lower, upper).jacobian(theta, free, at)
+
+    m = F._Misfit(channels, noise, M, "linear", None, lower, upper)
+    m.residuals(a, names, base)
+    np.testing.assert_array_equal(m.jacobian(b, names, base), fresh(b))  # another point
+    m.residuals(b, names, base)
+    np.testing.assert_array_equal(m.jacobian(b, names, base), fresh(b))  # the same point: reused
+    moved = {**base, "offset_acc": 0.02}  # the same free values, another fixed value
+    m.residuals(b[:-1], names[:-1], base)
+    np.testing.assert_array_equal(m.jacobian(b[:-1], names[:-1], moved), fresh(b[:-1], names[:-1], moved))
+    swapped = names[:-2] + names[:-3:-1]  # the same values for other free names (the two zeros swapped)
+    m.residuals(b, names, base)
+    np.testing.assert_array_equal(m.jacobian(b, swapped, base), fresh(b, swapped, base))
+
+
+@pytest.mark.parametrize("model", ["linear", "pendulum", "boucwen"])
+def test_the_release_time_column_is_that_of_the_motion_integrated_again(model):
+    """The Jacobian's release-time column evaluates the centre's motion at shifted times (the motion does not depend
+    on when it starts, and its steps not on the horizon): bit for bit the column of the motions integrated again
+    with the release moved, on the whole record and on the coarse steps of the thinned one."""
+    from quickrelease.building import isolation_fit as F
+
+    k = M * (2 * math.pi / 2.0) ** 2
+    channels = _record(k, k, math.inf, 2 * 0.04 * math.sqrt(k * M), 1.2e4, 0.15, 1, duration=4.0)
+    noise = {"lvdt": 2e-4, "acc": 0.02}
+    lower, upper = F._bounds(channels, 0.731, 2.0)
+    base = {"d0": 0.15, "release_time": 0.731, "offset_lvdt": 0.004, "offset_acc": 0.01, "damping_ratio": 0.04,
+            "period": 2.0, "friction": 1.2e4}
+    if model == "pendulum":
+        base.update(friction_slow=0.01, friction_fast=0.02, rate=30.0)
+    if model == "boucwen":
+        base.update(period=2.5, characteristic_strength=0.04 * M * 9.81, yield_displacement=0.01, shape=1.3)
+    names = ["d0", "release_time", "period", "offset_acc"]
+    theta = np.array([base[n] for n in names])
+    for coarse in (False, True):
+        m = F._Misfit(channels, noise, M, model, None, lower, upper, coarse_steps=coarse)
+        J = m.jacobian(theta, names, base)
+        again = F._Misfit(channels, noise, M, model, None, lower, upper, coarse_steps=coarse)
+        again._evaluated_at = lambda th, fr, ba, again=again: (again.residuals(th, fr, ba), None)
+        np.testing.assert_array_equal(J, again.jacobian(theta, names, base))
+        assert np.count_nonzero(J[:, 1]) > 0.5 * J.shape[0]
+def test_a_refit_given_the_memo_solves_only_what_its_start_changes(monkeypatch):
+    """fit_isolation(memo=...): a refit of the same record from other start values takes the global stage and the
+    solves its start leaves as they were from the memo (no global search; one least-squares solve, its start's on
+    the thinned record, where the start leads into the basin the first fit found) and is the fit computed without
+    the memo, to the last bit. An acceleration record's d0 comes from the start (no displacement to read it
+    from): a start with another d0 changes the record's own starts and the search's, which then run again."""
+    import quickrelease.building.isolation_fit as isf
+
+    T, zeta, Fs, d0 = 2.0, 0.04, 1.2e4, 0.15
+    k = M * (2 * math.pi / T) ** 2
+    t = np.arange(-1.0, 4.0, 1 / 50) + 0.0013  # an accelerometer at 50 Hz, 4 s after the release: cheap, enough
+    a = reference(M, k, k, math.inf, 2 * zeta * math.sqrt(k * M), Fs, d0, t - 0.731, with_rates=True)[0][2]
+    channels = [BuildingChannel("acc", "a", t, a + 0.01 + np.random.default_rng(3).normal(0, 0.02, t.size))]
+    counts = {"search": 0, "solve": 0}
+
+    def counted(name, real):
+        def run(*args, **kwargs):
+            counts[name] += 1
+            return real(*args, **kwargs)
+        return run
+
+    monkeypatch.setattr(isf, "global_candidates", counted("search", isf.global_candidates))
+    monkeypatch.setattr(isf, "bounded_least_squares", counted("solve", isf.bounded_least_squares))
+    memo = isf.FitMemo()
+    first = fit_isolation(channels, M, "linear", memo=memo)
+    assert counts["search"] == 1 and memo.hits == 0
+    for start, searches in (({"period": 1.05 * T, "damping_ratio": 0.05, "friction": 1.0e4}, 0),
+                            ({"period": T, "d0": 1.3 * d0}, 1)):
+        before = dict(counts)
+        refit = fit_isolation(channels, M, "linear", start=start, memo=memo)
+        assert counts["search"] - before["search"] == searches, start
+        assert abs(refit.chi2 - first.chi2) < 1.0  # the same minimum
+        if not searches:
+            assert counts["solve"] - before["solve"] == 1
+        again = fit_isolation(channels, M, "linear", start=start)
+        assert refit.chi2 == again.chi2 and refit.estimates == again.estimates and refit.ci95 == again.ci95
+        assert refit.search.summary() == again.search.summary() and refit.warnings == again.warnings
+    # the friction held at two values: the solves from the same start points differ in what they hold
+    fit_isolation(channels, M, "linear", fixed={"friction": 1.0e4}, global_search=False, memo=memo)
+    held = fit_isolation(channels, M, "linear", fixed={"friction": 1.4e4}, global_search=False, memo=memo)
+    again = fit_isolation(channels, M, "linear", fixed={"friction": 1.4e4}, global_search=False)
+    assert held.chi2 == again.chi2 and held.estimates == again.estimates

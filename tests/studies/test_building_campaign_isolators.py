@@ -487,6 +487,67 @@ def test_a_release_whose_minimum_is_not_confirmed_is_refitted_from_the_others(mo
     assert abs(r1.values["friction"] - 5.0e4) < 4 * r1.std_errors["friction"]
 
 
+def _same_fit(a, b):
+    """Two fits alike to the last bit: chi-square, estimates, standard errors, intervals, the certificate."""
+    assert a.chi2 == b.chi2 and a.estimates == b.estimates and a.std_errors == b.std_errors, (a.chi2, b.chi2)
+    assert a.ci95 == b.ci95 and a.nfev == b.nfev and a.warnings == b.warnings
+    assert a.search.summary() == b.search.summary()
+
+
+def test_a_restart_reuses_what_the_releases_fits_computed(monkeypatch):
+    """R1 marked unconfirmed is refitted from R2's and R3's estimates: each restart takes the global stage and
+    the record's own starts from what R1's fit computed (its FitMemo, handed back by the worker that fitted it)
+    and solves what its new start changes only; no global search runs for the restarts
+    (one per release), a restart's least-squares solves are a fraction of the first fit's, and each restart's fit
+    is the one computed afresh (without the memo, to the last bit). The workers here run in this process, one
+    after the other (an executor that runs each job as it is submitted), so that the counts are each fit's."""
+    import concurrent.futures
+
+    import quickrelease.building.isolation_fit as isf
+
+    class InProcess(concurrent.futures.Executor):
+        def __init__(self, workers, mp_context=None):
+            pass
+
+        def submit(self, fn, *args, **kwargs):
+            done = concurrent.futures.Future()
+            done.set_result(fn(*args, **kwargs))
+            return done
+
+    releases = _linear_releases(3)
+    counts = {"search": 0, "solve": 0}
+    calls = []
+
+    def counted(name, real):
+        def run(*args, **kwargs):
+            counts[name] += 1
+            return real(*args, **kwargs)
+        return run
+
+    monkeypatch.setattr(isf, "global_candidates", counted("search", isf.global_candidates))
+    monkeypatch.setattr(isf, "bounded_least_squares", counted("solve", isf.bounded_least_squares))
+    real_fit = bc.fit_isolation
+
+    def fit(*args, **kwargs):
+        before = dict(counts)
+        out = real_fit(*args, **kwargs)
+        calls.append((args, kwargs, out, {k: counts[k] - before[k] for k in counts}))
+        return out
+
+    monkeypatch.setattr(bc, "fit_isolation", fit)
+    monkeypatch.setattr(bc, "_unconfirmed", lambda f: f is calls[0][2])
+    monkeypatch.setattr(bc, "CAMPAIGN_WORKERS", 2)
+    monkeypatch.setattr(concurrent.futures, "ProcessPoolExecutor", InProcess)
+    fit_building_campaign(releases, 4.0e5, "linear", quantities=("friction",))
+    first, restarts = calls[:3], calls[3:]
+    assert [c[0][0] for c in first] == [r.channels for r in releases] and all(c[1]["memo"] for c in first)
+    assert [c[0][0] for c in restarts] == [releases[0].channels] * 2 and all(c[1]["start"] for c in restarts)
+    assert all(c[3]["search"] == 1 for c in first) and all(c[3]["search"] == 0 for c in restarts), calls
+    assert all(c[3]["solve"] <= 0.5 * first[0][3]["solve"] for c in restarts), (first[0][3], [c[3] for c in restarts])
+    for args, kwargs, out, _ in restarts:
+        _same_fit(out, real_fit(*args, **{**kwargs, "memo": None}))
+
+
 def test_the_shipped_pendulum_campaigns_records_hold_their_documented_motion():
     """examples/records/pendulum_campaign_R*.csv: the reference's motion (R = 2.5 m, mu = 0.5 %, zeta = 1 %, released
     1.05 s after the record's start, pushed the campaign file's displacement) plus the LVDT's documented zero

@@ -142,13 +142,15 @@ class FlexibleVibration(GridTurns, BaseAndRoof):
     d0: float
     """Pushed displacement of base and roof at the release [m]."""
     stop_time: float
-    """When the sliders hold the base for good [s] (inf: not within the horizon); the roof rings on."""
+    """When the sliders hold the base for good [s] (inf: not within the horizon, where the integration's last step
+    may have found it); the roof rings on."""
     horizon: float
     """The time up to which the motion was followed [s]."""
     _P: np.ndarray = field(repr=False)
     _S: np.ndarray = field(repr=False)
     _grid: tuple = field(repr=False)
     _push: np.ndarray = field(repr=False)
+    _still: float = field(default=math.inf, repr=False)  # where the base came to rest for good (past the horizon too)
 
     @property
     def isolation(self) -> FlexibleBuilding:
@@ -184,7 +186,7 @@ class FlexibleVibration(GridTurns, BaseAndRoof):
     def _evaluate(self, t) -> tuple[np.ndarray, np.ndarray]:
         t = np.asarray(t, dtype=float)
         gt, gy, gd, gf, n = self._grid
-        ys, acc = _ode_flexible.evaluate(self._P, self._S, gt, gy, gd, gf, n, self.stop_time, self._push,
+        ys, acc = _ode_flexible.evaluate(self._P, self._S, gt, gy, gd, gf, n, self._still, self._push,
                                          np.ascontiguousarray(t.ravel()))
         return ys.reshape(t.shape + (_ode_flexible.NY,)), acc.reshape(t.shape + (2,))
 
@@ -269,5 +271,6 @@ def free_vibration_flexible(building: FlexibleBuilding, d0: float, t_end: float 
                                  f"{_ode_flexible.MAX_CHAIN} reversals, sticks or slips in a row)", "s")
         capacity *= 4
     grid = (gt[:n].copy(), gy[:n].copy(), gd[:n].copy(), gf[:n].copy(), int(n))
-    return FlexibleVibration(building=building, d0=d0, stop_time=float(stop), horizon=horizon, _P=P, _S=S,
-                             _grid=grid, _push=y0)
+    # the last step may run past the horizon and find the hold there: within the horizon the base still slides
+    return FlexibleVibration(building=building, d0=d0, stop_time=float(stop) if stop <= horizon else math.inf,
+                             horizon=horizon, _P=P, _S=S, _grid=grid, _push=y0, _still=float(stop))

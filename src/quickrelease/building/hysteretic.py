@@ -355,13 +355,15 @@ class HystereticVibration(GridTurns):
     d0: float
     """Pushed displacement at the release [m]."""
     stop_time: float
-    """When the sliders stick for good [s] (inf: still moving at the horizon)."""
+    """When the sliders stick for good [s] (inf: still moving at the horizon; a stick that the integration's last
+    step found past the horizon is not within it)."""
     horizon: float
     """The time up to which the motion was followed [s]."""
     _P: np.ndarray = field(repr=False)
     _grid: tuple = field(repr=False)
     _push: np.ndarray = field(repr=False)
     _dense: np.ndarray = field(repr=False)  # each grid step's continuous extension (7 x NY coefficients)
+    _still: float = field(default=math.inf, repr=False)  # where the integration came to rest (past the horizon too)
 
     @property
     def rest(self) -> tuple[float, float]:
@@ -380,7 +382,7 @@ class HystereticVibration(GridTurns):
     def _evaluate(self, t) -> tuple[np.ndarray, np.ndarray]:
         t = np.asarray(t, dtype=float)
         gt, gy, gd, gf, n = self._grid
-        ys, acc = _ode.evaluate(self._P, gt, gy, gd, gf, self._dense, n, self.stop_time, self._push,
+        ys, acc = _ode.evaluate(self._P, gt, gy, gd, gf, self._dense, n, self._still, self._push,
                                 np.ascontiguousarray(t.ravel()))
         return ys.reshape(t.shape + (_ode.NY,)), acc.reshape(t.shape)
 
@@ -399,7 +401,7 @@ class HystereticVibration(GridTurns):
 
     def _motion(self, t: np.ndarray) -> np.ndarray:
         gt, gy, gd, gf, n = self._grid
-        return _ode.motion(self._P, gt, gy, gd, gf, self._dense, n, self.stop_time, self._push, t)
+        return _ode.motion(self._P, gt, gy, gd, gf, self._dense, n, self._still, self._push, t)
 
     def channels(self, t) -> dict[str, np.ndarray]:
         """Every channel of the building's record at times t [s] (the roof moves with the rigid layer)."""
@@ -465,5 +467,6 @@ def hysteretic_vibration(system, P: np.ndarray, z0: float, d0: float, t_end: flo
             raise ParameterError("t_end", horizon, f"a span of at most {MAX_STEPS} integration steps", "s")
         capacity *= 4
     grid = (gt[:n].copy(), gy[:n].copy(), gd[:n].copy(), gf[:n].copy(), int(n))
-    return HystereticVibration(isolation=system, d0=d0, stop_time=float(stop), horizon=horizon, _P=P, _grid=grid,
-                               _dense=gF[:n].copy(), _push=y0)
+    # the last step may run past the horizon and stick there: within the horizon the layer still moves
+    return HystereticVibration(isolation=system, d0=d0, stop_time=float(stop) if stop <= horizon else math.inf,
+                               horizon=horizon, _P=P, _grid=grid, _dense=gF[:n].copy(), _push=y0, _still=float(stop))

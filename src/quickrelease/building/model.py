@@ -202,9 +202,7 @@ def pushed_state(isolation: Isolation | Pendulum | BoucWen, d0: float) -> tuple[
     for Bouc-Wen) and the push force that held it, P = R0 + F_s sign(d0) [N] (F_s = mu_slow W for the
     pendulum).
     """
-    d0 = float(d0)
-    if not math.isfinite(d0) or d0 == 0.0:
-        raise ParameterError("d0", d0, "finite and non-zero", "m")
+    d0 = real_number("d0", d0, "finite and non-zero", "m", test=lambda v: math.isfinite(v) and v != 0.0)
     if isinstance(isolation, Pendulum | BoucWen):  # W d0 / R; Kd d0 + Qd z0 on the monotonic push curve
         z0 = isolation.pushed(d0)
         R0 = isolation.k2 * d0 + (isolation.characteristic_strength * z0 if isinstance(isolation, BoucWen) else 0.0)
@@ -1057,14 +1055,15 @@ def free_vibration_2dof(building: TwoDOF, d0: float, t_end: float | None = None)
     ----------
     building : TwoDOF
     d0 : float
-        Base (and roof) displacement at the release [m].
+        Base (and roof) displacement at the release [m]: a real number (not a bool), finite, non-zero, storing at
+        most 1e300 J in the isolators (``k d0^2 / 2``, :func:`~.hysteretic.checked_d0`).
     t_end : float, optional
         Follow the motion up to this time [s]; by default until the base is held for good (needs F_s > 0).
     """
+    if not isinstance(building, TwoDOF):
+        raise ParameterError("building", type(building).__name__, "a TwoDOF")
     b = building
-    d0 = float(d0)
-    if not math.isfinite(d0) or d0 == 0.0:
-        raise ParameterError("d0", d0, "finite and non-zero", "m")
+    d0 = checked_d0(b, d0)  # True was 1 m, as free_vibration's own check refuses
     horizon = _horizon(t_end, b.friction)
     k, ks, cs, Fs = b.stiffness, b.superstructure_stiffness, b.superstructure_damping, float(b.friction)
     pieces: list = []

@@ -147,15 +147,15 @@ def effective_cycles(fit: IsolationFit, points_per_period: int = 20000) -> tuple
     span = max(float(np.max(c.t)) for c in fit.channels) - fit.release_time if fit.channels else 0.0
     horizon = span if span > 0.0 else 20.0 * iso.period
     fv = free_vibration(iso, fit.parameters["d0"], t_end=horizon)
-    end = min(fv.stop_time, horizon) if math.isfinite(fv.stop_time) else horizon
+    end = fv.stop_time if math.isfinite(fv.stop_time) else horizon  # a stop lies within the horizon
     t = np.linspace(0.0, end, max(int(points_per_period * end / iso.period), 16) + 1)
     x, _, a = fv.state(t)
     # the turning points: the release from rest, the reversals, and the stop where the sliders hold
     turns = [0] + [int(i) for i in np.searchsorted(t, fv.reversal_times[1:]) if 0 < i < t.size - 1]
-    if math.isfinite(fv.stop_time) and fv.stop_time <= horizon and turns[-1] != t.size - 1:
+    if math.isfinite(fv.stop_time) and turns[-1] != t.size - 1:
         turns.append(t.size - 1)
     force = -fit.mass * a
-    if turns[-1] == t.size - 1 and fv.stop_time <= horizon and hasattr(fv, "restoring_force"):
+    if turns[-1] == t.size - 1 and math.isfinite(fv.stop_time) and hasattr(fv, "restoring_force"):
         # at rest after the stop -m a is 0 (the sliders hold the spring): the last cycle's closing chord needs the
         # spring's force there, as at a reversal (the mean either side); without it that cycle's EDC lost
         # F_s (x_start - x_end) / 2 (1.5% of it on the building command's test record)

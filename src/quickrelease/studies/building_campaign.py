@@ -102,6 +102,9 @@ the sliders stick, or the bilinear model's friction traded against its yield for
 estimates of each release that fits well, and the better fit kept (``restarted_from`` names its start); so is
 a release that fits its noise but whose fit did not confirm its minimum as the global one, from the estimates
 of the :data:`UNCONFIRMED_RESTARTS` best-fitting other releases (a pendulum's local minima can fit the noise).
+A refit takes what the release's first fit computed (its global search, its record's own starts, every solve
+the new start leaves as it was: :class:`~quickrelease.building.isolation_fit.FitMemo`) and gives the fit that
+is computed afresh.
 """
 
 from __future__ import annotations
@@ -120,6 +123,7 @@ from ..building.isolation_fit import (
     FLEXIBLE_MODELS,
     PARAMETER_BOUNDS,
     BuildingChannel,
+    FitMemo,
     IsolationFit,
     _isolation,
     fit_isolation,
@@ -490,32 +494,53 @@ CAMPAIGN_WORKERS = max(1, min(os.cpu_count() or 1, 8))
 
 
 def _fit_one(r, mass: float, model: str, start, superstructure_mass, damping: str = "viscous", shared=None,
-             flexible: bool = False):
+             memo: FitMemo | None = None, flexible: bool = False):
     try:
         return fit_isolation(r.channels, mass, model, release_time=r.release_time, start=start,
                              fixed=_fixed(r, shared), superstructure_mass=superstructure_mass,
-                             exclude_spikes=r.exclude_spikes, damping=damping, flexible=flexible)
+                             exclude_spikes=r.exclude_spikes, damping=damping, memo=memo, flexible=flexible)
     except ParameterError as exc:  # its own arguments (type(exc)(message) was a TypeError: a traceback)
         raise type(exc)(f"release {r.name}: {exc.name}", exc.value, exc.valid, exc.unit) from None
     except QuickReleaseError as exc:
         raise type(exc)(f"release {r.name}: {exc}") from None
 
 
+#: The bytes of arrays each release's :class:`~quickrelease.building.isolation_fit.FitMemo` keeps for the restarts
+#: (the global stage's candidates and the thinned record's solves come first and are small; a long record's
+#: whole-record solves beyond it are solved again where a restart needs them).
+CAMPAIGN_MEMO_BYTES = 64 * 2**20
+
+
+def _fit_kept(r, mass: float, model: str, start, superstructure_mass, damping: str = "viscous", shared=None,
+              flexible: bool = False) -> tuple[IsolationFit, FitMemo]:
+    """A release's fit, and the memo of what it computed (for the restarts; from a worker process too)."""
+    memo = FitMemo(CAMPAIGN_MEMO_BYTES)
+    return _fit_one(r, mass, model, start, superstructure_mass, damping, shared, memo, flexible), memo
+
+
 def _fit_releases(releases, mass: float, model: str, start, superstructure_mass, damping: str = "viscous",
-                  shared=None, flexible: bool = False) -> list[IsolationFit]:
+                  shared=None, memos: dict[str, FitMemo] | None = None, flexible: bool = False) \
+        -> list[IsolationFit]:
     """Each release's fit, in parallel processes (``CAMPAIGN_WORKERS``, spawned: each fit is Python-bound, so
     threads would share one core) where there are at least three releases and two cores; the fits are the
-    same as one after the other (each fit is deterministic for its seed)."""
+    same as one after the other (each fit is deterministic for its seed). ``memos`` gets each release's
+    :class:`~quickrelease.building.isolation_fit.FitMemo` (what its fit computed), by name, for
+    :func:`_restart_misfits`."""
     workers = min(CAMPAIGN_WORKERS, len(releases))
     if workers < 2 or len(releases) < 3:
-        return [_fit_one(r, mass, model, start, superstructure_mass, damping, shared, flexible) for r in releases]
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
+        out = [_fit_kept(r, mass, model, start, superstructure_mass, damping, shared, flexible)
+               for r in releases]
+    else:
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
 
-    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
-        jobs = [pool.submit(_fit_one, r, mass, model, start, superstructure_mass, damping, shared, flexible)
-                for r in releases]
-        return [job.result() for job in jobs]
+        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+            jobs = [pool.submit(_fit_kept, r, mass, model, start, superstructure_mass, damping, shared, flexible)
+                    for r in releases]
+            out = [job.result() for job in jobs]
+    if memos is not None:
+        memos.update((r.name, kept) for r, (_, kept) in zip(releases, out, strict=True))
+    return [fit for fit, _ in out]
 
 
 #: Other releases' estimates tried as starts of a release whose fit matches its noise but whose global minimum the
@@ -531,7 +556,8 @@ def _unconfirmed(fit: IsolationFit) -> bool:
 
 def _restart_misfits(releases, fits: list[IsolationFit], mass: float, model: str,
                      superstructure_mass: float | None = None, damping: str = "viscous",
-                     shared: dict[str, float] | None = None, flexible: bool = False) -> dict[str, str]:
+                     shared: dict[str, float] | None = None, memos: dict[str, FitMemo] | None = None,
+                     flexible: bool = False) -> dict[str, str]:
     """Refit each release whose misfit exceeds its noise from the estimates of every release that fits
     well (the campaign knows the building: the model's misfit has local minima, e.g. the count of
     half-cycles before the sliders stick), keeping the lowest chi-square; and each release that fits its noise
@@ -540,7 +566,9 @@ def _restart_misfits(releases, fits: list[IsolationFit], mass: float, model: str
     friction, 150 mm release (tests/studies/test_building_campaign_isolators.py): its fit settled at mu_slow =
     0.0025 +- 0.0001 (truth 0.005; chi2/dof 1.01, "reached from 0 of 5 starts"); from the 200 mm release's
     estimates chi-square fell by 37. ``fits`` is updated in place. Returns {release: the release whose estimates
-    started its kept fit}."""
+    started its kept fit}. ``memos``: what each release's fit computed (:func:`_fit_releases`), by name: a restart
+    takes the global stage, the record's own starts and every solve that its new start leaves as it was from its
+    release's, and solves only what the new start changes (the fit is the one computed afresh)."""
     good = [(r.name, f) for r, f in zip(releases, fits, strict=True) if not _misfit(f) and f.converged]
     good.sort(key=lambda pair: (_unconfirmed(pair[1]), pair[1].chi2_reduced))
     restarted = {}
@@ -554,7 +582,8 @@ def _restart_misfits(releases, fits: list[IsolationFit], mass: float, model: str
             try:
                 trial = fit_isolation(r.channels, mass, model, release_time=r.release_time, start=start,
                                       fixed=_fixed(r, shared), superstructure_mass=superstructure_mass,
-                                      exclude_spikes=r.exclude_spikes, damping=damping, flexible=flexible)
+                                      exclude_spikes=r.exclude_spikes, damping=damping,
+                                      memo=(memos or {}).get(r.name), flexible=flexible)
             except QuickReleaseError:
                 continue
             if trial.chi2 < fits[i].chi2:
@@ -769,8 +798,11 @@ def fit_building_campaign(releases, mass: float, model: str = "linear", *, varia
             and len({abs(r.d0) for r in releases}) == 1:
         raise QuickReleaseError("every release has the same pushed displacement d0: no law in the amplitude can be "
                                 "fitted")
-    fits = _fit_releases(releases, mass, model, start, superstructure_mass, damping, shared, flexible)
-    restarts = _restart_misfits(releases, fits, mass, model, superstructure_mass, damping, shared, flexible)
+    memos: dict[str, FitMemo] = {}  # what each fit computes, for the restarts (its global stage, its own starts)
+    fits = _fit_releases(releases, mass, model, start, superstructure_mass, damping, shared, memos=memos,
+                         flexible=flexible)
+    restarts = _restart_misfits(releases, fits, mass, model, superstructure_mass, damping, shared, memos=memos,
+                                flexible=flexible)
     reported = tuple(q for q in REPORTED.get(model, ()) + storey if q not in quantities)
     estimates = [_estimates(r, fit, quantities + reported, restarts.get(r.name))
                  for r, fit in zip(releases, fits, strict=True)]

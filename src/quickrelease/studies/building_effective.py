@@ -121,12 +121,11 @@ def model_cycles(isolation, d0: float, horizon: float) -> dict[str, np.ndarray]:
     horizon = check_real("horizon", horizon, "(0, inf)", "s", test=lambda v: math.isfinite(v) and v > 0.0)
     fv = free_vibration(isolation, d0, t_end=horizon)
     mass = float(isolation.mass)
-    times = np.asarray(fv.reversal_times, dtype=float)
-    times = times[times <= horizon]
+    times = np.asarray(fv.reversal_times, dtype=float)  # within the horizon, as the stop is
     keys = ("start_s", "amplitude_m", "keff_N_m", "edc_J", "beta_eff", "teff_s", "from_release")
     if times.size < 3:  # fewer than two half-cycles: no cycle
         return {k: np.empty(0, dtype=bool if k == "from_release" else float) for k in keys}
-    stuck = math.isfinite(fv.stop_time) and fv.stop_time <= horizon
+    stuck = math.isfinite(fv.stop_time)
     eps = 1e-9 * float(np.min(np.diff(times)))
     x = fv.state(times)[0]
     before = -mass * fv.state(np.maximum(times - eps, 0.0))[2]  # the force arriving at each turning point
