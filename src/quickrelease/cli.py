@@ -961,6 +961,7 @@ def building_command(
     model: Annotated[Literal["linear", "bilinear", "2dof", "pendulum", "boucwen"] | None, typer.Option("--model", help="Isolation model (default: the case's [building] model): linear or bilinear rubber with sliders, 2dof (a flexible superstructure), pendulum (curved surface sliders, Constantinou's mu(v)), boucwen (lead-rubber, high-damping rubber).")] = None,
     damping: Annotated[Literal["viscous", "power"] | None, typer.Option("--damping", help="The damper's law (default: the case's [building] damping): viscous, or power (a fluid viscous damper, C |v|^alpha).")] = None,
     compare: Annotated[bool, typer.Option("--compare", help="Also fit the other models; rank them by AIC/BIC and residual whiteness.")] = False,
+    flexible: Annotated[bool | None, typer.Option("--flexible/--rigid", show_default=False, help="The bilinear, pendulum or boucwen layer under a flexible superstructure ([building] superstructure_mass at the roof; its period and damping fitted), or under a rigid one (default: the case's [building] flexible, else rigid). The linear layer's flexible model is --model 2dof.")] = None,
     out: Annotated[Path | None, typer.Option("--out", "-o", show_default=False, help="Also write summary.json, the record, model and residuals (timeseries.csv, .nc), the figures and report.html into this folder (default: none, print only).")] = None,
     overwrite: OverwriteOpt = False,
     as_json: JsonOpt = False,
@@ -983,7 +984,8 @@ def building_command(
 
         building_folder(data, out, model=model, compare=compare, overwrite=overwrite)  # pre-flight
     with _busy(f"fitting the {model or data.model} isolation model") as step:
-        result = analyse_building(data, model=model, compare=compare, progress=step, damping=damping)
+        result = analyse_building(data, model=model, compare=compare, progress=step, damping=damping,
+                                  flexible=flexible)
     paths = {}
     if out is not None:
         from .workflow import write_building_results
@@ -1009,7 +1011,7 @@ def _building_tables(result, summary: dict[str, Any], title: str) -> None:
     for key in ("period_s", "radius_m", "k1_N_m", "k2_N_m", "Fy_N", "Kd_N_m", "Qd_N", "dy_m", "shape",
                 "friction_slow", "friction_fast", "rate_s_m", "friction_coefficient", "damping_ratio",
                 "damping_coefficient",
-                "damping_exponent", "friction_N"):
+                "damping_exponent", "friction_N", "superstructure_period_s", "superstructure_damping_ratio"):
         if summary.get(key) is not None:
             name, unit, _ = split_key(key)
             human, value, _, interval = estimate_row(name, summary[key], None, summary.get(f"{key}_ci95"), unit)
@@ -1022,7 +1024,7 @@ def _building_tables(result, summary: dict[str, Any], title: str) -> None:
                  + (f"delta chi-square {number(cert.next_best_delta_chi2, 2)})"
                     if math.isfinite(cert.next_best_delta_chi2) else "none found)"))
         state = f"{state}, {found}"
-    _table(f"{title}: {fit.model} isolation model, {state}, reduced chi-square {fit.chi2_reduced:.4g}, "
+    _table(f"{title}: {fit.label} isolation model, {state}, reduced chi-square {fit.chi2_reduced:.4g}, "
            f"AIC {fit.aic:.6g}, BIC {fit.bic:.6g}", rows, ("parameter", "estimate", "95% interval"))
     unit = {c.name: RECORD_CHANNELS[c.name][1] if c.name in RECORD_CHANNELS else "" for c in fit.channels}
     _table("Channels", [(c.name, c.kind, str(fit.samples[c.name]), quantity(fit.noise[c.name], unit[c.name], 3),

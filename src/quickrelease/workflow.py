@@ -133,6 +133,7 @@ def identified_building(spec, building) -> tuple[Any, str]:
     from .studies.building_analysis import holds_constant_friction
 
     fit = building.fit
+    flexible = getattr(fit, "flexible", False) and fit.model != "2dof"  # a layer under a flexible superstructure
     est = fit.parameters
     d0 = abs(float(fit.parameters["d0"])) if "d0" in fit.parameters else spec.displacement
     changes: dict[str, Any] = {"damping_ratio": est.get("damping_ratio", spec.damping_ratio),
@@ -142,19 +143,19 @@ def identified_building(spec, building) -> tuple[Any, str]:
     if fit.model == "linear":
         changes.update(period=est["period"], k1=None, k2=None, yield_force=None)
     elif fit.model == "bilinear" and {"k1", "k2", "yield_force"} <= fields:
-        iso = fit.isolation()
+        iso = fit.isolation().rigid() if flexible else fit.isolation()  # (a flexible fit: its layer)
         changes.update(period=None, k1=iso.stiffness, k2=iso.k2, yield_force=float(iso.yield_force))
     elif fit.model == "2dof" and "period" in est:  # the clearance takes the superstructure as rigid on the layer
         changes.update(period=est["period"], k1=None, k2=None, yield_force=None)
     elif fit.model == "pendulum" and "radius" in fields:  # W x / R and mu(v) W: the sliders' mu_slow W holds the push
-        iso = fit.isolation()
+        iso = fit.isolation().rigid() if flexible else fit.isolation()  # (a flexible fit: its layer)
         changes.update(period=None, radius=float(iso.radius), friction_slow=float(iso.friction_slow),
                        friction_fast=float(iso.friction_fast), rate=float(iso.rate), friction=None,
                        friction_coefficient=float(iso.friction_slow))
         if holds_constant_friction(fit):  # one coefficient mu, as a case's friction_coefficient reads
             changes.update(friction_fast=None, rate=None)
     elif fit.model == "boucwen" and "post_yield_stiffness" in fields:
-        iso = fit.isolation()
+        iso = fit.isolation().rigid() if flexible else fit.isolation()  # (a flexible fit: its layer)
         changes.update(period=None, post_yield_stiffness=float(iso.k2),
                        characteristic_strength=float(iso.characteristic_strength),
                        yield_displacement=float(iso.yield_displacement), shape=float(iso.shape),

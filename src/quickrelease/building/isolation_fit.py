@@ -49,6 +49,7 @@ from scipy.optimize import brentq
 
 from .._lsq import bounded_least_squares, identified_covariance, jacobian_covariance
 from ..errors import ParameterError, QuickReleaseError
+from .flexible import FlexibleBuilding
 from .hysteretic import EXPONENT_RANGE, GRAVITY, SHAPE_RANGE, BoucWen, Pendulum
 from .isolation_search import (
     COMPETING_DELTA_CHI2,
@@ -80,6 +81,9 @@ _UNITS = {"period": "s", "damping_ratio": "-", "friction": "N", "stiffness_ratio
 START_LAWS = ("viscous", "coulomb", "combined")
 #: Models :func:`fit_isolation` fits.
 FIT_MODELS = ("linear", "bilinear", "2dof", "pendulum", "boucwen")
+#: Models :func:`fit_isolation` fits under a flexible superstructure (``flexible=True``; the linear layer's is
+#: ``2dof``).
+FLEXIBLE_MODELS = ("bilinear", "pendulum", "boucwen")
 #: The damper's laws: ``viscous`` (c x_dot, its damping ratio fitted) and ``power`` (C |x_dot|^alpha sign(x_dot),
 #: a fluid viscous damper's: damping_coefficient C and damping_exponent alpha fitted).
 DAMPING_LAWS = ("viscous", "power")
@@ -163,7 +167,8 @@ class IsolationFit:
     warnings: tuple[str, ...] = ()
     channels: tuple[BuildingChannel, ...] = field(default=(), repr=False)
     superstructure_mass: float | None = None
-    """The superstructure (roof) mass m_s [kg] given to the 2-DOF fit; None for the rigid models."""
+    """The superstructure (roof) mass m_s [kg] given to the 2-DOF fit or a flexible fit (``flexible=True``); None
+    for the rigid models."""
     fixed: dict[str, float] = field(default_factory=dict)
     """Parameters held fixed in the fit (not in ``estimates``), by name."""
     drift_origin: float = math.nan
@@ -183,12 +188,25 @@ class IsolationFit:
         return bool(self.search is not None and self.search.global_minimum_confirmed)
 
     @property
+    def flexible(self) -> bool:
+        """Whether the fitted building has a flexible superstructure: the 2-DOF model, or a layer fitted with
+        ``flexible=True`` (its ``isolation()`` a :class:`~quickrelease.building.flexible.FlexibleBuilding`)."""
+        return self.superstructure_mass is not None
+
+    @property
+    def label(self) -> str:
+        """The model as tables name it: ``model``, with `` (flexible)`` for a layer under a flexible superstructure
+        (``boucwen (flexible)``; ``2dof`` is the linear layer's)."""
+        return f"{self.model} (flexible)" if self.flexible and self.model != "2dof" else self.model
+
+    @property
     def parameters(self) -> dict[str, float]:
         """Every parameter of the fitted model: the estimates and those held fixed."""
         return {**self.fixed, **self.estimates}
 
     def isolation(self, parameters: dict[str, float] | None = None) -> Isolation | TwoDOF:
-        """The fitted isolation layer (the :class:`~quickrelease.building.TwoDOF` building for ``2dof``); with
+        """The fitted isolation layer (the :class:`~quickrelease.building.TwoDOF` building for ``2dof``, the
+        :class:`~quickrelease.building.flexible.FlexibleBuilding` of a flexible fit); with
         ``parameters`` (a dict of fit parameters by name, e.g. a draw from the estimates' covariance), the
         same model at those values, the missing ones taken from the fit."""
         p = self.parameters if parameters is None else {**self.parameters, **parameters}
@@ -224,7 +242,9 @@ class IsolationFit:
         iso = self.isolation()
         corr = {f"{a}:{b}": float(self.correlation[i, j]) for i, a in enumerate(self.names)
                 for j, b in enumerate(self.names) if j > i}
-        return {"model": self.model, "damping": self.damping, "mass_kg": self.mass, "isolation": iso.summary(),
+        return {"model": self.model, "flexible": self.flexible, "label": self.label, "damping": self.damping,
+                "mass_kg": self.mass, "isolation": iso.summary(),
+                **({"superstructure_mass_kg": self.superstructure_mass} if self.flexible else {}),
                 "estimates": self.estimates, "fixed": self.fixed, "std_errors": self.std_errors,
                 "ci95": {k: list(v) for k, v in self.ci95.items()}, "interval_method": self.interval_method,
                 "units": {n: _unit(n, self.channels) for n in self.names},
@@ -270,10 +290,13 @@ def _unit(name: str, channels) -> str:
 
 
 def _isolation(model: str, mass: float, p: dict[str, float], superstructure_mass: float | None = None) \
-        -> Isolation | TwoDOF | Pendulum | BoucWen:
+        -> Isolation | TwoDOF | Pendulum | BoucWen | FlexibleBuilding:
     """The model at the fit's parameters ``p``; the damper is the power law where ``p`` holds a
     ``damping_exponent``, else viscous with ``damping_ratio`` referred to the stiffness of ``period``
-    (``m (2 pi / T)^2``: k, k1, W / R, Kd)."""
+    (``m (2 pi / T)^2``: k, k1, W / R, Kd). With a ``superstructure_mass`` (a flexible fit, ``flexible=True``),
+    the layer under the superstructure of ``superstructure_period`` and ``superstructure_damping_ratio``: the
+    closed-form :class:`~quickrelease.building.TwoDOF` for ``2dof``, a
+    :class:`~quickrelease.building.flexible.FlexibleBuilding` on the layer for the others."""
     k = mass * (2.0 * math.pi / p["period"]) ** 2
     if "damping_exponent" in p:
         c, alpha = p["damping_coefficient"], p["damping_exponent"]
@@ -283,14 +306,19 @@ def _isolation(model: str, mass: float, p: dict[str, float], superstructure_mass
         return TwoDOF(mass, superstructure_mass, p["period"], p["superstructure_period"], p["damping_ratio"],
                       p["friction"], p["superstructure_damping_ratio"])
     if model == "pendulum":
-        return Pendulum(mass, GRAVITY * (p["period"] / (2.0 * math.pi)) ** 2, p["friction_slow"],
-                        p["friction_fast"], p["rate"], c, alpha)
-    if model == "boucwen":
-        return BoucWen(mass, k, p["characteristic_strength"], p["yield_displacement"], p["shape"], c, alpha,
-                       p["friction"])
-    if model == "linear":
-        return Isolation(mass, k, c, p["friction"], damping_exponent=alpha)
-    return Isolation(mass, k, c, p["friction"], p["stiffness_ratio"] * k, p["yield_force"], damping_exponent=alpha)
+        layer = Pendulum(mass, GRAVITY * (p["period"] / (2.0 * math.pi)) ** 2, p["friction_slow"],
+                         p["friction_fast"], p["rate"], c, alpha)
+    elif model == "boucwen":
+        layer = BoucWen(mass, k, p["characteristic_strength"], p["yield_displacement"], p["shape"], c, alpha,
+                        p["friction"])
+    elif model == "linear":
+        layer = Isolation(mass, k, c, p["friction"], damping_exponent=alpha)
+    else:
+        layer = Isolation(mass, k, c, p["friction"], p["stiffness_ratio"] * k, p["yield_force"],
+                          damping_exponent=alpha)
+    if superstructure_mass is None:
+        return layer
+    return FlexibleBuilding(layer, superstructure_mass, p["superstructure_period"], p["superstructure_damping_ratio"])
 
 
 def _channel_model(iso: Isolation | TwoDOF, d0: float, t_r: float, kind: str, t: np.ndarray, t_last: float) \
@@ -364,7 +392,10 @@ def _quiet_noise(ch: BuildingChannel, t_r: float) -> float | None:
 
 def _start(model: str, mass: float, channels: list[BuildingChannel], t_r: float, d0: float,
            noise: dict[str, float], superstructure_mass: float | None = None) -> dict[str, float]:
-    """Start values from the model-free decay analysis of the displacement channel, else generic ones."""
+    """Start values from the model-free decay analysis of the displacement channel, else generic ones. A layer
+    under a flexible superstructure (a ``superstructure_mass``, a model other than ``2dof``) starts as the rigid
+    layer, with the 2dof model's superstructure start (:func:`_two_dof_start`, from the decay's period and the
+    record's second mode): its superstructure_period and superstructure_damping_ratio."""
     from .decay import analyse_decay
 
     start = {"period": 2.0, "damping_ratio": 0.05, "friction": 0.0}
@@ -385,10 +416,14 @@ def _start(model: str, mass: float, channels: list[BuildingChannel], t_r: float,
                     start["rest"] = analysis.law.rest
         except QuickReleaseError:
             pass
+    storey = {}
+    if superstructure_mass is not None and model != "2dof":  # the linear layer's modes: T_s only, the layer's
+        storey = {n: v for n, v in _two_dof_start(mass, superstructure_mass, channels, t_r, dict(start)).items()
+                  if n.startswith("superstructure_")}  # period is its model's own (below)
     if model == "bilinear":
-        start.update(_bilinear_start(mass, xch, t_r, noise, start, channels, analysis))
+        start.update(_bilinear_start(mass, xch, t_r, noise, start, channels, analysis, superstructure_mass))
     if model == "boucwen":  # the bilinear start's loop: Kd = k2, Qd = f_p, dy = F_y / k1
-        b = _bilinear_start(mass, xch, t_r, noise, start, channels, analysis)
+        b = _bilinear_start(mass, xch, t_r, noise, start, channels, analysis, superstructure_mass)
         k1 = mass * (2.0 * math.pi / b["period"]) ** 2
         k2, fy = b["stiffness_ratio"] * k1, b["yield_force"]
         zeta = b.get("damping_ratio", start["damping_ratio"])
@@ -401,6 +436,7 @@ def _start(model: str, mass: float, channels: list[BuildingChannel], t_r: float,
                      damping_ratio=min(start["damping_ratio"], 0.02))
     if model == "2dof":
         start.update(_two_dof_start(mass, superstructure_mass, channels, t_r, start))
+    start.update(storey)
     return start
 
 
@@ -413,10 +449,34 @@ def _two_dof_start(mass: float, ms: float, channels: list[BuildingChannel], t_r:
     circular frequencies), so w^2 and w_s^2 are the roots of ``z^2 - (S / r) z + P / r = 0``."""
     out = {"superstructure_period": 0.25 * linear["period"], "superstructure_damping_ratio": 0.02}
     w1 = 2.0 * math.pi / linear["period"]
+    w2 = _second_mode(channels, t_r, w1)
+    if w2 is None:
+        return out
+    r = mass / (mass - ms)
+    S, P = w1**2 + w2**2, w1**2 * w2**2
+    disc = (S / r) ** 2 - 4.0 * P / r
+    if disc <= 0.0:
+        return out
+    lo, hi = 0.5 * (S / r - math.sqrt(disc)), 0.5 * (S / r + math.sqrt(disc))
+    if lo > 0.0:
+        out["period"] = 2.0 * math.pi / math.sqrt(lo)
+    out["superstructure_period"] = max(2.0 * math.pi / math.sqrt(hi), 2.0 * SUPERSTRUCTURE_PERIOD_MIN)
+    return out
+
+
+def _second_mode(channels, t_r: float, w1: float) -> float | None:
+    """The circular frequency of the record's spectral peak above 1.5 ``w1`` [rad/s]: of a roof (else base)
+    acceleration, velocity or displacement from the release ``t_r`` to its last sample more than 8 noise levels
+    off its final level (Hann window); None where none shows one. (Over a whole 60 s record whose roof rang for
+    its first 10 s the window's taper left the ringing under the noise, and the peak was the noise's.)"""
     order = ("a_roof", "v_roof", "x_roof", "a", "v")
     pick = sorted((c for c in channels if c.kind in order), key=lambda c: order.index(c.kind))
     for ch in pick:
         moving = ch.t >= t_r
+        level = float(np.median(ch.values[-max(ch.values.size // 10, 5):]))
+        off = np.nonzero(np.abs(ch.values - level) > 8.0 * noise_scatter(ch.values))[0]
+        if off.size and np.count_nonzero(moving & (ch.t <= ch.t[off[-1]])) >= 64:
+            moving &= ch.t <= ch.t[off[-1]]
         if np.count_nonzero(moving) < 64:
             continue
         y = ch.values[moving] - float(np.mean(ch.values[moving]))
@@ -427,22 +487,37 @@ def _two_dof_start(mass: float, ms: float, channels: list[BuildingChannel], t_r:
         band = w > 1.5 * w1
         if not np.any(band) or not np.any(spec[band] > 0):
             continue
-        w2 = float(w[band][int(np.argmax(spec[band]))])
-        r = mass / (mass - ms)
-        S, P = w1**2 + w2**2, w1**2 * w2**2
-        disc = (S / r) ** 2 - 4.0 * P / r
-        if disc <= 0.0:
-            break
-        lo, hi = 0.5 * (S / r - math.sqrt(disc)), 0.5 * (S / r + math.sqrt(disc))
-        if lo > 0.0:
-            out["period"] = 2.0 * math.pi / math.sqrt(lo)
-        out["superstructure_period"] = max(2.0 * math.pi / math.sqrt(hi), 2.0 * SUPERSTRUCTURE_PERIOD_MIN)
-        break
-    return out
+        return float(w[band][int(np.argmax(spec[band]))])
+    return None
+
+
+def _layer_acceleration(channels, noise: dict[str, float], mass: float, superstructure_mass: float | None = None) \
+        -> tuple[BuildingChannel | None, float]:
+    """The acceleration whose product with the whole mass is the layer's force, ``F_iso = -m a``, for the
+    hysteresis loops of the starts, and its noise level: the layer's accelerometer (a rigid superstructure's roof
+    moves with it: else the roof's). Under a flexible superstructure (``superstructure_mass`` m_s) the layer holds
+    both masses, ``F_iso = -(m_b a_b + m_s a_s)``: with a roof accelerometer beside the layer's, the mass-weighted
+    mean ``(m_b a_b + m_s a_s) / m`` on the layer's time axis (the roof's interpolated; their zeros combine alike);
+    else the layer's (the roof's ringing then biases the loop's start, which the global search corrects)."""
+    ach = next((c for c in channels if c.kind == "a"), None)
+    roof = next((c for c in channels if c.kind == "a_roof"), None)
+    if ach is None:
+        return (roof, noise[roof.name]) if roof is not None and superstructure_mass is None else (None, math.nan)
+    if roof is None or superstructure_mass is None:
+        return ach, noise[ach.name]
+    share = float(superstructure_mass) / mass
+    inside = (ach.t >= roof.t[0]) & (ach.t <= roof.t[-1])
+    if np.count_nonzero(inside) < 10:
+        return ach, noise[ach.name]
+    t = ach.t[inside]
+    values = (1.0 - share) * ach.values[inside] + share * np.interp(t, roof.t, roof.values)
+    level = math.hypot((1.0 - share) * noise[ach.name], share * noise[roof.name])
+    return BuildingChannel(ach.name, "a", t, values, ach.noise and level, ach.offset), level
 
 
 def _bilinear_start(mass: float, xch: BuildingChannel | None, t_r: float, noise: dict[str, float],
-                    linear: dict[str, float], channels: list[BuildingChannel] = (), analysis=None) -> dict[str, float]:
+                    linear: dict[str, float], channels: list[BuildingChannel] = (), analysis=None,
+                    superstructure_mass: float | None = None) -> dict[str, float]:
     """Start values of the bilinear model from the record, without design values (``analysis``: the decay
     analysis of the displacement channel, made once by :func:`_start`).
 
@@ -459,8 +534,7 @@ def _bilinear_start(mass: float, xch: BuildingChannel | None, t_r: float, noise:
              "friction": 0.5 * linear["friction"]}
     if xch is None or analysis is None:  # no displacement, or its decay analysis failed (in _start)
         return guess
-    ach = next((c for c in channels if c.kind == "a"), None) or next((c for c in channels if c.kind == "a_roof"),
-                                                                      None)
+    ach, _ = _layer_acceleration(channels, noise, mass, superstructure_mass)
     if ach is not None:
         moving = (ach.t > t_r) & (ach.t >= xch.t[0]) & (ach.t <= xch.t[-1])
         pre = ach.values[ach.t < t_r]
@@ -519,20 +593,22 @@ JSON_KEYS = {"period": "period_s", "yield_force": "Fy_N", "friction_slow": "fric
              "release_time": "release_time_s"}
 
 
-def _physical_names(model: str, damping: str = "viscous") -> list[str]:
-    """The physical parameters of a model with its damper's law (in the fit's order)."""
+def _physical_names(model: str, damping: str = "viscous", flexible: bool = False) -> list[str]:
+    """The physical parameters of a model with its damper's law (in the fit's order); ``flexible``: the layer's,
+    then the superstructure's (``superstructure_period``, ``superstructure_damping_ratio``, as the 2dof model's)."""
     damper = ["damping_ratio"] if damping == "viscous" else ["damping_coefficient", "damping_exponent"]
     friction = ["friction_slow", "friction_fast", "rate"] if model == "pendulum" else ["friction"]
+    storey = ["superstructure_period", "superstructure_damping_ratio"]
     return ["period"] + damper + friction + {
         "bilinear": ["stiffness_ratio", "yield_force"],
         "boucwen": ["characteristic_strength", "yield_displacement", "shape"],
-        "2dof": ["superstructure_period", "superstructure_damping_ratio"]}.get(model, [])
+        "2dof": storey}.get(model, []) + (storey if flexible and model != "2dof" else [])
 
 
-def _parameter_names(model: str, channels, damping: str = "viscous") -> list[str]:
+def _parameter_names(model: str, channels, damping: str = "viscous", flexible: bool = False) -> list[str]:
     """Every parameter of a fit of ``model`` to ``channels``: the physical ones, d0, the release time, an
     offset per channel that has one and a drift per channel that has one."""
-    return (_physical_names(model, damping) + ["d0", "release_time"]
+    return (_physical_names(model, damping, flexible) + ["d0", "release_time"]
             + [f"offset_{c.name}" for c in channels if c.offset] + [f"drift_{c.name}" for c in channels if c.drift])
 
 
@@ -957,6 +1033,15 @@ def _start_points(model: str, mass: float, names: list[str], values: dict[str, f
     # also traded against the damping (linear) and against the yield force (bilinear: both act alike on
     # the soft branch). Several splits of the dissipation are tried as starts and the best fit kept.
     starts = [dict(values)]
+    if "superstructure_period" in names and model != "2dof":
+        # a flexible layer's record often ends with the base held by the sliders and the roof ringing on it at
+        # its fixed-base period: the roof's spectral peak read as that (T_s = 2 pi / w_peak), beside the 2dof
+        # start's reading of it as the sliding building's second mode
+        peak = _second_mode(misfit.channels, values["release_time"], 2.0 * math.pi / values["period"])
+        if peak is not None:
+            ts = max(2.0 * math.pi / peak, 2.0 * SUPERSTRUCTURE_PERIOD_MIN)
+            if abs(ts - values["superstructure_period"]) > 0.05 * ts:
+                starts.append({**values, "superstructure_period": ts})
     if model == "linear" and start:  # design values off by 15-25% can lead into the wrong basin: the decay's
         starts.append({**from_decay, **fixed})  # start (cheap for the linear model) is tried beside them
     if "friction" in names:
@@ -1155,7 +1240,7 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
                   fixed: dict[str, float] | None = None, profile: bool | None = None,
                   superstructure_mass: float | None = None, tolerance: float = 1e-12, global_search: bool = True,
                   seed: int = 0, progress=None, exclude_spikes: bool = False, damping: str = "viscous",
-                  memo: FitMemo | None = None) -> IsolationFit:
+                  memo: FitMemo | None = None, flexible: bool = False) -> IsolationFit:
     """Fit the isolation system (:mod:`quickrelease.building`) to records of the isolation layer.
 
     Parameters
@@ -1231,7 +1316,8 @@ def fit_isolation(channels, mass: float, model: str = "linear", *, release_time:
 
     kwargs = dict(release_time=release_time, fit_release_time=fit_release_time, start=start, fixed=fixed,
                   profile=profile, superstructure_mass=superstructure_mass, tolerance=tolerance,
-                  global_search=global_search, seed=seed, progress=progress, damping=damping, memo=memo)
+                  global_search=global_search, seed=seed, progress=progress, damping=damping, memo=memo,
+                  flexible=flexible)
     with threadpool_limits(1, user_api="blas"):  # thin Jacobians: BLAS threads cost more than they give
         fit = _fit_isolation(channels, mass, model, **kwargs)
         if not exclude_spikes:
@@ -1304,7 +1390,8 @@ def _spikes(fit: IsolationFit, channels) -> dict[str, tuple[float, ...]]:
 
 def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_release_time, start, fixed, profile,
                    superstructure_mass, tolerance, global_search, seed, progress=None,
-                   damping: str = "viscous", memo: FitMemo | None = None, polish: bool = True) -> IsolationFit:
+                   damping: str = "viscous", memo: FitMemo | None = None, polish: bool = True,
+                   flexible: bool = False) -> IsolationFit:
     channels = list(channels)
     if not channels:
         raise ParameterError("channels", "none", "at least one channel of the isolation layer")
@@ -1314,35 +1401,45 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
         raise ParameterError("damping", damping, "'viscous' or 'power'")
     if damping == "power" and model == "2dof":
         raise ParameterError("damping", damping, "'viscous' for model = '2dof'")
+    if not isinstance(flexible, bool | np.bool_):
+        raise ParameterError("flexible", flexible, "True or False")
+    flexible = bool(flexible) and model != "2dof"  # 2dof is the linear layer under a flexible superstructure
+    if flexible and model not in FLEXIBLE_MODELS:
+        raise ParameterError("model", model, f"{', '.join(repr(m) for m in FLEXIBLE_MODELS)} with flexible=True "
+                             "(the linear layer under a flexible superstructure is model='2dof', in closed form)")
+    if flexible and damping != "viscous":
+        raise ParameterError("damping", damping, "'viscous' with flexible=True (the flexible building's "
+                             "integrator solves the viscous damper only)")
     mass = float(mass)
     if not (math.isfinite(mass) and mass > 0):
         raise ParameterError("mass", mass, "(0, inf)", "kg")
-    if model == "2dof":
+    if model == "2dof" or flexible:
         ms = math.nan if superstructure_mass is None else float(superstructure_mass)
         if not (math.isfinite(ms) and 0.0 < ms < mass):
-            raise ParameterError("superstructure_mass", superstructure_mass,
-                                 f"(0, mass) = (0, {mass:.6g}) kg (the 2dof model needs it)", "kg")
+            raise ParameterError("superstructure_mass", superstructure_mass, f"(0, mass) = (0, {mass:.6g}) kg (the "
+                                 f"{'2dof model' if model == '2dof' else 'flexible superstructure'} needs it)", "kg")
         superstructure_mass = ms
     else:
         superstructure_mass = None
+    two_dof = superstructure_mass is not None  # 2dof or flexible: the base and a roof that rings
     names_seen = [c.name for c in channels]
     if len(set(names_seen)) != len(names_seen):
         raise ParameterError("channels", ", ".join(names_seen), "distinct channel names")
     fixed = dict(fixed or {})
     started_in_motion = []
-    if release_time is None and model != "2dof":
+    if release_time is None and not two_dof:
         channels, release_time, started_in_motion = _start_in_motion(channels)
     t_r0 = float(release_time) if release_time is not None else _detect_release(channels)
     if not fit_release_time:
         fixed["release_time"] = t_r0
     noise, source, absolute = _noise_levels(channels, t_r0)
-    if model != "2dof":
+    if not two_dof:  # the roof can pull a held base away again: the base's swings need not fall
         _check_decays(channels)
     p0, xch, d0, friction_se = _initial_values(model, mass, channels, t_r0, fixed, noise, superstructure_mass,
                                                (start or {}).get("d0"), damping)
     from_decay = dict(p0)  # the start of the model-free decay analysis, before the caller's start values
-    physical = _physical_names(model, damping)
-    all_names = _parameter_names(model, channels, damping)
+    physical = _physical_names(model, damping, flexible)
+    all_names = _parameter_names(model, channels, damping, flexible)
     # start values of this fit's parameters only: a case's design values of another model or damper law (a
     # power-law case fitted with viscous damping, --compare's other models) would otherwise enter the model
     # (a damping_exponent in the values makes the damper a power law, and damping_ratio had no effect)
@@ -1401,7 +1498,8 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
         _start_points(model, mass, names, record_values, fixed, None, from_decay, friction_se, xch, d0, misfit))]
     if start:
         named.append(("design values", values))
-    loop = _boucwen_from_loop(channels, mass, t_r0, noise, hint, names, record_values, fixed, damping) \
+    loop = _boucwen_from_loop(channels, mass, t_r0, noise, hint, names, record_values, fixed, damping,
+                              superstructure_mass) \
         if model == "boucwen" else []
     named += loop
     if model == "boucwen" and global_search:  # with the loop's start, the bilinear fit's at shape 1 alone (those
@@ -1427,7 +1525,7 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
             # search in the phases of other releases (the polish reaches the fit's whole range)
             reach = max(20.0 * misfit.dt, 0.06 * (hint if hint is not None else values["period"]))
             release = (max(lower["release_time"], t_r0 - reach), min(upper["release_time"], t_r0 + 2.0 * misfit.dt))
-        box = search_box(model, hint, search_d0, release, damping)
+        box = search_box(model, hint, search_d0, release, damping, flexible)
         runs, spend = SEARCH_RUNS[model] + search_d0, SEARCH_EVALUATIONS[model] * (1 + search_d0)
 
         def search():
@@ -1512,9 +1610,10 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
                     method[n] = "covers two minima"
     if "superstructure_period" in names and "superstructure_period" not in unseen and \
             est["superstructure_period"] - lower["superstructure_period"] <= 2.0 * std_errors["superstructure_period"]:
+        rigid = "the rigid layer (flexible=False)" if flexible else "model='linear'"
         warnings.append(f"superstructure_period at its lower bound ({SUPERSTRUCTURE_PERIOD_MIN:g} s): the record "
                         "does not resolve a superstructure this stiff (it moves with the isolation layer), and "
-                        "the rigid model is this fit's limit: fit model='linear' and compare_models")
+                        f"the rigid model is this fit's limit: fit {rigid} and compare_models")
     warnings += _limits(names, unseen, est, std_errors, ci)
     if cond > CONDITION_WARNING:
         warnings.append(f"ill-conditioned fit (condition number of the correlations {cond:.2g}): some combination "
@@ -1544,7 +1643,7 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
                         noise_source=source, residual_rms=rms, samples=samples, chi2=chi2, dof=dof,
                         chi2_reduced=chi2_red, absolute_sigma=absolute, aic=aic, bic=bic, whiteness_p=white,
                         converged=bool(res.success), nfev=int(res.nfev), warnings=tuple(warnings),
-                        channels=tuple(channels), superstructure_mass=superstructure_mass,
+                        channels=tuple(channels), superstructure_mass=superstructure_mass,  # flexible: not None
                         fixed={n: float(values[n]) for n in fixed}, search=cert, drift_origin=misfit.drift_origin,
                         damping=damping)
 
@@ -1618,7 +1717,7 @@ LOOP_HELD = ("yield_displacement", "shape", "friction")
 
 def _boucwen_from_loop(channels, mass: float, t_r0: float, noise: dict[str, float], hint: float | None,
                        names: list[str], record_values: dict[str, float], fixed: dict[str, float],
-                       damping: str) -> list[tuple[str, dict[str, float]]]:
+                       damping: str, superstructure_mass: float | None = None) -> list[tuple[str, dict[str, float]]]:
     """The Bouc-Wen fit's start from the measured loop (:func:`quickrelease.building.boucwen_loop.boucwen_loop`:
     the equation error F = -m a of the displacement and acceleration channels of the layer; the displacement's
     second derivative without an accelerometer), where the record has a displacement; none else. Its values are
@@ -1626,14 +1725,13 @@ def _boucwen_from_loop(channels, mass: float, t_r0: float, noise: dict[str, floa
     from .boucwen_loop import boucwen_loop
 
     xch = next((c for c in channels if c.kind == "x"), None)
-    ach = next((c for c in channels if c.kind == "a"), None) or next((c for c in channels if c.kind == "a_roof"),
-                                                                      None)  # the roof moves with the layer
+    ach, ach_noise = _layer_acceleration(channels, noise, mass, superstructure_mass)  # (flexible: m_b a_b + m_s a_s)
     if xch is None:
         return []
     period = hint if hint is not None else record_values["period"]
     try:  # a start: a record it cannot read (too short, degenerate) leaves the others
         loop = boucwen_loop(xch.t, xch.values, None if ach is None else ach.t, None if ach is None else ach.values,
-                            mass, t_r0, noise[xch.name], None if ach is None else noise[ach.name], period,
+                            mass, t_r0, noise[xch.name], None if ach is None else ach_noise, period,
                             damping=damping)
     except (ValueError, ArithmeticError, np.linalg.LinAlgError):
         loop = None
@@ -1971,7 +2069,7 @@ def _finite(value: float) -> float | None:
 
 def predicted_isolation_errors(channels, mass: float, model: str, parameters: dict[str, float], *,
                                superstructure_mass: float | None = None,
-                               fixed: tuple[str, ...] | list[str] = ()) -> IsolationPrecision:
+                               fixed: tuple[str, ...] | list[str] = (), flexible: bool = False) -> IsolationPrecision:
     """The standard errors a fit of ``model`` (:func:`fit_isolation`, noise levels given) to records on these
     channels would have, at the true ``parameters``: the Cramer-Rao bound.
 
@@ -1995,9 +2093,12 @@ def predicted_isolation_errors(channels, mass: float, model: str, parameters: di
         yield_displacement, shape; the pendulum friction_slow, friction_fast, rate [s/m] instead of friction),
         d0, release_time [s, record time], and offset_<channel> (default 0; they enter linearly).
     superstructure_mass : float, optional
-        2dof: the roof mass [kg].
+        2dof, or a layer under a flexible superstructure (``flexible``): the roof mass [kg].
     fixed : sequence of str
         Parameters the fit would hold fixed (not estimated).
+    flexible : bool
+        The layer (bilinear, pendulum, boucwen) under a flexible superstructure, as ``fit_isolation(flexible=True)``:
+        ``parameters`` hold superstructure_period and superstructure_damping_ratio too.
     """
     channels = list(channels)
     if not channels:
@@ -2005,11 +2106,20 @@ def predicted_isolation_errors(channels, mass: float, model: str, parameters: di
     if model not in FIT_MODELS:
         raise ParameterError("model", model, ", ".join(f"'{m}'" for m in FIT_MODELS))
     damping = "power" if "damping_exponent" in parameters else "viscous"
+    flexible = bool(flexible) and model != "2dof"
+    if flexible and model not in FLEXIBLE_MODELS:
+        raise ParameterError("model", model, f"{', '.join(repr(m) for m in FLEXIBLE_MODELS)} with flexible=True "
+                             "(the linear layer under a flexible superstructure is model='2dof', in closed form)")
+    if (flexible or model == "2dof") and superstructure_mass is None:
+        raise ParameterError("superstructure_mass", None, f"(0, mass) = (0, {float(mass):.6g}) kg (the "
+                             f"{'2dof model' if model == '2dof' else 'flexible superstructure'} needs it)", "kg")
+    if not (flexible or model == "2dof"):
+        superstructure_mass = None
     for ch in channels:
         if ch.noise is None:
             raise ParameterError(f"{ch.name}.noise", None, "given (the noise weights the information)",
                                  CHANNEL_KINDS[ch.kind])
-    all_names = _parameter_names(model, channels, damping)
+    all_names = _parameter_names(model, channels, damping, flexible)
     values = {n: 0.0 for n in all_names if n.startswith(("offset_", "drift_"))}
     values.update({n: float(v) for n, v in parameters.items() if n in all_names})
     missing = [n for n in all_names if n not in values]
@@ -2057,7 +2167,8 @@ def predicted_isolation_errors(channels, mass: float, model: str, parameters: di
 
 
 def compare_models(fits) -> list[dict[str, Any]]:
-    """AIC and BIC of fits of different models to the same record, best first, with their differences.
+    """AIC and BIC of fits of different models to the same record, best first, with their differences (each row's
+    ``model`` the fit's :attr:`IsolationFit.label`: ``boucwen (flexible)`` beside ``boucwen``).
 
     The fits must share the channels and noise levels (known noise, ``absolute_sigma``) for the criteria
     to be comparable; a difference above about 10 is strong support for the lower one.
@@ -2065,7 +2176,7 @@ def compare_models(fits) -> list[dict[str, Any]]:
     fits = list(fits)
     best_aic = min(f.aic for f in fits)
     best_bic = min(f.bic for f in fits)
-    rows = [{"model": f.model, "parameters": len(f.names), "chi2": f.chi2, "aic": f.aic, "bic": f.bic,
+    rows = [{"model": f.label, "parameters": len(f.names), "chi2": f.chi2, "aic": f.aic, "bic": f.bic,
              "delta_aic": f.aic - best_aic, "delta_bic": f.bic - best_bic,
              "whiteness_p": f.whiteness_p} for f in fits]
     return sorted(rows, key=lambda row: row["bic"])
@@ -2116,7 +2227,7 @@ def decay_check(fit: IsolationFit) -> dict[str, Any]:
                             "with the amplitude or the velocity): compare the equivalent quantities per cycle "
                             "instead")
         return out
-    if fit.model == "2dof":
+    if fit.flexible:
         out["notes"].append("the 2dof base decays in two coupled modes (and the roof can make the sliders stick "
                             "and slip again): the single-mode decay law does not hold; compare the equivalent "
                             "period and damping against the amplitude instead")

@@ -165,14 +165,16 @@ def record_period(channels, t_r: float) -> float | None:
 
 
 def search_box(model: str, period_hint: float | None, search_d0: bool,
-               release: tuple[float, float] | None = None, damping: str = "viscous") -> SearchBox:
+               release: tuple[float, float] | None = None, damping: str = "viscous",
+               flexible: bool = False) -> SearchBox:
     """The global stage's box for ``model``: period (log) within a factor around ``period_hint`` (the
     record's apparent period; 0.2-20 s without one; bilinear: the initial period T1 from a quarter to 1.5
     times it, since the soft branch lengthens the apparent period), damping ratio [0, 0.4], the sliders'
     force as a share ``friction_share`` of the push force in [0, 0.9] (above 1 the building never moves),
     these two on a square-root scale; bilinear also k2/k1 (log, 0.01-0.6) and the yield displacement over
     d0 ``yield_share`` (log, 0.01-1.5); 2dof the superstructure's period (log, 2% to 30% of the upper
-    period bound, i.e. 4% to 60% of the apparent period) and damping ratio [0, 0.2]; a factor on d0's
+    period bound, i.e. 4% to 60% of the apparent period) and damping ratio [0, 0.2], and so a layer under a
+    flexible superstructure (``flexible``), its storey's period 4% to 60% of the apparent period; a factor on d0's
     estimate (0.85-1.15 where the displacement's level before the release gives it, the sensor's zero
     unknown; log 0.5-2 where no displacement gives d0, ``search_d0``); and the release instant
     within ``release`` (the record's first departure lags it; where a jump of the acceleration at the
@@ -217,11 +219,14 @@ def search_box(model: str, period_hint: float | None, search_d0: bool,
         lower.append(0.15)
         upper.append(1.9)
         scale.append("linear")
-    if model == "2dof":  # a storey stiffer than 4% of the isolation period moves with the layer (and its free
-        # vibration, stepped at a fraction of T_s through every stick, costs the most to evaluate)
+    if model == "2dof" or flexible:  # a storey stiffer than 4% of the isolation period moves with the layer (and
+        # its free vibration, stepped at a fraction of T_s through every stick, costs the most to evaluate); a
+        # flexible layer's storey from the apparent period (the model's own period range differs: Kd's, T1's)
+        top = t_hi if model == "2dof" or period_hint is None or not math.isfinite(period_hint) or period_hint <= 0 \
+            else 2.0 * period_hint
         names += ["superstructure_period", "superstructure_damping_ratio"]
-        lower += [max(0.02, 0.02 * t_hi), 0.0]
-        upper += [max(0.3 * t_hi, 0.05), 0.2]
+        lower += [max(0.02, 0.02 * top), 0.0]
+        upper += [max(0.3 * top, 0.05), 0.2]
         scale += ["log", "sqrt"]
     names.append("d0_factor")  # from the record's own level: its sensor zero is not known yet
     lower.append(0.5 if search_d0 else 0.85)

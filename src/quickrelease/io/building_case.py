@@ -124,8 +124,16 @@ def spec_building(spec: BuildingSpec) -> Isolation | TwoDOF:
     """The ``[building]`` values as the model they name (SI units): :func:`spec_isolation` for ``linear`` and
     ``bilinear``; for ``2dof`` the :class:`~quickrelease.building.model.TwoDOF` building, ``TwoDOF(mass, m_s, T,
     T_s, zeta, F_s, zeta_s)`` (``mass`` the whole mass on the isolators, ``m_s`` lumped at the roof, T the
-    isolation period of the whole mass, T_s the superstructure's fixed-base period). Planning keeps
-    :func:`spec_isolation` (the 2dof building rigid on its isolation layer)."""
+    isolation period of the whole mass, T_s the superstructure's fixed-base period); with ``flexible = true`` the
+    layer of :func:`spec_isolation` under the superstructure, a
+    :class:`~quickrelease.building.flexible.FlexibleBuilding`. Planning keeps :func:`spec_isolation` (the 2dof
+    building rigid on its isolation layer)."""
+    if spec.model != "2dof" and spec.flexible:  # the layer under a flexible superstructure
+        from ..building.flexible import FlexibleBuilding
+
+        spec.require_design("the building's model")
+        return FlexibleBuilding(spec_isolation(spec), float(spec.superstructure_mass),
+                                float(spec.superstructure_period), float(spec.superstructure_damping_ratio or 0.0))
     if spec.model != "2dof":
         return spec_isolation(spec)
     spec.require_design("the building's model")
@@ -172,6 +180,9 @@ class BuildingData:
     jitter: dict[str, float] = field(default_factory=dict)
     """Per channel, how far its time stamps scatter about a uniform clock [s] where the record says so
     (:func:`quickrelease.io.timebase.time_base`; for :func:`quickrelease.building.decay.analyse_decay`'s ``jitter``)."""
+    flexible: bool = False
+    """``[building] flexible = true``: the layer (bilinear, pendulum, boucwen) under a flexible superstructure of
+    ``superstructure_mass`` (``fit_isolation(flexible=True)``)."""
     constant_friction: bool = False
     """The pendulum's friction is a constant coefficient (``[building] friction_coefficient``,
     :func:`constant_friction`): its fit holds the rate at 0 (:func:`constant_friction_fixed`)."""
@@ -212,7 +223,7 @@ def _start(spec: BuildingSpec) -> dict[str, float]:
         start["friction"] = spec.friction_force
     if spec.displacement is not None:
         start["d0"] = spec.displacement
-    if spec.model == "2dof":
+    if spec.model == "2dof" or spec.flexible:
         if spec.superstructure_period is not None:
             start["superstructure_period"] = spec.superstructure_period
         if spec.superstructure_damping_ratio:
@@ -280,7 +291,7 @@ def load_building(case: Case) -> BuildingData:
                         d0=spec.displacement, channels=channels, release_time=release_time, notes=notes,
                         source=case.source, superstructure_mass=spec.superstructure_mass, spec=spec, jitter=jitter,
                         exclude_spikes=spec.record is not None and spec.record.spikes == "exclude",
-                        constant_friction=constant_friction(spec))
+                        constant_friction=constant_friction(spec), flexible=spec.flexible and spec.model != "2dof")
 
 
 def pushed_displacement(push_force: float, building: BuildingSpec) -> float:

@@ -119,7 +119,9 @@ class BuildingSpec:
     bilinear hysteretic spring k1, k2, F_y; damping ratio referred to k1; slider friction) or ``2dof``
     (the linear isolation layer under a flexible superstructure: a second mass at the roof with its own
     fixed-base period and damping). In planning the values are the assumed building, in ``synth`` the
-    truth, in a fit of the building's record the start values.
+    truth, in a fit of the building's record the start values. ``flexible = true`` puts a bilinear, pendulum or
+    boucwen layer under a flexible superstructure the same way (superstructure_mass, superstructure_period,
+    superstructure_damping_ratio: a :class:`~quickrelease.building.flexible.FlexibleBuilding`).
     """
 
     period: float | None = None
@@ -170,6 +172,9 @@ class BuildingSpec:
     """boucwen: dy [m]."""
     shape: float | None = None
     """boucwen: n [-] (default 1)."""
+    flexible: bool = False
+    """bilinear, pendulum, boucwen: the layer under a flexible superstructure (``superstructure_mass`` at the roof,
+    its ``superstructure_period`` and ``superstructure_damping_ratio``), as 2dof puts the linear layer."""
     record: RecordSpec | None = None
     """The building's free-vibration record (``[building.record]``), read by
     :func:`quickrelease.io.building_case.load_building`."""
@@ -199,6 +204,8 @@ class BuildingSpec:
         keys = {"linear": ("period",), "bilinear": ("k1", "k2", "yield_force"),
                 "2dof": ("period", "superstructure_period"), "pendulum": ("radius",),
                 "boucwen": ("post_yield_stiffness", "characteristic_strength", "yield_displacement")}[self.model]
+        if self.flexible and self.model != "2dof":
+            keys = (*keys, "superstructure_period")
         if self.damping == "power":
             keys = (*keys, "damping_coefficient", "damping_exponent")
         return [k for k in keys if getattr(self, k) is None]
@@ -209,9 +216,10 @@ class BuildingSpec:
         missing = self.missing_design()
         if missing:
             key = missing[0]
-            raise CaseFileError(f"missing key [building] {key} for model = {self.model!r}: {purpose} needs the "
-                                f"design values ({CASE_SCHEMA['building'][key][1]}); a fit of the record needs "
-                                "the mass only")
+            flexible = " (flexible)" if self.flexible and self.model != "2dof" else ""
+            raise CaseFileError(f"missing key [building] {key} for model = {self.model!r}{flexible}: {purpose} "
+                                f"needs the design values ({CASE_SCHEMA['building'][key][1]}); a fit of the record "
+                                "needs the mass only")
 
 
 @dataclass(frozen=True)
@@ -319,6 +327,9 @@ CASE_SCHEMA: dict[str, dict[str, tuple[str, str]]] = {
         "superstructure_period": ("time", "a fixed-base period of the superstructure in [0.02, 1000] s, e.g. "
                                   "'0.5 s'"),
         "superstructure_damping_ratio": ("dimensionless", "a damping ratio in [0, 1), e.g. 0.02"),
+        "flexible": ("bool", "true or false: the bilinear, pendulum or boucwen layer under a flexible superstructure "
+                     "(with superstructure_mass; the linear layer's is model = '2dof'); false with "
+                     "superstructure_mass: the rigid layer, its flexible variant fitted by --flexible and --compare"),
     },
     "report": {
         "operator": ("str", "who ran the test or the analysis, e.g. 'A. Engineer'"),
@@ -796,6 +807,10 @@ _MODEL_KEYS = {
 }
 #: Keys that only some models take.
 _MODEL_ONLY = {key for keys in _MODEL_KEYS.values() for key in keys}
+#: The superstructure's keys: 2dof's, and those of a layer with ``flexible = true``.
+_STOREY_KEYS = ("superstructure_mass", "superstructure_period", "superstructure_damping_ratio")
+#: The models that take ``flexible = true``.
+FLEXIBLE_MODELS = ("bilinear", "pendulum", "boucwen")
 
 
 def _building(values: dict[str, Any], table: Any, source: str, base: Path) -> BuildingSpec | None:
@@ -805,11 +820,26 @@ def _building(values: dict[str, Any], table: Any, source: str, base: Path) -> Bu
         return None
     model = values.get("building.model", "linear")
     given = {key.split(".", 1)[1] for key in values if key.startswith("building.")}
-    for key in sorted(given & _MODEL_ONLY - set(_MODEL_KEYS[model])):
+    flexible = bool(values.get("building.flexible", False)) and model != "2dof"  # (2dof: flexible already)
+    if flexible and model not in FLEXIBLE_MODELS:
+        raise CaseFileError(f"{source}: [building] flexible = true with model = {model!r}: the linear layer under a "
+                            "flexible superstructure is model = '2dof' (flexible takes model = "
+                            f"{', '.join(repr(m) for m in FLEXIBLE_MODELS)})")
+    if flexible and "superstructure_mass" not in given:
+        raise CaseFileError(f"{source}: missing key [building] superstructure_mass for flexible = true "
+                            f"({CASE_SCHEMA['building']['superstructure_mass'][1]})")
+    if flexible and values.get("building.damping", "viscous") != "viscous":
+        raise CaseFileError(f"{source}: [building] damping = {table['damping']!r} with flexible = true: the flexible "
+                            "building's dampers are viscous")
+    # the superstructure's mass with a rigid bilinear, pendulum or boucwen layer: for --flexible and --compare's
+    # flexible variant (its period and damping are design values of the flexible building only)
+    allowed = set(_MODEL_KEYS[model]) | (set(_STOREY_KEYS) if flexible else
+                                         {"superstructure_mass"} if model in FLEXIBLE_MODELS else set())
+    for key in sorted(given & _MODEL_ONLY - allowed):
         users = " or ".join(m for m, keys in _MODEL_KEYS.items() if key in keys)
         raise CaseFileError(f"{source}: [building] {key} = {table[key]!r} with model = {model!r}: {key} belongs "
-                            f"to model = {users!r} (the {model} model takes "
-                            f"{', '.join(_MODEL_KEYS[model])})")
+                            f"to model = {users!r}{' or flexible = true' if key in _STOREY_KEYS else ''} (the "
+                            f"{model} model takes {', '.join(_MODEL_KEYS[model])})")
     # the design values (period, k1, k2, yield_force, superstructure_period, ...) are optional: a fit of the
     # record needs the mass only (and the 2dof model the superstructure's share of it); what needs them
     # (synth, planning, the clearance check) says which is missing (BuildingSpec.require_design)
@@ -881,7 +911,7 @@ def _building(values: dict[str, Any], table: Any, source: str, base: Path) -> Bu
                         yield_force=values.get("building.yield_force"), superstructure_mass=m_s,
                         superstructure_period=values.get("building.superstructure_period"),
                         superstructure_damping_ratio=values.get("building.superstructure_damping_ratio",
-                                                                None if model != "2dof" else 0.0),
+                                                                None if model != "2dof" and not flexible else 0.0),
                         damping=damping, damping_coefficient=values.get("building.damping_coefficient"),
                         damping_exponent=values.get("building.damping_exponent"),
                         radius=values.get("building.radius"),
@@ -891,4 +921,4 @@ def _building(values: dict[str, Any], table: Any, source: str, base: Path) -> Bu
                         post_yield_stiffness=values.get("building.post_yield_stiffness"),
                         characteristic_strength=values.get("building.characteristic_strength"),
                         yield_displacement=values.get("building.yield_displacement"),
-                        shape=values.get("building.shape"), record=record)
+                        shape=values.get("building.shape"), flexible=flexible, record=record)

@@ -29,6 +29,7 @@ from ..building.decay import DecayAnalysis, analyse_decay, hysteresis_loop
 from ..building.effective import CycleProperties, loop_cycles
 from ..building.identified import parameter_identified
 from ..building.isolation_fit import (
+    FLEXIBLE_MODELS,
     JSON_KEYS,
     BuildingChannel,
     IsolationFit,
@@ -134,12 +135,13 @@ def effective_cycles(fit: IsolationFit, points_per_period: int = 20000) -> tuple
     """The engineering quantities per cycle (:func:`quickrelease.building.effective.loop_cycles`) of the fitted
     model's own loop, the isolators' total force ``-m x_ddot`` against x, from the release until the sliders
     hold the building (or over the record's span), ``points_per_period`` samples a period: the cycles of the
-    record as the identified isolator runs them, free of the record's noise. Empty for ``2dof`` (its base
-    force is not the isolators' alone). The force at an extreme is the largest within two samples of it, which
-    carries the damper's force of those samples: 4 zeta (2 pi / points_per_period) of keff (3e-5 at zeta = 0.03
-    and the default 20000, within the bands of :func:`~quickrelease.studies.building_effective.effective_curves`
-    on clean records; 3e-4 at 2000); 0.09 s for a 60 s record of 22 cycles."""
-    if fit.model == "2dof":
+    record as the identified isolator runs them, free of the record's noise. Empty for ``2dof`` and a flexible
+    fit (their base force is not the isolators' alone). The force at an extreme is the largest within two samples
+    of it, which carries the damper's force of those samples: 4 zeta (2 pi / points_per_period) of keff (3e-5 at
+    zeta = 0.03 and the default 20000, within the bands of
+    :func:`~quickrelease.studies.building_effective.effective_curves` on clean records; 3e-4 at 2000); 0.09 s for a
+    60 s record of 22 cycles."""
+    if getattr(fit, "flexible", fit.model == "2dof"):
         return ()
     iso = fit.isolation()
     span = max(float(np.max(c.t)) for c in fit.channels) - fit.release_time if fit.channels else 0.0
@@ -164,10 +166,10 @@ def effective_cycles(fit: IsolationFit, points_per_period: int = 20000) -> tuple
 def characteristic_strength(fit: IsolationFit) -> dict[str, float]:
     """The model's characteristic strength ``Qd_N`` (the loading branches' force at x = 0: the sliders' F_s,
     plus ``F_y (1 - k2/k1)`` for the bilinear rubber) and post-yield stiffness ``Kd_N_m`` (k, or k2), where the
-    model has them (not for 2dof)."""
+    model has them (not for 2dof; a flexible fit's layer's)."""
     if fit.model == "2dof":
         return {}
-    iso = fit.isolation()
+    iso = fit.isolation().rigid() if getattr(fit, "flexible", fit.model == "2dof") else fit.isolation()
     if fit.model == "pendulum":  # the loading branch's force at x = 0 at vanishing velocity: mu_slow W
         return {"Qd_N": float(iso.friction), "Kd_N_m": float(iso.stiffness)}
     if fit.model == "boucwen":
@@ -190,7 +192,8 @@ def physical_estimates(fit: IsolationFit) -> dict[str, Any]:
     one the record does not identify (its key listed in ``not_identified``).
     """
     est, ci, model = fit.estimates, fit.ci95, fit.model
-    iso = fit.isolation()
+    flexible = getattr(fit, "flexible", False) and model != "2dof"  # a layer under a flexible superstructure
+    iso = fit.isolation().rigid() if flexible else fit.isolation()  # the layer's values
     out: dict[str, Any] = {}
 
     # the record does not identify it (found so by the fit, or an interval over its whole range): the rule of
@@ -250,6 +253,9 @@ def physical_estimates(fit: IsolationFit) -> dict[str, Any]:
         put("damping_ratio", float(est.get("damping_ratio", fit.parameters.get("damping_ratio"))))
     if model != "pendulum":
         put("friction", float(iso.friction))
+    if flexible:  # the superstructure's, as the 2dof fit names them
+        for name in ("superstructure_period", "superstructure_damping_ratio"):
+            put(name, float(fit.parameters[name]))
     # as building campaigns label it: a parameter the record does not identify has no interval, whatever method
     out["interval_method"] = {n: "not identified" if n in blind else m for n, m in fit.interval_method.items()}
     return {k: jsonable(v) for k, v in out.items()}
@@ -292,7 +298,8 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
                      start: dict[str, float] | None = None, release_time: float | None = None,
                      compare: bool = False, source: str = "", superstructure_mass: float | None = None,
                      progress=None, global_search: bool = True, exclude_spikes: bool | None = None,
-                     damping: str | None = None, constant_friction: bool | None = None) -> BuildingResult:
+                     damping: str | None = None, constant_friction: bool | None = None,
+                     flexible: bool | None = None) -> BuildingResult:
     """Fit the isolation model to the building's record and cross-check it (see the module docstring).
 
     Parameters
@@ -305,9 +312,15 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
     damping : {"viscous", "power"}, optional
         The damper's law (default: the data's ``[building] damping``, else viscous).
     superstructure_mass : float, optional
-        The roof mass m_s [kg] of the ``2dof`` model (default: the data's ``[building] superstructure_mass``).
+        The roof mass m_s [kg] of the ``2dof`` model and of a flexible fit (default: the data's ``[building]
+        superstructure_mass``).
+    flexible : bool, optional
+        Fit the bilinear, pendulum or boucwen layer under a flexible superstructure of ``superstructure_mass``
+        (``fit_isolation(flexible=True)``; default: the data's ``[building] flexible``, else False).
     compare : bool
-        Also fit the other models and rank them by AIC/BIC and residual whiteness.
+        Also fit the other models and rank them by AIC/BIC and residual whiteness; where the superstructure's mass
+        is known, also the chosen layer's other variant: the flexible one of a rigid bilinear, pendulum or boucwen
+        fit (and the rigid one of a flexible fit, among the others anyway).
     progress : callable, optional
         Called with a line saying what runs (see :func:`quickrelease.building.isolation_fit.fit_isolation`).
     global_search : bool
@@ -344,6 +357,9 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
             damping = data.spec.damping
         if constant_friction is None:
             constant_friction = bool(getattr(data, "constant_friction", False))
+        if flexible is None:
+            flexible = bool(getattr(data, "flexible", False))
+    flexible = bool(flexible) and model != "2dof"
     exclude_spikes = bool(exclude_spikes)
     damping = damping or "viscous"
     model = model or "linear"
@@ -355,7 +371,7 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
     prefix = f"{source}: " if source else ""
     held = constant_friction_fixed(start) if constant_friction else None  # the pendulum's fits only
     fit = _fit(channels, mass, model, start, release_time, prefix, superstructure_mass, progress, global_search,
-               exclude_spikes, damping, held if model == "pendulum" else None)
+               exclude_spikes, damping, held if model == "pendulum" else None, flexible)
     _check_long_enough(fit, prefix)
     if fit.excluded:  # the decay analysis, the loop and the other models see what the fit saw
         channels = drop_excluded(channels, fit.excluded)
@@ -370,9 +386,14 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
         # the case's start values belong to its model, but for the push, the release and the dampers (a power-law
         # damper's C and alpha are the dampers' own, whatever the bearings): the others start from the decay analysis
         shared = ("d0", "release_time") + (("damping_coefficient", "damping_exponent") if damping == "power" else ())
-        for other in MODELS:
-            if other == model:
-                continue
+        variants = [(other, False) for other in MODELS if other != model or flexible]
+        if model in FLEXIBLE_MODELS and not flexible:  # the chosen layer under a flexible superstructure
+            if superstructure_mass is None:
+                notes.append(f"model {model} (flexible) not compared: no superstructure_mass in [building]")
+            else:
+                variants.append((model, True))
+        for other, flex in variants:
+            label = f"{other} (flexible)" if flex else other
             if other == "2dof" and superstructure_mass is None:
                 notes.append("model 2dof not compared: no superstructure_mass in [building]")
                 continue
@@ -380,13 +401,14 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
                 compared.append(fit_isolation(channels, mass, other, release_time=release_time, profile=False,
                                               tolerance=COMPARE_TOLERANCE, progress=progress,
                                               exclude_spikes=exclude_spikes, damping=damping,
-                                              superstructure_mass=superstructure_mass if other == "2dof" else None,
+                                              superstructure_mass=superstructure_mass if other == "2dof" or flex
+                                              else None, flexible=flex,
                                               start={k: v for k, v in (start or {}).items() if k in shared} or None,
                                               fixed=held if other == "pendulum" else None))
             except QuickReleaseError as exc:  # e.g. 2dof, whose dampers are viscous only
                 why = (f'it takes no {damping}-law damper (damping = "{damping}")'
                        if isinstance(exc, ParameterError) and exc.name == "damping" else str(exc))
-                notes.append(f"model {other} not compared: {why}")
+                notes.append(f"model {label} not compared: {why}")
         comparison = compare_models(compared)
         if len(comparison) > 1:
             best, second = comparison[0], comparison[1]
@@ -439,8 +461,8 @@ def _measured(fit: IsolationFit, notes: list[str]):
 
 def _effective_curve(fit: IsolationFit, cycles) -> tuple[EffectiveCurve | None, CycleJudgement | None]:
     """The identified model's curves against amplitude with 95% bands and the cycles judged against them (None,
-    None for 2dof or a motion too short for two cycles after the release's)."""
-    if fit.model == "2dof":
+    None for 2dof or a flexible fit, or a motion too short for two cycles after the release's)."""
+    if getattr(fit, "flexible", fit.model == "2dof"):
         return None, None
     curve = effective_curves(fit)
     if curve.amplitude_m.size == 0:
@@ -504,11 +526,12 @@ def decay_envelope(decay: DecayAnalysis) -> dict[str, np.ndarray]:
 
 
 def _fit(channels, mass, model, start, release_time, prefix, superstructure_mass=None, progress=None,
-         global_search=True, exclude_spikes=False, damping="viscous", fixed=None) -> IsolationFit:
+         global_search=True, exclude_spikes=False, damping="viscous", fixed=None, flexible=False) -> IsolationFit:
     try:
         return fit_isolation(channels, mass, model, release_time=release_time, start=start or None, fixed=fixed,
-                             superstructure_mass=superstructure_mass if model == "2dof" else None, progress=progress,
-                             global_search=global_search, exclude_spikes=exclude_spikes, damping=damping)
+                             superstructure_mass=superstructure_mass if model == "2dof" or flexible else None,
+                             progress=progress, global_search=global_search, exclude_spikes=exclude_spikes,
+                             damping=damping, flexible=flexible)
     except ParameterError:
         raise
     except QuickReleaseError as exc:  # e.g. no release found: name the record

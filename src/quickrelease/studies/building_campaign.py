@@ -120,6 +120,7 @@ from scipy import stats
 from ..building.hysteretic import GRAVITY
 from ..building.identified import parameter_identified
 from ..building.isolation_fit import (
+    FLEXIBLE_MODELS,
     PARAMETER_BOUNDS,
     BuildingChannel,
     FitMemo,
@@ -493,11 +494,11 @@ CAMPAIGN_WORKERS = max(1, min(os.cpu_count() or 1, 8))
 
 
 def _fit_one(r, mass: float, model: str, start, superstructure_mass, damping: str = "viscous", shared=None,
-             memo: FitMemo | None = None):
+             memo: FitMemo | None = None, flexible: bool = False):
     try:
         return fit_isolation(r.channels, mass, model, release_time=r.release_time, start=start,
                              fixed=_fixed(r, shared), superstructure_mass=superstructure_mass,
-                             exclude_spikes=r.exclude_spikes, damping=damping, memo=memo)
+                             exclude_spikes=r.exclude_spikes, damping=damping, memo=memo, flexible=flexible)
     except ParameterError as exc:  # its own arguments (type(exc)(message) was a TypeError: a traceback)
         raise type(exc)(f"release {r.name}: {exc.name}", exc.value, exc.valid, exc.unit) from None
     except QuickReleaseError as exc:
@@ -510,15 +511,16 @@ def _fit_one(r, mass: float, model: str, start, superstructure_mass, damping: st
 CAMPAIGN_MEMO_BYTES = 64 * 2**20
 
 
-def _fit_kept(r, mass: float, model: str, start, superstructure_mass, damping: str = "viscous", shared=None) \
-        -> tuple[IsolationFit, FitMemo]:
+def _fit_kept(r, mass: float, model: str, start, superstructure_mass, damping: str = "viscous", shared=None,
+              flexible: bool = False) -> tuple[IsolationFit, FitMemo]:
     """A release's fit, and the memo of what it computed (for the restarts; from a worker process too)."""
     memo = FitMemo(CAMPAIGN_MEMO_BYTES)
-    return _fit_one(r, mass, model, start, superstructure_mass, damping, shared, memo), memo
+    return _fit_one(r, mass, model, start, superstructure_mass, damping, shared, memo, flexible), memo
 
 
 def _fit_releases(releases, mass: float, model: str, start, superstructure_mass, damping: str = "viscous",
-                  shared=None, memos: dict[str, FitMemo] | None = None) -> list[IsolationFit]:
+                  shared=None, memos: dict[str, FitMemo] | None = None, flexible: bool = False) \
+        -> list[IsolationFit]:
     """Each release's fit, in parallel processes (``CAMPAIGN_WORKERS``, spawned: each fit is Python-bound, so
     threads would share one core) where there are at least three releases and two cores; the fits are the
     same as one after the other (each fit is deterministic for its seed). ``memos`` gets each release's
@@ -526,13 +528,14 @@ def _fit_releases(releases, mass: float, model: str, start, superstructure_mass,
     :func:`_restart_misfits`."""
     workers = min(CAMPAIGN_WORKERS, len(releases))
     if workers < 2 or len(releases) < 3:
-        out = [_fit_kept(r, mass, model, start, superstructure_mass, damping, shared) for r in releases]
+        out = [_fit_kept(r, mass, model, start, superstructure_mass, damping, shared, flexible)
+               for r in releases]
     else:
         import multiprocessing
         from concurrent.futures import ProcessPoolExecutor
 
         with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
-            jobs = [pool.submit(_fit_kept, r, mass, model, start, superstructure_mass, damping, shared)
+            jobs = [pool.submit(_fit_kept, r, mass, model, start, superstructure_mass, damping, shared, flexible)
                     for r in releases]
             out = [job.result() for job in jobs]
     if memos is not None:
@@ -553,8 +556,8 @@ def _unconfirmed(fit: IsolationFit) -> bool:
 
 def _restart_misfits(releases, fits: list[IsolationFit], mass: float, model: str,
                      superstructure_mass: float | None = None, damping: str = "viscous",
-                     shared: dict[str, float] | None = None, memos: dict[str, FitMemo] | None = None) \
-        -> dict[str, str]:
+                     shared: dict[str, float] | None = None, memos: dict[str, FitMemo] | None = None,
+                     flexible: bool = False) -> dict[str, str]:
     """Refit each release whose misfit exceeds its noise from the estimates of every release that fits
     well (the campaign knows the building: the model's misfit has local minima, e.g. the count of
     half-cycles before the sliders stick), keeping the lowest chi-square; and each release that fits its noise
@@ -580,7 +583,7 @@ def _restart_misfits(releases, fits: list[IsolationFit], mass: float, model: str
                 trial = fit_isolation(r.channels, mass, model, release_time=r.release_time, start=start,
                                       fixed=_fixed(r, shared), superstructure_mass=superstructure_mass,
                                       exclude_spikes=r.exclude_spikes, damping=damping,
-                                      memo=(memos or {}).get(r.name))
+                                      memo=(memos or {}).get(r.name), flexible=flexible)
             except QuickReleaseError:
                 continue
             if trial.chi2 < fits[i].chi2:
@@ -607,7 +610,7 @@ class BuildingCampaignResult:
     reported: tuple[str, ...] = ()
     """Quantities reported per release without a law (2dof: the superstructure's period and damping)."""
     superstructure_mass: float | None = None
-    """2dof: the superstructure's mass at the roof given to every fit [kg]."""
+    """2dof or a flexible campaign: the superstructure's mass at the roof given to every fit [kg]."""
     cycles: tuple[dict[str, Any], ...] = ()
     """Every release's cycles of its fitted model's loop, pooled (:func:`pooled_cycles`): ``release``,
     ``amplitude_m``, ``keff_N_m``, ``edc_J``, ``beta_eff``, ``teff_s``; empty for 2dof."""
@@ -618,6 +621,8 @@ class BuildingCampaignResult:
     """The dampers' law every release was fitted with: ``viscous`` (damping_ratio) or ``power`` (C, alpha)."""
     constant_friction: bool = False
     """The pendulum's friction fitted as constant (``[building] friction_coefficient``: rate held at 0)."""
+    flexible: bool = False
+    """Every release fitted with the layer under a flexible superstructure (``fit_isolation(flexible=True)``)."""
     left_out: dict[str, tuple[str, ...]] = field(default_factory=dict)
     """Per quantity, the releases left out of its laws because their records do not identify it
     (:meth:`ReleaseEstimates.identified`); a quantity identified by fewer than three releases has no law."""
@@ -646,7 +651,7 @@ class BuildingCampaignResult:
                            "mass_kg": self.mass, "superstructure_mass_kg": self.superstructure_mass,
                            "variables": list(self.variables), "quantities": list(self.quantities),
                            "reported": list(self.reported), "damping": self.damping,
-                           "constant_friction": self.constant_friction,
+                           "constant_friction": self.constant_friction, "flexible": self.flexible,
                            "units": {q: QUANTITIES[q][1] for q in self.columns},
                            "releases": [r.summary() for r in self.releases],
                            "laws": laws, "left_out": {q: list(v) for q, v in self.left_out.items()},
@@ -669,7 +674,7 @@ def pooled_cycles(names, fits) -> tuple[dict[str, Any], ...]:
     the releases' order; none for 2dof (its base force is not the isolators' alone)."""
     out = []
     for name, fit in zip(names, fits, strict=True):
-        if fit.model == "2dof":
+        if getattr(fit, "flexible", fit.model == "2dof"):  # 2dof, or a layer under a flexible superstructure
             continue
         cyc = model_cycles(fit.isolation(), fit.parameters["d0"], record_span(fit))
         for i in range(cyc["amplitude_m"].size):
@@ -702,7 +707,8 @@ def cycle_laws(cycles, variables) -> dict[tuple[str, str], LinearLaw]:
 def fit_building_campaign(releases, mass: float, model: str = "linear", *, variables=("displacement",),
                           quantities=None, start: dict[str, float] | None = None, title: str = "",
                           source: str = "", notes: str = "", superstructure_mass: float | None = None,
-                          damping: str = "viscous", constant_friction: bool = False) -> BuildingCampaignResult:
+                          damping: str = "viscous", constant_friction: bool = False,
+                          flexible: bool = False) -> BuildingCampaignResult:
     """Fit every release of one building, then the law of each quantity in each variable.
 
     Parameters
@@ -719,12 +725,17 @@ def fit_building_campaign(releases, mass: float, model: str = "linear", *, varia
     start : dict, optional
         Start values of every fit (the design values; the bilinear fit needs them).
     superstructure_mass : float, optional
-        The ``2dof`` model's superstructure mass at the roof [kg], in (0, mass): the same in every release.
+        The ``2dof`` model's (or a flexible campaign's) superstructure mass at the roof [kg], in (0, mass): the
+        same in every release.
     damping : {"viscous", "power"}
         The dampers' law of every fit (``fit_isolation(damping=...)``; ``power``: not with ``2dof``).
     constant_friction : bool
         The pendulum's friction is a constant coefficient: each release fitted with Constantinou's rate held at 0
         (and mu_fast, which then plays no part, at the start's mu_slow); quantity ``friction_coefficient``.
+    flexible : bool
+        Fit each release's bilinear, pendulum or boucwen layer under a flexible superstructure of
+        ``superstructure_mass`` (``fit_isolation(flexible=True)``); the superstructure's period and damping ratio are
+        reported per release (laws where asked in ``quantities``), and there are no pooled cycles (as 2dof).
 
     Raises
     ------
@@ -742,11 +753,18 @@ def fit_building_campaign(releases, mass: float, model: str = "linear", *, varia
     bad = [v for v in variables if v not in BUILDING_VARIABLES]
     if bad or not variables:
         raise ParameterError("variables", bad[0] if bad else "none", ", ".join(BUILDING_VARIABLES))
-    if model == "2dof":
+    flexible = bool(flexible) and model != "2dof"
+    if flexible and model not in FLEXIBLE_MODELS:
+        raise ParameterError("model", model, f"{', '.join(repr(m) for m in FLEXIBLE_MODELS)} with flexible=True "
+                             "(the linear layer under a flexible superstructure is model='2dof')")
+    if flexible and damping != "viscous":
+        raise ParameterError("damping", damping, "'viscous' with flexible=True (its dampers are viscous)")
+    if model == "2dof" or flexible:
         ms = math.nan if superstructure_mass is None else float(superstructure_mass)
         if not (math.isfinite(ms) and 0.0 < ms < float(mass)):
-            raise ParameterError("superstructure_mass", superstructure_mass,
-                                 f"(0, mass) = (0, {float(mass):.6g}) kg (the 2dof model needs it)", "kg")
+            raise ParameterError("superstructure_mass", superstructure_mass, f"(0, mass) = (0, {float(mass):.6g}) kg "
+                                 f"(the {'2dof model' if model == '2dof' else 'flexible superstructure'} needs it)",
+                                 "kg")
         superstructure_mass = ms
     else:
         superstructure_mass = None
@@ -758,7 +776,8 @@ def fit_building_campaign(releases, mass: float, model: str = "linear", *, varia
     shared = constant_friction_fixed(start) if constant_friction else None
     defaults = default_quantities(model, damping, constant_friction)
     quantities = tuple(quantities) if quantities is not None else defaults
-    allowed = defaults + EXTRA_QUANTITIES.get(model, ()) + REPORTED.get(model, ())
+    storey = REPORTED["2dof"] if flexible else ()  # the superstructure's, as 2dof reports them
+    allowed = defaults + EXTRA_QUANTITIES.get(model, ()) + REPORTED.get(model, ()) + storey
     bad = [q for q in quantities if q not in allowed]
     if bad or not quantities:
         raise ParameterError("quantities", bad[0] if bad else "none", ", ".join(allowed))
@@ -780,9 +799,11 @@ def fit_building_campaign(releases, mass: float, model: str = "linear", *, varia
         raise QuickReleaseError("every release has the same pushed displacement d0: no law in the amplitude can be "
                                 "fitted")
     memos: dict[str, FitMemo] = {}  # what each fit computes, for the restarts (its global stage, its own starts)
-    fits = _fit_releases(releases, mass, model, start, superstructure_mass, damping, shared, memos=memos)
-    restarts = _restart_misfits(releases, fits, mass, model, superstructure_mass, damping, shared, memos=memos)
-    reported = tuple(q for q in REPORTED.get(model, ()) if q not in quantities)
+    fits = _fit_releases(releases, mass, model, start, superstructure_mass, damping, shared, memos=memos,
+                         flexible=flexible)
+    restarts = _restart_misfits(releases, fits, mass, model, superstructure_mass, damping, shared, memos=memos,
+                                flexible=flexible)
+    reported = tuple(q for q in REPORTED.get(model, ()) + storey if q not in quantities)
     estimates = [_estimates(r, fit, quantities + reported, restarts.get(r.name))
                  for r, fit in zip(releases, fits, strict=True)]
     laws = {}
@@ -806,7 +827,7 @@ def fit_building_campaign(releases, mass: float, model: str = "linear", *, varia
                                   releases=estimates, laws=laws, variables=variables, quantities=quantities,
                                   notes=notes, reported=reported, superstructure_mass=superstructure_mass,
                                   cycles=cycles, cycle_laws=cycle_laws(cycles, variables), damping=damping,
-                                  constant_friction=constant_friction, left_out=left_out)
+                                  constant_friction=constant_friction, left_out=left_out, flexible=flexible)
 
 
 @styled
@@ -889,8 +910,8 @@ def load_building_campaign(path, data: dict[str, Any]) -> tuple[str, str, tuple[
                                                                  float | None, str, bool]:
     """Read a building campaign file (its parsed TOML ``data``): every release's record is read and checked
     here, before any fit. Returns (title, notes, variables, model, mass, start values, releases,
-    superstructure mass (2dof; else None), the dampers' law, whether a pendulum's friction is constant
-    (``friction_coefficient``)).
+    superstructure mass (2dof, flexible; else None), the dampers' law, whether a pendulum's friction is constant
+    (``friction_coefficient``), whether the layer is under a flexible superstructure (``flexible = true``)).
 
     Campaign file::
 
@@ -1005,13 +1026,14 @@ def load_building_campaign(path, data: dict[str, Any]) -> tuple[str, str, tuple[
     model = str(template.get("model", "linear"))
     constant = loaded.constant_friction  # the last release's: [building] is every release's
     return title, str(data.get("notes", "")), tuple(variables), model, mass, start, releases, superstructure_mass, \
-        str(template.get("damping", "viscous")), constant
+        str(template.get("damping", "viscous")), constant, loaded.flexible
 
 
 def run_building_campaign(path, data: dict[str, Any]) -> BuildingCampaignResult:
     """Read a building campaign file (:func:`load_building_campaign`) and fit it
     (:func:`fit_building_campaign`)."""
-    title, notes, variables, model, mass, start, releases, ms, damping, constant = load_building_campaign(path, data)
+    (title, notes, variables, model, mass, start, releases, ms, damping, constant,
+     flexible) = load_building_campaign(path, data)
     return fit_building_campaign(releases, mass, model, variables=variables, start=start or None, title=title,
                                  source=str(path), notes=notes, superstructure_mass=ms, damping=damping,
-                                 constant_friction=constant)
+                                 constant_friction=constant, flexible=flexible)

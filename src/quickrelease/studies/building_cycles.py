@@ -243,8 +243,8 @@ def measured_cycles(fit: IsolationFit, draws: int = 100, window: int | None = No
     Returns
     -------
     MeasuredCycles or None
-        None for ``2dof``, for a record without a displacement channel, and where fewer than 32 samples of the
-        common clock follow the release; no cycles where the record holds fewer than two half-cycles.
+        None for ``2dof`` and a flexible fit, for a record without a displacement channel, and where fewer than 32
+        samples of the common clock follow the release; no cycles where the record holds fewer than two half-cycles.
     """
     draws = check_integer("draws", draws, 10, MOST_DRAWS)
     if window is not None:
@@ -252,7 +252,7 @@ def measured_cycles(fit: IsolationFit, draws: int = 100, window: int | None = No
     seed = check_seed("seed", seed)
     if not isinstance(fit, IsolationFit):
         raise ParameterError("fit", type(fit).__name__, "an IsolationFit (quickrelease.building.fit_isolation)")
-    if fit.model == "2dof":
+    if getattr(fit, "flexible", fit.model == "2dof"):  # (the base's -m a holds the roof's inertia)
         return None
     xch = next((c for c in fit.channels if c.kind == "x"), None)
     ach = next((c for c in fit.channels if c.kind == "a"), None)

@@ -334,9 +334,9 @@ def effective_curves(fit: IsolationFit, amplitudes=None, level: float = 0.95, dr
     draws = check_integer("draws", draws, 20, MOST_DRAWS)
     seed = check_seed("seed", seed)
     empty = {q: np.empty(0) for q in QUANTITIES}
-    if fit.model == "2dof":
+    if getattr(fit, "flexible", fit.model == "2dof"):
         return EffectiveCurve(fit.model, fit.mass, np.empty(0), empty, empty, empty, level, draws, 0, (), (),
-                              notes=("2dof: the base force is not the isolators' alone; no curves",))
+                              notes=(f"{fit.label}: the base force is not the isolators' alone; no curves",))
     horizon = record_span(fit)
     best = model_cycles(fit.isolation(), fit.parameters["d0"], horizon)
     keep = ~best["from_release"] & np.isfinite(best["edc_J"])

@@ -769,6 +769,9 @@ def plan_case(case: Case, *, clearance_samples: int = 200, threads: int | None =
         if case.building.model == "2dof":
             notes.append("clearance: the 2dof building taken as rigid on its isolation layer (the whole mass on the "
                          "isolation period; the superstructure's own mode left out)")
+        elif getattr(case.building, "flexible", False):
+            notes.append(f"clearance: the flexible {case.building.model} building taken as rigid on its isolation "
+                         "layer (the whole mass on the layer; the superstructure's own mode left out)")
         if not d0 > 0:
             raise QuickReleaseError(f"{case.source}: the isolators' friction ({case.building.friction_force:.6g} N) "
                                     f"holds the push (P = {P:.6g} N): no displacement to release from")

@@ -384,7 +384,7 @@ class SyntheticBuildingRecord(_Synthetic):
             p.update(characteristic_strength=t["Qd_N"], yield_displacement=t["dy_m"], shape=t["shape"])
         if t["model"] == "bilinear":
             p.update(stiffness_ratio=t["k2_N_m"] / t["k1_N_m"], yield_force=t["Fy_N"])
-        if t["model"] == "2dof":
+        if t["model"] == "2dof" or t.get("flexible"):
             p.update(superstructure_period=t["superstructure_period_s"],
                      superstructure_damping_ratio=t["superstructure_damping_ratio"])
         p.update(d0=t["d0_m"], release_time=t["release_time_s"])
@@ -429,7 +429,7 @@ def predicted_building_errors(synthetic: SyntheticBuildingRecord) -> IsolationPr
         parameters.update(fixed)
     pred = predicted_isolation_errors(synthetic.building_channels(noise_free=True), t["mass_kg"], t["model"],
                                       parameters, superstructure_mass=t.get("superstructure_mass_kg"),
-                                      fixed=tuple(fixed))
+                                      fixed=tuple(fixed), flexible=bool(t.get("flexible", False)))
     if not synthetic.constant_friction:
         return pred
     return ConstantFrictionPrecision(**{f.name: getattr(pred, f.name) for f in fields(pred)})
@@ -509,8 +509,9 @@ def synthesize_building(case: Case, channels: list[str] | tuple[str, ...], *, ra
     the exact closed form of :func:`quickrelease.building.model.free_vibration` (linear or bilinear isolation,
     viscous damping, Coulomb sliders, sticking; or the 2dof building, :class:`~quickrelease.building.model.TwoDOF`),
     sampled at the record's instants (point values). The channels x, v, a are the isolation layer's (the
-    base), x_roof, v_roof, a_roof the roof's: the 2dof building's superstructure mass, for the rigid
-    superstructure of linear and bilinear the layer's. Each channel gets a constant offset and Gaussian noise;
+    base), x_roof, v_roof, a_roof the roof's: the 2dof building's superstructure mass (and that of a layer with
+    ``[building] flexible = true``, a :class:`~quickrelease.building.flexible.FlexibleBuilding`), for the rigid
+    superstructure of the other models the layer's. Each channel gets a constant offset and Gaussian noise;
     optionally jittered instants and missing samples.
 
     Parameters
@@ -557,11 +558,13 @@ def synthesize_building(case: Case, channels: list[str] | tuple[str, ...], *, ra
             raise ParameterError(f"offset of {name}", value, "finite values", BUILDING_CHANNELS[name][1])
     iso = spec_building(spec)
     two = isinstance(iso, TwoDOF)
+    flexible = not two and hasattr(iso, "superstructure_mass")  # a FlexibleBuilding: the layer under the storey
+    layer = iso.rigid() if two or flexible else iso
     d0 = building_pushed_displacement(case)
     if not (math.isfinite(d0) and d0 > 0):
         raise ParameterError("d0", d0, "(0, inf) (the push must move the building past its sliders' friction)", "m")
-    R0 = pushed_state(iso.rigid() if two else iso, d0)[1]  # 2dof: the isolators hold k d0, the storey no shear
-    if abs(R0) <= iso.friction:
+    R0 = pushed_state(layer, d0)[1]  # 2dof, flexible: the isolators hold the push, the storey no shear
+    if abs(R0) <= layer.friction:
         if spec.friction_coefficient is not None:
             key = f"friction_coefficient = {spec.friction_coefficient:.6g}"
         elif spec.model == "pendulum":
@@ -569,10 +572,10 @@ def synthesize_building(case: Case, channels: list[str] | tuple[str, ...], *, ra
         else:
             key = f"friction = {spec.friction_force:.6g} N"
         raise QuickReleaseError(f"{case.source}: [building] d0 = {d0:.6g} m: the sliders' friction F_s = "
-                                f"{iso.friction:.6g} N holds the building there (restoring force {R0:.6g} N <= F_s), "
+                                f"{layer.friction:.6g} N holds the building there (restoring force {R0:.6g} N <= F_s), "
                                 f"so it never moves after the release: push it farther, or give less friction "
                                 f"([building] {key})")
-    period = iso.period
+    period = layer.period
     motion = free_vibration(iso, d0, t_end=20.0 * period)
     t_stop = motion.stop_time
     if duration is None:
@@ -584,6 +587,12 @@ def synthesize_building(case: Case, channels: list[str] | tuple[str, ...], *, ra
         M, _, K = iso.matrices()
         shortest = 2.0 * math.pi / math.sqrt(float(np.max(np.linalg.eigvals(np.linalg.solve(M, K)).real)))
         which += f", higher mode T_2 = {shortest:.4g} s"
+    elif flexible:  # the sliding base's faster mode: w_2^2 <= (m / m_b) (w^2 + w_s^2), w of the layer's period
+        r = iso.mass / iso.base_mass
+        shortest = 2.0 * math.pi / math.sqrt(r * ((2.0 * math.pi / period) ** 2
+                                                  + (2.0 * math.pi / iso.superstructure_period) ** 2))
+        which += f", higher mode T_2 >= {shortest:.4g} s"
+        two = True  # (the message's T_2)
     if not rate * min(shortest, release_time) >= MIN_SAMPLES:  # noise before the release, the motion after
         raise ParameterError("rate", rate, f"[{MIN_SAMPLES} / min(T{', T_2' if two else ''}, release_time), inf) = "
                              f"[{MIN_SAMPLES / min(shortest, release_time):.4g}, inf) ({which})", "Hz")
@@ -595,6 +604,8 @@ def synthesize_building(case: Case, channels: list[str] | tuple[str, ...], *, ra
     data = _measured(channels, clean, offsets, noise, missing, rng)
     stop = float(motion.stop_time) if motion.stop_time <= duration - release_time else None
     truth = {**iso.summary(), "d0_m": float(d0), "release_time_s": float(release_time), "stop_time_s": stop}
+    if flexible:  # the layer's model, flexible: its fit's names (fit_isolation(model, flexible=True))
+        truth.update(model=truth.pop("isolation_model"), flexible=True)
     if constant_friction(spec):
         truth = constant_friction_truth(truth)
     notes = [] if spec.mass is not None else ["no [building] mass: a unit mass (the motion depends on F_s / m only)"]
@@ -624,7 +635,9 @@ def building_case_toml(case: Case, synthetic: SyntheticBuildingRecord, record_ta
                   f'yield_displacement = "{t["dy_m"]!r} m"', f"shape = {t['shape']!r}"]
     else:
         lines.append(f'period = "{case.building.period!r} s"')
-    if t["model"] == "2dof":
+    if t.get("flexible"):
+        lines.append("flexible = true")
+    if t["model"] == "2dof" or t.get("flexible"):
         lines += [f'superstructure_mass = "{t["superstructure_mass_kg"]!r} kg"',
                   f'superstructure_period = "{t["superstructure_period_s"]!r} s"',
                   f"superstructure_damping_ratio = {t['superstructure_damping_ratio']!r}"]
