@@ -22,7 +22,8 @@ is not given, no design values:
   at 1 m/s, alpha = 0.4 (fitted with ``damping="power"``: damping_coefficient and damping_exponent); not part
   of the default run: 20-25 s of CPU (seeds 1-3, load 3-4 on 2 cores, 2026-11-27), each ending where the fit
   started at the truth ends (chi2 within 0.001), "confirmed" on one of the three; three quarters of it in the
-  integrator (6 500 motions of 2.2 ms: the Jacobians' 4 800, the global search's 2 800 on coarse steps);
+  integrator (cProfile, seed 1: 7 600 model evaluations, the least-squares solves' 4 800, mostly Jacobian
+  columns, and the global search's 2 800 on coarse steps; 6 500 integrations of 2.2 ms);
 * the baseline: the linear model's fit of a linear record of the same length (viscous 5 %, sliders 0.8 %).
 
 Timed by process CPU time (one core), best of ``--repeat``. Printed: CPU seconds, the issue's target (10 s),
