@@ -10,14 +10,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from typer.testing import CliRunner
-
-from quickrelease.cli import app
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "building"))
 import isolator_reference as ref  # noqa: E402
+from test_building_cli import _one_line_error, run  # noqa: E402  (the CLI's runner and its one-line check)
 
-runner = CliRunner()
 G0 = 9.80665
 M, MS, T, ZETA, FS, QD, DY, TS, ZS, D0, T_R = 8.0e5, 4.8e5, 3.0, 0.03, 2.0e4, 3.9e5, 0.02, 0.5, 0.02, 0.15, 1.0037
 
@@ -57,17 +54,6 @@ a = {{ column = "a_base_g", unit = "g0", file = "acc.csv", time = "t_acc_s" }}
 a_roof = {{ column = "a_roof_g", unit = "g0", file = "acc.csv", time = "t_acc_s" }}
 ''')
     return path
-
-
-def run(*args):
-    return runner.invoke(app, [str(a) for a in args])
-
-
-def _one_line_error(r, *fragments):
-    assert r.exit_code == 2, r.output
-    assert r.stderr.startswith("error: ") and r.stderr.count("\n") == 1, r.stderr
-    for fragment in fragments:
-        assert fragment in r.stderr, (fragment, r.stderr)
 
 
 def _check(data):
