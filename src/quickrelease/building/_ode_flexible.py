@@ -45,6 +45,8 @@ from ._ode import (
     ALPHA,
     DY,
     FFAST,
+    FINE,
+    FINE_SPAN,
     FP,
     FSLOW,
     H_BOUCWEN,
@@ -318,6 +320,10 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
         return gt, gy, gd, gf, n, 0.0, 0
     hp = _step_size(P, S, y, d, mode)
     fresh = True  # the first step of a slide that starts at rest (its d x_b'' starts at 0)
+    # the graded substeps after z's zero crossing with a fractional n (``_ode``'s meshes: ratio 2 where n > 1,
+    # FINE where n < 1), each a plain step of its own; queue[iq:nq] the lengths still to take [s]
+    queue = np.empty(_ode.FINE_GRADES + 1)
+    iq, nq = 0, 0
     steps = 0
     chain = 0  # events since the last plain step
     n = _put(gt, gy, gd, gf, n, t, y, d, mode)
@@ -327,11 +333,11 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
         steps += 1
         if steps > max_steps:
             return gt, gy, gd, gf, n, stop, 2
-        h = hp
+        h = hp if iq == nq else queue[iq]
         if d != 0.0 and rated:  # the friction law's velocity scale, from the base's acceleration over the step
             _rhs(P, S, y, d, mode, r)
             a0 = abs(r[1])
-            h = min(hp, _rate_step(P, a0))
+            h = min(h, _rate_step(P, a0))
         _step(P, S, y, h, d, mode, k, tmp, y1)
         if d != 0.0 and rated:
             for _ in range(8):  # the acceleration grew over the step past its start's bound: the step again, shorter
@@ -381,6 +387,11 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
                 theta = _locate(P, S, y, theta, d, mode, EV_SLIP, 1.0, k, tmp, out, r)
         if kind == EV_NONE:
             chain = 0
+            if iq < nq:  # a graded substep taken (the rest of it next, where the friction law shortened it)
+                if h < queue[iq]:
+                    queue[iq] -= h
+                else:
+                    iq += 1
             t += h
             for j in range(NY):
                 y[j] = y1[j]
@@ -421,6 +432,15 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
                 n = _put(gt, gy, gd, gf, n, t, y, 0.0, 0)
                 break
         hp = _step_size(P, S, y, d, mode)
+        iq, nq = 0, 0  # (an event ends a grading)
+        if kind == EV_ZERO and P[N] != math.floor(P[N]):
+            # |z|^n with a fractional n is not smooth where z leaves 0: the next steps graded from it
+            fine = P[N] < 1.0
+            g = _ode._fractions(P, FINE if fine else 1, False)
+            span = hp * FINE_SPAN if fine else hp
+            nq = g.size
+            for i in range(nq):
+                queue[i] = g[i] * span
         n = _put(gt, gy, gd, gf, n, t, y, d, mode)
         if t >= t_end:
             break
