@@ -14,10 +14,11 @@ hold the base, ``x_b' = 0``, the roof vibrates on the fixed base). Events:
 
 - sliding: the reversal (``d x_b' = 0``: the base sticks where the holding force ``G = k x_b + f_h - k_s u - c_s u'``
   is within the sliders' static limit, ``|G| <= f_slow``, else it turns, d = -sign(G)); the plastic element's
-  yield, the Bouc-Wen element's saturation and zero crossing of z (as ``_ode``). The base's velocity is not
-  monotone between reversals here (the storey pushes and pulls it): a step where ``d x_b''`` turns from negative
-  to positive has its minimum of ``d x_b'`` located, and a reversal looked for before it (so a dip to zero within
-  a step is not missed);
+  yield, the Bouc-Wen element's saturation and zero crossing of z (as ``_ode``; where the shape n is not whole, the
+  steps after the crossing graded as ``_ode``'s default steps, ``_ode._fractions``, each substep a plain step of
+  its own). The base's velocity is not monotone between reversals here (the storey pushes and pulls it): a step
+  where ``d x_b''`` turns from negative to positive has its minimum of ``d x_b'`` located, and a reversal looked
+  for before it (so a dip to zero within a step is not missed);
 - stuck: the re-slip, where ``|G|`` reaches ``f_slow`` (likewise with the maxima of ``|G|`` inside a step); the
   base is held for good where ``|k x_b + f_h| + E <= f_slow``, E the envelope of the storey's force
   ``k_s u + c_s u'`` on the fixed base (a damped oscillation: it never exceeds E again). From then on the roof
