@@ -406,6 +406,7 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
                 y[1] = 0.0
                 d, mode = 0.0, 0
                 hp = _step_size(P, S, y, d, mode)
+                iq = nq  # (a grading's rest dropped: the layer is still)
             n = _put(gt, gy, gd, gf, n, t, y, d, mode)
             if t >= t_end:
                 break
