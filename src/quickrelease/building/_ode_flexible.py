@@ -14,10 +14,11 @@ hold the base, ``x_b' = 0``, the roof vibrates on the fixed base). Events:
 
 - sliding: the reversal (``d x_b' = 0``: the base sticks where the holding force ``G = k x_b + f_h - k_s u - c_s u'``
   is within the sliders' static limit, ``|G| <= f_slow``, else it turns, d = -sign(G)); the plastic element's
-  yield, the Bouc-Wen element's saturation and zero crossing of z (as ``_ode``). The base's velocity is not
-  monotone between reversals here (the storey pushes and pulls it): a step where ``d x_b''`` turns from negative
-  to positive has its minimum of ``d x_b'`` located, and a reversal looked for before it (so a dip to zero within
-  a step is not missed);
+  yield, the Bouc-Wen element's saturation and zero crossing of z (as ``_ode``; where the shape n is not whole, the
+  steps after the crossing graded as ``_ode``'s default steps, ``_ode._fractions``, each substep a plain step of
+  its own). The base's velocity is not monotone between reversals here (the storey pushes and pulls it): a step
+  where ``d x_b''`` turns from negative to positive has its minimum of ``d x_b'`` located, and a reversal looked
+  for before it (so a dip to zero within a step is not missed);
 - stuck: the re-slip, where ``|G|`` reaches ``f_slow`` (likewise with the maxima of ``|G|`` inside a step); the
   base is held for good where ``|k x_b + f_h| + E <= f_slow``, E the envelope of the storey's force
   ``k_s u + c_s u'`` on the fixed base (a damped oscillation: it never exceeds E again). From then on the roof
@@ -45,6 +46,8 @@ from ._ode import (
     ALPHA,
     DY,
     FFAST,
+    FINE,
+    FINE_SPAN,
     FP,
     FSLOW,
     H_BOUCWEN,
@@ -318,6 +321,10 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
         return gt, gy, gd, gf, n, 0.0, 0
     hp = _step_size(P, S, y, d, mode)
     fresh = True  # the first step of a slide that starts at rest (its d x_b'' starts at 0)
+    # the graded substeps after z's zero crossing with a fractional n (``_ode``'s meshes: ratio 2 where n > 1,
+    # FINE where n < 1), each a plain step of its own; queue[iq:nq] the lengths still to take [s]
+    queue = np.empty(_ode.FINE_GRADES + 1)
+    iq, nq = 0, 0
     steps = 0
     chain = 0  # events since the last plain step
     n = _put(gt, gy, gd, gf, n, t, y, d, mode)
@@ -327,11 +334,11 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
         steps += 1
         if steps > max_steps:
             return gt, gy, gd, gf, n, stop, 2
-        h = hp
+        h = hp if iq == nq else queue[iq]
         if d != 0.0 and rated:  # the friction law's velocity scale, from the base's acceleration over the step
             _rhs(P, S, y, d, mode, r)
             a0 = abs(r[1])
-            h = min(hp, _rate_step(P, a0))
+            h = min(h, _rate_step(P, a0))
         _step(P, S, y, h, d, mode, k, tmp, y1)
         if d != 0.0 and rated:
             for _ in range(8):  # the acceleration grew over the step past its start's bound: the step again, shorter
@@ -381,6 +388,11 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
                 theta = _locate(P, S, y, theta, d, mode, EV_SLIP, 1.0, k, tmp, out, r)
         if kind == EV_NONE:
             chain = 0
+            if iq < nq:  # a graded substep taken (the rest of it next, where the friction law shortened it)
+                if h < queue[iq]:
+                    queue[iq] -= h
+                else:
+                    iq += 1
             t += h
             for j in range(NY):
                 y[j] = y1[j]
@@ -394,6 +406,7 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
                 y[1] = 0.0
                 d, mode = 0.0, 0
                 hp = _step_size(P, S, y, d, mode)
+                iq = nq  # (a grading's rest dropped: the layer is still)
             n = _put(gt, gy, gd, gf, n, t, y, d, mode)
             if t >= t_end:
                 break
@@ -421,6 +434,15 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
                 n = _put(gt, gy, gd, gf, n, t, y, 0.0, 0)
                 break
         hp = _step_size(P, S, y, d, mode)
+        iq, nq = 0, 0  # (an event ends a grading)
+        if kind == EV_ZERO and P[N] != math.floor(P[N]):
+            # |z|^n with a fractional n is not smooth where z leaves 0: the next steps graded from it
+            fine = P[N] < 1.0
+            g = _ode._fractions(P, FINE if fine else 1, False)
+            span = hp * FINE_SPAN if fine else hp
+            nq = g.size
+            for i in range(nq):
+                queue[i] = g[i] * span
         n = _put(gt, gy, gd, gf, n, t, y, d, mode)
         if t >= t_end:
             break
