@@ -703,3 +703,22 @@ def test_a_motion_still_moving_is_not_extrapolated_past_its_last_step():
     assert np.all(np.isnan(x)) and np.all(np.isnan(v)) and np.all(np.isnan(a))
     frame = free_vibration_frame(motion)
     assert frame.index[-1] == pytest.approx(motion.horizon) and np.all(np.isfinite(frame.to_numpy()))
+
+
+def test_a_pendulum_turning_at_its_holding_limit_to_rounding_comes_to_rest():
+    """A trial of a rigid pendulum fit (slow friction 3.5e-10, fast 0.029, a 15 s/m, 0.03 % damping) creeps into
+    its holding limit and turns there with the push 4e-9 of f_slow past it: the friction, growing with the speed,
+    balances that at 3e-18 m/s. The integration turned there without end (each step of length 0: 20 million
+    steps, minutes, inside a fit); now it is at rest there (``_ode._held``: the quasi-static speed below the creep
+    limit), and a turn that still does not advance ends the integration with one clear error (``MAX_STALLED``)."""
+    radius = ref.GRAVITY * (3.528190249237098 / (2 * math.pi)) ** 2
+    k = 1.0e6 * ref.GRAVITY / radius
+    system = Pendulum(1.0e6, radius, 3.4628269188684774e-10, 0.029483028768929102, 14.991437416505562,
+                      damping=2 * 0.00027222766349593625 * math.sqrt(k * 1.0e6))
+    motion = free_vibration(system, 0.303713641862295, t_end=60.0)
+    assert 30.0 < motion.stop_time < 60.0
+    x_rest, v_rest = motion.rest
+    assert v_rest == 0.0 and abs(k * x_rest) <= 1.0e6 * ref.GRAVITY * 3.4628269188684774e-10 * (1 + 1e-7)
+    balance = motion.energies(np.array([motion.stop_time]))
+    assert abs(sum(balance[n][0] for n in ("kinetic", "stored", "hysteretic", "friction", "viscous"))
+               - balance["initial"][0]) < 1e-9 * balance["initial"][0]

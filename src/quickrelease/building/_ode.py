@@ -119,6 +119,9 @@ FINE_GRADES = 28
 FINE_SPAN = 1.0 / (FINE_RATIO - 1.0)
 #: The kinds of grading at a step's start: none, towards a reversal or zero crossing (ratio 2), FINE.
 FINE = 2
+#: Events in a row located at the start of their step (the motion does not advance) after which the integration
+#: gives up with status 3 rather than loop to MAX_STEPS (minutes).
+MAX_STALLED = 1000
 #: A creep into the sliders' holding limit is at rest below this fraction of the release's largest speed.
 CREEP = 1e-8
 #: A piece's mode bit: creeping (added to the element's mode): the damper (alpha < 1) holds the layer on its slow
@@ -586,11 +589,22 @@ def _held(P, net, creep):
     neglected the damper balances the excess, ``C s^alpha = |net| - f_slow``, and the speed never exceeds
     ``((|net| - f_slow) / C)^(1 / alpha)`` since the excess only falls as the layer moves towards the holding limit.
     (A record of a linear layer, alpha 0.32, turning 0.8 % past the holding limit crept at 1e-11 m/s, a damper
-    so stiff there, alpha C s^(alpha - 1), that the explicit steps shrank to 1e-7 s: 350 000 steps a second.)"""
+    so stiff there, alpha C s^(alpha - 1), that the explicit steps shrank to 1e-7 s: 350 000 steps a second.)
+    Likewise a friction that grows with the speed, with a viscous damper or none, where its quasi-static speed is
+    below ``creep``."""
     excess = abs(net) - P[FSLOW]
     if excess <= 0.0:
         return True
-    return P[ALPHA] < 1.0 and P[C] > 0.0 and (excess / P[C]) ** (1.0 / P[ALPHA]) < creep
+    if P[ALPHA] < 1.0 and P[C] > 0.0:
+        return (excess / P[C]) ** (1.0 / P[ALPHA]) < creep
+    # a friction that grows with the speed (Constantinou's law, f_fast > f_slow) and a viscous damper balance the
+    # excess at the quasi-static speed excess / g'(0) (to 1 + rate s of itself): at rest where that is below
+    # ``creep`` (a pendulum turning 4e-9 of f_slow past its holding limit, its slow friction 3.5e-10, crept at
+    # 3e-18 m/s, and the integration turned there without end, each step of length 0)
+    slope = P[C] if P[ALPHA] == 1.0 else 0.0
+    if P[RATE] > 0.0 and P[FFAST] > P[FSLOW]:
+        slope += (P[FFAST] - P[FSLOW]) * P[RATE]
+    return slope > 0.0 and excess < slope * creep and P[RATE] * excess < 0.1 * slope
 
 
 @njit(cache=True, nogil=True)
@@ -681,7 +695,8 @@ def integrate(P, y0, t_end, capacity, max_steps):
     :data:`YIELDING`, :data:`LOADING`, plus :data:`CREEPING` on the slow manifold), the continuous extension's
     coefficients of the step each point starts (7 x NY, from the step's own stages: evaluating the record does not
     take the steps again), the count of points, the stop time (inf if it never sticks) and a status (0 done, 1 the
-    grid's capacity is too small, 2 more than max_steps steps).
+    grid's capacity is too small, 2 more than max_steps steps, 3 more than MAX_STALLED events in a row without
+    progress).
 
     With a power-law damper the steps next to a reversal are graded towards it: the step after it from the
     reversal on, the one before it from the start of the step before the one that holds it (so that every
@@ -720,6 +735,7 @@ def integrate(P, y0, t_end, capacity, max_steps):
     hp = _step_size(P, y, d, mode)  # the piece's step
     h = _relax_step(P, y, d, mode, hp)[0] if stiff else hp
     steps = 0
+    stalled = 0  # events in a row at the step's start (no progress)
     # the grid index, time and gradedness of the start of the step before the current one in this piece (-1: none)
     prev, t_prev, graded_prev = -1, 0.0, 0
     margin = 4 * GRADES + 8 + (2 * FINE_GRADES if P[N] < 1.0 else 0)  # the most grid points a step may take
@@ -802,6 +818,9 @@ def integrate(P, y0, t_end, capacity, max_steps):
                 break
             continue
         # the event's instant
+        stalled = stalled + 1 if t + theta <= t else 0
+        if stalled > MAX_STALLED:  # events without progress: a degenerate turn the tests above do not settle
+            return gt, gy, gd, gf, gF, n, stop, 3
         n = here + 1  # (a graded step's substeps, recorded above, taken back)
         if kind == EV_REVERSAL and powered and prev >= 0 and not graded:
             n = prev + 1

@@ -465,6 +465,10 @@ def hysteretic_vibration(system, P: np.ndarray, z0: float, d0: float, t_end: flo
             break
         if status == 2:
             raise ParameterError("t_end", horizon, f"a span of at most {MAX_STEPS} integration steps", "s")
+        if status == 3:
+            raise ParameterError("isolation", type(system).__name__, "a layer whose motion advances: it turned "
+                                 f"{_ode.MAX_STALLED} times at t = {gt[n - 1]:.9g} s without moving (at its sliders' "
+                                 "holding limit to rounding)")
         capacity *= 4
     grid = (gt[:n].copy(), gy[:n].copy(), gd[:n].copy(), gf[:n].copy(), int(n))
     # the last step may run past the horizon and stick there: within the horizon the layer still moves
