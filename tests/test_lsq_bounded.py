@@ -72,3 +72,18 @@ def test_interior_optimum_near_the_bound_is_freed(c_true):
     r = bounded_least_squares(fun, X0, jac, LO, HI, tol=1e-12, x_scale="jac")
     np.testing.assert_allclose(r.x, [*TRUTH, c_true], rtol=1e-8, atol=1e-12)
     assert r.held == []
+
+
+@pytest.mark.parametrize("x0", [(-1.2, 1.0), (-3.0, 8.0)])
+def test_a_slow_steady_descent_is_not_taken_for_a_stall(x0):
+    """Rosenbrock's valley as least squares (r = (10 (y - x^2), 1 - x)): 24-30 iterations of steady progress, past the
+    stall's window of 20 (``STALL_STEPS``): solved to its exact minimum (1, 1), not stopped as a staircase."""
+    def fun(p):
+        return np.array([10.0 * (p[1] - p[0] ** 2), 1.0 - p[0], 0.0])
+
+    def jac(p):
+        return np.array([[-20.0 * p[0], 10.0], [-1.0, 0.0], [0.0, 0.0]])
+
+    r = bounded_least_squares(fun, np.array(x0), jac, np.array([-10.0, -10.0]), np.array([10.0, 10.0]), tol=1e-14)
+    assert r.njev > 20 and "staircase" not in r.message
+    np.testing.assert_allclose(r.x, [1.0, 1.0], atol=1e-10)
