@@ -169,14 +169,15 @@ def bounded_least_squares(fun, x0, jac, lower, upper, *, args=(), tol: float = 1
             z = full(y)
             history.append(z)
             J = jac(z, *a)[:, free]
-            if len(calls) == 3 and np.array_equal(calls[1], y):
+            known = len(calls) == 3 and np.array_equal(calls[1], y)  # the residuals at y were just evaluated
+            if known:
                 f = calls[2]
                 costs.append(float(f @ f))
                 if len(costs) > STALL_STEPS:  # (the chi-square's fall over the window, in residual variances)
                     variance = costs[-1] / max(f.size - n, 1)
                     if costs[-1 - STALL_STEPS] - costs[-1] < STALL_DROP * max(variance, 1e-300):
                         raise _Stall(np.array(y), f, J)
-            if watch and len(history) > CRAWL_STEPS and len(calls) == 3 and np.array_equal(calls[1], y):
+            if watch and len(history) > CRAWL_STEPS and known:
                 crawling = [(k, b) for k, i in enumerate(free) if i not in freed for b in (lo[i], hi[i])
                             if math.isfinite(b) and _crawls(history, i, b)]
                 if crawling:  # held only where the Gauss-Newton step would cross the bound (else it converges)
