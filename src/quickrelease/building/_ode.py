@@ -1063,10 +1063,10 @@ def motion(P, gt, gy, gd, gf, gF, n, stop, y_push, t):
             z += gy[p, 2]
         out[0, i] = x
         out[1, i] = v
-        if gf[p] & CREEPING:
+        if gf[p] & CREEPING:  # the slow manifold's rate (as _creep's, without the works)
             ynew[0], ynew[1], ynew[2] = x, v, z
-            _creep(P, ynew, gd[p], gf[p], tmp)
-            out[2, i] = tmp[1]
+            speed, rate, _g1, _kt, _zx = _slow(P, ynew, gd[p], gf[p])
+            out[2, i] = gd[p] * rate if speed > 0.0 else 0.0
         else:
             out[2, i] = _accel(P, x, v, z, gd[p])
     return out
