@@ -1017,7 +1017,6 @@ def motion(P, gt, gy, gd, gf, gF, n, stop, y_push, t):
     stopped), without the works, the grid walked once."""
     m = t.size
     out = np.empty((3, m))
-    tmp = np.empty(NY)
     ynew = np.empty(NY)
     p = 0
     for i in range(m):
