@@ -287,3 +287,47 @@ def test_the_release_column_reaches_past_a_record_that_ends_at_a_step(model):
     v = ref.simulate(system, d0, t - t_r, t_end=float(t[-1] - t_r) + 1e-3).v
     assert np.all(np.isfinite(J[:, 1]))
     np.testing.assert_allclose(J[:, 1], -v / sigma, rtol=0, atol=1e-6 * np.max(np.abs(v)) / sigma)
+
+
+def test_a_refit_with_other_weights_computes_again():
+    """A memo of one record fitted with the accelerometer's noise at 0.02 m/s^2, then the same samples weighted with
+    it at 0.2 (the LVDT's alone rules): the refit with the memo is the fit without one, to the last bit (the
+    record's key holds its weights: the searches and solves of the first fit are not the second's), and the two
+    weightings' estimates differ."""
+    import quickrelease.building.isolation_fit as isf
+
+    T, zeta, Fs, d0 = 2.0, 0.04, 1.2e4, 0.15
+    k = M * (2 * math.pi / T) ** 2
+    raw = _record(k, k, math.inf, 2 * zeta * math.sqrt(k * M), Fs, d0, 5, duration=4.0)
+
+    def weighted(acc):
+        return [BuildingChannel(c.name, c.kind, c.t, c.values, 2e-4 if c.kind == "x" else acc) for c in raw]
+
+    memo = isf.FitMemo()
+    first = fit_isolation(weighted(0.02), M, "linear", memo=memo)
+    refit = fit_isolation(weighted(0.2), M, "linear", memo=memo)
+    again = fit_isolation(weighted(0.2), M, "linear")
+    assert refit.chi2 == again.chi2 and refit.estimates == again.estimates and refit.ci95 == again.ci95
+    assert refit.estimates["period"] != first.estimates["period"]
+
+
+def test_a_refinement_from_another_point_has_another_key():
+    """The memo's key of a refinement (the polish, the step search) holds the point it starts from: two solves of
+    the same record, cost and count of evaluations (what a refit from other start values can end at: the same
+    piece of a staircase) that differ in one parameter have different keys; the same solve, the same key."""
+    from scipy.optimize import OptimizeResult
+
+    import quickrelease.building.isolation_fit as isf
+
+    k = M * (2 * math.pi / 2.0) ** 2
+    channels = _record(k, k, math.inf, 0.0, 1.2e4, 0.15, 1, duration=2.0)
+    lower, upper = isf._bounds(channels, 0.731, 2.0)
+    misfit = isf._Misfit(channels, {"lvdt": 2e-4, "acc": 0.02}, M, "linear", None, lower, upper)
+    names, values = ["period", "d0"], {"period": 2.0, "d0": 0.15, "friction": 1.2e4}
+
+    def key(x):
+        res = OptimizeResult(x=np.array(x), cost=1234.5, nfev=17)
+        return isf._refinement_key("polish", misfit, names, values, res, 0, 1e-8)
+
+    assert key([2.0, 0.15]) == key([2.0, 0.15])
+    assert key([2.0, 0.15]) != key([2.0, 0.15 + 1e-9])

@@ -886,6 +886,14 @@ class FitMemo:
         return out
 
 
+def _refinement_key(name: str, misfit: _Misfit, names, values: dict[str, float], res, seed, tolerance) -> tuple:
+    """The :class:`FitMemo` key of a refinement of the solve ``res`` (the polish, the step search): the record
+    (its samples and weights: ``misfit.fingerprint()``), the parameters fitted and the values of those held, the
+    point it starts from, with its cost and evaluations, the seed and the tolerance."""
+    return (name, misfit.fingerprint(), tuple(names), _held(values, names), np.asarray(res.x, dtype=float).tobytes(),
+            float(res.cost), int(res.nfev), seed, float(tolerance))
+
+
 def _noise_levels(channels, t_r0: float) -> tuple[dict[str, float], dict[str, str], bool]:
     """The noise level [SI] of each channel and where it came from: given; else the scatter of the quiet
     segment before the release ``t_r0`` (:func:`_quiet_noise`); else the channel's spread, a first guess
@@ -1535,9 +1543,7 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
         """A refinement of ``res`` on the whole record (the polish, the step search), kept in the memo."""
         if memo is None:
             return step(res, *args)
-        return memo.value((name, misfit.fingerprint(), tuple(names), _held(values, names),
-                           np.asarray(res.x, dtype=float).tobytes(), float(res.cost), int(res.nfev), seed,
-                           float(tolerance)),
+        return memo.value(_refinement_key(name, misfit, names, values, res, seed, tolerance),
                           lambda: step(res, *args))
 
     # the starts: the record's own (decay analysis or hysteresis loop, and splits of the dissipation), the
