@@ -145,6 +145,44 @@ def test_the_jacobian_reuses_the_residuals_only_at_the_same_point():
     np.testing.assert_array_equal(m.jacobian(b, swapped, base), fresh(b, swapped, base))
 
 
+def test_a_solve_stopped_at_a_sample_instant_is_bounded_there():
+    """``_Misfit.release_edge``: a release time within the Jacobian's release step of a sample instant t_k (a solve
+    stopped against the step the chi-square takes there) is bounded at t_k on the side where it ended: above by t_k
+    (the sample on the released motion: the acceleration there -(k d0 - F_s) / m, the closed form at rest after the
+    release) or below by the next float after it (the sample at rest: 0); the other bounds as they were. Farther
+    than the step from every sample, or with the release not free: None."""
+    from quickrelease.building import isolation_fit as F
+
+    T, Fs, d0 = 2.0, 1.2e4, 0.15
+    k = M * (2 * math.pi / T) ** 2
+    channels = _record(k, k, math.inf, 0.0, Fs, d0, 1, duration=4.0)
+    lower, upper = F._bounds(channels, 0.731, T)
+    m = F._Misfit(channels, {"lvdt": 2e-4, "acc": 0.02}, M, "linear", None, lower, upper)
+    free = ["period", "release_time", "d0"]
+    lo = np.array([lower.get(n, -math.inf) for n in free])
+    hi = np.array([upper.get(n, math.inf) for n in free])
+    acc = channels[1]
+    j = int(np.argmin(np.abs(acc.t - 0.731)))
+    t_k = float(acc.t[j])  # an accelerometer's sample (its clock 1.3 ms off the LVDT's)
+    h = F.RELEASE_STEP * max(1.0, t_k - float(channels[0].t[0]))
+    rows = slice(channels[0].t.size, None)
+    for offset in (-0.9 * h, -1e-12, 0.0, 1e-12, 0.9 * h):
+        new_lo, new_hi = m.release_edge(np.array([T, t_k + offset, d0]), free, lo, hi)
+        edge = new_hi[1] if offset <= 0.0 else new_lo[1]
+        base = {"period": T, "damping_ratio": 0.0, "friction": Fs, "d0": d0, "release_time": edge}
+        a = m.model_vector(base)[rows][j]
+        if offset <= 0.0:
+            assert edge == t_k and new_lo[1] == lo[1]
+            assert a == pytest.approx(-(k * d0 - Fs) / M, rel=1e-12)
+        else:
+            assert edge == np.nextafter(t_k, math.inf) and new_hi[1] == hi[1]
+            assert a == 0.0
+        np.testing.assert_array_equal(np.delete(new_lo, 1), np.delete(lo, 1))
+        np.testing.assert_array_equal(np.delete(new_hi, 1), np.delete(hi, 1))
+    assert m.release_edge(np.array([T, t_k + 1.1 * h, d0]), free, lo, hi) is None
+    assert m.release_edge(np.array([T, d0]), ["period", "d0"], lo[[0, 2]], hi[[0, 2]]) is None
+
+
 @pytest.mark.parametrize("model", ["linear", "pendulum", "boucwen"])
 def test_the_release_time_column_is_that_of_the_motion_integrated_again(model):
     """The Jacobian's release-time column evaluates the centre's motion at shifted times (the motion does not depend
@@ -213,3 +251,83 @@ def test_a_refit_given_the_memo_solves_only_what_its_start_changes(monkeypatch):
     held = fit_isolation(channels, M, "linear", fixed={"friction": 1.4e4}, global_search=False, memo=memo)
     again = fit_isolation(channels, M, "linear", fixed={"friction": 1.4e4}, global_search=False)
     assert held.chi2 == again.chi2 and held.estimates == again.estimates
+
+
+@pytest.mark.parametrize("model", ["pendulum", "boucwen"])
+def test_the_release_column_reaches_past_a_record_that_ends_at_a_step(model):
+    """The motion runs ``RELEASE_REACH`` release steps past the record's last sample: the Jacobian's release column
+    evaluates it there with the release one step earlier (the integrated motions are NaN past their last step). A
+    record whose last sample lies 1e-7 s before one of the integration's step ends (its steps do not depend on the
+    horizon): without the reach that step would be the motion's last, and the column's last entry past it. The
+    column of an LVDT is ``-v(t - t_r) / sigma``: the independent reference's velocity, to 1e-6 of its largest."""
+    import isolator_reference as ref
+
+    from quickrelease.building import isolation_fit as F
+    from quickrelease.building.model import free_vibration
+
+    t_r, d0, sigma = 0.731, 0.15, 2e-4
+    p = {"period": 2.5, "damping_ratio": 0.03, "d0": d0, "release_time": t_r, "offset_x": 0.0}
+    if model == "pendulum":
+        p.update(friction_slow=0.01, friction_fast=0.02, rate=30.0)
+    else:
+        p.update(friction=1.2e4, characteristic_strength=0.04 * M * 9.81, yield_displacement=0.01, shape=1.3)
+    k = M * (2 * math.pi / p["period"]) ** 2
+    c = 2 * p["damping_ratio"] * math.sqrt(k * M)
+    system = ref.pendulum(M, 9.80665 / k * M, 0.01, 0.02, rate=30.0, damping=c) if model == "pendulum" else \
+        ref.boucwen(M, k, p["characteristic_strength"], 0.01, 1.3, damping=c, friction=1.2e4)
+    steps = free_vibration(F._isolation(model, M, p), d0, t_end=6.0)._grid[0]
+    end = float(steps[np.searchsorted(steps, 1.5)])  # (the motion still moving: it sticks at 2.5 s, 3.5 s)
+    t = t_r + end - 1e-7 - 0.01 * np.arange(400)[::-1]  # 100 Hz, the last sample 1e-7 s before the step's end
+    x = ref.simulate(system, d0, t - t_r, t_end=float(t[-1] - t_r) + 1e-3).x
+    channels = [BuildingChannel("lvdt", "x", t, x, sigma)]
+    lower, upper = F._bounds(channels, t_r, p["period"])
+    misfit = F._Misfit(channels, {"lvdt": sigma}, M, model, None, lower, upper)
+    assert misfit.motion(p)._grid[0][-1] > end  # the reach: past the step that ends just after the record
+    J = misfit.jacobian(np.array([d0, t_r]), ["d0", "release_time"], p)
+    v = ref.simulate(system, d0, t - t_r, t_end=float(t[-1] - t_r) + 1e-3).v
+    assert np.all(np.isfinite(J[:, 1]))
+    np.testing.assert_allclose(J[:, 1], -v / sigma, rtol=0, atol=1e-6 * np.max(np.abs(v)) / sigma)
+
+
+def test_a_refit_with_other_weights_computes_again():
+    """A memo of one record fitted with the accelerometer's noise at 0.02 m/s^2, then the same samples weighted with
+    it at 0.2 (the LVDT's alone rules): the refit with the memo is the fit without one, to the last bit (the
+    record's key holds its weights: the searches and solves of the first fit are not the second's), and the two
+    weightings' estimates differ."""
+    import quickrelease.building.isolation_fit as isf
+
+    T, zeta, Fs, d0 = 2.0, 0.04, 1.2e4, 0.15
+    k = M * (2 * math.pi / T) ** 2
+    raw = _record(k, k, math.inf, 2 * zeta * math.sqrt(k * M), Fs, d0, 5, duration=4.0)
+
+    def weighted(acc):
+        return [BuildingChannel(c.name, c.kind, c.t, c.values, 2e-4 if c.kind == "x" else acc) for c in raw]
+
+    memo = isf.FitMemo()
+    first = fit_isolation(weighted(0.02), M, "linear", memo=memo)
+    refit = fit_isolation(weighted(0.2), M, "linear", memo=memo)
+    again = fit_isolation(weighted(0.2), M, "linear")
+    assert refit.chi2 == again.chi2 and refit.estimates == again.estimates and refit.ci95 == again.ci95
+    assert refit.estimates["period"] != first.estimates["period"]
+
+
+def test_a_refinement_from_another_point_has_another_key():
+    """The memo's key of a refinement (the polish, the step search) holds the point it starts from: two solves of
+    the same record, cost and count of evaluations (what a refit from other start values can end at: the same
+    piece of a staircase) that differ in one parameter have different keys; the same solve, the same key."""
+    from scipy.optimize import OptimizeResult
+
+    import quickrelease.building.isolation_fit as isf
+
+    k = M * (2 * math.pi / 2.0) ** 2
+    channels = _record(k, k, math.inf, 0.0, 1.2e4, 0.15, 1, duration=2.0)
+    lower, upper = isf._bounds(channels, 0.731, 2.0)
+    misfit = isf._Misfit(channels, {"lvdt": 2e-4, "acc": 0.02}, M, "linear", None, lower, upper)
+    names, values = ["period", "d0"], {"period": 2.0, "d0": 0.15, "friction": 1.2e4}
+
+    def key(x):
+        res = OptimizeResult(x=np.array(x), cost=1234.5, nfev=17)
+        return isf._refinement_key("polish", misfit, names, values, res, 0, 1e-8)
+
+    assert key([2.0, 0.15]) == key([2.0, 0.15])
+    assert key([2.0, 0.15]) != key([2.0, 0.15 + 1e-9])

@@ -84,7 +84,17 @@ STEPS_PERIOD = 32.0
 STEPS_TRANSITION = 1.5
 STEPS_RATE = 2.0
 #: Halvings of the steps next to a reversal with a power-law damper (the last substep is 2^-GRADES of a step).
-GRADES = 14
+#: The tableau's error on the last substep towards the reversal, where the damper's s^alpha is not smooth, falls as
+#: its length to the 1 + alpha, and the reversal's instant, the root of the velocity there, is off by that error
+#: over the deceleration, which at a stick near the sliders' holding limit, (f_slow - |k x + f_h|) / m, can be small:
+#: a Bouc-Wen layer (n 1.5, alpha 0.2, sliders) stuck at 3.2e-3 m/s^2 came to rest 3.9e-8 s after the reference
+#: (converged to 1e-13 s) with 14 halvings, 4.3e-9 with 17, 2.3e-9 with 18 (x 4.3e-10 -> 0.9e-10 of d0; on four
+#: other power-law layers the reversals and x as close or closer); 18 cost 0-19% more grid points. (Graded towards
+#: the reversal by 18 and after it by 14, the errors of the other layers grew, a pendulum's reversals from 2.5e-10
+#: to 3.7e-9 s: the two sides' errors had cancelled.) On coarse steps (a fit's search), and after z's zero crossing
+#: of a fractional n < 1 on them, SEARCH_GRADES, as before.
+GRADES = 18
+SEARCH_GRADES = 14
 #: Halvings after z's zero crossing with a fractional n >= 1 where there is no power-law damper (default steps,
 #: and coarse steps: a fit's search on a thinned record). The graded substeps [s, 2 s] of a term t^n each err in
 #: proportion to s^(n + 1), the same at every scale: the largest ones (h / 2, h / 4) rule the error, and past a few
@@ -105,7 +115,7 @@ COARSE_GRADES = 4
 #: plain steps after it are at most FINE_RATIO - 1 of their distance from the crossing, as the graded substeps) on
 #: the mesh of ratio FINE_RATIO, the points ``FINE_RATIO^-j`` of it for j = FINE_GRADES .. 0 (the first substep
 #: 2^-14 of it); the push's z from 0 (:func:`boucwen_push`) likewise. Coarse steps keep the ratio-2 grading of
-#: GRADES. Measured against the solve_ivp reference (rtol 1e-12; 40 s of a 0.2 m release of 800 t on Kd 3.5 MN/m,
+#: SEARCH_GRADES. Measured against the solve_ivp reference (rtol 1e-12; 40 s of a 0.2 m release of 800 t on Kd 3.5 MN/m,
 #: Qd 400 kN, dy 25 mm, viscous 2 %, no sliders), the largest error of x / a over d0 / d0 omega^2, grid points and
 #: time of a motion (load ~2):
 #:   n     ratio 2, 14 halvings, pushed on equal steps   ratio 2, graded push      FINE (ratio sqrt 2, 28), graded push
@@ -411,9 +421,9 @@ def _tableau_creep(P, y, h, d, mode, k, tmp, out):
 @njit("float64[::1](float64[::1], int64, boolean)", cache=True, nogil=True)
 def _fractions(P, graded_start, graded_end):
     """The substeps of a step, as fractions of it: one, or graded towards a reversal at its start or end
-    (:data:`GRADES` halvings; where the grading only follows z's zero crossing with a fractional n above 1, no
-    power-law damper, :data:`ZERO_GRADES`, or :data:`COARSE_GRADES` on coarse steps, ``P[COARSE]`` above 1; a
-    damper of alpha > 1, ZERO_GRADES), or
+    (:data:`GRADES` halvings, :data:`SEARCH_GRADES` on coarse steps, ``P[COARSE]`` above 1; where the grading
+    only follows z's zero crossing with a fractional n above 1, no power-law damper, :data:`ZERO_GRADES`, or
+    :data:`COARSE_GRADES` on coarse steps; a damper of alpha > 1, ZERO_GRADES), or
     (``graded_start`` :data:`FINE`: the step after z's zero crossing with n below 1) on the finer mesh of ratio
     :data:`FINE_RATIO` (:data:`FINE_GRADES` substeps after the first)."""
     if not graded_start and not graded_end:
@@ -434,11 +444,13 @@ def _fractions(P, graded_start, graded_end):
             out[FINE_GRADES + 1 + grades - i] = 0.5 * 0.5 ** (grades + 1 - i)
         return out
     grades = GRADES
-    if P[ALPHA] >= 1.0 and (P[HKIND] != H_BOUCWEN or P[N] >= 1.0):  # (see ZERO_GRADES, POWER_GRADES)
+    if P[ALPHA] >= 1.0 and (P[HKIND] != H_BOUCWEN or P[N] >= 1.0):  # (see ZERO_GRADES)
         if P[ALPHA] > 1.0:
             grades = ZERO_GRADES
-        else:
+        else:  # no power-law damper: the grading follows z's zero crossing only
             grades = COARSE_GRADES if P[COARSE] > 1.0 else ZERO_GRADES
+    elif P[COARSE] > 1.0:  # a fit's search (a power-law damper's reversals, n < 1's zero crossings)
+        grades = SEARCH_GRADES
     g = np.empty(grades + 1)
     g[0] = 0.5 ** grades
     for i in range(1, grades + 1):

@@ -649,6 +649,10 @@ THIN_COARSE = 2.0
 #: The Jacobian's step of the release time, relative to its distance from the record's first sample (at least 1 s),
 #: and how many such steps each motion runs past the record's last sample (for the one-sided stencil's 2 steps).
 RELEASE_STEP, RELEASE_REACH = 1e-4, 3.0
+#: A solve whose release time ends within this fraction of the Jacobian's release step of a sample instant was
+#: stopped against the step the misfit takes there (:meth:`_Misfit.release_edge`): solved again with the release
+#: bounded at that instant.
+RELEASE_EDGE = 1.0
 SMALL_PARAMETERS = frozenset({"friction_slow", "friction_fast", "damping_ratio", "superstructure_damping_ratio",
                               "stiffness_ratio", "damping_exponent", "yield_displacement", "d0"})
 
@@ -710,6 +714,43 @@ class _Misfit:
         reach = RELEASE_REACH * RELEASE_STEP * max(1.0, abs(p["release_time"] - self.t_first))
         return free_vibration(iso, p["d0"], t_end=max(self.t_last - p["release_time"], 1e-9) + reach,
                               coarse=THIN_COARSE if self.coarse_steps else 1.0)
+
+    def release_edge(self, x, free, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """The bounds ``(lo, hi)`` of a solve that ended at ``x`` with the release time bounded at the sample
+        instant t_k it was stopped against (within ``RELEASE_EDGE`` of the Jacobian's release step of it), on the
+        side where it ended: above by ``t_k`` where ``t_r <= t_k`` (the sample after the release: the motion's
+        value there), below by the next float after ``t_k`` where ``t_r > t_k`` (the sample at rest); None where
+        the release is not free or not at a sample.
+
+        Where the release crosses a sample, that sample switches between the rest before the release and the
+        released motion: an acceleration jumps there (by the pushed force over the mass, thousands of chi-square on
+        a record's noise), so the chi-square is a cliff in the release time at every sample instant. The
+        Jacobian's guarded differences do not see the jump (by design: it would read as infinite information);
+        where the minimum of the smooth side lies beyond the cliff (a release on a sample instant: 6 of 8
+        Bouc-Wen records, rigid or flexible) the solver's steps cross it, each is refused, its trust region
+        shrinks to nothing against it and it stops there, 1e-12 to 1e-7 s short of the sample, with the other
+        parameters not yet at their optimum (a flexible Bouc-Wen record released at 0.5 s: 7.9 above the minimum
+        with the release at the sample, from the truth and from the global search alike). The cliff is a bound:
+        solved again against it, the release goes to the bound and the others are solved on
+        (:func:`~quickrelease._lsq.bounded_least_squares` holds a parameter at a bound where its optimum lies
+        beyond)."""
+        if "release_time" not in free:
+            return None
+        i = list(free).index("release_time")
+        t_r = float(x[i])
+        k = int(np.searchsorted(self.t_all, t_r))
+        near = [float(self.t_all[j]) for j in (k - 1, k) if 0 <= j < self.t_all.size]
+        if not near:
+            return None
+        t_k = min(near, key=lambda v: abs(v - t_r))
+        if abs(t_r - t_k) > RELEASE_EDGE * RELEASE_STEP * max(1.0, abs(t_r - self.t_first)):
+            return None
+        lo, hi = np.array(lo, dtype=float), np.array(hi, dtype=float)
+        if t_r <= t_k:
+            hi[i] = min(hi[i], t_k)
+        else:
+            lo[i] = max(lo[i], float(np.nextafter(t_k, math.inf)))
+        return (lo, hi) if lo[i] <= t_r <= hi[i] else None
 
     def vector(self, fv, p: dict[str, float]) -> np.ndarray:
         """The channels of the motion ``fv`` released at ``p["release_time"]``, with their offsets and drifts."""
@@ -843,6 +884,14 @@ class FitMemo:
             self._kept[key] = copy.deepcopy(out)
             self.size += size
         return out
+
+
+def _refinement_key(name: str, misfit: _Misfit, names, values: dict[str, float], res, seed, tolerance) -> tuple:
+    """The :class:`FitMemo` key of a refinement of the solve ``res`` (the polish, the step search): the record
+    (its samples and weights: ``misfit.fingerprint()``), the parameters fitted and the values of those held, the
+    point it starts from, with its cost and evaluations, the seed and the tolerance."""
+    return (name, misfit.fingerprint(), tuple(names), _held(values, names), np.asarray(res.x, dtype=float).tobytes(),
+            float(res.cost), int(res.nfev), seed, float(tolerance))
 
 
 def _noise_levels(channels, t_r0: float) -> tuple[dict[str, float], dict[str, str], bool]:
@@ -1474,8 +1523,16 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
             # the Jacobian by central differences over a relative step of 1e-4 (_Misfit.jacobian): the misfit
             # jumps where a piece boundary (a stick, a yield) passes a sample, so a step near the rounding level
             # would see those jumps; a parameter whose optimum is its bound is held there (bounded_least_squares)
-            return bounded_least_squares(on.residuals, x0, on.jacobian, lo, hi, args=(free, base), tol=tol,
-                                         max_nfev=max_nfev, x_scale="jac")
+            res = bounded_least_squares(on.residuals, x0, on.jacobian, lo, hi, args=(free, base), tol=tol,
+                                        max_nfev=max_nfev, x_scale="jac")
+            edge = on.release_edge(res.x, free, lo, hi)
+            if edge is not None:  # stopped against a sample instant: solved again with the release bounded there
+                pinned = bounded_least_squares(on.residuals, res.x, on.jacobian, *edge, args=(free, base), tol=tol,
+                                               max_nfev=max_nfev, x_scale="jac")
+                if pinned.cost < res.cost:
+                    pinned.nfev += res.nfev
+                    res = pinned
+            return res
 
         if memo is None:
             return run()
@@ -1486,9 +1543,7 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
         """A refinement of ``res`` on the whole record (the polish, the step search), kept in the memo."""
         if memo is None:
             return step(res, *args)
-        return memo.value((name, misfit.fingerprint(), tuple(names), _held(values, names),
-                           np.asarray(res.x, dtype=float).tobytes(), float(res.cost), int(res.nfev), seed,
-                           float(tolerance)),
+        return memo.value(_refinement_key(name, misfit, names, values, res, seed, tolerance),
                           lambda: step(res, *args))
 
     # the starts: the record's own (decay analysis or hysteresis loop, and splits of the dissipation), the
