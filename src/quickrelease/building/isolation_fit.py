@@ -1525,8 +1525,11 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
             # would see those jumps; a parameter whose optimum is its bound is held there (bounded_least_squares)
             res = bounded_least_squares(on.residuals, x0, on.jacobian, lo, hi, args=(free, base), tol=tol,
                                         max_nfev=max_nfev, x_scale="jac")
-            edge = on.release_edge(res.x, free, lo, hi)
-            if edge is not None:  # stopped against a sample instant: solved again with the release bounded there
+            # stopped against a sample instant: solved again with the release bounded there (on the whole record;
+            # a start's solve on the thinned record is one of several, refined on the whole record after it: a
+            # benchmark Bouc-Wen + fluid damper fit spent 2.5 s of 12.4 s re-solving one of them)
+            edge = None if on.coarse_steps else on.release_edge(res.x, free, lo, hi)
+            if edge is not None:
                 pinned = bounded_least_squares(on.residuals, res.x, on.jacobian, *edge, args=(free, base), tol=tol,
                                                max_nfev=max_nfev, x_scale="jac")
                 if pinned.cost < res.cost:
