@@ -19,11 +19,12 @@ is not given, no design values:
 * ``power``: 800 t, linear bearings T = 2.5 s with sliders (0.8 % of W) and fluid dampers C = 300 kN at 1 m/s,
   alpha = 0.4, d0 = 0.15 m;
 * ``boucwen-damper``: the ``boucwen`` bearings with fluid viscous dampers instead of the 2 % damping, C = 300 kN
-  at 1 m/s, alpha = 0.4 (fitted with ``damping="power"``: damping_coefficient and damping_exponent); not part
-  of the default run: 20-25 s of CPU (seeds 1-3, load 3-4 on 2 cores, 2026-11-27), each ending where the fit
-  started at the truth ends (chi2 within 0.001), "confirmed" on one of the three; three quarters of it in the
-  integrator (cProfile, seed 1: 7 600 model evaluations, the least-squares solves' 4 800, mostly Jacobian
-  columns, and the global search's 2 800 on coarse steps; 6 500 integrations of 2.2 ms);
+  at 1 m/s, alpha = 0.4 (fitted with ``damping="power"``: damping_coefficient and damping_exponent); after 2.5 s
+  and seven turns the layer creeps back for the rest of the minute on the dampers' slow manifold. It cost 17-22 s
+  (seeds 1-3) while the creep was integrated on explicit steps of the dampers' relaxation time until that was 100
+  times the swing's (3 600 grid points a minute, 4.5 ms); on the slow manifold from 30 times, with two corrections
+  for inertia and steps of its own slow time (466 points, 0.95 ms), 8.9-10.0 s (2026-11-27, paired with the old
+  tree, load ~2), each seed at the chi-square it had;
 * the baseline: the linear model's fit of a linear record of the same length (viscous 5 %, sliders 0.8 %).
 
 Measured 2026-11-27 (fourth session; paired runs, the session's base 0b1e3bb and main alternated, --repeat 2, load
@@ -107,7 +108,7 @@ def record(system, d0: float, seed: int):
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=1)
-    parser.add_argument("--models", default="pendulum,boucwen,power")
+    parser.add_argument("--models", default="pendulum,boucwen,power,boucwen-damper")
     parser.add_argument("--seeds", default="11")
     parser.add_argument("--truth", action="store_true")
     args = parser.parse_args()

@@ -299,6 +299,8 @@ ISOLATOR_GALLERY = {
     "plot_isolator_lead_rubber.py": {"Kd_N_m": 1.6e6, "Qd_N": 4.0e5, "dy_m": 0.025, "damping_ratio": 0.02},
     "plot_isolator_fluid_damper.py": {"period_s": 2.5, "friction_N": 0.005 * 8.0e5 * 9.80665,
                                       "damping_coefficient": 1.0e5, "damping_exponent": 0.4},
+    "plot_isolator_lead_rubber_damper.py": {"Kd_N_m": 1.6e6, "Qd_N": 4.0e5, "dy_m": 0.025, "shape": 1.0,
+                                            "damping_coefficient": 2.0e5, "damping_exponent": 0.5},
 }
 
 
