@@ -52,6 +52,13 @@ MODELS = {
         mass=M_D, d0=D0_D, duration=8.0, model="linear", damping="power",
         truth={"period": T_D, "friction": FS_D, "damping_coefficient": C_D, "damping_exponent": ALPHA_D,
                "d0": D0_D, "release_time": RELEASE}),
+    # lead-rubber bearings with fluid dampers (examples/lead_rubber_damper_building.toml's layer)
+    "boucwen-power": dict(
+        system=ref.boucwen(M_B, KD, QD, DY, shape=N, damping=2.0e5, damping_exponent=0.5),
+        mass=M_B, d0=D0_B, duration=10.0, model="boucwen", damping="power",
+        truth={"period": 2 * math.pi * math.sqrt(M_B / KD), "characteristic_strength": QD,
+               "yield_displacement": DY, "shape": N, "damping_coefficient": 2.0e5, "damping_exponent": 0.5,
+               "d0": D0_B, "release_time": RELEASE}),
 }
 
 
