@@ -82,14 +82,18 @@ def truth(system, d0: float) -> dict[str, float]:
     p = system.params
     out = {"d0": d0, "release_time": RELEASE, "offset_x": ZERO["x"], "offset_v": ZERO["v"], "offset_a": ZERO["a"]}
     if system.kind == "boucwen":
-        out.update(period=2.0 * math.pi * math.sqrt(system.mass / p["Kd"]), characteristic_strength=p["Qd"],
+        k = p["Kd"]
+        out.update(period=2.0 * math.pi * math.sqrt(system.mass / k), characteristic_strength=p["Qd"],
                    yield_displacement=p["dy"], shape=p["n"], friction=p["Fs"])
+    elif system.kind == "linear":
+        k = p["k"]
+        out.update(period=2.0 * math.pi * math.sqrt(system.mass / k), friction=p["Fs"])
     else:
         raise NotImplementedError(f"--truth: {system.kind}")
     if system.exponent != 1.0:
         out.update(damping_coefficient=system.damping, damping_exponent=system.exponent)
     else:
-        out["damping_ratio"] = system.damping / (2.0 * math.sqrt(p["Kd"] * system.mass))
+        out["damping_ratio"] = system.damping / (2.0 * math.sqrt(k * system.mass))
     return out
 
 
