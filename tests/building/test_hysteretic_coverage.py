@@ -1,12 +1,12 @@
-"""Statistical honesty of the pendulum, Bouc-Wen and power-law damper fits (fit_isolation, issue 24) on records made by the
-independent solve_ivp of isolator_reference.py (never the fit's own model).
+"""Statistical honesty of the pendulum, Bouc-Wen and power-law damper fits (fit_isolation, issue 24) on records
+made by the independent solve_ivp of isolator_reference.py (never the fit's own model).
 
 Records like those of test_isolation_coverage.py: 200 Hz, the base displacement (LVDT, noise 0.2 mm) and the
 acceleration on its own clock (noise 0.02 m/s^2, zero 0.01 m/s^2), a quiet second before an unknown release
 instant. One reference simulation per model; the noise is drawn per seed. Slow (a fit of these models takes
-tens of seconds here): 3 seeds per model by default (run with -m slow), 200 with QUICKRELEASE_SLOW=1, where
-each parameter's coverage must lie in the 0.05%-99.95% band of Binomial(200, 0.95) (179-198) and the pooled
-coverage in 90-99%.
+seconds to tens of seconds here): 3 seeds per model by default (run with -m slow), 200 with QUICKRELEASE_SLOW=1
+(and ``-p no:timeout``: 6-45 minutes a model, past the suite's 600 s limit a test), where each parameter's
+coverage must lie in the 0.05%-99.95% band of Binomial(200, 0.95) (179-198) and the pooled coverage in 90-99%.
 """
 
 import math
