@@ -72,11 +72,14 @@ from ._ode import (
 #: damper and hysteresis [J]), then x_s [m], x_s' [m/s] and the storey damper's work [J].
 NY = 9
 XS, VS, WS = 6, 7, 8
-#: The storey's vector: m_s [kg], k_s [N/m], c_s [N s/m].
-MS, KS, CS = 0, 1, 2
+#: The storey's vector: m_s [kg], k_s [N/m], c_s [N s/m]; inside :func:`integrate` one more slot, the holding
+#: limit f_slow + :func:`margin` [N].
+MS, KS, CS, LIMIT = 0, 1, 2, 3
 #: Events: none, a reversal, a yield (saturation), z's zero crossing, the re-slip of a stuck base; the two
-#: extrema looked for inside a step (the base's slowest speed, the holding force's largest magnitude).
-EV_NONE, EV_REVERSAL, EV_YIELD, EV_ZERO, EV_SLIP, EV_DIP, EV_PEAK = 0, 2, 3, 4, 7, 8, 9
+#: extrema looked for inside a step (the base's slowest speed, the holding force's largest magnitude); the re-slip
+#: of a base stuck within the holding margin (|G| above f_slow, not above f_slow + :func:`margin`: where |G| leaves
+#: the margin).
+EV_NONE, EV_REVERSAL, EV_YIELD, EV_ZERO, EV_SLIP, EV_DIP, EV_PEAK, EV_SLIP_MARGIN = 0, 2, 3, 4, 7, 8, 9, 10
 #: A slide whose speed falls below this fraction of the release's scale with the holding force within the
 #: sliders' limit is stuck (the rigid kernel's creep into the holding limit).
 CREEP = _ode.CREEP
@@ -135,6 +138,8 @@ def _value(P, S, y, kind, d, r):
         return y[2]
     if kind == EV_SLIP:
         return P[FSLOW] - abs(holding(P, S, y))
+    if kind == EV_SLIP_MARGIN:
+        return S[LIMIT] - abs(holding(P, S, y))
     # EV_PEAK: |G| still growing: sign(G) G', G' = -(k_s u' + c_s u'') on the fixed base
     _rhs(P, S, y, 0.0, 0, r)
     g = holding(P, S, y)
@@ -261,9 +266,35 @@ def envelope(S, u, du):
 
 
 @njit(cache=True, nogil=True)
-def held(P, S, y):
-    """Whether the stuck base at y is held for good: ``|k x_b + f_h| + E <= f_slow`` (:func:`envelope`)."""
-    return abs(_ode._net(P, y)) + envelope(S, y[XS] - y[0], y[VS] - y[1]) <= P[FSLOW]
+def margin(P, creep):
+    """The excess of the holding force's magnitude over the sliders' static limit f_slow [N] within which the base
+    is at rest: at most ``1e-9 f_slow`` (where a slide creeping below ``creep`` [m/s] is stuck, the rounding of
+    the holding force), and where the friction grows with the speed (Constantinou's law) or a viscous damper acts,
+    the excess whose quasi-static creep speed ``excess / g'(0)`` is below ``creep`` (the rigid kernel's
+    :func:`quickrelease.building._ode._held`: ``excess < slope creep`` and ``rate excess < 0.1 slope``).
+
+    Without it a base stuck at its holding limit to rounding (a pendulum crept there under a velocity-strengthening
+    friction, the roof's ringing damped out, |G| - f_slow of 1e-16 of f_slow) slipped at every step of the stuck
+    piece, turned at once and stuck again: two events and a located instant each 3 ms, to the horizon (13 000 of
+    each in a 60 s record, 2.2 s an evaluation against 0.6 ms; the flexible pendulum fit spent 130 of its 145 s
+    there)."""
+    tol = 1e-9 * P[FSLOW]
+    slope = P[C]
+    if P[RATE] > 0.0 and P[FFAST] > P[FSLOW]:
+        slope += (P[FFAST] - P[FSLOW]) * P[RATE]
+    if slope > 0.0:
+        creeping = slope * creep
+        if P[RATE] > 0.0:
+            creeping = min(creeping, 0.1 * slope / P[RATE])
+        tol = max(tol, creeping)
+    return tol
+
+
+@njit(cache=True, nogil=True)
+def held(P, S, y, limit):
+    """Whether the stuck base at y is held for good: ``|k x_b + f_h| + E <= limit`` (:func:`envelope`; ``limit``
+    f_slow plus the holding :func:`margin` [N])."""
+    return abs(_ode._net(P, y)) + envelope(S, y[XS] - y[0], y[VS] - y[1]) <= limit
 
 
 @njit(cache=True, nogil=True)
@@ -277,12 +308,13 @@ def _put(gt, gy, gd, gf, n, t, y, d, mode):
 
 
 @njit(cache=True, nogil=True)
-def _start(P, S, y, slip):
+def _start(P, S, y, slip, limit):
     """The direction (0: stuck) and mode of a piece starting at y with the base at rest (``slip``: at a re-slip,
-    where |G| has reached the limit: it slides); the base's velocity and a saturated Bouc-Wen element's z set."""
+    where |G| has reached the limit: it slides; else stuck where ``|G| <= limit``, f_slow plus the holding
+    :func:`margin`); the base's velocity and a saturated Bouc-Wen element's z set."""
     y[1] = 0.0
     g = holding(P, S, y)
-    if abs(g) <= P[FSLOW] and not slip:
+    if abs(g) <= limit and not slip:
         return 0.0, 0
     d = -1.0 if g > 0.0 else 1.0
     mode = _ode._mode(P, y, d)
@@ -313,10 +345,12 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
     n = 0
     stop = math.inf
     creep = CREEP * math.sqrt(2.0 * _energy(P, S, y) / (P[M] + S[MS]))
+    limit = P[FSLOW] + margin(P, creep)  # the holding limit: stuck within it, re-slips beyond it
+    S = np.array([S[MS], S[KS], S[CS], limit])
     rated = P[RATE] > 0.0 and P[FFAST] != P[FSLOW]
     a0 = 0.0
-    d, mode = _start(P, S, y, False)
-    if d == 0.0 and held(P, S, y):
+    d, mode = _start(P, S, y, False, limit)
+    if d == 0.0 and held(P, S, y, limit):
         n = _put(gt, gy, gd, gf, n, 0.0, y, 0.0, 0)
         return gt, gy, gd, gf, n, 0.0, 0
     hp = _step_size(P, S, y, d, mode)
@@ -377,15 +411,18 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
                     for j in range(NY):
                         out[j] = ym[j]
         else:
-            if P[FSLOW] - abs(holding(P, S, y1)) < 0.0:
+            # a re-slip where |G| passes the holding limit; located where it passes f_slow (the physical onset),
+            # or the limit where the piece starts within the margin (stuck above f_slow)
+            if limit - abs(holding(P, S, y1)) < 0.0:
                 kind = EV_SLIP
             else:  # a peak of |G| past the limit inside the step
                 if _value(P, S, y, EV_PEAK, 0.0, r) > 0.0 and _value(P, S, y1, EV_PEAK, 0.0, r) < 0.0:
                     tm = _locate(P, S, y, h, d, mode, EV_PEAK, 1.0, k, tmp, ym, r)
-                    if P[FSLOW] - abs(holding(P, S, ym)) < 0.0:
+                    if limit - abs(holding(P, S, ym)) < 0.0:
                         kind, theta = EV_SLIP, tm
             if kind == EV_SLIP:
-                theta = _locate(P, S, y, theta, d, mode, EV_SLIP, 1.0, k, tmp, out, r)
+                onset = EV_SLIP if abs(holding(P, S, y)) <= P[FSLOW] else EV_SLIP_MARGIN
+                theta = _locate(P, S, y, theta, d, mode, onset, 1.0, k, tmp, out, r)
         if kind == EV_NONE:
             chain = 0
             if iq < nq:  # a graded substep taken (the rest of it next, where the friction law shortened it)
@@ -397,11 +434,11 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
             for j in range(NY):
                 y[j] = y1[j]
             fresh = False
-            if d == 0.0 and held(P, S, y):
+            if d == 0.0 and held(P, S, y, limit):
                 stop = t
                 n = _put(gt, gy, gd, gf, n, t, y, 0.0, 0)
                 break
-            if d != 0.0 and d * y[1] < creep and abs(holding(P, S, y)) <= P[FSLOW] * (1.0 + 1e-9):
+            if d != 0.0 and d * y[1] < creep and abs(holding(P, S, y)) <= limit:
                 # creeping into the sliders' holding limit: stuck from here
                 y[1] = 0.0
                 d, mode = 0.0, 0
@@ -427,9 +464,9 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
             y[2] = 0.0
             mode = LOADING
         else:  # a reversal or a re-slip: the base at rest, the holding force decides
-            d, mode = _start(P, S, y, kind == EV_SLIP)
+            d, mode = _start(P, S, y, kind == EV_SLIP, limit)
             fresh = True
-            if d == 0.0 and held(P, S, y):
+            if d == 0.0 and held(P, S, y, limit):
                 stop = t
                 n = _put(gt, gy, gd, gf, n, t, y, 0.0, 0)
                 break
