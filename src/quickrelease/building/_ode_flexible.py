@@ -44,6 +44,7 @@ from ._ode import (
     _B,
     _S,
     ALPHA,
+    COARSE,
     DY,
     FFAST,
     FINE,
@@ -211,10 +212,11 @@ def _step_size(P, S, y, d, mode):
     post-yield, saturated) stiffness and the storey's (the roof's on the fixed base while stuck); over the Bouc-Wen
     transition as ``_ode._step_size``, with the storey's force in the bound on the base's acceleration and the whole
     energy in the bound on its speed. (The friction law's velocity scale bounds each step of a slide by the base's
-    own acceleration there: :func:`_rate_step`.)"""
+    own acceleration there: :func:`_rate_step`.) Times ``P[COARSE]`` where that is above 1 (as ``_ode``'s)."""
     ms, ks, cs = S[MS], S[KS], S[CS]
+    coarse = max(P[COARSE], 1.0)
     if d == 0.0:
-        return 2.0 * math.pi * math.sqrt(ms / ks) / STEPS_PERIOD
+        return 2.0 * math.pi * math.sqrt(ms / ks) * coarse / STEPS_PERIOD
     mb = P[M]
     base = mode & 3
     k1 = P[K]
@@ -225,7 +227,7 @@ def _step_size(P, S, y, d, mode):
     a11, a22 = (k1 + ks) / mb, ks / ms
     half = 0.5 * (a11 + a22)
     lam = half + math.sqrt(max(half * half - k1 * ks / (mb * ms), 0.0))
-    h = 2.0 * math.pi / math.sqrt(lam) / STEPS_PERIOD
+    h = 2.0 * math.pi / math.sqrt(lam) * coarse / STEPS_PERIOD
     energy = _energy(P, S, y)
     vmax = math.sqrt(2.0 * energy / mb)
     xmax = math.sqrt(2.0 * energy / P[K])
@@ -234,7 +236,7 @@ def _step_size(P, S, y, d, mode):
     if P[HKIND] == H_BOUCWEN and base == LOADING and vmax > 0.0:
         reach = P[DY] * (1.0 - d * y[2] + math.log(1.0 / SATURATION) / P[N])
         v = min(vmax, math.sqrt(y[1] * y[1] + 2.0 * (amax + P[C] * vmax ** P[ALPHA] / mb) * reach))
-        h = min(h, P[DY] / (max(P[N], 1.0) * v * STEPS_TRANSITION))
+        h = min(h, coarse * P[DY] / (max(P[N], 1.0) * v * STEPS_TRANSITION))
     return h
 
 
@@ -249,8 +251,9 @@ def _rate_step(P, accel):
     ``1 / (RATE_SAFETY STEPS_RATE)`` of the scale a step. The integrator takes the larger of the accelerations at
     the step's start and end (the step is taken again, shorter, where the end's exceeds the start's bound): the
     base's actual acceleration, not a bound from the energy (whose storey term, sqrt(2 k_s E) over m_b, was 20
-    times a pendulum's actual acceleration under a 0.6 s storey and cost it 18 times the steps)."""
-    return 1.0 / (P[RATE] * (RATE_SAFETY * accel + 1e-300) * STEPS_RATE)
+    times a pendulum's actual acceleration under a 0.6 s storey and cost it 18 times the steps). Times
+    ``P[COARSE]`` where that is above 1."""
+    return max(P[COARSE], 1.0) / (P[RATE] * (RATE_SAFETY * accel + 1e-300) * STEPS_RATE)
 
 
 @njit(cache=True, nogil=True)
@@ -474,7 +477,7 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
         iq, nq = 0, 0  # (an event ends a grading)
         if kind == EV_ZERO and P[N] != math.floor(P[N]):
             # |z|^n with a fractional n is not smooth where z leaves 0: the next steps graded from it
-            fine = P[N] < 1.0
+            fine = P[N] < 1.0 and P[COARSE] <= 1.0  # (coarse steps: the ratio-2 grading, as ``_ode``)
             g = _ode._fractions(P, FINE if fine else 1, False)
             span = hp * FINE_SPAN if fine else hp
             nq = g.size
