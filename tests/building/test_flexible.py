@@ -514,3 +514,20 @@ def test_coarse_steps_of_a_fractional_shape(shape):
 def test_bad_coarse_is_named(coarse):
     with pytest.raises(ParameterError, match="coarse"):
         free_vibration_flexible(FlexibleBuilding(**GOOD), 0.1, t_end=1.0, coarse=coarse)
+
+
+def test_a_creep_held_under_a_stiff_storey_is_held_by_the_force_it_then_meets():
+    """A base creeping into its holding limit under a stiff storey (T_s 0.02 s, zeta_s 0.1: c_s = 4.6e7 N s/m)
+    and a friction of slow coefficient ~0 (3e-13): the creep rule holds it where the holding force at rest (its
+    speed 0 in the storey's damper) is within the holding limit, so every stuck piece lasts (each slip after its
+    stick), and the base is held for good within 40 s. With the creep's speed (1e-10 m/s) in the damper's force the
+    rule held a base whose force at rest was past the limit by 0.002 N: it slipped at once, 37 000 sticks of length 0
+    in 60 s (5 s an evaluation, against 0.1 s)."""
+    mass, ms, period, d0 = 1.0e6, 7.0e5, 3.5759, 0.3085
+    radius = G * (period / (2 * math.pi)) ** 2
+    c = 2 * 0.000425 * math.sqrt(mass * G / radius * mass)
+    building = FlexibleBuilding(Pendulum(mass, radius, 3.16e-13, 0.0312, rate=11.21, damping=c), ms, 0.02, 0.105)
+    motion = free_vibration_flexible(building, d0, t_end=40.0)
+    sticks, slips = motion.stick_times, motion.slip_times
+    assert motion.stop_time < 40.0 and sticks.size == slips.size + 1 and sticks.size > 100
+    assert np.all(slips > sticks[:-1])

@@ -441,8 +441,10 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
                 stop = t
                 n = _put(gt, gy, gd, gf, n, t, y, 0.0, 0)
                 break
-            if d != 0.0 and d * y[1] < creep and abs(holding(P, S, y)) <= limit:
-                # creeping into the sliders' holding limit: stuck from here
+            if d != 0.0 and d * y[1] < creep and abs(holding(P, S, y) - S[CS] * y[1]) <= limit:
+                # creeping into the sliders' holding limit: stuck from here (the holding force the stuck base
+                # meets, its speed 0 in the storey's damper: with the creep's speed in it, a stiff storey's damper
+                # held a base that then slipped at once, two events a step)
                 y[1] = 0.0
                 d, mode = 0.0, 0
                 hp = _step_size(P, S, y, d, mode)
