@@ -265,17 +265,12 @@ def free_vibration_flexible(building: FlexibleBuilding, d0: float, t_end: float 
     horizon = checked_horizon(t_end, P[_ode.FSLOW], natural_period(building.isolation))  # the layer's, whole m
     z0 = pushed_state(building.isolation, d0)[0]
     y0 = np.array([d0, 0.0, z0, 0.0, 0.0, 0.0, d0, 0.0, 0.0])
-    capacity = 4096
-    while True:
-        gt, gy, gd, gf, n, stop, status = _ode_flexible.integrate(P, S, y0, horizon, capacity, MAX_STEPS)
-        if status == 0:
-            break
-        if status == 2:
-            raise ParameterError("t_end", horizon, f"a span of at most {MAX_STEPS} integration steps", "s")
-        if status == 3:
-            raise ParameterError("t_end", horizon, f"a span where the base's events make progress (more than "
-                                 f"{_ode_flexible.MAX_CHAIN} reversals, sticks or slips in a row)", "s")
-        capacity *= 4
+    gt, gy, gd, gf, n, stop, status = _ode_flexible.integrate(P, S, y0, horizon, 4096, MAX_STEPS)
+    if status == 2:
+        raise ParameterError("t_end", horizon, f"a span of at most {MAX_STEPS} integration steps", "s")
+    if status == 3:
+        raise ParameterError("t_end", horizon, f"a span where the base's events make progress (more than "
+                             f"{_ode_flexible.MAX_CHAIN} reversals, sticks or slips in a row)", "s")
     grid = (gt[:n].copy(), gy[:n].copy(), gd[:n].copy(), gf[:n].copy(), int(n))
     # the last step may run past the horizon and find the hold there: within the horizon the base still slides
     return FlexibleVibration(building=building, d0=d0, stop_time=float(stop) if stop <= horizon else math.inf,
