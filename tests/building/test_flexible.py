@@ -516,18 +516,37 @@ def test_bad_coarse_is_named(coarse):
         free_vibration_flexible(FlexibleBuilding(**GOOD), 0.1, t_end=1.0, coarse=coarse)
 
 
-def test_a_creep_held_under_a_stiff_storey_is_held_by_the_force_it_then_meets():
-    """A base creeping into its holding limit under a stiff storey (T_s 0.02 s, zeta_s 0.1: c_s = 4.6e7 N s/m)
-    and a friction of slow coefficient ~0 (3e-13): the creep rule holds it where the holding force at rest (its
-    speed 0 in the storey's damper) is within the holding limit, so every stuck piece lasts (each slip after its
-    stick), and the base is held for good within 40 s. With the creep's speed (1e-10 m/s) in the damper's force the
-    rule held a base whose force at rest was past the limit by 0.002 N: it slipped at once, 37 000 sticks of length 0
-    in 60 s (5 s an evaluation, against 0.1 s)."""
+def _stiff_storey_creep(horizon):
     mass, ms, period, d0 = 1.0e6, 7.0e5, 3.5759, 0.3085
     radius = G * (period / (2 * math.pi)) ** 2
     c = 2 * 0.000425 * math.sqrt(mass * G / radius * mass)
-    building = FlexibleBuilding(Pendulum(mass, radius, 3.16e-13, 0.0312, rate=11.21, damping=c), ms, 0.02, 0.105)
-    motion = free_vibration_flexible(building, d0, t_end=40.0)
-    sticks, slips = motion.stick_times, motion.slip_times
-    assert motion.stop_time < 40.0 and sticks.size == slips.size + 1 and sticks.size > 100
-    assert np.all(slips > sticks[:-1])
+    args = (mass, radius, 3.16e-13, 0.0312)
+    building = FlexibleBuilding(Pendulum(*args, rate=11.21, damping=c), ms, 0.02, 0.105)
+    return building, free_vibration_flexible(building, d0, t_end=horizon), ref.pendulum(*args, rate=11.21, damping=c), d0
+
+
+def test_a_creep_under_a_stiff_storey_ends_in_one_hold():
+    """A base creeping into its holding limit under a stiff storey (T_s 0.02 s, zeta_s 0.1: c_s = 4.6e7 N s/m) and a
+    friction of slow coefficient ~0 (3e-13; Constantinou's rate 11 s/m): the creep is at rest for good where the
+    sliders hold it at rest against the roof's ringing too, within 18 s and after at most 3 sticks. Stuck where the
+    holding force alone was within the limit, the roof broke it away again and again (3 000 sticks before the hold at
+    29.7 s; with the creep's speed in the storey damper's force, 37 000 sticks of length 0 in 60 s, 5 s an
+    evaluation against 0.05 s)."""
+    _, motion, _, _ = _stiff_storey_creep(20.0)
+    assert motion.stop_time < 18.0 and 1 <= motion.stick_times.size <= 3
+    assert np.all(motion.slip_times > motion.stick_times[:-1])
+
+
+@pytest.mark.skipif(not SLOW, reason="set QUICKRELEASE_SLOW=1 (the reference under a 0.02 s storey: 10 s)")
+def test_a_creep_under_a_stiff_storey_against_the_reference():
+    """That motion against the reference (which creeps on without a hold) over 20 s: base and roof within 1e-8 of d0,
+    accelerations within 1e-6 of their largest (measured 1.5e-10 and 2.3e-8)."""
+    building, motion, system, d0 = _stiff_storey_creep(20.0)
+    t = np.linspace(0.0, 20.0, 2001)
+    r = ref.simulate_2dof(system, building.superstructure_mass, building.superstructure_stiffness,
+                          building.superstructure_damping, d0, t, 20.0)
+    s = motion.states(t)
+    for key, want in (("x_b", r.x), ("x_s", r.xs)):
+        assert np.max(np.abs(s[key] - want)) < 1e-8 * d0, key
+    for key, want in (("a_b", r.a), ("a_s", r.as_)):
+        assert np.max(np.abs(s[key] - want)) < 1e-6 * np.max(np.abs(want)), key

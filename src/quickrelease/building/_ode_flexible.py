@@ -81,8 +81,8 @@ MS, KS, CS, LIMIT = 0, 1, 2, 3
 #: of a base stuck within the holding margin (|G| above f_slow, not above f_slow + :func:`margin`: where |G| leaves
 #: the margin).
 EV_NONE, EV_REVERSAL, EV_YIELD, EV_ZERO, EV_SLIP, EV_DIP, EV_PEAK, EV_SLIP_MARGIN = 0, 2, 3, 4, 7, 8, 9, 10
-#: A slide whose speed falls below this fraction of the release's scale with the holding force within the
-#: sliders' limit is stuck (the rigid kernel's creep into the holding limit).
+#: A slide whose speed falls below this fraction of the release's scale is at rest for good where the sliders hold it
+#: there against the roof's ringing too (the rigid kernel's creep into the holding limit).
 CREEP = _ode.CREEP
 #: Most events in a row without a plain step between them (a base that chatters without end: status 3).
 MAX_CHAIN = 10_000
@@ -472,15 +472,17 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
                 stop = t
                 n = _put(gt, gy, gd, gf, n, t, y, 0.0, 0)
                 break
-            if d != 0.0 and d * y[1] < creep and abs(holding(P, S, y) - S[CS] * y[1]) <= limit:
-                # creeping into the sliders' holding limit: stuck from here (the holding force the stuck base
-                # meets, its speed 0 in the storey's damper: with the creep's speed in it, a stiff storey's damper
-                # held a base that then slipped at once, two events a step)
+            if d != 0.0 and d * y[1] < creep:
+                # creeping into the sliders' holding limit: at rest for good from here where the sliders hold it at
+                # rest against the roof's ringing too (:func:`held`); else it creeps on (the roof breaks a base
+                # stuck there away again at once: under a stiff storey, 3 000 sticks and slips before the hold)
+                v = y[1]
                 y[1] = 0.0
-                d, mode = 0.0, 0
-                known0 = False
-                hp = _step_size(P, S, y, d, mode)
-                iq = nq  # (a grading's rest dropped: the layer is still)
+                if held(P, S, y, limit):
+                    stop = t
+                    n = _put(gt, gy, gd, gf, n, t, y, 0.0, 0)
+                    break
+                y[1] = v
             n = _put(gt, gy, gd, gf, n, t, y, d, mode)
             if t >= t_end:
                 break
