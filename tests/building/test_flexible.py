@@ -550,3 +550,50 @@ def test_a_creep_under_a_stiff_storey_against_the_reference():
         assert np.max(np.abs(s[key] - want)) < 1e-8 * d0, key
     for key, want in (("a_b", r.a), ("a_s", r.as_)):
         assert np.max(np.abs(s[key] - want)) < 1e-6 * np.max(np.abs(want)), key
+
+
+def test_the_grid_grows_without_changing_the_motion():
+    """The grid grows in place as it fills (fourfold from the room it starts with): a 20 s motion under a stiff storey
+    (46 000 points) started with room for 16 points is the one started with room for all, bit for bit."""
+    from quickrelease.building import _ode_flexible
+    from quickrelease.building.hysteretic import MAX_STEPS
+    from quickrelease.building.model import pushed_state
+
+    building, motion, _, d0 = _stiff_storey_creep(20.0)
+    P, S = building.vector()
+    z0 = pushed_state(building.isolation, d0)[0]
+    y0 = np.array([d0, 0.0, z0, 0.0, 0.0, 0.0, d0, 0.0, 0.0])
+    small = _ode_flexible.integrate(P, S, y0, 20.0, 16, MAX_STEPS)
+    large = _ode_flexible.integrate(P, S, y0, 20.0, 100_000, MAX_STEPS)
+    n = small[4]
+    assert n == large[4] == motion._grid[4] > 4096 and small[5:] == large[5:]
+    for a, b in zip(small[:4], large[:4], strict=True):
+        assert np.array_equal(a[:n], b[:n])
+
+
+def test_each_slide_step_resolves_the_friction_laws_velocity_scale():
+    """Every step of a slide under Constantinou's law is at most the friction-law step (``_rate_step``) of the larger
+    of the base's accelerations at its ends (the rule of the integrator, each acceleration evaluated here from the
+    grid's states): on the 0.18 s storey's creep (reversals, sticks and re-slips, 5 700 points)."""
+    from quickrelease.building import _ode_flexible
+
+    period, zeta, mu1, mu2, rate, Ts, zs, d0 = CREEPING[1]
+    radius = G * (period / (2 * math.pi)) ** 2
+    c = 2 * zeta * math.sqrt(1.0e6 * G / radius * 1.0e6)
+    motion = free_vibration_flexible(FlexibleBuilding(Pendulum(1.0e6, radius, mu1, mu2, rate=rate, damping=c), 7.0e5,
+                                                      Ts, zs), d0, t_end=25.0)
+    gt, gy, gd, gf, n = motion._grid
+    P, S = motion._P, motion._S
+    r = np.empty(_ode_flexible.NY)
+    checked = 0
+    for i in range(n - 1):
+        if gd[i] == 0.0 or gt[i + 1] == gt[i]:
+            continue
+        a = []
+        for y in (gy[i], gy[i + 1]):
+            _ode_flexible._rhs(P, S, y, gd[i], gf[i], r)
+            a.append(abs(r[1]))
+        if gd[i + 1] == gd[i] and gf[i + 1] == gf[i]:  # a plain step (an event's state is the next piece's start)
+            assert gt[i + 1] - gt[i] <= _ode_flexible._rate_step(P, max(a)) * (1 + 1e-12), i
+            checked += 1
+    assert checked > 1000
