@@ -16,9 +16,12 @@ noise levels given, no design values:
 
 Printed, by process CPU time (best of ``--repeat``): one evaluation of the misfit on the whole record (flexible and
 rigid, and their ratio) and its integration alone with the steps it takes; with ``--fit`` the whole fits (global
-search, starts, intervals), their reduced chi-square and whether the global minimum was confirmed. (2026-11-27, a
-2-core machine at load 2-4: evaluations 2.2 / 0.44 ms Bouc-Wen, 2.1 / 0.43 ms pendulum; whole fits 17 s / 6 s
-Bouc-Wen, 160-170 s pendulum, whose rigid fit of this record ran past 10 min and was stopped.)
+search, starts, intervals), their reduced chi-square and whether the global minimum was confirmed; with
+``--trials`` the evaluation of three trials of the pendulum's search (TRIALS). (2026-11-27, a 2-core machine at
+load 2-4: evaluations 2.2 / 0.44 ms Bouc-Wen, 2.1 / 0.43 ms pendulum; whole fits 17 s / 6 s Bouc-Wen, 160-170 s
+pendulum. h32a, paired with the tree before it, load 1.8-2.0: flexible / rigid whole fits 9.9-10.2 s / 4.2-4.3 s
+Bouc-Wen (was 13.1-13.3 / 4.2-4.3), 8.1-8.2 s / 4.6-4.8 s pendulum (was 136-139 / 4.6), the same minima; the
+trials 1.4, 5.6 and 47 ms, were 563, 2 054 and 87 ms.)
 """
 
 from __future__ import annotations
