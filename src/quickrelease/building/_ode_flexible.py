@@ -44,6 +44,7 @@ from ._ode import (
     _B,
     _S,
     ALPHA,
+    COARSE,
     DY,
     FFAST,
     FINE,
@@ -72,13 +73,16 @@ from ._ode import (
 #: damper and hysteresis [J]), then x_s [m], x_s' [m/s] and the storey damper's work [J].
 NY = 9
 XS, VS, WS = 6, 7, 8
-#: The storey's vector: m_s [kg], k_s [N/m], c_s [N s/m].
-MS, KS, CS = 0, 1, 2
+#: The storey's vector: m_s [kg], k_s [N/m], c_s [N s/m]; inside :func:`integrate` one more slot, the holding
+#: limit f_slow + :func:`margin` [N].
+MS, KS, CS, LIMIT = 0, 1, 2, 3
 #: Events: none, a reversal, a yield (saturation), z's zero crossing, the re-slip of a stuck base; the two
-#: extrema looked for inside a step (the base's slowest speed, the holding force's largest magnitude).
-EV_NONE, EV_REVERSAL, EV_YIELD, EV_ZERO, EV_SLIP, EV_DIP, EV_PEAK = 0, 2, 3, 4, 7, 8, 9
-#: A slide whose speed falls below this fraction of the release's scale with the holding force within the
-#: sliders' limit is stuck (the rigid kernel's creep into the holding limit).
+#: extrema looked for inside a step (the base's slowest speed, the holding force's largest magnitude); the re-slip
+#: of a base stuck within the holding margin (|G| above f_slow, not above f_slow + :func:`margin`: where |G| leaves
+#: the margin).
+EV_NONE, EV_REVERSAL, EV_YIELD, EV_ZERO, EV_SLIP, EV_DIP, EV_PEAK, EV_SLIP_MARGIN = 0, 2, 3, 4, 7, 8, 9, 10
+#: A slide whose speed falls below this fraction of the release's scale is at rest for good where the sliders hold it
+#: there against the roof's ringing too (the rigid kernel's creep into the holding limit).
 CREEP = _ode.CREEP
 #: Most events in a row without a plain step between them (a base that chatters without end: status 3).
 MAX_CHAIN = 10_000
@@ -135,6 +139,8 @@ def _value(P, S, y, kind, d, r):
         return y[2]
     if kind == EV_SLIP:
         return P[FSLOW] - abs(holding(P, S, y))
+    if kind == EV_SLIP_MARGIN:
+        return S[LIMIT] - abs(holding(P, S, y))
     # EV_PEAK: |G| still growing: sign(G) G', G' = -(k_s u' + c_s u'') on the fixed base
     _rhs(P, S, y, 0.0, 0, r)
     g = holding(P, S, y)
@@ -206,10 +212,11 @@ def _step_size(P, S, y, d, mode):
     post-yield, saturated) stiffness and the storey's (the roof's on the fixed base while stuck); over the Bouc-Wen
     transition as ``_ode._step_size``, with the storey's force in the bound on the base's acceleration and the whole
     energy in the bound on its speed. (The friction law's velocity scale bounds each step of a slide by the base's
-    own acceleration there: :func:`_rate_step`.)"""
+    own acceleration there: :func:`_rate_step`.) Times ``P[COARSE]`` where that is above 1 (as ``_ode``'s)."""
     ms, ks, cs = S[MS], S[KS], S[CS]
+    coarse = max(P[COARSE], 1.0)
     if d == 0.0:
-        return 2.0 * math.pi * math.sqrt(ms / ks) / STEPS_PERIOD
+        return 2.0 * math.pi * math.sqrt(ms / ks) * coarse / STEPS_PERIOD
     mb = P[M]
     base = mode & 3
     k1 = P[K]
@@ -220,7 +227,7 @@ def _step_size(P, S, y, d, mode):
     a11, a22 = (k1 + ks) / mb, ks / ms
     half = 0.5 * (a11 + a22)
     lam = half + math.sqrt(max(half * half - k1 * ks / (mb * ms), 0.0))
-    h = 2.0 * math.pi / math.sqrt(lam) / STEPS_PERIOD
+    h = 2.0 * math.pi / math.sqrt(lam) * coarse / STEPS_PERIOD
     energy = _energy(P, S, y)
     vmax = math.sqrt(2.0 * energy / mb)
     xmax = math.sqrt(2.0 * energy / P[K])
@@ -229,7 +236,7 @@ def _step_size(P, S, y, d, mode):
     if P[HKIND] == H_BOUCWEN and base == LOADING and vmax > 0.0:
         reach = P[DY] * (1.0 - d * y[2] + math.log(1.0 / SATURATION) / P[N])
         v = min(vmax, math.sqrt(y[1] * y[1] + 2.0 * (amax + P[C] * vmax ** P[ALPHA] / mb) * reach))
-        h = min(h, P[DY] / (max(P[N], 1.0) * v * STEPS_TRANSITION))
+        h = min(h, coarse * P[DY] / (max(P[N], 1.0) * v * STEPS_TRANSITION))
     return h
 
 
@@ -244,8 +251,9 @@ def _rate_step(P, accel):
     ``1 / (RATE_SAFETY STEPS_RATE)`` of the scale a step. The integrator takes the larger of the accelerations at
     the step's start and end (the step is taken again, shorter, where the end's exceeds the start's bound): the
     base's actual acceleration, not a bound from the energy (whose storey term, sqrt(2 k_s E) over m_b, was 20
-    times a pendulum's actual acceleration under a 0.6 s storey and cost it 18 times the steps)."""
-    return 1.0 / (P[RATE] * (RATE_SAFETY * accel + 1e-300) * STEPS_RATE)
+    times a pendulum's actual acceleration under a 0.6 s storey and cost it 18 times the steps). Times
+    ``P[COARSE]`` where that is above 1."""
+    return max(P[COARSE], 1.0) / (P[RATE] * (RATE_SAFETY * accel + 1e-300) * STEPS_RATE)
 
 
 @njit(cache=True, nogil=True)
@@ -261,9 +269,35 @@ def envelope(S, u, du):
 
 
 @njit(cache=True, nogil=True)
-def held(P, S, y):
-    """Whether the stuck base at y is held for good: ``|k x_b + f_h| + E <= f_slow`` (:func:`envelope`)."""
-    return abs(_ode._net(P, y)) + envelope(S, y[XS] - y[0], y[VS] - y[1]) <= P[FSLOW]
+def margin(P, creep):
+    """The excess of the holding force's magnitude over the sliders' static limit f_slow [N] within which the base
+    is at rest: at most ``1e-9 f_slow`` (where a slide creeping below ``creep`` [m/s] is stuck, the rounding of
+    the holding force), and where the friction grows with the speed (Constantinou's law) or a viscous damper acts,
+    the excess whose quasi-static creep speed ``excess / g'(0)`` is below ``creep`` (the rigid kernel's
+    :func:`quickrelease.building._ode._held`: ``excess < slope creep`` and ``rate excess < 0.1 slope``).
+
+    Without it a base stuck at its holding limit to rounding (a pendulum crept there under a velocity-strengthening
+    friction, the roof's ringing damped out, |G| - f_slow of 1e-16 of f_slow) slipped at every step of the stuck
+    piece, turned at once and stuck again: two events and a located instant each 3 ms, to the horizon (13 000 of
+    each in a 60 s record, 2.2 s an evaluation against 0.6 ms; the flexible pendulum fit spent 130 of its 145 s
+    there)."""
+    tol = 1e-9 * P[FSLOW]
+    slope = P[C]
+    if P[RATE] > 0.0 and P[FFAST] > P[FSLOW]:
+        slope += (P[FFAST] - P[FSLOW]) * P[RATE]
+    if slope > 0.0:
+        creeping = slope * creep
+        if P[RATE] > 0.0:
+            creeping = min(creeping, 0.1 * slope / P[RATE])
+        tol = max(tol, creeping)
+    return tol
+
+
+@njit(cache=True, nogil=True)
+def held(P, S, y, limit):
+    """Whether the stuck base at y is held for good: ``|k x_b + f_h| + E <= limit`` (:func:`envelope`; ``limit``
+    f_slow plus the holding :func:`margin` [N])."""
+    return abs(_ode._net(P, y)) + envelope(S, y[XS] - y[0], y[VS] - y[1]) <= limit
 
 
 @njit(cache=True, nogil=True)
@@ -277,12 +311,27 @@ def _put(gt, gy, gd, gf, n, t, y, d, mode):
 
 
 @njit(cache=True, nogil=True)
-def _start(P, S, y, slip):
+def _grown(gt, gy, gd, gf, n, capacity):
+    """The grid's arrays with room for ``capacity`` points, their first n copied."""
+    t2 = np.empty(capacity)
+    y2 = np.empty((capacity, NY))
+    d2 = np.empty(capacity)
+    f2 = np.empty(capacity, dtype=np.int64)
+    t2[:n] = gt[:n]
+    y2[:n] = gy[:n]
+    d2[:n] = gd[:n]
+    f2[:n] = gf[:n]
+    return t2, y2, d2, f2
+
+
+@njit(cache=True, nogil=True)
+def _start(P, S, y, slip, limit):
     """The direction (0: stuck) and mode of a piece starting at y with the base at rest (``slip``: at a re-slip,
-    where |G| has reached the limit: it slides); the base's velocity and a saturated Bouc-Wen element's z set."""
+    where |G| has reached the limit: it slides; else stuck where ``|G| <= limit``, f_slow plus the holding
+    :func:`margin`); the base's velocity and a saturated Bouc-Wen element's z set."""
     y[1] = 0.0
     g = holding(P, S, y)
-    if abs(g) <= P[FSLOW] and not slip:
+    if abs(g) <= limit and not slip:
         return 0.0, 0
     d = -1.0 if g > 0.0 else 1.0
     mode = _ode._mode(P, y, d)
@@ -296,8 +345,10 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
     """The free vibration from the state y0 at rest (t = 0) to t_end [s] (inf: until the base is held for good).
 
     Returns (grid_t, grid_y, grid_d, grid_flags, n, stop_time, status) as ``_ode.integrate``: d = 0 marks a stuck
-    piece; stop_time is when the base is held for good (inf: not within the horizon); status 0 done, 1 the grid's
-    capacity is too small, 2 more than max_steps steps, 3 more than MAX_CHAIN events in a row."""
+    piece; stop_time is when the base is held for good (inf: not within the horizon); status 0 done, 2 more than
+    max_steps steps, 3 more than MAX_CHAIN events in a row. The grid starts with room for ``capacity`` points and
+    grows fourfold as it fills (:func:`_grown`; the integration was run again from the start with four times the
+    room, which cost a 60 s motion under a stiff storey, 88 000 points from 4 096, twice its steps)."""
     gt = np.empty(capacity)
     gy = np.empty((capacity, NY))
     gd = np.empty(capacity)
@@ -308,15 +359,20 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
     y1 = np.empty(NY)
     ym = np.empty(NY)
     r = np.empty(NY)
+    r0 = np.empty(NY)  # the right-hand side at y (known0) and at y1 (known1), each computed once
+    r1 = np.empty(NY)
+    known0 = known1 = False
     y = y0.copy()
     t = 0.0
     n = 0
     stop = math.inf
     creep = CREEP * math.sqrt(2.0 * _energy(P, S, y) / (P[M] + S[MS]))
+    limit = P[FSLOW] + margin(P, creep)  # the holding limit: stuck within it, re-slips beyond it
+    S = np.array([S[MS], S[KS], S[CS], limit])
     rated = P[RATE] > 0.0 and P[FFAST] != P[FSLOW]
     a0 = 0.0
-    d, mode = _start(P, S, y, False)
-    if d == 0.0 and held(P, S, y):
+    d, mode = _start(P, S, y, False, limit)
+    if d == 0.0 and held(P, S, y, limit):
         n = _put(gt, gy, gd, gf, n, 0.0, y, 0.0, 0)
         return gt, gy, gd, gf, n, 0.0, 0
     hp = _step_size(P, S, y, d, mode)
@@ -330,34 +386,44 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
     n = _put(gt, gy, gd, gf, n, t, y, d, mode)
     while True:
         if n + 4 >= capacity:
-            return gt, gy, gd, gf, n, stop, 1
+            capacity *= 4
+            gt, gy, gd, gf = _grown(gt, gy, gd, gf, n, capacity)
         steps += 1
         if steps > max_steps:
             return gt, gy, gd, gf, n, stop, 2
         h = hp if iq == nq else queue[iq]
         if d != 0.0 and rated:  # the friction law's velocity scale, from the base's acceleration over the step
-            _rhs(P, S, y, d, mode, r)
-            a0 = abs(r[1])
+            if not known0:
+                _rhs(P, S, y, d, mode, r0)
+                known0 = True
+            a0 = abs(r0[1])
             h = min(h, _rate_step(P, a0))
         _step(P, S, y, h, d, mode, k, tmp, y1)
+        known1 = False
         if d != 0.0 and rated:
             for _ in range(8):  # the acceleration grew over the step past its start's bound: the step again, shorter
-                _rhs(P, S, y1, d, mode, r)
-                a0 = max(a0, abs(r[1]))
+                _rhs(P, S, y1, d, mode, r1)
+                known1 = True
+                a0 = max(a0, abs(r1[1]))
                 if h <= _rate_step(P, a0):
                     break
                 h = _rate_step(P, a0)
                 _step(P, S, y, h, d, mode, k, tmp, y1)
+                known1 = False
         kind = EV_NONE
         theta = h
         if d != 0.0:
             if d * y1[1] <= 0.0:
                 kind = EV_REVERSAL
             elif not fresh:  # a dip of the speed to zero inside the step
-                _rhs(P, S, y, d, mode, r)
-                a0 = d * r[1]
-                _rhs(P, S, y1, d, mode, r)
-                if a0 < 0.0 and d * r[1] > 0.0:
+                if not known0:
+                    _rhs(P, S, y, d, mode, r0)
+                    known0 = True
+                a0 = d * r0[1]
+                if not known1:
+                    _rhs(P, S, y1, d, mode, r1)
+                    known1 = True
+                if a0 < 0.0 and d * r1[1] > 0.0:
                     tm = _locate(P, S, y, h, d, mode, EV_DIP, 1.0, k, tmp, ym, r)
                     if d * ym[1] <= 0.0:
                         kind, theta = EV_REVERSAL, tm
@@ -377,15 +443,18 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
                     for j in range(NY):
                         out[j] = ym[j]
         else:
-            if P[FSLOW] - abs(holding(P, S, y1)) < 0.0:
+            # a re-slip where |G| passes the holding limit; located where it passes f_slow (the physical onset),
+            # or the limit where the piece starts within the margin (stuck above f_slow)
+            if limit - abs(holding(P, S, y1)) < 0.0:
                 kind = EV_SLIP
             else:  # a peak of |G| past the limit inside the step
                 if _value(P, S, y, EV_PEAK, 0.0, r) > 0.0 and _value(P, S, y1, EV_PEAK, 0.0, r) < 0.0:
                     tm = _locate(P, S, y, h, d, mode, EV_PEAK, 1.0, k, tmp, ym, r)
-                    if P[FSLOW] - abs(holding(P, S, ym)) < 0.0:
+                    if limit - abs(holding(P, S, ym)) < 0.0:
                         kind, theta = EV_SLIP, tm
             if kind == EV_SLIP:
-                theta = _locate(P, S, y, theta, d, mode, EV_SLIP, 1.0, k, tmp, out, r)
+                onset = EV_SLIP if abs(holding(P, S, y)) <= P[FSLOW] else EV_SLIP_MARGIN
+                theta = _locate(P, S, y, theta, d, mode, onset, 1.0, k, tmp, out, r)
         if kind == EV_NONE:
             chain = 0
             if iq < nq:  # a graded substep taken (the rest of it next, where the friction law shortened it)
@@ -396,17 +465,24 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
             t += h
             for j in range(NY):
                 y[j] = y1[j]
+                r0[j] = r1[j]
+            known0 = known1  # (the right-hand side at the step's end: the next step's start's)
             fresh = False
-            if d == 0.0 and held(P, S, y):
+            if d == 0.0 and held(P, S, y, limit):
                 stop = t
                 n = _put(gt, gy, gd, gf, n, t, y, 0.0, 0)
                 break
-            if d != 0.0 and d * y[1] < creep and abs(holding(P, S, y)) <= P[FSLOW] * (1.0 + 1e-9):
-                # creeping into the sliders' holding limit: stuck from here
+            if d != 0.0 and d * y[1] < creep:
+                # creeping into the sliders' holding limit: at rest for good from here where the sliders hold it at
+                # rest against the roof's ringing too (:func:`held`); else it creeps on (the roof breaks a base
+                # stuck there away again at once: under a stiff storey, 3 000 sticks and slips before the hold)
+                v = y[1]
                 y[1] = 0.0
-                d, mode = 0.0, 0
-                hp = _step_size(P, S, y, d, mode)
-                iq = nq  # (a grading's rest dropped: the layer is still)
+                if held(P, S, y, limit):
+                    stop = t
+                    n = _put(gt, gy, gd, gf, n, t, y, 0.0, 0)
+                    break
+                y[1] = v
             n = _put(gt, gy, gd, gf, n, t, y, d, mode)
             if t >= t_end:
                 break
@@ -414,6 +490,7 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
         chain += 1
         if chain > MAX_CHAIN:
             return gt, gy, gd, gf, n, stop, 3
+        known0 = False  # (the state, direction or mode changes at the event)
         t += theta
         for j in range(NY):
             y[j] = out[j]
@@ -427,9 +504,9 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
             y[2] = 0.0
             mode = LOADING
         else:  # a reversal or a re-slip: the base at rest, the holding force decides
-            d, mode = _start(P, S, y, kind == EV_SLIP)
+            d, mode = _start(P, S, y, kind == EV_SLIP, limit)
             fresh = True
-            if d == 0.0 and held(P, S, y):
+            if d == 0.0 and held(P, S, y, limit):
                 stop = t
                 n = _put(gt, gy, gd, gf, n, t, y, 0.0, 0)
                 break
@@ -437,7 +514,7 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
         iq, nq = 0, 0  # (an event ends a grading)
         if kind == EV_ZERO and P[N] != math.floor(P[N]):
             # |z|^n with a fractional n is not smooth where z leaves 0: the next steps graded from it
-            fine = P[N] < 1.0
+            fine = P[N] < 1.0 and P[COARSE] <= 1.0  # (coarse steps: the ratio-2 grading, as ``_ode``)
             g = _ode._fractions(P, FINE if fine else 1, False)
             span = hp * FINE_SPAN if fine else hp
             nq = g.size

@@ -115,10 +115,10 @@ class FlexibleBuilding:
         return P, np.array([float(self.superstructure_mass), self.superstructure_stiffness,
                             self.superstructure_damping])
 
-    def free_vibration(self, d0: float, t_end: float | None = None) -> FlexibleVibration:
+    def free_vibration(self, d0: float, t_end: float | None = None, coarse: float = 1.0) -> FlexibleVibration:
         """:func:`free_vibration_flexible` of this building (what :func:`quickrelease.building.model.free_vibration`
         calls for it)."""
-        return free_vibration_flexible(self, d0, t_end)
+        return free_vibration_flexible(self, d0, t_end, coarse=coarse)
 
     def summary(self) -> dict[str, Any]:
         return {**self.isolation.summary(), "isolation_model": self.isolation.model, "model": "flexible",
@@ -236,7 +236,8 @@ class FlexibleVibration(GridTurns, BaseAndRoof):
                 "first_peak_m": float(peaks[1]) if peaks.size > 1 else None}
 
 
-def free_vibration_flexible(building: FlexibleBuilding, d0: float, t_end: float | None = None) -> FlexibleVibration:
+def free_vibration_flexible(building: FlexibleBuilding, d0: float, t_end: float | None = None, *,
+                            coarse: float = 1.0) -> FlexibleVibration:
     """The flexible building's free vibration after the release from the pushed state (SI units).
 
     The jack pushes the base quasi-statically, so the roof rides on it undeformed: at the release
@@ -251,25 +252,25 @@ def free_vibration_flexible(building: FlexibleBuilding, d0: float, t_end: float 
     t_end : float, optional
         Follow the motion up to this time [s]; by default until the sliders hold the base for good (needs the
         sliders' friction; the roof rings on after it).
+    coarse : float
+        The integrator's steps this many times longer, in [1, 4] (default 1): the fit's search on a thinned record
+        takes 2 (as the rigid layers', :func:`quickrelease.building.model.free_vibration`).
     """
     if not isinstance(building, FlexibleBuilding):
         raise ParameterError("building", type(building).__name__, "a FlexibleBuilding")
+    coarse = real_number("coarse", coarse, "[1, 4]", test=lambda v: 1.0 <= v <= 4.0)
     d0 = checked_d0(building.isolation, d0)
     P, S = building.vector()
+    P[_ode.COARSE] = coarse
     horizon = checked_horizon(t_end, P[_ode.FSLOW], natural_period(building.isolation))  # the layer's, whole m
     z0 = pushed_state(building.isolation, d0)[0]
     y0 = np.array([d0, 0.0, z0, 0.0, 0.0, 0.0, d0, 0.0, 0.0])
-    capacity = 4096
-    while True:
-        gt, gy, gd, gf, n, stop, status = _ode_flexible.integrate(P, S, y0, horizon, capacity, MAX_STEPS)
-        if status == 0:
-            break
-        if status == 2:
-            raise ParameterError("t_end", horizon, f"a span of at most {MAX_STEPS} integration steps", "s")
-        if status == 3:
-            raise ParameterError("t_end", horizon, f"a span where the base's events make progress (more than "
-                                 f"{_ode_flexible.MAX_CHAIN} reversals, sticks or slips in a row)", "s")
-        capacity *= 4
+    gt, gy, gd, gf, n, stop, status = _ode_flexible.integrate(P, S, y0, horizon, 4096, MAX_STEPS)
+    if status == 2:
+        raise ParameterError("t_end", horizon, f"a span of at most {MAX_STEPS} integration steps", "s")
+    if status == 3:
+        raise ParameterError("t_end", horizon, f"a span where the base's events make progress (more than "
+                             f"{_ode_flexible.MAX_CHAIN} reversals, sticks or slips in a row)", "s")
     grid = (gt[:n].copy(), gy[:n].copy(), gd[:n].copy(), gf[:n].copy(), int(n))
     # the last step may run past the horizon and find the hold there: within the horizon the base still slides
     return FlexibleVibration(building=building, d0=d0, stop_time=float(stop) if stop <= horizon else math.inf,

@@ -507,7 +507,8 @@ def free_vibration(isolation: Isolation | Pendulum | BoucWen, d0: float, t_end: 
         form at most :data:`~.hysteretic.MAX_PERIODS` natural periods).
     coarse : float
         Where the layer has no closed form (pendulum, Bouc-Wen, a power-law damper: the integrator of
-        :mod:`quickrelease.building._ode`), its steps this many times longer, in [1, 4] (default 1). The fit's search
+        :mod:`quickrelease.building._ode`; a FlexibleBuilding: :mod:`quickrelease.building._ode_flexible`), its
+        steps this many times longer, in [1, 4] (default 1). The fit's search
         on a thinned record takes 2: half the steps, the state within ~1e-11 m of the default's on the benchmark's
         60 s records (the 8th-order tableau's error falls as the 8th power of the step).
 
@@ -521,7 +522,7 @@ def free_vibration(isolation: Isolation | Pendulum | BoucWen, d0: float, t_end: 
         return free_vibration_2dof(isolation, d0, t_end)
     flexible = getattr(isolation, "free_vibration", None)  # a FlexibleBuilding (building.flexible) solves itself
     if flexible is not None and not isinstance(isolation, type):
-        return flexible(d0, t_end)
+        return flexible(d0, t_end, coarse=coarse)
     if not isinstance(isolation, Isolation | Pendulum | BoucWen):
         raise ParameterError("isolation", type(isolation).__name__,
                              "an Isolation, Pendulum, BoucWen, TwoDOF or FlexibleBuilding")
