@@ -436,6 +436,7 @@ def test_a_fractional_shape_against_the_independent_reference(shape, friction):
     assert (len(motion.slip_times) > 0) == (friction > 0.0)  # the sliders' cases broken away again
 
 
+@pytest.mark.slow
 def test_a_slides_steps_resolve_the_friction_laws_velocity_scale():
     """The pendulum's friction mu(|v|) changes over the velocity scale 1 / a (a = 40 s/m): each step of a slide
     changes the base's speed by at most 1 / (RATE_SAFETY STEPS_RATE) = 1/3 of it (2% allowed: the acceleration is
@@ -462,7 +463,8 @@ CREEPING = [(3.4718, 0.0006, 0.0001, 0.0332, 11.242, 0.5901, 0.0301, 0.3114),
             (3.5645, 0.0928, 0.0116, 0.0303, 19.3758, 0.1765, 0.0258, 0.3104)]
 
 
-@pytest.mark.parametrize("case", CREEPING, ids=["storey-0.6s", "storey-0.18s"])
+@pytest.mark.parametrize("case", [CREEPING[0], pytest.param(CREEPING[1], marks=pytest.mark.slow)],
+                         ids=["storey-0.6s", "storey-0.18s"])
 def test_a_base_crept_into_its_holding_limit_is_held_for_good(case):
     """The base creeps into its holding limit (the friction's quasi-static speed falling towards 0) and the roof's
     ringing dies out: |G| ends within rounding of f_slow. The base is held for good within 25 s, after a few sticks

@@ -502,6 +502,7 @@ def _lrb_dampers(name):
 _T_LRB = np.linspace(0.5, 59.5, 60)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", list(_LRB_DAMPERS))
 def test_lead_rubber_with_fluid_dampers_creeps_for_a_minute(name):
     """Lead-rubber bearings with fluid dampers (alpha 0.4, 0.2) swing for 2.5 s, then creep back for the rest of
@@ -520,6 +521,7 @@ def test_lead_rubber_with_fluid_dampers_creeps_for_a_minute(name):
     assert 2e-7 < abs(float(r.v[-1])) < 1e-5  # still creeping at the end
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", list(_LRB_DAMPERS))
 def test_the_slow_manifold_speed_against_the_reference(name):
     """The slow manifold's speed (_ode._slow, S0 + S1 + S2) at the reference's own state (x, z) in the creep: the

@@ -289,6 +289,7 @@ def test_the_release_column_reaches_past_a_record_that_ends_at_a_step(model):
     np.testing.assert_allclose(J[:, 1], -v / sigma, rtol=0, atol=1e-6 * np.max(np.abs(v)) / sigma)
 
 
+@pytest.mark.slow
 def test_a_refit_with_other_weights_computes_again():
     """A memo of one record fitted with the accelerometer's noise at 0.02 m/s^2, then the same samples weighted with
     it at 0.2 (the LVDT's alone rules): the refit with the memo is the fit without one, to the last bit (the
