@@ -152,6 +152,7 @@ def test_too_little_motion_gives_none():
     assert boucwen_loop(tx[tx < 1.1], x[tx < 1.1], ta[ta < 1.1], a[ta < 1.1], MASS, 1.0, 5e-5, 0.02, 1.8) is None
 
 
+@pytest.mark.slow
 def test_the_loop_start_of_an_lvdt_alone_reaches_the_minimum():
     """The same building from its LVDT alone, without the global stage: the loop's start, first solved with dy, n
     and F_s held at the loop's values (isolation_fit.LOOP_HELD), ends in the truth's basin (chi2/dof 1.01; from

@@ -639,6 +639,7 @@ def test_creep_on_the_slow_manifold_against_the_reference(name):
     np.testing.assert_allclose(total, e["initial"], rtol=1e-9)
 
 
+@pytest.mark.slow
 def test_a_power_law_damper_holds_a_creep_past_the_holding_limit():
     """A linear layer with sliders and a damper of alpha 0.32 whose fifth turn lands 0.8 % past the sliders'
     holding limit (h26c's finding: 31 s of CPU for 10 s of record, 347 000 steps, as the damper's stiffness at

@@ -209,6 +209,9 @@ def test_the_release_time_column_is_that_of_the_motion_integrated_again(model):
         again._evaluated_at = lambda th, fr, ba, again=again: (again.residuals(th, fr, ba), None)
         np.testing.assert_array_equal(J, again.jacobian(theta, names, base))
         assert np.count_nonzero(J[:, 1]) > 0.5 * J.shape[0]
+
+
+@pytest.mark.slow
 def test_a_refit_given_the_memo_solves_only_what_its_start_changes(monkeypatch):
     """fit_isolation(memo=...): a refit of the same record from other start values takes the global stage and the
     solves its start leaves as they were from the memo (no global search; one least-squares solve, its start's on

@@ -272,6 +272,7 @@ def _model_choice_fit(model: str):
     return case, channels, fit_isolation(channels, case.mass, model, profile=False)
 
 
+@pytest.mark.slow
 def test_a_clock_of_the_time_of_day_gives_the_same_fit():
     """Loggers stamp samples with the time of day (36 000 s at 10 am): the record's time origin carries no physics,
     so the fit must not depend on it. The Jacobian stepped the release instant by 1e-4 of its clock value, 3.6 s
