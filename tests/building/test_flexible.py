@@ -47,6 +47,15 @@ SLOW_CASES = [
 ]
 
 
+def _assert_near_reference(s, r, x_tol, a_tol):
+    """Base and roof displacements of the states ``s`` within ``x_tol`` [m] of the reference ``r``'s, their
+    accelerations within ``a_tol`` of the largest of each."""
+    for key, want in (("x_b", r.x), ("x_s", r.xs)):
+        assert np.max(np.abs(s[key] - want)) < x_tol, key
+    for key, want in (("a_b", r.a), ("a_s", r.as_)):
+        assert np.max(np.abs(s[key] - want)) < a_tol * np.max(np.abs(want)), key
+
+
 def _solve(case):
     _, iso, system, ms, Ts, zs, d0 = case
     building = FlexibleBuilding(iso, ms, Ts, zs)
@@ -400,10 +409,7 @@ def test_the_friction_laws_velocity_scale_is_resolved():
     building, motion, r = _solved(CASES[0])
     d0 = abs(CASES[0][-1])
     s = motion.states(T)
-    for key, want in (("x_b", r.x), ("x_s", r.xs)):
-        assert np.max(np.abs(s[key] - want)) < 1e-11 * d0, key
-    for key, want in (("a_b", r.a), ("a_s", r.as_)):
-        assert np.max(np.abs(s[key] - want)) < 1e-10 * np.max(np.abs(want)), key
+    _assert_near_reference(s, r, 1e-11 * d0, 1e-10)
 
 
 # Bouc-Wen shapes n that are not whole: |z|^n is not smooth where z leaves 0 (the steps after each crossing graded on
@@ -426,10 +432,7 @@ def test_a_fractional_shape_against_the_independent_reference(shape, friction):
                           building.superstructure_damping, d0, t, horizon)
     s = motion.states(t)
     tol = 1e-10 if shape < 1.0 else 1e-9
-    for key, want in (("x_b", r.x), ("x_s", r.xs)):
-        assert np.max(np.abs(s[key] - want)) < tol * d0, key
-    for key, want in (("a_b", r.a), ("a_s", r.as_)):
-        assert np.max(np.abs(s[key] - want)) < tol * np.max(np.abs(want)), key
+    _assert_near_reference(s, r, tol * d0, tol)
     np.testing.assert_allclose(motion.reversal_times, r.reversal_times, rtol=0, atol=1e-9)
     np.testing.assert_allclose(motion.stick_times, r.stick_times, rtol=0, atol=1e-9)
     np.testing.assert_allclose(motion.slip_times, r.slip_times, rtol=0, atol=1e-9)
@@ -485,10 +488,7 @@ def test_a_base_crept_into_its_holding_limit_is_held_for_good(case):
                           building.superstructure_stiffness, building.superstructure_damping, d0, t, horizon)
     assert motion.stop_time < horizon and 1 <= motion.stick_times.size <= 30
     s = motion.states(t)
-    for key, want in (("x_b", r.x), ("x_s", r.xs)):
-        assert np.max(np.abs(s[key] - want)) < 1e-7 * d0, key
-    for key, want in (("a_b", r.a), ("a_s", r.as_)):
-        assert np.max(np.abs(s[key] - want)) < 1e-6 * np.max(np.abs(want)), key
+    _assert_near_reference(s, r, 1e-7 * d0, 1e-6)
 
 
 @pytest.mark.parametrize("case", CASES, ids=[c[0] for c in CASES])
@@ -501,10 +501,7 @@ def test_coarse_steps_against_the_independent_reference(case):
     assert coarse._grid[4] < 0.6 * motion._grid[4]
     d0 = abs(case[-1])
     s = coarse.states(T)
-    for key, want in (("x_b", r.x), ("x_s", r.xs)):
-        assert np.max(np.abs(s[key] - want)) < 1e-9 * d0, key
-    for key, want in (("a_b", r.a), ("a_s", r.as_)):
-        assert np.max(np.abs(s[key] - want)) < 1e-8 * np.max(np.abs(want)), key
+    _assert_near_reference(s, r, 1e-9 * d0, 1e-8)
     np.testing.assert_allclose(coarse.stick_times, r.stick_times, rtol=0, atol=1e-9)
     np.testing.assert_allclose(coarse.slip_times, r.slip_times, rtol=0, atol=1e-9)
     np.testing.assert_allclose(coarse.reversal_times, r.reversal_times, rtol=0, atol=1e-9)
@@ -524,10 +521,7 @@ def test_coarse_steps_of_a_fractional_shape(shape):
     r = ref.simulate_2dof(ref.boucwen(8.0e5, 1.6e6, 4.0e5, 0.025, **kw), 6.0e5, building.superstructure_stiffness,
                           building.superstructure_damping, d0, t, horizon)
     s = motion.states(t)
-    for key, want in (("x_b", r.x), ("x_s", r.xs)):
-        assert np.max(np.abs(s[key] - want)) < 1e-9 * d0, key
-    for key, want in (("a_b", r.a), ("a_s", r.as_)):
-        assert np.max(np.abs(s[key] - want)) < 1e-8 * np.max(np.abs(want)), key
+    _assert_near_reference(s, r, 1e-9 * d0, 1e-8)
     np.testing.assert_allclose(motion.reversal_times, r.reversal_times, rtol=0, atol=1e-9)
     np.testing.assert_allclose(motion.stick_times, r.stick_times, rtol=0, atol=1e-9)
 
@@ -568,10 +562,7 @@ def test_a_creep_under_a_stiff_storey_against_the_reference():
     r = ref.simulate_2dof(system, building.superstructure_mass, building.superstructure_stiffness,
                           building.superstructure_damping, d0, t, 20.0)
     s = motion.states(t)
-    for key, want in (("x_b", r.x), ("x_s", r.xs)):
-        assert np.max(np.abs(s[key] - want)) < 1e-8 * d0, key
-    for key, want in (("a_b", r.a), ("a_s", r.as_)):
-        assert np.max(np.abs(s[key] - want)) < 1e-6 * np.max(np.abs(want)), key
+    _assert_near_reference(s, r, 1e-8 * d0, 1e-6)
 
 
 def test_the_grid_grows_without_changing_the_motion():
