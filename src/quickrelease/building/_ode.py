@@ -669,10 +669,18 @@ def _held(P, net, creep):
     # excess at the quasi-static speed excess / g'(0) (to 1 + rate s of itself): at rest where that is below
     # ``creep`` (a pendulum turning 4e-9 of f_slow past its holding limit, its slow friction 3.5e-10, crept at
     # 3e-18 m/s, and the integration turned there without end, each step of length 0)
+    slope = _creep_slope(P)
+    return slope > 0.0 and excess < slope * creep and P[RATE] * excess < 0.1 * slope
+
+
+@njit(cache=True, nogil=True)
+def _creep_slope(P):
+    """g'(0) [N s/m]: how fast the sliders' friction (Constantinou's law, f_fast > f_slow) and a viscous damper grow
+    with the speed from rest, the slope of the quasi-static creep ``excess / g'(0)`` (0 where neither grows)."""
     slope = P[C] if P[ALPHA] == 1.0 else 0.0
     if P[RATE] > 0.0 and P[FFAST] > P[FSLOW]:
         slope += (P[FFAST] - P[FSLOW]) * P[RATE]
-    return slope > 0.0 and excess < slope * creep and P[RATE] * excess < 0.1 * slope
+    return slope
 
 
 @njit(cache=True, nogil=True)

@@ -282,9 +282,7 @@ def margin(P, creep):
     each in a 60 s record, 2.2 s an evaluation against 0.6 ms; the flexible pendulum fit spent 130 of its 145 s
     there)."""
     tol = 1e-9 * P[FSLOW]
-    slope = P[C]
-    if P[RATE] > 0.0 and P[FFAST] > P[FSLOW]:
-        slope += (P[FFAST] - P[FSLOW]) * P[RATE]
+    slope = _ode._creep_slope(P)  # (the flexible layer's damper is viscous)
     if slope > 0.0:
         creeping = slope * creep
         if P[RATE] > 0.0:
