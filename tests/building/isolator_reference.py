@@ -314,7 +314,7 @@ class Motion2:
 
 
 def simulate_2dof(system: System, superstructure_mass: float, storey_stiffness: float, storey_damping: float,
-                  d0: float, t_out, t_end: float | None = None) -> Motion2:
+                  d0: float, t_out, t_end: float | None = None, creep_speed: float = 0.0) -> Motion2:
     """The free vibration of the layer ``system`` (its mass the whole building's m: the weight on the sliders; the
     base's mass m_b = m - m_s) under a roof mass m_s on the storey (k_s [N/m], c_s [N s/m]), from base and roof at
     rest at d0 [m] (the storey undeformed), sampled at t_out [s], followed to t_end (default the last of t_out).
@@ -324,7 +324,14 @@ def simulate_2dof(system: System, superstructure_mass: float, storey_stiffness: 
     solve_ivp events: the reversal (v_b = 0; then stuck where |G| <= static friction, else it turns, s = -sign(G)),
     z's zero crossing and the plastic yield as :func:`simulate`, and while stuck G reaching +- the static friction
     (the re-slip, s = -sign(G)). The stuck phase is followed to the horizon unless it slips (no "held for good"
-    shortcut). Steps at most 1/40 of the fastest period, so that no event is stepped over."""
+    shortcut). Steps at most 1/40 of the fastest period, so that no event is stepped over.
+
+    ``creep_speed`` [m/s] (a damper of alpha < 1 only): the base is held while the damper alone would balance the
+    excess of |G| over the static friction at below this speed, ``|G| <= static + C creep_speed^alpha`` (the damper's
+    slope is unbounded at rest: a slide that starts from an excess of 0, at a re-slip or a turn where the roof drives
+    the base, stops and starts again without end on the solver's rounding). The motion it neglects is a creep below
+    creep_speed; the instants of the sticks and slips move with it, the displacements by less than creep_speed times
+    the shift."""
     t_out = np.asarray(t_out, dtype=float)
     m, C, alpha, p = system.mass, system.damping, system.exponent, system.params
     ms, ks, cs = superstructure_mass, storey_stiffness, storey_damping
@@ -341,6 +348,8 @@ def simulate_2dof(system: System, superstructure_mass: float, storey_stiffness: 
     fastest = math.sqrt((k1 + ks) / mb + ks / ms)
     max_step = 2.0 * math.pi / fastest / 40.0
     static = system.static_friction
+    if alpha < 1.0 and C > 0.0 and creep_speed > 0.0:
+        static += C * creep_speed ** alpha
     reversals, sticks, slips = [0.0], [], []
     t, y = 0.0, np.array([d0, 0.0, z0, 0.0, 0.0, 0.0, d0, 0.0, 0.0])
 

@@ -44,7 +44,11 @@ from ._ode import (
     _B,
     _S,
     ALPHA,
+    BAND_TOL,
     COARSE,
+    CREEP_RATIO,
+    CREEP_TOL,
+    CREEPING,
     DY,
     FFAST,
     FINE,
@@ -60,6 +64,9 @@ from ._ode import (
     SATURATION,
     STEPS_PERIOD,
     STEPS_RATE,
+    STEP_CREEP,
+    STEP_RELAX,
+    STEP_STABLE,
     STEPS_TRANSITION,
     YIELDING,
     C,
@@ -73,14 +80,21 @@ from ._ode import (
 #: damper and hysteresis [J]), then x_s [m], x_s' [m/s] and the storey damper's work [J].
 NY = 9
 XS, VS, WS = 6, 7, 8
-#: The storey's vector: m_s [kg], k_s [N/m], c_s [N s/m]; inside :func:`integrate` one more slot, the holding
-#: limit f_slow + :func:`margin` [N].
-MS, KS, CS, LIMIT = 0, 1, 2, 3
+#: The storey's vector: m_s [kg], k_s [N/m], c_s [N s/m]; inside :func:`integrate` two more slots, the holding
+#: limit f_slow + :func:`margin` [N] and the drive at which a creep ends (:data:`EV_REST`) [N].
+MS, KS, CS, LIMIT, REST = 0, 1, 2, 3, 4
 #: Events: none, a reversal, a yield (saturation), z's zero crossing, the re-slip of a stuck base; the two
 #: extrema looked for inside a step (the base's slowest speed, the holding force's largest magnitude); the re-slip
 #: of a base stuck within the holding margin (|G| above f_slow, not above f_slow + :func:`margin`: where |G| leaves
 #: the margin).
 EV_NONE, EV_REVERSAL, EV_YIELD, EV_ZERO, EV_SLIP, EV_DIP, EV_PEAK, EV_SLIP_MARGIN = 0, 2, 3, 4, 7, 8, 9, 10
+#: The end of a creep on the slow manifold: the drive (:func:`drive`) falls to ``S[REST]``, inside the holding
+#: limit (the base at rest there, as the rigid kernel's ``_ode.EV_REST``).
+EV_REST = 11
+#: A creeping piece leaves the slow manifold (back to explicit steps) where its relaxation is no longer this many
+#: times faster than the motions that move it (CREEP_RATIO on entry: the two apart, so that a piece at the
+#: threshold does not enter and leave at every step); the neglected terms (1 / CREEP_EXIT)^6 = 1.6e-8 of the speed.
+CREEP_EXIT = CREEP_RATIO / 1.5
 #: A slide whose speed falls below this fraction of the release's scale is at rest for good where the sliders hold it
 #: there against the roof's ringing too (the rigid kernel's creep into the holding limit).
 CREEP = _ode.CREEP
@@ -95,9 +109,146 @@ def holding(P, S, y):
 
 
 @njit(cache=True, nogil=True)
+def drive(P, S, y, d):
+    """The force that drives a sliding base on in its direction d, less the storey damper's part that the base's
+    own speed makes [N]: ``push = -d (k x_b + f_h) + d (k_s u + c_s x_s')``. The base's equation along d is
+    ``m_b s' = push - G(s)``, s = d x_b' and ``G(s) = f_f(s) + C s^alpha + c_s s`` (the sliders, the layer's damper
+    and the storey's damper, which the base drags)."""
+    return -d * _ode._net(P, y) + d * (S[KS] * (y[XS] - y[0]) + S[CS] * y[VS])
+
+
+@njit(cache=True, nogil=True)
+def _resist(P, S, s):
+    """``G(s) = g(s) + c_s s`` (:func:`quickrelease.building._ode._resist`'s g) and its first two derivatives."""
+    g, g1, g2 = _ode._resist(P, s)
+    return g + S[CS] * s, g1 + S[CS], g2
+
+
+@njit(cache=True, nogil=True)
+def _quasi(P, S, push):
+    """The quasi-static speed S0 [m/s], ``G(S0) = push`` (:func:`_resist`; 0 where the sliders hold the base,
+    push <= f_slow): :func:`quickrelease.building._ode._quasi` without a storey damper, else a safeguarded Newton
+    iteration on ln S0 within a bracket."""
+    cs = S[CS]
+    if cs <= 0.0:
+        return _ode._quasi(P, push)
+    if push <= P[FSLOW]:
+        return 0.0
+    fmin = min(P[FSLOW], P[FFAST])
+    hi = (push - fmin) / cs  # G(s) >= fmin + c_s s
+    if P[C] > 0.0:
+        hi = min(hi, ((push - fmin) / P[C]) ** (1.0 / P[ALPHA]))
+    u_hi = math.log(hi)
+    u_lo = u_hi
+    for _ in range(40):
+        u_lo -= 20.0
+        if _resist(P, S, math.exp(u_lo))[0] < push:
+            break
+    u = u_hi
+    for _ in range(200):
+        s = math.exp(u)
+        g, g1, _g2 = _resist(P, S, s)
+        if abs(g - push) <= 4e-16 * push:
+            return s
+        if g > push:
+            u_hi = u
+        else:
+            u_lo = u
+        new = u - (g - push) / s / g1 if g1 > 0.0 else 0.5 * (u_lo + u_hi)
+        if not (u_lo < new < u_hi):
+            new = 0.5 * (u_lo + u_hi)
+        if abs(new - u) <= 1e-15 or u_hi - u_lo <= 1e-15:
+            return math.exp(new)
+        u = new
+    return math.exp(u)
+
+
+@njit(cache=True, nogil=True)
+def _slow(P, S, y, d, mode):
+    """The slow manifold of a sliding base whose dampers dominate (:func:`quickrelease.building._ode._slow` with the
+    storey): returns (S, dS/dt, G'(S0), eps), the speed S = S0 + S1 + S2 [m/s], its rate [m/s^2], the
+    resistance's slope [N s/m] and the expansion's small parameter.
+
+    From ``m_b dS/dt = push - G(S)`` (:func:`drive`) and ``dpush/dt = A - B S`` (A = d (k_s x_s' - c_s (k_s u +
+    c_s x_s') / m_s) the roof's part, B = k_t + k_s - c_s^2 / m_s; the roof ``m_s x_s'' = -(k_s u + c_s u')``):
+    S0 the quasi-static speed (G(S0) = push, :func:`_quasi`), S1 = -m_b push' / G'^2 its first correction for
+    inertia, S2 = (m_b B S1 / G' - m_b dS1/dt - G'' S1^2 / 2) / G' the second (dS1/dt with push'' = A' - k_t' S0 -
+    B dS0/dt at first order); ``eps = m_b (|A| + |B| S0) / (G'^2 S0)``, the relaxation time m_b / G' over the
+    time in which S0 changes by itself (the rigid kernel's (omega / lambda)^2 where A = 0), the neglected terms
+    eps^3 of S. Without the storey (k_s = c_s = 0) the rigid kernel's expansion, term by term. Where the roof's
+    part A does not vanish with S0 (a ringing roof that drives the base), eps grows without bound as S0 falls for
+    alpha > 1/2 (``eps ~ S0^(1 - 2 alpha)``): the expansion holds only where eps is small, which the callers
+    check."""
+    ms, ks, cs = S[MS], S[KS], S[CS]
+    zx, kt = _ode._slope(P, y[2], mode)
+    u, vs = y[XS] - y[0], y[VS]
+    s0 = _quasi(P, S, drive(P, S, y, d))
+    if not (0.0 < s0 < math.inf):
+        return 0.0, 0.0, 0.0, math.inf
+    m = P[M]
+    _g, g1, g2 = _resist(P, S, s0)
+    a = d * (ks * vs - cs * (ks * u + cs * vs) / ms)
+    b = kt + ks - cs * cs / ms
+    p1 = a - b * s0
+    ds0 = p1 / g1
+    s1 = -m * p1 / g1 / g1
+    dkt = 0.0
+    if P[HKIND] == H_BOUCWEN and (mode & 3) == LOADING and P[N] > 0.0:
+        z = y[2]
+        az = abs(z)
+        if az > 0.0:
+            dkt = -P[Q] * P[N] * az ** (P[N] - 1.0) * (1.0 if z > 0.0 else -1.0) * d * s0 * zx / P[DY]
+    du = vs - d * s0
+    dvs = -(ks * u + cs * du) / ms
+    da = d * (ks * dvs - cs * (ks * du + cs * dvs) / ms)
+    p2 = da - dkt * s0 - b * ds0
+    ds1 = -m * p2 / g1 / g1 + 2.0 * m * p1 * g2 * ds0 / g1 / g1 / g1
+    s2 = (m * b * s1 / g1 - m * ds1 - 0.5 * g2 * s1 * s1) / g1
+    sp = s0 + s1 + s2
+    eps = m * (abs(a) + abs(b) * s0) / (g1 * g1 * s0)
+    return sp, (a - b * sp) / g1 + ds1, g1, eps
+
+
+@njit(cache=True, nogil=True)
+def _creep(P, S, y, d, mode, out):
+    """The right-hand side on the slow manifold (:func:`_slow`): the base moves at its speed S, the velocity's state
+    at its rate, z and the works with it; the roof on the storey."""
+    for j in range(NY):
+        out[j] = 0.0
+    sp, ds, _g1, _eps = _slow(P, S, y, d, mode)
+    v = 0.0
+    if sp > 0.0:
+        v = d * sp
+        zx = _ode._slope(P, y[2], mode)[0]
+        base = mode & 3
+        out[0] = v
+        out[1] = d * ds
+        out[2] = v * zx
+        g, _g1, _g2 = _ode._resist(P, sp)
+        fd = P[C] * sp ** P[ALPHA]
+        out[3] = (g - fd) * sp
+        out[4] = fd * sp
+        if P[HKIND] == H_BOUCWEN:
+            if base == LOADING:
+                az = abs(y[2])
+                out[5] = P[Q] * (az if P[N] == 1.0 else az ** P[N]) * y[2] * v
+            elif base == YIELDING:
+                out[5] = P[Q] * y[2] * v
+        elif P[HKIND] == H_PLASTIC and base == YIELDING:
+            out[5] = P[FP] * sp
+    du = y[VS] - v
+    out[XS] = y[VS]
+    out[VS] = -(S[KS] * (y[XS] - y[0]) + S[CS] * du) / S[MS]
+    out[WS] = S[CS] * du * du
+
+
+@njit(cache=True, nogil=True)
 def _rhs(P, S, y, d, mode, out):
     """The right-hand side: the layer's of ``_ode`` plus the storey's force on the base (sliding, d = +-1), the base
-    at rest (stuck, d = 0); the roof on the storey."""
+    at rest (stuck, d = 0); the roof on the storey. On the slow manifold (mode bit CREEPING): :func:`_creep`."""
+    if mode & CREEPING:
+        _creep(P, S, y, d, mode, out)
+        return
     fs = S[KS] * (y[XS] - y[0]) + S[CS] * (y[VS] - y[1])
     if d == 0.0:
         for j in range(6):
@@ -141,6 +292,8 @@ def _value(P, S, y, kind, d, r):
         return P[FSLOW] - abs(holding(P, S, y))
     if kind == EV_SLIP_MARGIN:
         return S[LIMIT] - abs(holding(P, S, y))
+    if kind == EV_REST:
+        return drive(P, S, y, d) - S[REST]
     # EV_PEAK: |G| still growing: sign(G) G', G' = -(k_s u' + c_s u'') on the fixed base
     _rhs(P, S, y, 0.0, 0, r)
     g = holding(P, S, y)
@@ -149,13 +302,45 @@ def _value(P, S, y, kind, d, r):
 
 
 @njit(cache=True, nogil=True)
-def _locate(P, S, y, h, d, mode, kind, sign, k, tmp, out, r):
+def _advance(P, S, y, h, d, mode, fr, k, tmp, a, out):
+    """y advanced by h through substeps of the fractions ``fr`` of it (one: a plain step) into out; a is scratch."""
+    if fr.size == 1:
+        _step(P, S, y, h, d, mode, k, tmp, out)
+        return
+    for j in range(NY):
+        a[j] = y[j]
+    for f in fr:
+        _step(P, S, a, f * h, d, mode, k, tmp, out)
+        for j in range(NY):
+            a[j] = out[j]
+
+
+@njit(cache=True, nogil=True)
+def _walk(P, S, y, h, d, mode, fr, t, gt, gy, gd, gf, n, k, tmp, a, out):
+    """:func:`_advance`, each substep's start after the first recorded as a grid point (the first is the grid point
+    n - 1); the end state in out. Returns the grid's count."""
+    for j in range(NY):
+        a[j] = y[j]
+    tt = t
+    for i in range(fr.size):
+        if i > 0:
+            n = _put(gt, gy, gd, gf, n, tt, a, d, mode)
+        _step(P, S, a, fr[i] * h, d, mode, k, tmp, out)
+        tt += fr[i] * h
+        for j in range(NY):
+            a[j] = out[j]
+    return n
+
+
+@njit(cache=True, nogil=True)
+def _locate(P, S, y, h, d, mode, kind, sign, fr, k, tmp, a, out, r):
     """The instant theta in (0, h] where the event's function (:func:`_value`, times ``sign``) falls from >= 0 at
-    the step's start to <= 0 at its end, on the tableau's map, by the Illinois iteration to machine precision;
-    the state there in out. (EV_DIP's function is evaluated in the piece's own mode.)"""
+    the step's start to <= 0 at its end, on the tableau's map (through the substeps ``fr``, :func:`_advance`), by
+    the Illinois iteration to machine precision; the state there in out. (EV_DIP's function is evaluated in the
+    piece's own mode.)"""
     lo, hi = 0.0, h
     flo = sign * _value_in(P, S, y, kind, d, mode, r)
-    _step(P, S, y, h, d, mode, k, tmp, out)
+    _advance(P, S, y, h, d, mode, fr, k, tmp, a, out)
     fhi = sign * _value_in(P, S, out, kind, d, mode, r)
     if flo < 0.0:
         flo = 0.0
@@ -169,7 +354,7 @@ def _locate(P, S, y, h, d, mode, kind, sign, k, tmp, out, r):
             theta = 0.5 * (lo + hi)
         if not (lo < theta < hi):
             break
-        _step(P, S, y, theta, d, mode, k, tmp, out)
+        _advance(P, S, y, theta, d, mode, fr, k, tmp, a, out)
         f = sign * _value_in(P, S, out, kind, d, mode, r)
         if f > 0.0:
             lo, flo = theta, f
@@ -185,7 +370,7 @@ def _locate(P, S, y, h, d, mode, kind, sign, k, tmp, out, r):
             return theta
         if hi - lo <= 4e-16 * hi:
             break
-    _step(P, S, y, hi, d, mode, k, tmp, out)
+    _advance(P, S, y, hi, d, mode, fr, k, tmp, a, out)
     return hi
 
 
@@ -282,13 +467,65 @@ def margin(P, creep):
     each in a 60 s record, 2.2 s an evaluation against 0.6 ms; the flexible pendulum fit spent 130 of its 145 s
     there)."""
     tol = 1e-9 * P[FSLOW]
-    slope = _ode._creep_slope(P)  # (the flexible layer's damper is viscous)
+    slope = _ode._creep_slope(P)
     if slope > 0.0:
         creeping = slope * creep
         if P[RATE] > 0.0:
             creeping = min(creeping, 0.1 * slope / P[RATE])
         tol = max(tol, creeping)
+    if P[ALPHA] < 1.0 and P[C] > 0.0:  # a power-law damper of alpha < 1 balances an excess C s^alpha at speed s
+        tol = max(tol, P[C] * creep ** P[ALPHA])
     return tol
+
+
+@njit(cache=True, nogil=True)
+def _relax_step(P, S, y, d, mode, h):
+    """The step [s] of a sliding base that a damper of alpha < 1 may dominate (:func:`quickrelease.building._ode.
+    _relax_step` with the storey): where the drive exceeds the sliders' static limit (push > f_slow,
+    :func:`drive`), at most STEP_RELAX of the base's relaxation time m_b / G'(s) at its speed s (at S0 from rest)
+    while the speed relaxes, STEP_STABLE once within BAND_TOL of the slow manifold, and the speed at most halved in
+    a step while it slows down onto it; h otherwise. Returns (step, creep, S): whether the piece may creep (the
+    expansion's eps of :func:`_slow` at most 1 / CREEP_RATIO^2, the relaxation CREEP_RATIO times faster than the
+    roof's own oscillation too, and the speed within CREEP_TOL of the manifold's S)."""
+    push = drive(P, S, y, d)
+    if push <= P[FSLOW]:
+        return h, False, 0.0
+    sp, _ds, g1, eps = _slow(P, S, y, d, mode)
+    if not (0.0 < g1 < math.inf and sp > 0.0):
+        return h, False, 0.0
+    m = P[M]
+    s = d * y[1]
+    off = abs(s - sp)
+    if (eps * CREEP_RATIO * CREEP_RATIO <= 1.0 and g1 * g1 * S[MS] >= CREEP_RATIO * CREEP_RATIO * S[KS] * m * m
+            and off <= CREEP_TOL * sp):
+        return h, True, sp
+    if s > 0.0:
+        g, g1, _g2 = _resist(P, S, s)
+        if not (0.0 < g1 < math.inf):
+            return h, False, 0.0
+        if g > push:
+            h = min(h, 0.5 * s * m / (g - push))
+    return min(h, (STEP_STABLE if off <= max(BAND_TOL, 10.0 * eps * eps * eps) * sp else STEP_RELAX) * m / g1), False, 0.0
+
+
+@njit(cache=True, nogil=True)
+def _creep_step(P, S, y, d, mode, h):
+    """The step [s] of a creeping piece, or -1 where it must leave the slow manifold (its eps above
+    1 / CREEP_EXIT^2, or its relaxation less than CREEP_EXIT times the roof's frequency; the drive at the sliders'
+    limit): STEP_CREEP of its slow time ``G' S0 / (|A| + |B| S0)`` (:func:`_slow`), at most a STEPS_PERIOD-th of
+    the roof's period on the fixed base and (the Bouc-Wen element loading) the transition's steps at the creep's
+    speed, and at least the piece's step h."""
+    sp, _ds, g1, eps = _slow(P, S, y, d, mode)
+    m = P[M]
+    if (not (sp > 0.0 and 0.0 < g1 < math.inf) or eps * CREEP_EXIT * CREEP_EXIT > 1.0
+            or g1 * g1 * S[MS] < CREEP_EXIT * CREEP_EXIT * S[KS] * m * m):
+        return -1.0
+    coarse = max(P[COARSE], 1.0)
+    hc = STEP_CREEP * m / (g1 * eps)  # (the slow time is m_b / (G' eps))
+    hc = min(hc, 2.0 * math.pi * math.sqrt(S[MS] / S[KS]) * coarse / STEPS_PERIOD)
+    if P[HKIND] == H_BOUCWEN and (mode & 3) == LOADING:
+        hc = min(hc, coarse * P[DY] / (max(P[N], 1.0) * sp * STEPS_TRANSITION))
+    return max(h, hc)
 
 
 @njit(cache=True, nogil=True)
@@ -346,19 +583,32 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
     piece; stop_time is when the base is held for good (inf: not within the horizon); status 0 done, 2 more than
     max_steps steps, 3 more than MAX_CHAIN events in a row. The grid starts with room for ``capacity`` points and
     grows fourfold as it fills (:func:`_grown`; the integration was run again from the start with four times the
-    room, which cost a 60 s motion under a stiff storey, 88 000 points from 4 096, twice its steps)."""
+    room, which cost a 60 s motion under a stiff storey, 88 000 points from 4 096, twice its steps).
+
+    With a power-law damper (alpha != 1) a slide's first step is graded from its start and the steps to a reversal
+    towards it (``_ode._fractions``; a step's substeps are grid points of their own): a reversal found in a step is
+    located again on the substeps graded from the start of the step before (or of the slide's graded first step),
+    so that every plain step lies at least its own length away from where the base's speed vanishes. A damper of
+    alpha < 1 limits the steps by the base's relaxation (:func:`_relax_step`) and, where it holds the base on its
+    slow manifold, the base creeps (:func:`_creep`) until the drive falls to ``S[REST]`` (:data:`EV_REST`: at rest
+    there, within the holding limit), a yield or z's zero crossing, or the manifold no longer holds
+    (:func:`_creep_step`)."""
     gt = np.empty(capacity)
     gy = np.empty((capacity, NY))
     gd = np.empty(capacity)
     gf = np.empty(capacity, dtype=np.int64)
     k = np.empty((_S, NY))
     tmp = np.empty(NY)
+    a = np.empty(NY)
     out = np.empty(NY)
     y1 = np.empty(NY)
     ym = np.empty(NY)
+    yb = np.empty(NY)
     r = np.empty(NY)
     r0 = np.empty(NY)  # the right-hand side at y (known0) and at y1 (known1), each computed once
     r1 = np.empty(NY)
+    one = np.ones(1)
+    fr = one
     known0 = known1 = False
     y = y0.copy()
     t = 0.0
@@ -366,30 +616,45 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
     stop = math.inf
     creep = CREEP * math.sqrt(2.0 * _energy(P, S, y) / (P[M] + S[MS]))
     limit = P[FSLOW] + margin(P, creep)  # the holding limit: stuck within it, re-slips beyond it
-    S = np.array([S[MS], S[KS], S[CS], limit])
+    S = np.array([S[MS], S[KS], S[CS], limit, P[FSLOW] + 0.5 * (limit - P[FSLOW])])
     rated = P[RATE] > 0.0 and P[FFAST] != P[FSLOW]
+    powered = P[ALPHA] != 1.0
+    stiff = P[ALPHA] < 1.0 and P[C] > 0.0  # a damper that can dominate the sliders at low speed
     a0 = 0.0
     d, mode = _start(P, S, y, False, limit)
     if d == 0.0 and held(P, S, y, limit):
         n = _put(gt, gy, gd, gf, n, 0.0, y, 0.0, 0)
         return gt, gy, gd, gf, n, 0.0, 0
     hp = _step_size(P, S, y, d, mode)
+    hs = _relax_step(P, S, y, d, mode, hp)[0] if stiff and d != 0.0 else hp  # the plain steps' length
     fresh = True  # the first step of a slide that starts at rest (its d x_b'' starts at 0)
-    # the graded substeps after z's zero crossing with a fractional n (``_ode``'s meshes: ratio 2 where n > 1,
-    # FINE where n < 1), each a plain step of its own; queue[iq:nq] the lengths still to take [s]
-    queue = np.empty(_ode.FINE_GRADES + 1)
+    # the graded substeps of a slide's first step (a power-law damper) and after z's zero crossing with a fractional
+    # n (``_ode``'s meshes: ratio 2 where n > 1, FINE where n < 1), each a plain step of its own; queue[iq:nq] the
+    # lengths still to take [s]
+    queue = np.empty(2 * (_ode.FINE_GRADES + _ode.GRADES + 2))
     iq, nq = 0, 0
+    if d != 0.0 and powered:
+        g = _ode._fractions(P, 1, False)
+        nq = g.size
+        for i in range(nq):
+            queue[i] = g[i] * hs
+    # the grid index, time and grading (``_ode._fractions``' graded_start) of the current (graded or plain) step's
+    # start and of the one before it in this piece (-1: none)
+    cur_i, cur_t, cur_g = 0, 0.0, (1 if nq > 0 else 0)
+    prev_i, prev_t, prev_g = -1, 0.0, 0
+    room = 2 * (_ode.FINE_GRADES + _ode.GRADES + 2) + 8
     steps = 0
     chain = 0  # events since the last plain step
     n = _put(gt, gy, gd, gf, n, t, y, d, mode)
     while True:
-        if n + 4 >= capacity:
+        if n + room >= capacity:
             capacity *= 4
             gt, gy, gd, gf = _grown(gt, gy, gd, gf, n, capacity)
         steps += 1
         if steps > max_steps:
             return gt, gy, gd, gf, n, stop, 2
-        h = hp if iq == nq else queue[iq]
+        h = hs if iq == nq else queue[iq]
+        creeping = mode & CREEPING
         if d != 0.0 and rated:  # the friction law's velocity scale, from the base's acceleration over the step
             if not known0:
                 _rhs(P, S, y, d, mode, r0)
@@ -410,23 +675,40 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
                 known1 = False
         kind = EV_NONE
         theta = h
+        walk = False  # the event's step taken again on graded substeps from yb at t_b (grid point i_b)
+        i_b, t_b = 0, 0.0
         if d != 0.0:
-            if d * y1[1] <= 0.0:
-                kind = EV_REVERSAL
-            elif not fresh:  # a dip of the speed to zero inside the step
-                if not known0:
-                    _rhs(P, S, y, d, mode, r0)
-                    known0 = True
-                a0 = d * r0[1]
-                if not known1:
-                    _rhs(P, S, y1, d, mode, r1)
-                    known1 = True
-                if a0 < 0.0 and d * r1[1] > 0.0:
-                    tm = _locate(P, S, y, h, d, mode, EV_DIP, 1.0, k, tmp, ym, r)
-                    if d * ym[1] <= 0.0:
-                        kind, theta = EV_REVERSAL, tm
+            if not creeping:
+                if d * y1[1] <= 0.0:
+                    kind = EV_REVERSAL
+                elif not fresh:  # a dip of the speed to zero inside the step
+                    if not known0:
+                        _rhs(P, S, y, d, mode, r0)
+                        known0 = True
+                    a0 = d * r0[1]
+                    if not known1:
+                        _rhs(P, S, y1, d, mode, r1)
+                        known1 = True
+                    if a0 < 0.0 and d * r1[1] > 0.0:
+                        tm = _locate(P, S, y, h, d, mode, EV_DIP, 1.0, one, k, tmp, a, ym, r)
+                        if d * ym[1] <= 0.0:
+                            kind, theta = EV_REVERSAL, tm
             if kind == EV_REVERSAL:
-                theta = _locate(P, S, y, theta, d, mode, EV_REVERSAL, 1.0, k, tmp, out, r)
+                if powered:  # located on substeps graded towards it, from the start of the step before
+                    if iq < nq or prev_i < 0:
+                        i_b, t_b, gs = cur_i, cur_t, cur_g
+                    else:
+                        i_b, t_b, gs = prev_i, prev_t, prev_g
+                    fr = _ode._fractions(P, gs, True)
+                    for j in range(NY):
+                        yb[j] = gy[i_b, j]
+                    _advance(P, S, yb, t + theta - t_b, d, mode, fr, k, tmp, a, out)
+                    walk = d * out[1] <= 0.0  # (else, a dip that the graded map does not reach: as before)
+                if walk:
+                    theta = _locate(P, S, yb, t + theta - t_b, d, mode, EV_REVERSAL, 1.0, fr, k, tmp, a, out, r)
+                    theta += t_b - t  # (the event's instant from this step's start)
+                else:
+                    theta = _locate(P, S, y, theta, d, mode, EV_REVERSAL, 1.0, one, k, tmp, a, out, r)
             base = mode & 3
             ev = EV_NONE
             if ((P[HKIND] == H_PLASTIC and base == 0 and d * y1[2] >= P[FP])
@@ -434,10 +716,13 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
                 ev = EV_YIELD
             if P[HKIND] == H_BOUCWEN and base == 0 and (y1[2] == 0.0 or (y1[2] > 0.0) != (y[2] > 0.0)):
                 ev = EV_ZERO
+            if creeping and ev == EV_NONE and drive(P, S, y1, d) <= S[REST]:
+                ev = EV_REST
             if ev != EV_NONE:
-                th = _locate(P, S, y, h, d, mode, ev, 1.0 if ev != EV_ZERO or y[2] > 0.0 else -1.0, k, tmp, ym, r)
+                th = _locate(P, S, y, h, d, mode, ev, 1.0 if ev != EV_ZERO or y[2] > 0.0 else -1.0, one, k, tmp, a,
+                             ym, r)
                 if kind == EV_NONE or th < theta:
-                    kind, theta = ev, th
+                    kind, theta, walk = ev, th, False
                     for j in range(NY):
                         out[j] = ym[j]
         else:
@@ -447,15 +732,18 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
                 kind = EV_SLIP
             else:  # a peak of |G| past the limit inside the step
                 if _value(P, S, y, EV_PEAK, 0.0, r) > 0.0 and _value(P, S, y1, EV_PEAK, 0.0, r) < 0.0:
-                    tm = _locate(P, S, y, h, d, mode, EV_PEAK, 1.0, k, tmp, ym, r)
+                    tm = _locate(P, S, y, h, d, mode, EV_PEAK, 1.0, one, k, tmp, a, ym, r)
                     if limit - abs(holding(P, S, ym)) < 0.0:
                         kind, theta = EV_SLIP, tm
             if kind == EV_SLIP:
-                onset = EV_SLIP if abs(holding(P, S, y)) <= P[FSLOW] else EV_SLIP_MARGIN
-                theta = _locate(P, S, y, theta, d, mode, onset, 1.0, k, tmp, out, r)
+                # (a damper of alpha < 1 moves the base at below the creep's speed inside the margin, its slope
+                # unbounded at rest: the slide starts where the drive leaves the margin)
+                onset = EV_SLIP if abs(holding(P, S, y)) <= P[FSLOW] and not stiff else EV_SLIP_MARGIN
+                theta = _locate(P, S, y, theta, d, mode, onset, 1.0, one, k, tmp, a, out, r)
         if kind == EV_NONE:
             chain = 0
-            if iq < nq:  # a graded substep taken (the rest of it next, where the friction law shortened it)
+            grouped = iq < nq
+            if grouped:  # a graded substep taken (the rest of it next, where the friction law shortened it)
                 if h < queue[iq]:
                     queue[iq] -= h
                 else:
@@ -481,7 +769,48 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
                     n = _put(gt, gy, gd, gf, n, t, y, 0.0, 0)
                     break
                 y[1] = v
+                if stiff and drive(P, S, y, d) <= S[REST]:
+                    # a damper of alpha < 1 brings the slide to rest: below the creep's speed with the drive down
+                    # to where the damper alone would move it at below that speed (as :data:`EV_REST`; the roof
+                    # still rings: stuck, not held for good)
+                    y[1] = 0.0
+                    d, mode = _start(P, S, y, False, limit)
+                    fresh = True
+                    iq, nq = 0, 0
+                    hp = _step_size(P, S, y, d, mode)
+                    hs = hp
+                    known0 = False
+                    n = _put(gt, gy, gd, gf, n, t, y, d, mode)
+                    prev_i = -1
+                    cur_i, cur_t, cur_g = n - 1, t, 0
+                    if t >= t_end:
+                        break
+                    continue
             n = _put(gt, gy, gd, gf, n, t, y, d, mode)
+            if not grouped or iq == nq:  # a (graded or plain) step ends here
+                prev_i, prev_t, prev_g = cur_i, cur_t, cur_g
+                cur_i, cur_t, cur_g = n - 1, t, 0
+            if d != 0.0 and stiff and iq == nq:
+                if creeping:
+                    hs = _creep_step(P, S, y, d, mode, hp)
+                    if hs < 0.0:  # off the slow manifold: explicit steps again
+                        mode &= 3
+                        gf[n - 1] = mode
+                        known0 = False
+                        hs = _relax_step(P, S, y, d, mode, hp)[0]
+                else:
+                    hs, creeps, speed = _relax_step(P, S, y, d, mode, hp)
+                    if creeps:  # on the slow manifold: on it from here, on its own slow steps
+                        mode |= CREEPING
+                        y[1] = d * speed
+                        gy[n - 1, 1] = y[1]
+                        gf[n - 1] = mode
+                        known0 = False
+                        hs = _creep_step(P, S, y, d, mode, hp)
+                        if hs < 0.0:
+                            mode &= 3
+                            gf[n - 1] = mode
+                            hs = _relax_step(P, S, y, d, mode, hp)[0]
             if t >= t_end:
                 break
             continue
@@ -489,19 +818,22 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
         if chain > MAX_CHAIN:
             return gt, gy, gd, gf, n, stop, 3
         known0 = False  # (the state, direction or mode changes at the event)
+        if walk:  # the graded substeps recorded from the grid point i_b (those after it taken back)
+            n = _walk(P, S, yb, t + theta - t_b, d, mode, fr, t_b, gt, gy, gd, gf, i_b + 1, k, tmp, a, out)
         t += theta
         for j in range(NY):
             y[j] = out[j]
+        creeping = mode & CREEPING
         if kind == EV_YIELD and P[HKIND] == H_PLASTIC:
             y[2] = d * P[FP]
-            mode = YIELDING
+            mode = YIELDING | creeping
         elif kind == EV_YIELD:
             y[2] = d
-            mode = YIELDING
+            mode = YIELDING | creeping
         elif kind == EV_ZERO:
             y[2] = 0.0
-            mode = LOADING
-        else:  # a reversal or a re-slip: the base at rest, the holding force decides
+            mode = LOADING | creeping
+        else:  # a reversal, a re-slip or a creep's end: the base at rest, the holding force decides
             d, mode = _start(P, S, y, kind == EV_SLIP, limit)
             fresh = True
             if d == 0.0 and held(P, S, y, limit):
@@ -509,16 +841,36 @@ def integrate(P, S, y0, t_end, capacity, max_steps):
                 n = _put(gt, gy, gd, gf, n, t, y, 0.0, 0)
                 break
         hp = _step_size(P, S, y, d, mode)
+        if mode & CREEPING:
+            hs = _creep_step(P, S, y, d, mode, hp)
+            if hs < 0.0:
+                mode &= 3
+                hs = _relax_step(P, S, y, d, mode, hp)[0]
+        elif stiff and d != 0.0:
+            hs = _relax_step(P, S, y, d, mode, hp)[0]
+        else:
+            hs = hp
         iq, nq = 0, 0  # (an event ends a grading)
+        cur_g = 0
         if kind == EV_ZERO and P[N] != math.floor(P[N]):
             # |z|^n with a fractional n is not smooth where z leaves 0: the next steps graded from it
             fine = P[N] < 1.0 and P[COARSE] <= 1.0  # (coarse steps: the ratio-2 grading, as ``_ode``)
-            g = _ode._fractions(P, FINE if fine else 1, False)
-            span = hp * FINE_SPAN if fine else hp
+            cur_g = FINE if fine else 1
+            g = _ode._fractions(P, cur_g, False)
+            span = hs * FINE_SPAN if fine else hs
             nq = g.size
             for i in range(nq):
                 queue[i] = g[i] * span
+        elif d != 0.0 and powered and kind != EV_YIELD and kind != EV_ZERO:
+            # a slide from rest: |x_b'|^alpha is not smooth at its start
+            cur_g = 1
+            g = _ode._fractions(P, 1, False)
+            nq = g.size
+            for i in range(nq):
+                queue[i] = g[i] * hs
         n = _put(gt, gy, gd, gf, n, t, y, d, mode)
+        prev_i = -1
+        cur_i, cur_t = n - 1, t
         if t >= t_end:
             break
     return gt, gy, gd, gf, n, stop, 0

@@ -50,7 +50,7 @@ class FlexibleBuilding:
     """A superstructure lumped at the roof on an isolation layer of any model (SI units)."""
 
     isolation: Isolation | Pendulum | BoucWen
-    """The isolation layer, its ``mass`` the whole building's m (viscous damper only: ``damping_exponent`` 1)."""
+    """The isolation layer, its ``mass`` the whole building's m (its damper viscous or a power law)."""
     superstructure_mass: float
     """Superstructure mass lumped at the roof, m_s [kg], in (0, m)."""
     superstructure_period: float
@@ -62,9 +62,6 @@ class FlexibleBuilding:
         iso = self.isolation
         if not isinstance(iso, Isolation | Pendulum | BoucWen):
             raise ParameterError("isolation", type(iso).__name__, "an Isolation, Pendulum or BoucWen")
-        if iso.damping_exponent != 1.0:
-            raise ParameterError("damping_exponent", iso.damping_exponent,
-                                 "1 (a viscous damper) under a flexible superstructure")
         ms = real_number("superstructure_mass", self.superstructure_mass, f"(0, mass) = (0, {iso.mass:.6g}) kg",
                          "kg", test=lambda v: 0.0 < v < iso.mass)
         Ts = real_number("superstructure_period", self.superstructure_period, "(0, inf)", "s",
