@@ -184,7 +184,6 @@ def _channels():
 @pytest.mark.parametrize("kwargs, name, says", [
     ({"model": "boucwen"}, "superstructure_mass", "flexible superstructure needs it"),
     ({"model": "pendulum", "superstructure_mass": 2e6}, "superstructure_mass", "(0, mass)"),
-    ({"model": "boucwen", "superstructure_mass": 5e5, "damping": "power"}, "damping", "'viscous' with flexible=True"),
     ({"model": "linear", "superstructure_mass": 5e5}, "model", "model='2dof'"),
     ({"model": "bilinear", "superstructure_mass": 5e5, "flexible": "yes"}, "flexible", "True or False"),
 ])

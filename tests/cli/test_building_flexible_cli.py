@@ -116,8 +116,6 @@ def test_the_case_file_reads_flexible(tmp_path):
 
 @pytest.mark.parametrize("body, fragments", [
     ("model = 'linear'", ("flexible = true with model = 'linear'", "model = '2dof'")),
-    ("model = 'boucwen'\ndamping = 'power'\ndamping_coefficient = '100 kN'\ndamping_exponent = 0.5", ("flexible = true",
-                                                                                   "viscous")),
 ])
 def test_flexible_with_what_it_cannot_take_is_one_line(tmp_path, body, fragments):
     _write_record(tmp_path, duration=4.0)

@@ -37,9 +37,6 @@ def test_a_bad_value_of_a_new_key_is_one_line_naming_it(model, key, value, tmp_p
 
 
 @pytest.mark.parametrize("model, extra, words", [
-    ("2dof", {"period": "'2 s'", "superstructure_mass": "'600 t'", "superstructure_period": "'0.5 s'",
-              "damping": "'power'", "damping_coefficient": "'100 kN'", "damping_exponent": "0.5"},
-     "damping = 'power' with model = '2dof'"),
     ("quadratic", {"period": "'2 s'"}, "model = 'quadratic'"),
 ])
 def test_a_campaign_of_a_model_it_does_not_fit_says_so(model, extra, words, tmp_path):

@@ -388,8 +388,6 @@ def test_the_campaign_checks_the_damper_law_and_the_constant_friction_quantities
 
     with pytest.raises(ParameterError, match="damping"):
         fit_building_campaign(releases, 4.0e5, "linear", damping="quadratic")
-    with pytest.raises(ParameterError, match="damping"):
-        fit_building_campaign(releases, 4.0e5, "2dof", damping="power", superstructure_mass=1.0e5)
     with pytest.raises(ParameterError, match="quantities"):  # no rate in a constant-friction campaign
         fit_building_campaign(releases, 4.0e5, "pendulum", constant_friction=True, quantities=("rate",))
     with pytest.raises(ParameterError, match="quantities"):  # a power-law campaign has no damping ratio

@@ -62,11 +62,11 @@ from ._ode import (
     LOADING,
     RATE,
     SATURATION,
-    STEPS_PERIOD,
-    STEPS_RATE,
     STEP_CREEP,
     STEP_RELAX,
     STEP_STABLE,
+    STEPS_PERIOD,
+    STEPS_RATE,
     STEPS_TRANSITION,
     YIELDING,
     C,
@@ -505,7 +505,7 @@ def _relax_step(P, S, y, d, mode, h):
             return h, False, 0.0
         if g > push:
             h = min(h, 0.5 * s * m / (g - push))
-    return min(h, (STEP_STABLE if off <= max(BAND_TOL, 10.0 * eps * eps * eps) * sp else STEP_RELAX) * m / g1), False, 0.0
+    return min(h, (STEP_STABLE if off <= BAND_TOL * sp else STEP_RELAX) * m / g1), False, 0.0
 
 
 @njit(cache=True, nogil=True)

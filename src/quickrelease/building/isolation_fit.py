@@ -295,14 +295,15 @@ def _isolation(model: str, mass: float, p: dict[str, float], superstructure_mass
     ``damping_exponent``, else viscous with ``damping_ratio`` referred to the stiffness of ``period``
     (``m (2 pi / T)^2``: k, k1, W / R, Kd). With a ``superstructure_mass`` (a flexible fit, ``flexible=True``),
     the layer under the superstructure of ``superstructure_period`` and ``superstructure_damping_ratio``: the
-    closed-form :class:`~quickrelease.building.TwoDOF` for ``2dof``, a
-    :class:`~quickrelease.building.flexible.FlexibleBuilding` on the layer for the others."""
+    closed-form :class:`~quickrelease.building.TwoDOF` for ``2dof`` (a
+    :class:`~quickrelease.building.flexible.FlexibleBuilding` on the linear layer with a power-law damper), a
+    FlexibleBuilding on the layer for the others."""
     k = mass * (2.0 * math.pi / p["period"]) ** 2
     if "damping_exponent" in p:
         c, alpha = p["damping_coefficient"], p["damping_exponent"]
     else:
         c, alpha = 2.0 * _damping_ratio(p["damping_ratio"]) * math.sqrt(k * mass), 1.0
-    if model == "2dof":
+    if model == "2dof" and "damping_exponent" not in p:
         return TwoDOF(mass, superstructure_mass, p["period"], p["superstructure_period"], p["damping_ratio"],
                       p["friction"], p["superstructure_damping_ratio"])
     if model == "pendulum":
@@ -311,7 +312,7 @@ def _isolation(model: str, mass: float, p: dict[str, float], superstructure_mass
     elif model == "boucwen":
         layer = BoucWen(mass, k, p["characteristic_strength"], p["yield_displacement"], p["shape"], c, alpha,
                         p["friction"])
-    elif model == "linear":
+    elif model in ("linear", "2dof"):
         layer = Isolation(mass, k, c, p["friction"], damping_exponent=alpha)
     else:
         layer = Isolation(mass, k, c, p["friction"], p["stiffness_ratio"] * k, p["yield_force"],
@@ -1448,17 +1449,12 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
         raise ParameterError("model", model, ", ".join(f"'{m}'" for m in FIT_MODELS))
     if damping not in DAMPING_LAWS:
         raise ParameterError("damping", damping, "'viscous' or 'power'")
-    if damping == "power" and model == "2dof":
-        raise ParameterError("damping", damping, "'viscous' for model = '2dof'")
     if not isinstance(flexible, bool | np.bool_):
         raise ParameterError("flexible", flexible, "True or False")
     flexible = bool(flexible) and model != "2dof"  # 2dof is the linear layer under a flexible superstructure
     if flexible and model not in FLEXIBLE_MODELS:
         raise ParameterError("model", model, f"{', '.join(repr(m) for m in FLEXIBLE_MODELS)} with flexible=True "
                              "(the linear layer under a flexible superstructure is model='2dof', in closed form)")
-    if flexible and damping != "viscous":
-        raise ParameterError("damping", damping, "'viscous' with flexible=True (the flexible building's "
-                             "integrator solves the viscous damper only)")
     mass = float(mass)
     if not (math.isfinite(mass) and mass > 0):
         raise ParameterError("mass", mass, "(0, inf)", "kg")

@@ -124,13 +124,13 @@ def spec_building(spec: BuildingSpec) -> Isolation | TwoDOF:
     """The ``[building]`` values as the model they name (SI units): :func:`spec_isolation` for ``linear`` and
     ``bilinear``; for ``2dof`` the :class:`~quickrelease.building.model.TwoDOF` building, ``TwoDOF(mass, m_s, T,
     T_s, zeta, F_s, zeta_s)`` (``mass`` the whole mass on the isolators, ``m_s`` lumped at the roof, T the
-    isolation period of the whole mass, T_s the superstructure's fixed-base period); with ``flexible = true`` the
-    layer of :func:`spec_isolation` under the superstructure, a
+    isolation period of the whole mass, T_s the superstructure's fixed-base period); with ``flexible = true`` (and
+    for 2dof with ``damping = "power"``) the layer of :func:`spec_isolation` under the superstructure, a
     :class:`~quickrelease.building.flexible.FlexibleBuilding`. Planning keeps :func:`spec_isolation` (the 2dof
     building rigid on its isolation layer)."""
-    if spec.model != "2dof" and spec.flexible:  # the layer under a flexible superstructure
-        from ..building.flexible import FlexibleBuilding
+    from ..building.flexible import FlexibleBuilding
 
+    if spec.model != "2dof" and spec.flexible:  # the layer under a flexible superstructure
         spec.require_design("the building's model")
         return FlexibleBuilding(spec_isolation(spec), float(spec.superstructure_mass),
                                 float(spec.superstructure_period), float(spec.superstructure_damping_ratio or 0.0))
@@ -140,6 +140,9 @@ def spec_building(spec: BuildingSpec) -> Isolation | TwoDOF:
     if spec.mass is None:
         raise ParameterError("[building] mass", None, "given for model = '2dof' (its stiffnesses act on the mass)",
                              "kg")
+    if spec.damping == "power":  # the linear layer with a power-law damper: no closed form, the flexible integrator
+        return FlexibleBuilding(spec_isolation(spec), float(spec.superstructure_mass),
+                                float(spec.superstructure_period), float(spec.superstructure_damping_ratio or 0.0))
     return TwoDOF(mass=float(spec.mass), superstructure_mass=float(spec.superstructure_mass), period=float(spec.period),
                   superstructure_period=float(spec.superstructure_period), damping_ratio=float(spec.damping_ratio),
                   friction=float(spec.friction_force),

@@ -828,9 +828,6 @@ def _building(values: dict[str, Any], table: Any, source: str, base: Path) -> Bu
     if flexible and "superstructure_mass" not in given:
         raise CaseFileError(f"{source}: missing key [building] superstructure_mass for flexible = true "
                             f"({CASE_SCHEMA['building']['superstructure_mass'][1]})")
-    if flexible and values.get("building.damping", "viscous") != "viscous":
-        raise CaseFileError(f"{source}: [building] damping = {table['damping']!r} with flexible = true: the flexible "
-                            "building's dampers are viscous")
     # the superstructure's mass with a rigid bilinear, pendulum or boucwen layer: for --flexible and --compare's
     # flexible variant (its period and damping are design values of the flexible building only)
     allowed = set(_MODEL_KEYS[model]) | (set(_STOREY_KEYS) if flexible else
@@ -864,9 +861,6 @@ def _building(values: dict[str, Any], table: Any, source: str, base: Path) -> Bu
     if damping == "power" and "damping_ratio" in given:
         raise CaseFileError(f"{source}: [building] damping_ratio = {table['damping_ratio']!r} with damping = "
                             "'power': the power-law damper takes damping_coefficient and damping_exponent")
-    if damping == "power" and model == "2dof":
-        raise CaseFileError(f"{source}: [building] damping = 'power' with model = '2dof': the 2dof model's "
-                            "dampers are viscous")
     if model == "pendulum" and "friction" in given:
         raise CaseFileError(f"{source}: [building] friction = {table['friction']!r} with model = 'pendulum': give "
                             "friction_coefficient (constant) or friction_slow, friction_fast and rate")

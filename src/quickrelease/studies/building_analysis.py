@@ -405,10 +405,8 @@ def analyse_building(data: Any = None, *, channels=None, mass: float | None = No
                                               else None, flexible=flex,
                                               start={k: v for k, v in (start or {}).items() if k in shared} or None,
                                               fixed=held if other == "pendulum" else None))
-            except QuickReleaseError as exc:  # e.g. 2dof, whose dampers are viscous only
-                why = (f'it takes no {damping}-law damper (damping = "{damping}")'
-                       if isinstance(exc, ParameterError) and exc.name == "damping" else str(exc))
-                notes.append(f"model {label} not compared: {why}")
+            except QuickReleaseError as exc:  # (a model the record cannot carry: named, the others ranked)
+                notes.append(f"model {label} not compared: {exc}")
         comparison = compare_models(compared)
         if len(comparison) > 1:
             best, second = comparison[0], comparison[1]

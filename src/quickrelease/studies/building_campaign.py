@@ -36,7 +36,7 @@ Quantities (per release, from the fitted model, SI):
   ``characteristic_strength`` Qd [N], ``yield_displacement`` dy [m], ``shape`` n [-], the sliders' ``friction``
   F_s [N] (0 for bearings alone: its interval then a profile from the bound), ``damping_ratio`` referred to Kd
   and ``equivalent_damping_ratio``;
-- ``damping = "power"`` (fluid viscous dampers ``C |v|^alpha sign(v)``, any model but 2dof):
+- ``damping = "power"`` (fluid viscous dampers ``C |v|^alpha sign(v)``, any model, 2dof and flexible too):
   ``damping_coefficient`` C [N (s/m)^alpha] and ``damping_exponent`` alpha [-] in place of ``damping_ratio``.
 
 The equivalent damping of every model is that of one harmonic cycle ``x = d cos(omega t)``, d = |d0|, at the
@@ -728,7 +728,7 @@ def fit_building_campaign(releases, mass: float, model: str = "linear", *, varia
         The ``2dof`` model's (or a flexible campaign's) superstructure mass at the roof [kg], in (0, mass): the
         same in every release.
     damping : {"viscous", "power"}
-        The dampers' law of every fit (``fit_isolation(damping=...)``; ``power``: not with ``2dof``).
+        The dampers' law of every fit (``fit_isolation(damping=...)``).
     constant_friction : bool
         The pendulum's friction is a constant coefficient: each release fitted with Constantinou's rate held at 0
         (and mu_fast, which then plays no part, at the start's mu_slow); quantity ``friction_coefficient``.
@@ -757,8 +757,6 @@ def fit_building_campaign(releases, mass: float, model: str = "linear", *, varia
     if flexible and model not in FLEXIBLE_MODELS:
         raise ParameterError("model", model, f"{', '.join(repr(m) for m in FLEXIBLE_MODELS)} with flexible=True "
                              "(the linear layer under a flexible superstructure is model='2dof')")
-    if flexible and damping != "viscous":
-        raise ParameterError("damping", damping, "'viscous' with flexible=True (its dampers are viscous)")
     if model == "2dof" or flexible:
         ms = math.nan if superstructure_mass is None else float(superstructure_mass)
         if not (math.isfinite(ms) and 0.0 < ms < float(mass)):
@@ -770,8 +768,6 @@ def fit_building_campaign(releases, mass: float, model: str = "linear", *, varia
         superstructure_mass = None
     if damping not in DAMPER_QUANTITIES:
         raise ParameterError("damping", damping, ", ".join(DAMPER_QUANTITIES))
-    if damping != "viscous" and model == "2dof":
-        raise ParameterError("damping", damping, "'viscous' for model = '2dof' (its dampers are viscous)")
     constant_friction = bool(constant_friction) and model == "pendulum"
     shared = constant_friction_fixed(start) if constant_friction else None
     defaults = default_quantities(model, damping, constant_friction)

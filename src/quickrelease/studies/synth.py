@@ -604,7 +604,10 @@ def synthesize_building(case: Case, channels: list[str] | tuple[str, ...], *, ra
     data = _measured(channels, clean, offsets, noise, missing, rng)
     stop = float(motion.stop_time) if motion.stop_time <= duration - release_time else None
     truth = {**iso.summary(), "d0_m": float(d0), "release_time_s": float(release_time), "stop_time_s": stop}
-    if flexible:  # the layer's model, flexible: its fit's names (fit_isolation(model, flexible=True))
+    if flexible and spec.model == "2dof":  # 2dof's linear layer with a power-law damper (on the flexible integrator)
+        truth.pop("isolation_model")
+        truth["model"] = "2dof"
+    elif flexible:  # the layer's model, flexible: its fit's names (fit_isolation(model, flexible=True))
         truth.update(model=truth.pop("isolation_model"), flexible=True)
     if constant_friction(spec):
         truth = constant_friction_truth(truth)
