@@ -1,0 +1,99 @@
+"""Fits with fluid viscous dampers (``damping="power"``, ``C |v|^alpha sign(v)``) under a flexible superstructure
+(issue 24: each damping law usable in 2dof): the 2dof model (its linear layer with dampers, on the flexible
+integrator) and lead-rubber bearings with dampers (``boucwen``, ``flexible=True``), on records made by the independent
+solve_ivp reference ``isolator_reference.simulate_2dof`` (no package code): the base's LVDT and accelerometer and the
+roof's accelerometer at 100 Hz with their sensor zeros and white noise of known level, a quiet second before an
+unknown release. The truth lies in the fit's joint 95% region and each parameter near its estimate, the misfit at the
+noise level, the fitted model the FlexibleBuilding of the estimates."""
+
+import math
+
+import isolator_reference as ref
+import numpy as np
+import pytest
+from scipy import stats
+
+from quickrelease.building.flexible import FlexibleBuilding
+from quickrelease.building.hysteretic import BoucWen
+from quickrelease.building.isolation_fit import BuildingChannel, fit_isolation
+from quickrelease.building.model import Isolation
+
+NOISE = {"x": 2e-4, "a": 0.02, "a_roof": 0.02}
+ZEROS = {"x": 0.003, "a": 0.01, "a_roof": -0.005}
+T_R = 0.537
+M, MS = 8.0e5, 4.8e5
+# the linear layer with sliders and dampers of alpha 0.4 under a storey of 0.5 s: it sticks, the roof breaks it away
+# again, and it creeps in and out of the sliders' hold while the roof rings
+TWO_DOF = dict(period=2.5, damping_coefficient=1.2e5, damping_exponent=0.4, friction=1.5e4, superstructure_period=0.5,
+               superstructure_damping_ratio=0.02, d0=0.2, release_time=T_R)
+# lead-rubber bearings with dampers of alpha 0.4 (bench_isolators' boucwen-damper) under the storey: after the swing
+# the base creeps back on the dampers' slow manifold while the roof rings
+LEAD_RUBBER = dict(period=2 * math.pi * math.sqrt(M / 3.5e6), damping_coefficient=3e5, damping_exponent=0.4,
+                   friction=0.0, characteristic_strength=4e5, yield_displacement=0.025, shape=1.0,
+                   superstructure_period=0.5, superstructure_damping_ratio=0.02, d0=0.2, release_time=T_R)
+
+
+def _system(model, p):
+    k = M * (2 * math.pi / p["period"]) ** 2
+    c, alpha = p["damping_coefficient"], p["damping_exponent"]
+    if model == "boucwen":
+        return ref.boucwen(M, k, p["characteristic_strength"], p["yield_displacement"], p["shape"], damping=c,
+                           damping_exponent=alpha, friction=p["friction"])
+    return ref.linear(M, k, damping=c, damping_exponent=alpha, friction=p["friction"])
+
+
+def _record(model, p, seed, duration=15.0):
+    t = np.arange(-1.0, duration, 0.01)
+    system = _system(model, p)
+    ks = MS * (2 * math.pi / p["superstructure_period"]) ** 2
+    cs = 2 * p["superstructure_damping_ratio"] * math.sqrt(ks * MS)
+    creep = 1e-8 * math.sqrt(2.0 * system.stored(p["d0"], system.pushed_z(p["d0"])) / M)  # (the kernel's convention)
+    motion = ref.simulate_2dof(system, MS, ks, cs, p["d0"], t - p["release_time"], duration, creep_speed=creep)
+    rng = np.random.default_rng(seed)
+    return [BuildingChannel(name, kind, t, y + ZEROS[kind] + rng.normal(0.0, NOISE[kind], t.size), NOISE[kind])
+            for name, kind, y in (("lvdt", "x", motion.x), ("base_acc", "a", motion.a),
+                                  ("roof_acc", "a_roof", motion.as_))]
+
+
+def _checked(fit, truth):
+    """The truth (the sensors' zeros too) inside the fit's joint 95% region (its chi-square above the fit's by less
+    than the quantile of the parameters' count); each true parameter within 3.3 standard errors of its estimate (a
+    marginal 95% interval misses one of ten parameters on 40% of the records; 3.3 on 1%); the misfit at the
+    noise. (Seed 1 of the lead-rubber record: the release 2.1 standard errors off, every other parameter inside its
+    95% interval.)"""
+    far = {n: (v, fit.estimates[n], fit.std_errors[n]) for n, v in truth.items()
+           if not abs(fit.estimates[n] - v) < 3.3 * fit.std_errors[n]}
+    assert far == {}
+    p = {**fit.parameters, **truth, **{f"offset_{c.name}": ZEROS[c.kind] for c in fit.channels}}
+    building = fit.isolation(p)
+    chi2 = 0.0
+    for c in fit.channels:
+        motion = building.free_vibration(p["d0"], t_end=float(c.t[-1] - p["release_time"]))
+        model = motion.channels(c.t - p["release_time"])[c.kind] + p[f"offset_{c.name}"]
+        chi2 += float(np.sum(((model - c.values) / c.noise) ** 2))
+    assert chi2 - fit.chi2 < stats.chi2.ppf(0.95, len(fit.names))
+    assert 0.9 < fit.chi2_reduced < 1.1
+
+
+@pytest.mark.slow
+def test_2dof_with_fluid_dampers_fitted_back():
+    """model="2dof", damping="power": the linear layer with its dampers' C and alpha and the storey fitted back
+    (:func:`_checked`); the fitted model the FlexibleBuilding of the linear layer with the power-law damper."""
+    fit = fit_isolation(_record("linear", TWO_DOF, seed=1), M, "2dof", damping="power", superstructure_mass=MS,
+                        profile=False)
+    _checked(fit, TWO_DOF)
+    building = fit.isolation()
+    assert isinstance(building, FlexibleBuilding) and isinstance(building.isolation, Isolation)
+    assert building.isolation.damping_exponent == fit.estimates["damping_exponent"]
+    assert fit.model == "2dof" and fit.damping == "power" and fit.label == "2dof"
+
+
+@pytest.mark.slow
+def test_lead_rubber_with_fluid_dampers_under_a_storey_fitted_back():
+    """Lead-rubber bearings with dampers (alpha 0.4) under a flexible superstructure: Kd's period, Qd, dy, n, C,
+    alpha, the storey, d0 and the release fitted back (:func:`_checked`; the sliders' friction near its bound 0)."""
+    fit = fit_isolation(_record("boucwen", LEAD_RUBBER, seed=1), M, "boucwen", flexible=True, damping="power",
+                        superstructure_mass=MS, profile=False)
+    _checked(fit, {n: v for n, v in LEAD_RUBBER.items() if n != "friction"})
+    assert fit.estimates["friction"] < 3.0 * fit.std_errors["friction"]
+    assert isinstance(fit.isolation().isolation, BoucWen) and fit.label == "boucwen (flexible)"
