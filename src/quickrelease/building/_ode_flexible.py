@@ -24,8 +24,13 @@ hold the base, ``x_b' = 0``, the roof vibrates on the fixed base). Events:
   ``k_s u + c_s u'`` on the fixed base (a damped oscillation: it never exceeds E again). From then on the roof
   rings on in closed form (:func:`_ringing`).
 
-Only the viscous damper (alpha = 1) is solved here (a power-law damper's |v|^alpha needs the graded steps of
-``_ode`` at every reversal and re-slip). The works of the layer's friction, damper and hysteresis are the layer's
+A power-law damper (``C |x_b'|^alpha``, alpha != 1) is solved as ``_ode`` solves it: a slide's first step graded
+from its start and the steps to a reversal towards it (:func:`integrate`); a damper of alpha < 1, whose slope is
+unbounded at rest, limits the steps by the base's relaxation time (:func:`_relax_step`) and, where it holds the
+base on its slow manifold, the base creeps there (mode bit CREEPING, :func:`_slow`, :func:`_creep`): the
+expansion of ``_ode._slow`` with the storey's drive (:func:`drive`), whose rate carries the roof's ringing. A slide
+below the creep speed whose drive is within the dampers' margin is at rest (stuck; it slips again where the drive
+leaves the margin, :func:`margin`). The works of the layer's friction, damper and hysteresis are the layer's
 states of ``_ode``; the storey damper's work is one more state, so the energy balance closes to the integrator's
 accuracy.
 """
