@@ -311,11 +311,6 @@ def test_each_bad_parameter_is_named(name, value):
     assert any(c in msg.split(name, 1)[1] for c in "([") or "a FlexibleBuilding" in msg or "an Isolation" in msg
 
 
-def test_a_power_law_damper_is_refused_by_name():
-    with pytest.raises(ParameterError, match="damping_exponent.*0.5"):
-        FlexibleBuilding(BoucWen(8.0e5, 1.6e6, 4.0e5, 0.025, damping=1e4, damping_exponent=0.5), 6.0e5, 0.5)
-
-
 @pytest.mark.parametrize("d0", [0.0, math.nan, math.inf])
 def test_bad_d0(d0):
     with pytest.raises(ParameterError, match="d0"):
