@@ -43,9 +43,9 @@ def _system(model, p):
     return ref.linear(M, k, damping=c, damping_exponent=alpha, friction=p["friction"])
 
 
-def _clean(model, p, duration=15.0):
+def _clean(model, p, duration=15.0, rate=100.0):
     """The reference's record without noise: (t, [(name, kind, values)])."""
-    t = np.arange(-1.0, duration, 0.01)
+    t = np.arange(-1.0, duration, 1.0 / rate)
     system = _system(model, p)
     ks = MS * (2 * math.pi / p["superstructure_period"]) ** 2
     cs = 2 * p["superstructure_damping_ratio"] * math.sqrt(ks * MS)
@@ -61,8 +61,8 @@ def _noisy(rows, seed):
             for name, kind, y in channels]
 
 
-def _record(model, p, seed, duration=15.0):
-    return _noisy(_clean(model, p, duration), seed)
+def _record(model, p, seed, duration=15.0, rate=100.0):
+    return _noisy(_clean(model, p, duration, rate), seed)
 
 
 def _checked(fit, truth):
@@ -96,6 +96,21 @@ def test_2dof_with_fluid_dampers_fitted_back():
     assert isinstance(building, FlexibleBuilding) and isinstance(building.isolation, Isolation)
     assert building.isolation.damping_exponent == fit.estimates["damping_exponent"]
     assert fit.model == "2dof" and fit.damping == "power" and fit.label == "2dof"
+
+
+@pytest.mark.slow
+def test_2dof_with_fluid_dampers_reaches_the_minimum_on_a_minute():
+    """The benchmark's minute (bench_flexible_fit's 2dof-power record: 60 s at 200 Hz): the auto fit ends at or
+    below the fit started from the truth. The misfit has cusps where a turn (C |v|^alpha) passes a sample, where the
+    least-squares solves stop short (xtol); 2dof skipped the polish, whose restarts reach past them: its auto fit
+    ended 16.3 above the truth-started fit (36 017.0, the base accelerometer's zero 5.6 standard errors off), now
+    35 994.4 against 35 998.6 (still "not confirmed")."""
+    channels = _record("linear", TWO_DOF, seed=1, duration=60.0, rate=200.0)
+    fit = fit_isolation(channels, M, "2dof", damping="power", superstructure_mass=MS, profile=False)
+    start = {**TWO_DOF, **{f"offset_{c.name}": ZEROS[c.kind] for c in channels}}
+    truth = fit_isolation(channels, M, "2dof", damping="power", superstructure_mass=MS, profile=False, start=start,
+                          global_search=False)
+    assert fit.chi2 <= truth.chi2 + 0.5, (fit.chi2, truth.chi2)
 
 
 @pytest.mark.slow

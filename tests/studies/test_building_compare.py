@@ -90,17 +90,26 @@ def test_a_viscous_case_compares_viscous_fits(monkeypatch):
                     "fits, beyond CI's budget; the spy tests above check the wiring")
 def test_a_power_damped_record_ranks_the_models_under_its_law(monkeypatch):
     """The whole comparison (linear, bilinear, 2dof, pendulum; no Bouc-Wen, whose fit of another model's record
-    takes minutes): every compared fit has the power-law damper and fits the record to its noise (reduced
-    chi-square below 1.2: bilinear, 2dof and pendulum nest the linear isolator), and the linear model, the truth with
-    the fewest parameters, ranks first by BIC. Viscous fits of this record, as the comparison made them before,
-    ranked the bearings by the damper's misfit: reduced chi-square 36.9 (linear), 7.47 (bilinear), 1.14 (pendulum,
-    whose friction rising with the speed mimics the damper's C |v|^0.3)."""
+    takes minutes): every compared fit has the power-law damper; bilinear and pendulum, which nest the linear
+    isolator, fit the record to its noise (reduced chi-square below 1.2); 2dof, which nests it only as its storey
+    stiffens without bound, ends at the storey period's lower bound (SUPERSTRUCTURE_PERIOD_MIN, 0.02 s) with the
+    layer's period and the dampers' law at the truth (its reduced chi-square 1.34: the 0.02 s storey still rings
+    after the release); and the linear model, the truth with the fewest parameters, ranks first by BIC. Viscous fits
+    of this record, as the comparison made them before, ranked the bearings by the damper's misfit: reduced
+    chi-square 36.9 (linear), 7.47 (bilinear), 1.14 (pendulum, whose friction rising with the speed mimics the
+    damper's C |v|^0.3), 41.1 (2dof)."""
+    from quickrelease.building.isolation_fit import SUPERSTRUCTURE_PERIOD_MIN
+
     monkeypatch.setattr(building_analysis, "MODELS", ("linear", "bilinear", "2dof", "pendulum"))
     result = building_analysis.analyse_building(channels=record(), mass=M, model="linear", damping="power",
                                                 compare=True, superstructure_mass=2e5, global_search=False)
     assert [f.model for f in result.compared] == ["linear", "bilinear", "2dof", "pendulum"]
     for f in result.compared:
         assert f.damping == "power", f.model
-        assert f.chi2 / f.dof < 1.2, (f.model, f.chi2 / f.dof)
+        if f.model != "2dof":
+            assert f.chi2 / f.dof < 1.2, (f.model, f.chi2 / f.dof)
+        else:
+            assert abs(f.estimates["superstructure_period"] / SUPERSTRUCTURE_PERIOD_MIN - 1) < 1e-9 and f.chi2 / f.dof < 1.5
+            assert abs(f.estimates["period"] / T - 1) < 1e-3 and abs(f.estimates["damping_exponent"] - ALPHA) < 0.01
     assert result.comparison[0]["model"] == "linear"
     assert not any(" not compared" in n for n in result.notes)

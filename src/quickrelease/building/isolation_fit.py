@@ -1598,7 +1598,8 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
         named += [(c["origin"], c["parameters"]) for c in found]
     res, groups = _multistart(named, names, values, solve, thin_misfit, model, factor, progress)
     res = _requiet(res, channels, noise, source, sig, names, values, solve, t_r0)
-    if model != "2dof" and polish:
+    if (model != "2dof" or damping == "power") and polish:  # (2dof's closed form is smooth but at its sticks; with
+        # fluid dampers it is the flexible integrator's, the misfit's cusps at the turns (C |v|^alpha) as the others')
         res = stage("polish", _polish, res, names, values, solve, misfit.residuals, lower, upper, misfit.dt)
         res = stage("turn polish", _turn_polish, res, names, values, solve, misfit, lower, upper)
         if not any(c.kind in ("x", "x_roof") for c in channels):  # no smooth channel: the steps rule the misfit
