@@ -1731,9 +1731,9 @@ def _covariance_without_cusps(J, scale: float) -> tuple[np.ndarray, np.ndarray]:
     |t - t_rev|^alpha, with an infinite slope. The least-squares fit likes to park such a cusp on a sample (that
     sample's model value then moves infinitely fast with the parameters that move the cusp, and its residual is
     zeroed at no cost to the others). There the Jacobian's column reads that one sample as all the information
-    along some direction of the parameters: its leverage was 0.94-0.999 where an ordinary sample's is about p / n,
+    along some direction of the parameters: its leverage was 0.89-0.999 where an ordinary sample's is about p / n,
     and the standard errors came out 1.4-14 times too small (seeds 2400-2599 of test_hysteretic_coverage's
-    power-law record: 85 of 200 fits, and nearly all the misses: period covered 180 times of 200, d0 179). Within
+    power-law record: 83 of 200 fits, and nearly all the misses: period covered 180 times of 200, d0 179). Within
     the interval the cusp moves hundreds of microseconds, that sample's value by a fraction of its noise: it
     carries no such information. A sample that alone would halve some direction's variance (leverage above 0.5:
     leaving it out multiplies that variance by 1 / (1 - h)) is left out of the covariance (not of the fit); the
