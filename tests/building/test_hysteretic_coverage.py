@@ -82,9 +82,9 @@ def test_intervals_cover_the_truth(model):
     deviation (:func:`coverage_records.joint_deviation`): a count of misses per parameter (at most one in three
     seeds) failed on seeds 2400 and 2402, each off by 2-3 standard errors in four parameters at once, a
     3-parameter event of chi-square 7 degrees of freedom. The power-law layer's 200 seeds (2400-2599, measured
-    2026-11-27): 187-198 (period 187, friction 198, C 197, alpha 191, d0 198, release 193), pooled 0.970; before
-    the covariance left out a damper's cusp parked on a sample (:func:`test_a_damper_cusp_on_a_sample_keeps_the_
-    standard_errors`) 179-192, pooled 0.917, d0 179 and period 180 at the band's lower edge."""
+    2026-11-27): period 187, friction 198, C 197, alpha 191, d0 198, release 193, pooled 0.970; before the
+    covariance left out a damper's cusp parked on a sample (see the test below) 179-192, pooled 0.917, d0 179 and
+    period 180 at the band's lower edge."""
     spec = MODELS[model]
     rows = _rows(model)
     covered = dict.fromkeys(spec["truth"], 0)
