@@ -145,6 +145,41 @@ def test_the_jacobian_reuses_the_residuals_only_at_the_same_point():
     np.testing.assert_array_equal(m.jacobian(b, swapped, base), fresh(b, swapped, base))
 
 
+def test_the_covariance_leaves_out_a_sample_that_alone_holds_a_direction():
+    """``_covariance_without_cusps``: scale (J^T J)^-1 (numpy's inverse here), except that a sample whose leverage
+    (the hat matrix's diagonal) exceeds 0.5 is left out (a model's cusp parked on it, whose infinite slope the
+    Jacobian reads as information): in a block where ten samples see the third parameter with slope 1 and one more
+    with slope a, that one's leverage is a^2 / (10 + a^2): kept at 0.45, left out at 0.55. Ordinary samples (400
+    of 3 parameters, leverages ~0.0075) are all kept; a parameter that only one sample sees keeps that sample (left
+    out, the parameter would not be identified)."""
+    from quickrelease.building.isolation_fit import _covariance_without_cusps
+
+    rng = np.random.default_rng(7)
+    J = rng.normal(size=(400, 3))
+    cov, blind = _covariance_without_cusps(J, 2.0)
+    np.testing.assert_allclose(cov, 2.0 * np.linalg.inv(J.T @ J), rtol=1e-9)
+    assert not blind.any()
+    for share, left_out in ((0.45, False), (0.55, True)):
+        block = J.copy()
+        block[:11, :2] = 0.0
+        block[:, 2] = 0.0
+        block[:10, 2] = 1.0
+        block[10, 2] = math.sqrt(10.0 * share / (1.0 - share))
+        kept = np.delete(block, 10, axis=0) if left_out else block
+        cov, blind = _covariance_without_cusps(block, 3.0)
+        np.testing.assert_allclose(cov, 3.0 * np.linalg.inv(kept.T @ kept), rtol=1e-9)
+    cusp = J.copy()
+    cusp[17] = [0.0, 300.0, 5.0]  # one sample moving 300 times as fast as the others with the second parameter
+    rest = np.delete(cusp, 17, axis=0)
+    np.testing.assert_allclose(_covariance_without_cusps(cusp, 1.0)[0], np.linalg.inv(rest.T @ rest), rtol=1e-9)
+    alone = J.copy()
+    alone[:, 2] = 0.0
+    alone[5, 2] = 4.0
+    cov, blind = _covariance_without_cusps(alone, 1.0)
+    np.testing.assert_allclose(cov, np.linalg.inv(alone.T @ alone), rtol=1e-9)
+    assert not blind.any()
+
+
 def test_a_solve_stopped_at_a_sample_instant_is_bounded_there():
     """``_Misfit.release_edge``: a release time within the Jacobian's release step of a sample instant t_k (a solve
     stopped against the step the chi-square takes there) is bounded at t_k on the side where it ended: above by t_k
