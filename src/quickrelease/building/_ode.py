@@ -197,29 +197,39 @@ def _resist(P, s):
 
 
 @njit(cache=True, nogil=True)
-def _quasi(P, push):
-    """The quasi-static speed S0 [m/s] at which the sliders and the damper balance the force ``push`` [N] that
-    drives the layer on, g(S0) = push (0 where the sliders hold it, push <= f_slow). Closed form for constant
-    friction, ((push - f_slow) / C)^(1 / alpha); else a safeguarded Newton iteration on ln S0 within a bracket."""
+def _quasi(P, push, cs=0.0):
+    """The quasi-static speed S0 [m/s] at which the sliders and the damper (and ``cs`` [N s/m], a viscous slope in
+    parallel: the flexible superstructure's storey damper, which the base drags) balance the force ``push`` [N] that
+    drives the layer on, g(S0) + cs S0 = push (0 where the sliders hold it, push <= f_slow). Closed form for
+    constant friction without cs, ((push - f_slow) / C)^(1 / alpha); else a safeguarded Newton iteration on ln S0
+    within a bracket, to a residual of rounding."""
     excess = push - P[FSLOW]
-    if excess <= 0.0 or P[C] <= 0.0:
+    if excess <= 0.0 or (P[C] <= 0.0 and cs <= 0.0):
         return 0.0
-    if P[RATE] <= 0.0 or P[FFAST] == P[FSLOW]:
+    if cs <= 0.0 and (P[RATE] <= 0.0 or P[FFAST] == P[FSLOW]):
         return (excess / P[C]) ** (1.0 / P[ALPHA])
-    # g(hi) >= push: the friction is at least the smaller of its two levels (a friction that weakens with the
-    # speed makes g rise, fall and rise again: the bracket's iteration finds one of its roots)
-    hi = ((push - min(P[FSLOW], P[FFAST])) / P[C]) ** (1.0 / P[ALPHA])
+    # g(hi) + cs hi >= push: the friction is at least the smaller of its two levels (a friction that weakens with
+    # the speed makes g rise, fall and rise again: the bracket's iteration finds one of its roots)
+    fmin = min(P[FSLOW], P[FFAST])
+    hi = math.inf
+    if P[C] > 0.0:
+        hi = ((push - fmin) / P[C]) ** (1.0 / P[ALPHA])
+    if cs > 0.0:
+        hi = min(hi, (push - fmin) / cs)
     u_hi = math.log(hi)
     u_lo = u_hi
     for _ in range(40):  # g -> f_slow < push as the speed vanishes
         u_lo -= 20.0
-        if _resist(P, math.exp(u_lo))[0] < push:
+        s = math.exp(u_lo)
+        if _resist(P, s)[0] + cs * s < push:
             break
     u = u_hi
     for _ in range(200):
         s = math.exp(u)
         g, g1, _g2 = _resist(P, s)
-        if g == push:
+        g += cs * s
+        g1 += cs
+        if abs(g - push) <= 4e-16 * push:
             return s
         if g > push:
             u_hi = u
@@ -268,17 +278,24 @@ def _slow(P, y, d, mode):
     m = P[M]
     _g, g1, g2 = _resist(P, s0)
     s1 = m * kt * s0 / g1 / g1
-    dkt = 0.0
-    if P[HKIND] == H_BOUCWEN and (mode & 3) == LOADING and P[N] > 0.0:
-        z = y[2]
-        az = abs(z)
-        if az > 0.0:
-            dkt = -P[Q] * P[N] * az ** (P[N] - 1.0) * (1.0 if z > 0.0 else -1.0) * d * s0 * zx / P[DY]
+    dkt = _stiffening(P, y, d, mode, s0, zx)
     ds0 = -kt * s0 / g1
     ds1 = m * (dkt * s0 + kt * ds0) / g1 / g1 - 2.0 * m * kt * s0 * g2 * ds0 / g1 / g1 / g1
     s2 = (m * kt * s1 / g1 - m * ds1 - 0.5 * g2 * s1 * s1) / g1
     s = s0 + s1 + s2
     return s, -kt * s / g1 + ds1, g1, kt, zx
+
+
+@njit(cache=True, nogil=True)
+def _stiffening(P, y, d, mode, s, zx):
+    """dk_t/dt [N/(m s)] of a piece moving at the speed s [m/s] in direction d: while the Bouc-Wen element loads,
+    ``-Q n |z|^(n-1) sgn(z) z_dot / dy`` with z_dot = d s dz/dx (``zx``); 0 otherwise."""
+    if P[HKIND] == H_BOUCWEN and (mode & 3) == LOADING and P[N] > 0.0:
+        z = y[2]
+        az = abs(z)
+        if az > 0.0:
+            return -P[Q] * P[N] * az ** (P[N] - 1.0) * (1.0 if z > 0.0 else -1.0) * d * s * zx / P[DY]
+    return 0.0
 
 
 @njit(cache=True, nogil=True)
@@ -291,11 +308,17 @@ def _creep(P, y, d, mode, out):
     if s <= 0.0:
         return
     v = d * s
-    zdot = v * zx
-    base = mode & 3
     out[0] = v
     out[1] = d * ds
-    out[2] = zdot
+    out[2] = v * zx
+    _creep_works(P, y, mode, s, v, out)
+
+
+@njit(cache=True, nogil=True)
+def _creep_works(P, y, mode, s, v, out):
+    """The works' rates (out[3:6], [W]) of a piece creeping at the speed s > 0 [m/s], velocity v = d s: the sliders'
+    friction, the damper and the hysteresis (as :func:`_rhs`'s)."""
+    base = mode & 3
     g, _g1, _g2 = _resist(P, s)
     fd = P[C] * s ** P[ALPHA]
     out[3] = (g - fd) * s

@@ -130,45 +130,6 @@ def _resist(P, S, s):
 
 
 @njit(cache=True, nogil=True)
-def _quasi(P, S, push):
-    """The quasi-static speed S0 [m/s], ``G(S0) = push`` (:func:`_resist`; 0 where the sliders hold the base,
-    push <= f_slow): :func:`quickrelease.building._ode._quasi` without a storey damper, else a safeguarded Newton
-    iteration on ln S0 within a bracket."""
-    cs = S[CS]
-    if cs <= 0.0:
-        return _ode._quasi(P, push)
-    if push <= P[FSLOW]:
-        return 0.0
-    fmin = min(P[FSLOW], P[FFAST])
-    hi = (push - fmin) / cs  # G(s) >= fmin + c_s s
-    if P[C] > 0.0:
-        hi = min(hi, ((push - fmin) / P[C]) ** (1.0 / P[ALPHA]))
-    u_hi = math.log(hi)
-    u_lo = u_hi
-    for _ in range(40):
-        u_lo -= 20.0
-        if _resist(P, S, math.exp(u_lo))[0] < push:
-            break
-    u = u_hi
-    for _ in range(200):
-        s = math.exp(u)
-        g, g1, _g2 = _resist(P, S, s)
-        if abs(g - push) <= 4e-16 * push:
-            return s
-        if g > push:
-            u_hi = u
-        else:
-            u_lo = u
-        new = u - (g - push) / s / g1 if g1 > 0.0 else 0.5 * (u_lo + u_hi)
-        if not (u_lo < new < u_hi):
-            new = 0.5 * (u_lo + u_hi)
-        if abs(new - u) <= 1e-15 or u_hi - u_lo <= 1e-15:
-            return math.exp(new)
-        u = new
-    return math.exp(u)
-
-
-@njit(cache=True, nogil=True)
 def _slow(P, S, y, d, mode):
     """The slow manifold of a sliding base whose dampers dominate (:func:`quickrelease.building._ode._slow` with the
     storey): returns (S, dS/dt, G'(S0), eps), the speed S = S0 + S1 + S2 [m/s], its rate [m/s^2], the
@@ -176,7 +137,7 @@ def _slow(P, S, y, d, mode):
 
     From ``m_b dS/dt = push - G(S)`` (:func:`drive`) and ``dpush/dt = A - B S`` (A = d (k_s x_s' - c_s (k_s u +
     c_s x_s') / m_s) the roof's part, B = k_t + k_s - c_s^2 / m_s; the roof ``m_s x_s'' = -(k_s u + c_s u')``):
-    S0 the quasi-static speed (G(S0) = push, :func:`_quasi`), S1 = -m_b push' / G'^2 its first correction for
+    S0 the quasi-static speed (G(S0) = push, ``_ode._quasi`` with c_s), S1 = -m_b push' / G'^2 its first correction for
     inertia, S2 = (m_b B S1 / G' - m_b dS1/dt - G'' S1^2 / 2) / G' the second (dS1/dt with push'' = A' - k_t' S0 -
     B dS0/dt at first order); ``eps = m_b (|A| + |B| S0) / (G'^2 S0)``, the relaxation time m_b / G' over the
     time in which S0 changes by itself (the rigid kernel's (omega / lambda)^2 where A = 0), the neglected terms
@@ -187,7 +148,7 @@ def _slow(P, S, y, d, mode):
     ms, ks, cs = S[MS], S[KS], S[CS]
     zx, kt = _ode._slope(P, y[2], mode)
     u, vs = y[XS] - y[0], y[VS]
-    s0 = _quasi(P, S, drive(P, S, y, d))
+    s0 = _ode._quasi(P, drive(P, S, y, d), S[CS])
     if not (0.0 < s0 < math.inf):
         return 0.0, 0.0, 0.0, math.inf
     m = P[M]
@@ -197,12 +158,7 @@ def _slow(P, S, y, d, mode):
     p1 = a - b * s0
     ds0 = p1 / g1
     s1 = -m * p1 / g1 / g1
-    dkt = 0.0
-    if P[HKIND] == H_BOUCWEN and (mode & 3) == LOADING and P[N] > 0.0:
-        z = y[2]
-        az = abs(z)
-        if az > 0.0:
-            dkt = -P[Q] * P[N] * az ** (P[N] - 1.0) * (1.0 if z > 0.0 else -1.0) * d * s0 * zx / P[DY]
+    dkt = _ode._stiffening(P, y, d, mode, s0, zx)
     du = vs - d * s0
     dvs = -(ks * u + cs * du) / ms
     da = d * (ks * dvs - cs * (ks * du + cs * dvs) / ms)
@@ -224,23 +180,10 @@ def _creep(P, S, y, d, mode, out):
     v = 0.0
     if sp > 0.0:
         v = d * sp
-        zx = _ode._slope(P, y[2], mode)[0]
-        base = mode & 3
         out[0] = v
         out[1] = d * ds
-        out[2] = v * zx
-        g, _g1, _g2 = _ode._resist(P, sp)
-        fd = P[C] * sp ** P[ALPHA]
-        out[3] = (g - fd) * sp
-        out[4] = fd * sp
-        if P[HKIND] == H_BOUCWEN:
-            if base == LOADING:
-                az = abs(y[2])
-                out[5] = P[Q] * (az if P[N] == 1.0 else az ** P[N]) * y[2] * v
-            elif base == YIELDING:
-                out[5] = P[Q] * y[2] * v
-        elif P[HKIND] == H_PLASTIC and base == YIELDING:
-            out[5] = P[FP] * sp
+        out[2] = v * _ode._slope(P, y[2], mode)[0]
+        _ode._creep_works(P, y, mode, sp, v, out)
     du = y[VS] - v
     out[XS] = y[VS]
     out[VS] = -(S[KS] * (y[XS] - y[0]) + S[CS] * du) / S[MS]

@@ -1933,13 +1933,20 @@ def _polish(res, names, values, solve, residuals, lower, upper, dt: float):
             probe = float(r @ r)
             if probe <= chi2 + float(np.sum((J @ (y - x)) ** 2)) - POLISH_GAIN and probe < best_chi2:
                 best, best_chi2 = y, probe
-        if best is None:
-            return res
-        done = solve(names, values, best)
-        if 2.0 * (res.cost - done.cost) < POLISH_GAIN:
+        done = _restarted(res, best, solve, names, values)
+        if done is None:
             return res
         res = done
     return res
+
+
+def _restarted(res, best, solve, names, values):
+    """The fit solved again from the probe ``best`` (None: no probe), where that lowers its chi-square by at least
+    ``POLISH_GAIN`` (less is within the noise of where the sampled steps fall); else None."""
+    if best is None:
+        return None
+    done = solve(names, values, best)
+    return done if 2.0 * (res.cost - done.cost) >= POLISH_GAIN else None
 
 
 #: The turning-point polish (:func:`_turn_polish`): rounds at most; where a probe puts the turning point, past the
@@ -2086,10 +2093,8 @@ def _turn_polish(res, names, values, solve, misfit, lower, upper):
             value = float(probe @ probe)
             if value < best_chi2:
                 best, best_chi2 = y, value
-        if best is None:
-            return res
-        done = solve(names, values, best)
-        if 2.0 * (res.cost - done.cost) < POLISH_GAIN:
+        done = _restarted(res, best, solve, names, values)
+        if done is None:
             return res
         res = done
     return res
