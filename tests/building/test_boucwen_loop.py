@@ -115,6 +115,7 @@ def test_the_noise_does_not_ratchet_z():
     assert noisy.characteristic_strength == pytest.approx(clean.characteristic_strength, rel=0.05)
 
 
+@pytest.mark.slow
 def test_the_loop_start_finds_the_minimum_the_others_miss():
     """The fit of a noisy record (lead-rubber bearings with alpha = 0.5 dampers) without the global stage: its
     other start (the decay's and the bilinear loop's) ends at chi2/dof ~2850 (measured; Kd's period 2.2 s

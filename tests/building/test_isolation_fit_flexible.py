@@ -145,6 +145,7 @@ def test_pendulum_under_a_flexible_storey_fitted_back():
     assert isinstance(fit.isolation().isolation, Pendulum)
 
 
+@pytest.mark.slow
 def test_boucwen_record_starts_reach_the_truth():
     """Without the global search (the record's own starts only: the hysteresis loop of (m_b a_b + m_s a_s) / m, the
     rigid bilinear fit's, the two readings of the roof's spectral peak): a shorter Bouc-Wen record fitted back,

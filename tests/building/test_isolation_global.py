@@ -291,6 +291,7 @@ def test_a_clock_of_the_time_of_day_gives_the_same_fit():
 
 @pytest.mark.parametrize("model", ["linear", pytest.param("bilinear", marks=[pytest.mark.slow, pytest.mark.skipif(
     not SLOW, reason="opt-in (QUICKRELEASE_SLOW=1): three bilinear fits; CI's whole run took 884 s of its 900")])])
+@pytest.mark.slow
 def test_a_mirrored_record_and_a_scaled_mass_give_the_same_fit(model):
     """Two symmetries of the physics, not of the code: a record pushed the other way (every channel negated: a
     sensor mounted the other way round) is the same building, d0 negated; and the record fixes the parameters per

@@ -476,6 +476,7 @@ def test_campaign_command_on_the_shipped_pendulum_campaign(tmp_path):
     assert report_number_faults(report) == [] and "<th>mu [%] (95% interval)</th>" in report
 
 
+@pytest.mark.slow
 def test_a_release_whose_minimum_is_not_confirmed_is_refitted_from_the_others(monkeypatch):
     """A fit that matches its noise but whose multi-start did not confirm its minimum (planted here: R1's fit held
     at a friction 3 standard errors off, chi2/dof still below 1.3, and marked unconfirmed) is refitted from the
@@ -510,6 +511,7 @@ def _same_fit(a, b):
     assert a.search.summary() == b.search.summary()
 
 
+@pytest.mark.slow
 def test_a_restart_reuses_what_the_releases_fits_computed(monkeypatch):
     """R1 marked unconfirmed is refitted from R2's and R3's estimates: each restart takes the global stage and
     the record's own starts from what R1's fit computed (its FitMemo, handed back by the worker that fitted it)
