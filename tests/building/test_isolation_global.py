@@ -127,6 +127,7 @@ def test_bilinear_fit_reaches_the_truth_started_minimum(seed, which, off):
     assert fit.chi2 <= ref.chi2 + 1.0, (fit.estimates, ref.estimates)
 
 
+@pytest.mark.slow
 def test_the_global_stage_finds_what_the_design_values_miss():
     """A record whose sliders stick after a swing and a half: from design values 30% off, the local search
     ends in another basin (more than 100 above the best), the fit with its global stage within delta

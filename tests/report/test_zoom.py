@@ -305,6 +305,7 @@ def _in_chromium(page: str, figure: str, folder: Path) -> dict:
     return json.loads(found.group(1).replace("&lt;", "<").replace("&gt;", ">").replace("&amp;", "&"))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("case", "figure", "channels"), [("building", "building_fit", 2), ("device", "fit_channels", 3)])
 def test_the_figure_zooms_pans_and_resets_in_headless_chromium(case, figure, channels, request, tmp_path):
     page = request.getfixturevalue(case)[1]

@@ -304,6 +304,7 @@ def _linear_releases(n=4):
     return out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("how", ["not identified", "whole range"])
 def test_a_release_that_does_not_identify_a_quantity_is_left_out_of_its_laws(how, monkeypatch):
     """R2's friction planted as the fit's "not identified" (standard error inf, no interval), or as a profile
