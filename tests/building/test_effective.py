@@ -140,6 +140,7 @@ def test_bad_loops_are_one_line():
     assert loop_cycles([0, 1, 2, 3], [0, 1, 2, 3], [0, 1, 2, 3]) == ()  # no turning point: no cycle
 
 
+@pytest.mark.slow
 def test_the_building_analysis_reports_the_fitted_isolators_cycles():
     """analyse_building on an independent record of a linear isolator on sliders (no dampers): per cycle of
     the fitted model's loop after the first (which starts at the release, on the unloading branch), keff =

@@ -102,6 +102,7 @@ def _check_truth(data):
         assert lo < value < hi
 
 
+@pytest.mark.slow
 def test_building_command_json_folder_and_refusals(tmp_path):
     _write_record(tmp_path, duration=14.0)
     case = _case(tmp_path, _building_toml())

@@ -94,6 +94,7 @@ def test_errors_are_one_line_exit_2(args, fragment):
     assert "Traceback" not in r.output and "None" not in r.stderr  # click 8.2.0 printed "(env var: 'None')"
 
 
+@pytest.mark.slow
 def test_demo_prints_the_comparison(tmp_path):
     r = run("demo", "--out", str(tmp_path / "demo"))
     assert r.exit_code == 0, r.output
@@ -113,6 +114,7 @@ def test_demo_prints_the_comparison(tmp_path):
     assert table["provenance"]["input"]["name"] == "paper case (built in)"
 
 
+@pytest.mark.slow
 def test_installed_script_runs():
     r = subprocess.run([sys.executable, "-m", "quickrelease.cli", "simulate", "--energy", "2900", "--alpha0", "0.2",
                         "--f1", "400", "--f2", "800", "--json"], capture_output=True, text=True, timeout=120)

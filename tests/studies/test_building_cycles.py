@@ -193,6 +193,7 @@ def test_bad_draws_and_window_are_one_line():
         measured_cycles(fit, window=8)
 
 
+@pytest.mark.slow
 def test_the_shipped_examples_measured_cycle_agrees_with_the_fitted_models():
     """examples/building.toml (LVDT 200 Hz, accelerometer 100 Hz on its own clock, in mm and g0): its one whole
     cycle before the sliders hold, read off the record, within 2 standard errors and 2 % of the fitted model's
