@@ -29,8 +29,9 @@ load 2-4: evaluations 2.2 / 0.44 ms Bouc-Wen, 2.1 / 0.43 ms pendulum; whole fits
 pendulum. h32a, paired with the tree before it, load 1.8-2.0: flexible / rigid whole fits 9.9-10.2 s / 4.2-4.3 s
 Bouc-Wen (was 13.1-13.3 / 4.2-4.3), 8.1-8.2 s / 4.6-4.8 s pendulum (was 136-139 / 4.6), the same minima; the
 trials 1.4, 5.6 and 47 ms, were 563, 2 054 and 87 ms. Sixth session, load 2-3: 2dof-power evaluation 26.9 ms
-(7 015 steps), whole fit 19.7 s, not confirmed (24.0 s with the polish, load ~0.5: below the truth-started fit); boucwen-damper 46.7 ms (6 115 steps), 81.6 s, confirmed; reduced
-chi-square 0.98 each, the rigid fits' 26.4 and 21.2.)
+(7 015 steps), whole fit 19.7 s, not confirmed (24.0 s with the polish, load ~0.5: below the truth-started fit);
+boucwen-damper 46.7 ms (6 115 steps), 81.6 s, confirmed; reduced chi-square 0.98 each, the rigid fits' 26.4 and
+21.2.)
 """
 
 from __future__ import annotations
