@@ -87,3 +87,68 @@ def test_a_slow_steady_descent_is_not_taken_for_a_stall(x0):
     r = bounded_least_squares(fun, np.array(x0), jac, np.array([-10.0, -10.0]), np.array([10.0, 10.0]), tol=1e-14)
     assert r.njev > 20 and "staircase" not in r.message
     np.testing.assert_allclose(r.x, [1.0, 1.0], atol=1e-10)
+
+
+
+def _curved(amplitude: float):
+    """Residuals whose minimum (0) is at ``(amplitude, 2)``: an exponential in the second parameter (a Gauss-Newton
+    step from below it overshoots, and the trust region shrinks) beside a first parameter of magnitude
+    ``amplitude`` (a damper's coefficient in N (s/m)^alpha beside a period in s)."""
+
+    def fun(p):
+        return np.array([1e3 * (np.exp(5.0 * (p[1] - 2.0)) - 1.0), 1e3 * (p[0] / amplitude - 1.0),
+                         0.1 * (p[0] / amplitude - 1.0) * p[1]])
+
+    def jac(p):  # central differences written here
+        J = np.empty((3, 2))
+        for i in range(2):
+            h = 1e-7 * max(1.0, abs(p[i]))
+            up, down = p.copy(), p.copy()
+            up[i] += h
+            down[i] -= h
+            J[:, i] = (fun(up) - fun(down)) / (2.0 * h)
+        return J
+
+    return fun, jac
+
+
+@pytest.mark.parametrize("w0", [0.5, 1.0, 3.0])
+def test_a_large_parameter_does_not_end_the_small_ones_solve(w0):
+    """scipy's xtol compares the step with the norm of x in the parameters' own units: beside a coefficient of 1e6
+    a step of 0.5 reads as converged after the trust region shrank once, and the solve stops short (the guarded
+    failure); measured against each parameter's own magnitude (``scale``) it reaches the exact minimum."""
+    amplitude = 1e6
+    fun, jac = _curved(amplitude)
+    x0 = np.array([amplitude, w0])
+    lo, hi = np.array([0.0, 0.0]), np.array([5e6, 5.0])
+    plain = bounded_least_squares(fun, x0, jac, lo, hi, tol=1e-6, x_scale="jac")
+    assert abs(plain.x[1] - 2.0) > 0.1 and "xtol" in plain.message  # what this guards against
+    scaled = bounded_least_squares(fun, x0, jac, lo, hi, tol=1e-6, x_scale="jac", scale=np.abs(x0))
+    np.testing.assert_allclose(scaled.x, [amplitude, 2.0], rtol=1e-7)
+    assert 2.0 * scaled.cost < 1e-8
+    np.testing.assert_allclose(scaled.jac, jac(scaled.x), rtol=1e-4, atol=1e-6)  # the Jacobian back in x's units
+    np.testing.assert_allclose(scaled.grad, scaled.jac.T @ scaled.fun, rtol=1e-6, atol=1e-12)
+
+def test_the_release_times_origin_keeps_its_solve_relative():
+    """A parameter far from 0 in its own units (a release at a logger's time of day, 36 000 s) measured from an
+    origin: the solve reaches the minimum as from the shifted problem."""
+    fun, jac = _problem(0.0)
+    shift = 36000.0
+
+    def fun_s(p):
+        return fun(np.array([p[0], p[1], p[2] - shift, p[3]]))
+
+    def jac_s(p):
+        return jac(np.array([p[0], p[1], p[2] - shift, p[3]]))
+
+    x0 = X0 + np.array([0.0, 0.0, shift, 0.0])
+    r = bounded_least_squares(fun_s, x0, jac_s, LO + [0, 0, shift, 0], HI + [0, 0, shift, 0], tol=1e-8,
+                              x_scale="jac", scale=[1.0, 0.3, 2.0, 0.1], origin=[0.0, 0.0, shift, 0.0])
+    np.testing.assert_allclose(r.x - [0.0, 0.0, shift, 0.0], [*TRUTH, 0.0], atol=1e-7)
+
+
+@pytest.mark.parametrize("scale", [[0.0, 1.0, 1.0], [np.nan, 1.0, 1.0], [1.0, 1.0]])
+def test_a_bad_scale_is_refused(scale):
+    fun, jac = _problem(0.0)
+    with pytest.raises(ValueError, match="scale"):
+        bounded_least_squares(fun, X0[:3], jac, LO[:3], HI[:3], scale=scale)
