@@ -118,7 +118,7 @@ def _gauss_newton(J: np.ndarray, f: np.ndarray) -> np.ndarray:
 
 
 def bounded_least_squares(fun, x0, jac, lower, upper, *, args=(), tol: float = 1e-8, max_nfev: int | None = None,
-                          scale=None, origin=None, **options) -> OptimizeResult:
+                          scale=None, origin=None, xtol: float | None = None, **options) -> OptimizeResult:
     """scipy's bounded ``least_squares`` (trust-region reflective) with an active set: a parameter whose optimum
     lies at its bound is held there instead of approached geometrically.
 
@@ -142,7 +142,8 @@ def bounded_least_squares(fun, x0, jac, lower, upper, *, args=(), tol: float = 1
     ``x`` in the parameters' own units (``x_scale`` shapes the trust region only): beside a fluid damper's
     coefficient of 1e6 N (s/m)^alpha a step of 0.3 s in the period is "below" 1e-6 of ``x`` and ends the solve, a
     start 5 000 above the minimum taken for one (a Bouc-Wen + damper record's multi-start: thinned solves ended after
-    6-10 evaluations). In ``u`` every parameter's change counts relative to its own magnitude.
+    6-10 evaluations). In ``u`` every parameter's change counts relative to its own magnitude. ``xtol``: the step's
+    tolerance where it differs from ``tol`` (which sets ``ftol`` and ``gtol``).
 
     Returns scipy's OptimizeResult over all the parameters (``x``, ``fun``, ``cost``, ``jac`` (the full Jacobian at
     ``x`` where a parameter was held), ``nfev`` and ``njev`` over every round, ``status``, ``success``, ``message``)
@@ -156,7 +157,7 @@ def bounded_least_squares(fun, x0, jac, lower, upper, *, args=(), tol: float = 1
         r = bounded_least_squares(lambda u, *a: fun(o + s * u, *a), (np.asarray(x0, dtype=float) - o) / s,
                                   lambda u, *a: jac(o + s * u, *a) * s, (np.asarray(lower, dtype=float) - o) / s,
                                   (np.asarray(upper, dtype=float) - o) / s, args=args, tol=tol, max_nfev=max_nfev,
-                                  **options)
+                                  xtol=xtol, **options)
         r.x = o + s * r.x
         r.jac = r.jac / s
         if getattr(r, "grad", None) is not None:
@@ -210,8 +211,8 @@ def bounded_least_squares(fun, x0, jac, lower, upper, *, args=(), tol: float = 1
 
         budget = None if max_nfev is None else max(max_nfev - nfev, 1)
         try:
-            r = least_squares(f, x[free], jac=j, bounds=(lo[free], hi[free]), args=args, xtol=tol, ftol=tol,
-                              gtol=tol, max_nfev=budget, **options)
+            r = least_squares(f, x[free], jac=j, bounds=(lo[free], hi[free]), args=args,
+                              xtol=tol if xtol is None else xtol, ftol=tol, gtol=tol, max_nfev=budget, **options)
         except _Stall as st:
             njev += len(history)
             nfev += calls[0]

@@ -116,6 +116,26 @@ def test_lead_rubber_with_fluid_dampers_under_a_storey_fitted_back():
     _checked(fit, {n: v for n, v in LEAD_RUBBER.items() if n != "friction"})
     assert fit.estimates["friction"] < 3.0 * fit.std_errors["friction"]
     assert isinstance(fit.isolation().isolation, BoucWen) and fit.label == "boucwen (flexible)"
+    # three starts reach the minimum (before the solver's steps were measured against each parameter's magnitude,
+    # the loop's alone: "not confirmed", a second basin 1 835 above)
+    assert fit.global_minimum_confirmed, fit.search.warnings
+
+
+@pytest.mark.slow
+def test_a_bilinear_fit_that_never_yields_gives_no_bouc_wen_start():
+    """The Bouc-Wen fit's start from a bilinear fit of the record (Kd = k2, Qd = F_y (1 - k2 / k1), dy = F_y / k1):
+    on this record the bilinear fit's layer never yields within d0 (F_y undetermined: it ran to 2e19 N, dy 3e12 m)
+    and the flexible fit from that start's Jacobian did not end in 20 minutes. Such a fit gives no start; any start
+    given lies within the loop (0 < dy < d0)."""
+    from quickrelease.building.isolation_fit import _boucwen_from_bilinear, _detect_release
+
+    channels = _record("boucwen", LEAD_RUBBER, seed=1)
+    t_r = _detect_release(channels)
+    record = {"d0": 0.203, "release_time": t_r, **{f"offset_{c.name}": 0.0 for c in channels}}
+    starts = _boucwen_from_bilinear(channels, M, t_r, True, {}, record, "power", 0, None, (1.0,),
+                                    global_search=False)  # (as the fit calls it where the loop gives a start)
+    for _, p in starts:
+        assert 0.0 < p["yield_displacement"] < abs(p["d0"]) and math.isfinite(p["characteristic_strength"])
 
 
 COVERAGE_SEEDS = 25  # 25 records x 8 parameters: 200 intervals
