@@ -8,6 +8,7 @@ noise level, the fitted model the FlexibleBuilding of the estimates."""
 
 import math
 import os
+import time
 
 import isolator_reference as ref
 import numpy as np
@@ -141,5 +142,44 @@ def test_2dof_with_fluid_dampers_intervals_cover_the_truth():
     pooled = sum(covered.values()) / (COVERAGE_SEEDS * len(covered))
     print(f"coverage of 2dof with fluid dampers over {COVERAGE_SEEDS} seeds: {covered}, pooled {pooled:.3f}")
     lo, hi = binomial_band(COVERAGE_SEEDS)
+    assert all(lo <= c <= hi for c in covered.values()), covered
+    assert 0.90 <= pooled <= 0.99, (pooled, covered)
+
+
+LEAD_RUBBER_SEEDS = 24  # 24 records x 10 parameters: 240 intervals
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not os.environ.get("QUICKRELEASE_SLOW"), reason="opt-in (QUICKRELEASE_SLOW=1, -p no:timeout): 24 "
+                    "fits of lead-rubber bearings with fluid dampers under a storey, ~12 minutes; the fit above runs "
+                    "in CI")
+def test_lead_rubber_with_fluid_dampers_under_a_storey_intervals_cover_the_truth():
+    """The 95% intervals of the lead-rubber + fluid dampers + storey fit over 24 records (seeds 3400-3423, 6 s after
+    the release: the base is still below the noise from 4 s on; 240 intervals of its 10 parameters, the sliders'
+    friction, true 0 at its bound, left out): each record released at its own instant, a seeded 0-10 ms after
+    LEAD_RUBBER's (the release's and the turns' places between the samples vary as in the field). The pooled
+    coverage in 90-99% and each parameter's count within the 0.05%-99.95% band of Binomial(24, 0.95)."""
+    from coverage_records import binomial_band
+
+    names = [n for n in LEAD_RUBBER if n != "friction"]
+    covered = dict.fromkeys(names, 0)
+    z = {n: [] for n in names}
+    for seed in range(3400, 3400 + LEAD_RUBBER_SEEDS):
+        truth = {**LEAD_RUBBER, "release_time": T_R + np.random.default_rng(seed).uniform(0.0, 0.01)}
+        channels = _record("boucwen", truth, seed, duration=6.0)
+        start = time.perf_counter()
+        fit = fit_isolation(channels, M, "boucwen", flexible=True, damping="power", superstructure_mass=MS,
+                            profile=False)
+        seconds = time.perf_counter() - start
+        for name in names:
+            covered[name] += fit.ci95[name][0] <= truth[name] <= fit.ci95[name][1]
+            z[name].append((fit.estimates[name] - truth[name]) / fit.std_errors[name])
+        print(f"seed {seed}: {seconds:.1f} s, chi2_red {fit.chi2_reduced:.3f}, confirmed {fit.global_minimum_confirmed}, z "
+              + " ".join(f"{name} {z[name][-1]:+.2f}" for name in names), flush=True)
+    pooled = sum(covered.values()) / (LEAD_RUBBER_SEEDS * len(covered))
+    spread = {name: round(float(np.std(v)), 2) for name, v in z.items()}
+    print(f"coverage of lead-rubber + fluid dampers + storey over {LEAD_RUBBER_SEEDS} records: {covered}, pooled "
+          f"{pooled:.3f}; the z-scores' spread {spread}")
+    lo, hi = binomial_band(LEAD_RUBBER_SEEDS)
     assert all(lo <= c <= hi for c in covered.values()), covered
     assert 0.90 <= pooled <= 0.99, (pooled, covered)

@@ -145,3 +145,30 @@ def test_start_values_of_another_damper_law_are_left_out():
     assert fit.chi2_reduced < 1.3, fit.chi2_reduced
     z = {name: (fit.estimates[name] - value) / fit.std_errors[name] for name, value in truth.items()}
     assert all(abs(v) < 4.0 for v in z.values()), z
+
+
+@pytest.mark.parametrize("fy", [6.124e16, 2.0e5])
+def test_boucwen_start_of_a_bilinear_fit_keeps_its_layer(fy):
+    """The Bouc-Wen start from a bilinear fit (isolation_fit._boucwen_of_bilinear: Kd = k2, Qd = F_y (1 - k2 / k1),
+    dy = F_y / k1) moves as the bilinear layer over the record: within the bounds of the fit, its free vibration by
+    isolator_reference's solve_ivp within 1 % of d0 of the bilinear layer's. F_y = 6.1e16 N: seed 3422's bilinear
+    fit of the lead-rubber + damper record under a storey (test_isolation_fit_flexible_power's coverage records,
+    k2 / k1 = 0.9921, T1 = 2.068 s), which never yields: dy = 8e9 m, clipped to the bound 10 m by the solve with Qd
+    of 5e14 N left: a base on 5e13 N/m, each evaluation 5 s, the fit tens of minutes. 2e5 N: one that yields at 27 mm
+    (Qd, dy the closed form)."""
+    import isolator_reference as ref
+
+    from quickrelease.building.isolation_fit import PARAMETER_BOUNDS, _boucwen_of_bilinear
+
+    m, d0 = 8.0e5, 0.133
+    k1 = m * (2.0 * math.pi / 2.068) ** 2
+    k2 = 0.9921 * k1 if fy > 1e10 else 0.25 * k1
+    qd, dy = _boucwen_of_bilinear(k1, k2, fy)
+    lo, hi = PARAMETER_BOUNDS["yield_displacement"]
+    assert lo <= dy <= hi
+    if fy / k1 <= hi:
+        assert qd == pytest.approx(fy * (1.0 - k2 / k1), rel=1e-12) and dy == pytest.approx(fy / k1, rel=1e-12)
+    t = np.arange(0.0, 4.0, 0.005)
+    bilinear = ref.simulate(ref.bilinear(m, k1, k2, fy), d0, t).x
+    boucwen = ref.simulate(ref.boucwen(m, k2, qd, dy, shape=25.0 if fy / k1 <= hi else 1.0), d0, t).x
+    assert np.max(np.abs(boucwen - bilinear)) < 0.01 * d0
