@@ -119,6 +119,48 @@ def test_lead_rubber_with_fluid_dampers_under_a_storey_fitted_back():
     assert isinstance(fit.isolation().isolation, BoucWen) and fit.label == "boucwen (flexible)"
 
 
+def _reference_errors(model, p, duration, rate=100.0):
+    """The standard errors the record's noise allows at the truth ``p``, from the independent simulator alone: the
+    Fisher information ``J^T J`` of the weighted samples (NOISE), J by central differences of
+    isolator_reference's motion over 1e-6 of each parameter (the sliders' friction, true 0 at its bound, forward
+    over 50 N: the fit frees it), with a zero for each channel (its column 1 / sigma)."""
+    names = list(p)
+
+    def weighted(q):
+        return np.concatenate([y / NOISE[kind] for _, kind, y in _clean(model, q, duration, rate)[1]])
+
+    at = weighted(p)
+    columns = []
+    for name in names:
+        if p[name] == 0.0:
+            columns.append((weighted({**p, name: 50.0}) - at) / 50.0)
+        else:
+            h = 1e-6 * abs(p[name])
+            columns.append((weighted({**p, name: p[name] + h}) - weighted({**p, name: p[name] - h})) / (2 * h))
+    n = at.size // 3
+    for i, kind in enumerate(("x", "a", "a_roof")):
+        zero = np.zeros(at.size)
+        zero[i * n:(i + 1) * n] = 1.0 / NOISE[kind]
+        columns.append(zero)
+    J = np.column_stack(columns)
+    cov = np.linalg.inv(J.T @ J)
+    return {name: math.sqrt(cov[i, i]) for i, name in enumerate(names)}
+
+
+@pytest.mark.slow
+def test_lead_rubber_with_fluid_dampers_under_a_storey_standard_errors():
+    """The standard errors of the lead-rubber + dampers + storey fit (a 6 s record, seed 3401) each within
+    0.8-1.25 of those the independent simulator's information gives at the truth (:func:`_reference_errors`; the
+    fit's at its estimate, a few standard errors away). Measured: 1.00-1.03. (The coverage check below is
+    opt-in; this one runs in CI.)"""
+    channels = _record("boucwen", LEAD_RUBBER, 3401, duration=6.0)
+    fit = fit_isolation(channels, M, "boucwen", flexible=True, damping="power", superstructure_mass=MS,
+                        profile=False)
+    reference = _reference_errors("boucwen", LEAD_RUBBER, 6.0)
+    ratios = {name: fit.std_errors[name] / se for name, se in reference.items()}
+    assert all(0.8 <= r <= 1.25 for r in ratios.values()), ratios
+
+
 COVERAGE_SEEDS = 25  # 25 records x 8 parameters: 200 intervals
 
 
@@ -158,7 +200,15 @@ def test_lead_rubber_with_fluid_dampers_under_a_storey_intervals_cover_the_truth
     the release: the base is still below the noise from 4 s on; 240 intervals of its 10 parameters, the sliders'
     friction, true 0 at its bound, left out): each record released at its own instant, a seeded 0-10 ms after
     LEAD_RUBBER's (the release's and the turns' places between the samples vary as in the field). The pooled
-    coverage in 90-99% and each parameter's count within the 0.05%-99.95% band of Binomial(24, 0.95)."""
+    coverage in 90-99% and each parameter's count within the 0.05%-99.95% band of Binomial(24, 0.95) (18-24).
+    Measured 2026-11-27 (15.2 minutes at load ~2-3, a fit 19-79 s, median 36 s): period, C, alpha, Qd, dy, n,
+    T_s, zeta_s, d0 23 of 24 each, release 21; pooled 0.950; the z-scores' spread 0.74-0.90, the release's 1.20
+    (its three misses late by 2.2-2.6 standard errors); reduced chi-square 0.946-1.067; 21 of 24 "confirmed".
+    The friction's bound pulls the parameters correlated with it (period, C, alpha, Qd, dy, zeta_s, d0: |rho|
+    0.65-0.89) off by +-0.2-0.5 on average and narrows their spread: with the friction free the intervals are
+    those of the unconstrained fit, a linearised fit held at 0 half the time covers 0.97 of them. Seed 3422 had
+    run for tens of minutes (a Bouc-Wen start from a bilinear fit that never yielded: see
+    test_isolation_start's test_boucwen_start_of_a_bilinear_fit_keeps_its_layer); now 57 s."""
     from coverage_records import binomial_band
 
     names = [n for n in LEAD_RUBBER if n != "friction"]
