@@ -172,3 +172,34 @@ def test_boucwen_start_of_a_bilinear_fit_keeps_its_layer(fy):
     bilinear = ref.simulate(ref.bilinear(m, k1, k2, fy), d0, t).x
     boucwen = ref.simulate(ref.boucwen(m, k2, qd, dy, shape=25.0 if fy / k1 <= hi else 1.0), d0, t).x
     assert np.max(np.abs(boucwen - bilinear)) < 0.01 * d0
+
+
+def test_boucwen_starts_from_a_bilinear_fit_keep_its_layer(monkeypatch):
+    """_boucwen_from_bilinear's starts from seed 3422's bilinear fit (above; the fit itself replaced by its result):
+    dy within its bounds, the initial stiffness Kd + Qd / dy the bilinear's k1, the power-law damper's start; and
+    the record's own start (_start, from the bilinear loop's values, replaced likewise) the same."""
+    from types import SimpleNamespace
+
+    import quickrelease.building.isolation_fit as fit_module
+
+    m = 8.0e5
+    bilinear = dict(period=2.068, damping_ratio=0.2573, friction=1.597e5, stiffness_ratio=0.9921, yield_force=6.124e16,
+                    d0=0.1333, release_time=0.52)
+    monkeypatch.setattr(fit_module, "_fit_isolation", lambda *a, **k: SimpleNamespace(parameters=bilinear))
+    starts = fit_module._boucwen_from_bilinear([], m, 0.52, True, {}, {"d0": 0.2, "release_time": 0.54}, "power", 0,
+                                               None)
+    k1 = m * (2.0 * math.pi / bilinear["period"]) ** 2
+    lo, hi = fit_module.PARAMETER_BOUNDS["yield_displacement"]
+    assert len(starts) == len(fit_module.BOUCWEN_SHAPES)
+    for _, start in starts:
+        kd = m * (2.0 * math.pi / start["period"]) ** 2
+        assert lo <= start["yield_displacement"] <= hi
+        assert kd + start["characteristic_strength"] / start["yield_displacement"] == pytest.approx(k1, rel=1e-9)
+        assert start["d0"] == bilinear["d0"] and start["damping_exponent"] == 0.5
+    # the record's own start (isolation_fit._start, from the bilinear loop's values): the same layer
+    loop = {n: bilinear[n] for n in ("period", "damping_ratio", "friction", "stiffness_ratio", "yield_force")}
+    monkeypatch.setattr(fit_module, "_bilinear_start", lambda *a, **k: dict(loop))
+    start = fit_module._start("boucwen", m, [], 0.52, 0.1333, {})
+    kd = m * (2.0 * math.pi / start["period"]) ** 2
+    assert lo <= start["yield_displacement"] <= hi
+    assert kd + start["characteristic_strength"] / start["yield_displacement"] == pytest.approx(k1, rel=1e-9)
