@@ -193,7 +193,7 @@ LEAD_RUBBER_SEEDS = 24  # 24 records x 10 parameters: 240 intervals
 
 @pytest.mark.slow
 @pytest.mark.skipif(not os.environ.get("QUICKRELEASE_SLOW"), reason="opt-in (QUICKRELEASE_SLOW=1, -p no:timeout): 24 "
-                    "fits of lead-rubber bearings with fluid dampers under a storey, ~12 minutes; the fit above runs "
+                    "fits of lead-rubber bearings with fluid dampers under a storey, ~15 minutes; the fits above run "
                     "in CI")
 def test_lead_rubber_with_fluid_dampers_under_a_storey_intervals_cover_the_truth():
     """The 95% intervals of the lead-rubber + fluid dampers + storey fit over 24 records (seeds 3400-3423, 6 s after
@@ -204,6 +204,11 @@ def test_lead_rubber_with_fluid_dampers_under_a_storey_intervals_cover_the_truth
     Measured 2026-11-27 (15.2 minutes at load ~2-3, a fit 19-79 s, median 36 s): period, C, alpha, Qd, dy, n,
     T_s, zeta_s, d0 23 of 24 each, release 21; pooled 0.950; the z-scores' spread 0.74-0.90, the release's 1.20
     (its three misses late by 2.2-2.6 standard errors); reduced chi-square 0.946-1.067; 21 of 24 "confirmed".
+    20 more records (seeds 3424-3443, a scratch run): 18-20 of 20, pooled 0.985; the 44 together pooled 0.966,
+    the release 39 of 44 (Binomial(44, 0.95) puts 39 or fewer at 7 %; its 44 z-scores' sum of squares at 6 %,
+    Kolmogorov-Smirnov p 0.57): its standard error is the reference's (1.00 of the simulator's information at the
+    truth on seeds 3401, 3408, 3411, 3412, three of them misses), the package's motion at the truth the
+    reference's to far below the noise; left as chance.
     The friction's bound pulls the parameters correlated with it (period, C, alpha, Qd, dy, zeta_s, d0: |rho|
     0.65-0.89) off by +-0.2-0.5 on average and narrows their spread: with the friction free the intervals are
     those of the unconstrained fit, a linearised fit held at 0 half the time covers 0.97 of them. Seed 3422 had
