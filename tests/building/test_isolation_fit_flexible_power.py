@@ -8,6 +8,7 @@ noise level, the fitted model the FlexibleBuilding of the estimates."""
 
 import math
 import os
+import time
 
 import isolator_reference as ref
 import numpy as np
@@ -121,21 +122,46 @@ def test_lead_rubber_with_fluid_dampers_under_a_storey_fitted_back():
     assert fit.global_minimum_confirmed, fit.search.warnings
 
 
-@pytest.mark.slow
-def test_a_bilinear_fit_that_never_yields_gives_no_bouc_wen_start():
-    """The Bouc-Wen fit's start from a bilinear fit of the record (Kd = k2, Qd = F_y (1 - k2 / k1), dy = F_y / k1):
-    on this record the bilinear fit's layer never yields within d0 (F_y undetermined: it ran to 2e19 N, dy 3e12 m)
-    and the flexible fit from that start's Jacobian did not end in 20 minutes. Such a fit gives no start; any start
-    given lies within the loop (0 < dy < d0)."""
-    from quickrelease.building.isolation_fit import _boucwen_from_bilinear, _detect_release
+def _reference_errors(model, p, duration, rate=100.0):
+    """The standard errors the record's noise allows at the truth ``p``, from the independent simulator alone: the
+    Fisher information ``J^T J`` of the weighted samples (NOISE), J by central differences of
+    isolator_reference's motion over 1e-6 of each parameter (the sliders' friction, true 0 at its bound, forward
+    over 50 N: the fit frees it), with a zero for each channel (its column 1 / sigma)."""
+    names = list(p)
 
-    channels = _record("boucwen", LEAD_RUBBER, seed=1)
-    t_r = _detect_release(channels)
-    record = {"d0": 0.203, "release_time": t_r, **{f"offset_{c.name}": 0.0 for c in channels}}
-    starts = _boucwen_from_bilinear(channels, M, t_r, True, {}, record, "power", 0, None, (1.0,),
-                                    global_search=False)  # (as the fit calls it where the loop gives a start)
-    for _, p in starts:
-        assert 0.0 < p["yield_displacement"] < abs(p["d0"]) and math.isfinite(p["characteristic_strength"])
+    def weighted(q):
+        return np.concatenate([y / NOISE[kind] for _, kind, y in _clean(model, q, duration, rate)[1]])
+
+    at = weighted(p)
+    columns = []
+    for name in names:
+        if p[name] == 0.0:
+            columns.append((weighted({**p, name: 50.0}) - at) / 50.0)
+        else:
+            h = 1e-6 * abs(p[name])
+            columns.append((weighted({**p, name: p[name] + h}) - weighted({**p, name: p[name] - h})) / (2 * h))
+    n = at.size // 3
+    for i, kind in enumerate(("x", "a", "a_roof")):
+        zero = np.zeros(at.size)
+        zero[i * n:(i + 1) * n] = 1.0 / NOISE[kind]
+        columns.append(zero)
+    J = np.column_stack(columns)
+    cov = np.linalg.inv(J.T @ J)
+    return {name: math.sqrt(cov[i, i]) for i, name in enumerate(names)}
+
+
+@pytest.mark.slow
+def test_lead_rubber_with_fluid_dampers_under_a_storey_standard_errors():
+    """The standard errors of the lead-rubber + dampers + storey fit (a 6 s record, seed 3401) each within
+    0.8-1.25 of those the independent simulator's information gives at the truth (:func:`_reference_errors`; the
+    fit's at its estimate, a few standard errors away). Measured: 1.00-1.03. (The coverage check below is
+    opt-in; this one runs in CI.)"""
+    channels = _record("boucwen", LEAD_RUBBER, 3401, duration=6.0)
+    fit = fit_isolation(channels, M, "boucwen", flexible=True, damping="power", superstructure_mass=MS,
+                        profile=False)
+    reference = _reference_errors("boucwen", LEAD_RUBBER, 6.0)
+    ratios = {name: fit.std_errors[name] / se for name, se in reference.items()}
+    assert all(0.8 <= r <= 1.25 for r in ratios.values()), ratios
 
 
 COVERAGE_SEEDS = 25  # 25 records x 8 parameters: 200 intervals
@@ -161,5 +187,57 @@ def test_2dof_with_fluid_dampers_intervals_cover_the_truth():
     pooled = sum(covered.values()) / (COVERAGE_SEEDS * len(covered))
     print(f"coverage of 2dof with fluid dampers over {COVERAGE_SEEDS} seeds: {covered}, pooled {pooled:.3f}")
     lo, hi = binomial_band(COVERAGE_SEEDS)
+    assert all(lo <= c <= hi for c in covered.values()), covered
+    assert 0.90 <= pooled <= 0.99, (pooled, covered)
+
+
+LEAD_RUBBER_SEEDS = 24  # 24 records x 10 parameters: 240 intervals
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not os.environ.get("QUICKRELEASE_SLOW"), reason="opt-in (QUICKRELEASE_SLOW=1, -p no:timeout): 24 "
+                    "fits of lead-rubber bearings with fluid dampers under a storey, ~15 minutes; the fits above run "
+                    "in CI")
+def test_lead_rubber_with_fluid_dampers_under_a_storey_intervals_cover_the_truth():
+    """The 95% intervals of the lead-rubber + fluid dampers + storey fit over 24 records (seeds 3400-3423, 6 s after
+    the release: the base is still below the noise from 4 s on; 240 intervals of its 10 parameters, the sliders'
+    friction, true 0 at its bound, left out): each record released at its own instant, a seeded 0-10 ms after
+    LEAD_RUBBER's (the release's and the turns' places between the samples vary as in the field). The pooled
+    coverage in 90-99% and each parameter's count within the 0.05%-99.95% band of Binomial(24, 0.95) (18-24).
+    Measured 2026-11-27 (15.2 minutes at load ~2-3, a fit 19-79 s, median 36 s): period, C, alpha, Qd, dy, n,
+    T_s, zeta_s, d0 23 of 24 each, release 21; pooled 0.950; the z-scores' spread 0.74-0.90, the release's 1.20
+    (its three misses late by 2.2-2.6 standard errors); reduced chi-square 0.946-1.067; 21 of 24 "confirmed".
+    20 more records (seeds 3424-3443, a scratch run): 18-20 of 20, pooled 0.985; the 44 together pooled 0.966,
+    the release 39 of 44 (Binomial(44, 0.95) puts 39 or fewer at 7 %; its 44 z-scores' sum of squares at 6 %,
+    Kolmogorov-Smirnov p 0.57): its standard error is the reference's (1.00 of the simulator's information at the
+    truth on seeds 3401, 3408, 3411, 3412, three of them misses), the package's motion at the truth the
+    reference's to far below the noise; left as chance.
+    The friction's bound pulls the parameters correlated with it (period, C, alpha, Qd, dy, zeta_s, d0: |rho|
+    0.65-0.89) off by +-0.2-0.5 on average and narrows their spread: with the friction free the intervals are
+    those of the unconstrained fit, a linearised fit held at 0 half the time covers 0.97 of them. Seed 3422 had
+    run for tens of minutes (a Bouc-Wen start from a bilinear fit that never yielded: see
+    test_isolation_start's test_boucwen_start_of_a_bilinear_fit_keeps_its_layer); now 57 s."""
+    from coverage_records import binomial_band
+
+    names = [n for n in LEAD_RUBBER if n != "friction"]
+    covered = dict.fromkeys(names, 0)
+    z = {n: [] for n in names}
+    for seed in range(3400, 3400 + LEAD_RUBBER_SEEDS):
+        truth = {**LEAD_RUBBER, "release_time": T_R + np.random.default_rng(seed).uniform(0.0, 0.01)}
+        channels = _record("boucwen", truth, seed, duration=6.0)
+        start = time.perf_counter()
+        fit = fit_isolation(channels, M, "boucwen", flexible=True, damping="power", superstructure_mass=MS,
+                            profile=False)
+        seconds = time.perf_counter() - start
+        for name in names:
+            covered[name] += fit.ci95[name][0] <= truth[name] <= fit.ci95[name][1]
+            z[name].append((fit.estimates[name] - truth[name]) / fit.std_errors[name])
+        print(f"seed {seed}: {seconds:.1f} s, chi2_red {fit.chi2_reduced:.3f}, confirmed {fit.global_minimum_confirmed}, z "
+              + " ".join(f"{name} {z[name][-1]:+.2f}" for name in names), flush=True)
+    pooled = sum(covered.values()) / (LEAD_RUBBER_SEEDS * len(covered))
+    spread = {name: round(float(np.std(v)), 2) for name, v in z.items()}
+    print(f"coverage of lead-rubber + fluid dampers + storey over {LEAD_RUBBER_SEEDS} records: {covered}, pooled "
+          f"{pooled:.3f}; the z-scores' spread {spread}")
+    lo, hi = binomial_band(LEAD_RUBBER_SEEDS)
     assert all(lo <= c <= hi for c in covered.values()), covered
     assert 0.90 <= pooled <= 0.99, (pooled, covered)

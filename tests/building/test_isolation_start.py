@@ -145,3 +145,61 @@ def test_start_values_of_another_damper_law_are_left_out():
     assert fit.chi2_reduced < 1.3, fit.chi2_reduced
     z = {name: (fit.estimates[name] - value) / fit.std_errors[name] for name, value in truth.items()}
     assert all(abs(v) < 4.0 for v in z.values()), z
+
+
+@pytest.mark.parametrize("fy", [6.124e16, 2.0e5])
+def test_boucwen_start_of_a_bilinear_fit_keeps_its_layer(fy):
+    """The Bouc-Wen start from a bilinear fit (isolation_fit._boucwen_of_bilinear: Kd = k2, Qd = F_y (1 - k2 / k1),
+    dy = F_y / k1) moves as the bilinear layer over the record: within the bounds of the fit, its free vibration by
+    isolator_reference's solve_ivp within 1 % of d0 of the bilinear layer's. F_y = 6.1e16 N: seed 3422's bilinear
+    fit of the lead-rubber + damper record under a storey (test_isolation_fit_flexible_power's coverage records,
+    k2 / k1 = 0.9921, T1 = 2.068 s), which never yields: dy = 8e9 m, clipped to the bound 10 m by the solve with Qd
+    of 5e14 N left: a base on 5e13 N/m, each evaluation 5 s, the fit tens of minutes. 2e5 N: one that yields at 27 mm
+    (Qd, dy the closed form)."""
+    import isolator_reference as ref
+
+    from quickrelease.building.isolation_fit import PARAMETER_BOUNDS, _boucwen_of_bilinear
+
+    m, d0 = 8.0e5, 0.133
+    k1 = m * (2.0 * math.pi / 2.068) ** 2
+    k2 = 0.9921 * k1 if fy > 1e10 else 0.25 * k1
+    qd, dy = _boucwen_of_bilinear(k1, k2, fy)
+    lo, hi = PARAMETER_BOUNDS["yield_displacement"]
+    assert lo <= dy <= hi
+    if fy / k1 <= hi:
+        assert qd == pytest.approx(fy * (1.0 - k2 / k1), rel=1e-12) and dy == pytest.approx(fy / k1, rel=1e-12)
+    t = np.arange(0.0, 4.0, 0.005)
+    bilinear = ref.simulate(ref.bilinear(m, k1, k2, fy), d0, t).x
+    boucwen = ref.simulate(ref.boucwen(m, k2, qd, dy, shape=25.0 if fy / k1 <= hi else 1.0), d0, t).x
+    assert np.max(np.abs(boucwen - bilinear)) < 0.01 * d0
+
+
+def test_boucwen_starts_from_a_bilinear_fit_keep_its_layer(monkeypatch):
+    """_boucwen_from_bilinear's starts from seed 3422's bilinear fit (above; the fit itself replaced by its result):
+    dy within its bounds, the initial stiffness Kd + Qd / dy the bilinear's k1, the power-law damper's start; and
+    the record's own start (_start, from the bilinear loop's values, replaced likewise) the same."""
+    from types import SimpleNamespace
+
+    import quickrelease.building.isolation_fit as fit_module
+
+    m = 8.0e5
+    bilinear = dict(period=2.068, damping_ratio=0.2573, friction=1.597e5, stiffness_ratio=0.9921, yield_force=6.124e16,
+                    d0=0.1333, release_time=0.52)
+    monkeypatch.setattr(fit_module, "_fit_isolation", lambda *a, **k: SimpleNamespace(parameters=bilinear))
+    starts = fit_module._boucwen_from_bilinear([], m, 0.52, True, {}, {"d0": 0.2, "release_time": 0.54}, "power", 0,
+                                               None)
+    k1 = m * (2.0 * math.pi / bilinear["period"]) ** 2
+    lo, hi = fit_module.PARAMETER_BOUNDS["yield_displacement"]
+    assert len(starts) == len(fit_module.BOUCWEN_SHAPES)
+    for _, start in starts:
+        kd = m * (2.0 * math.pi / start["period"]) ** 2
+        assert lo <= start["yield_displacement"] <= hi
+        assert kd + start["characteristic_strength"] / start["yield_displacement"] == pytest.approx(k1, rel=1e-9)
+        assert start["d0"] == bilinear["d0"] and start["damping_exponent"] == 0.5
+    # the record's own start (isolation_fit._start, from the bilinear loop's values): the same layer
+    loop = {n: bilinear[n] for n in ("period", "damping_ratio", "friction", "stiffness_ratio", "yield_force")}
+    monkeypatch.setattr(fit_module, "_bilinear_start", lambda *a, **k: dict(loop))
+    start = fit_module._start("boucwen", m, [], 0.52, 0.1333, {})
+    kd = m * (2.0 * math.pi / start["period"]) ** 2
+    assert lo <= start["yield_displacement"] <= hi
+    assert kd + start["characteristic_strength"] / start["yield_displacement"] == pytest.approx(k1, rel=1e-9)

@@ -432,8 +432,9 @@ def _start(model: str, mass: float, channels: list[BuildingChannel], t_r: float,
         k1 = mass * (2.0 * math.pi / b["period"]) ** 2
         k2, fy = b["stiffness_ratio"] * k1, b["yield_force"]
         zeta = b.get("damping_ratio", start["damping_ratio"])
-        start.update(period=2.0 * math.pi * math.sqrt(mass / k2), characteristic_strength=fy * (1.0 - k2 / k1),
-                     yield_displacement=fy / k1, shape=2.0, friction=b["friction"],
+        qd, dy = _boucwen_of_bilinear(k1, k2, fy)
+        start.update(period=2.0 * math.pi * math.sqrt(mass / k2), characteristic_strength=qd,
+                     yield_displacement=dy, shape=2.0, friction=b["friction"],
                      damping_ratio=float(np.clip(zeta * math.sqrt(k1 / k2), 0.002, 0.5)))
     if model == "pendulum":  # the decay's Coulomb share as the friction coefficient, spread about it
         mu = start.pop("friction") / (mass * GRAVITY)
@@ -1849,6 +1850,20 @@ def _limits(names: list[str], unseen: set[str], est: dict[str, float], se: dict[
     return out
 
 
+def _boucwen_of_bilinear(k1: float, k2: float, fy: float) -> tuple[float, float]:
+    """The Bouc-Wen bearings' Qd [N] and dy [m] of bilinear ones (k1, k2 = Kd [N/m], F_y [N]; their limit
+    n -> inf): ``Qd = F_y (1 - k2 / k1)``, ``dy = F_y / k1``, the initial stiffness ``Kd + Qd / dy = k1``. Where the
+    bilinear layer yields beyond the yield displacement's upper bound (a fit whose F_y ran off: the layer elastic
+    with k1 over the record), dy is that bound and ``Qd = (k1 - k2) dy``: the same initial stiffness. (dy clipped
+    to the bound alone kept Qd = F_y (1 - k2 / k1): a bilinear fit of a lead-rubber + damper record under a storey
+    ended at F_y = 6e16 N, and its start, Qd 5e14 N over dy 10 m, held the base on a spring of 5e13 N/m whose every
+    evaluation took 5 s: one fit ran for tens of minutes.)"""
+    top = PARAMETER_BOUNDS["yield_displacement"][1]
+    if fy / k1 <= top:
+        return fy * (1.0 - k2 / k1), fy / k1
+    return (k1 - k2) * top, top
+
+
 #: The Bouc-Wen shapes tried from the bilinear fit (n = 1 the rounded loop of lead-rubber, larger: sharper).
 BOUCWEN_SHAPES = (1.0, 2.0, 5.0)
 
@@ -1875,13 +1890,11 @@ def _boucwen_from_bilinear(channels, mass: float, t_r0: float, fit_release_time:
     e = bl.parameters
     k1 = mass * (2.0 * math.pi / e["period"]) ** 2
     k2, fy = e["stiffness_ratio"] * k1, e["yield_force"]
-    if not 0.0 < fy / k1 < abs(e["d0"]):  # a layer that never yields (the record's loop a line, F_y undetermined and
-        # free to run: 2e19 N on a flexible lead-rubber record): its limit says nothing of the loop
-        return []
     c = 2.0 * e["damping_ratio"] * math.sqrt(k1 * mass)
     base = {**record_values, **{n: v for n, v in e.items() if n in record_values and n not in PARAMETER_BOUNDS}}
-    base.update(period=2.0 * math.pi * math.sqrt(mass / k2), characteristic_strength=fy * (1.0 - k2 / k1),
-                yield_displacement=fy / k1, friction=e["friction"])
+    qd, dy = _boucwen_of_bilinear(k1, k2, fy)
+    base.update(period=2.0 * math.pi * math.sqrt(mass / k2), characteristic_strength=qd, yield_displacement=dy,
+                friction=e["friction"])
     if damping == "power":
         v_ref = math.pi * abs(e["d0"]) / base["period"]
         base.update(damping_coefficient=c * math.sqrt(v_ref), damping_exponent=0.5)
