@@ -1265,9 +1265,13 @@ def _multistart(named, names: list[str], values: dict[str, float], solve, thin_m
             if progress is not None:
                 progress(f"{model}: start {len(named) + 1} ({origin})")
             r = solve(names, values, x0, tol=THIN_TOLERANCE, on=thin_misfit, max_nfev=THIN_EVALUATIONS * len(names))
-            polished.append({"origin": origin, "chi2": 2.0 * float(r.cost) * factor, "x": np.asarray(r.x),
-                             "jac": r.jac})
-            polished.sort(key=lambda d: d["chi2"])
+            new = {"origin": origin, "chi2": 2.0 * float(r.cost) * factor, "x": np.asarray(r.x), "jac": r.jac}
+            low = min(polished[0], new, key=lambda d: d["chi2"])
+            se = _basin_errors(low["jac"], names, _compared(names, model), low["chi2"] / factor, dof_thin)
+            # back in the basin it left (the sliders are the record's): no new start, no second count of that one
+            if not same_basin(_unpack(new["x"], names, values), _unpack(item["x"], names, values), se):
+                polished.append(new)
+                polished.sort(key=lambda d: d["chi2"])
     compare = _compared(names, model)
     dof_thin = thin_misfit.data.size - len(names)
     se = _basin_errors(polished[0]["jac"], names, compare, polished[0]["chi2"] / factor, dof_thin)
