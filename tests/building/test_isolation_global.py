@@ -290,6 +290,26 @@ def test_a_clock_of_the_time_of_day_gives_the_same_fit():
         assert b.std_errors[n] == pytest.approx(a.std_errors[n], rel=0.01), n
 
 
+def test_the_solvers_coordinates_do_not_depend_on_the_clock():
+    """The solver's coordinates (each parameter's origin and magnitude, _Misfit.scales): the release time measured from
+    the record's first sample, so that a clock of the time of day (36 000 s) does not make the release's steps
+    relative to 36 000 s (the starts' solves stop at 1e-4 of each magnitude: 3.6 s); the others from their values,
+    a force at least 1e-3 of the weight."""
+    from quickrelease.building.isolation_fit import _Misfit
+
+    t = np.arange(0.0, 10.0, 0.01)
+    names = ["period", "friction", "d0", "release_time", "offset_x"]
+    scales = []
+    for shift in (0.0, 36000.0):
+        ch = [BuildingChannel("x", "x", t + shift, np.cos(t), 1e-3)]
+        misfit = _Misfit(ch, {"x": 1e-3}, 8e5, "linear", None, {}, {})
+        origin, scale = misfit.scales(names, np.array([2.5, 0.0, 0.2, 1.3 + shift, 0.0]))
+        scales.append(scale)
+        assert origin[3] == shift and scale[3] == pytest.approx(1.3)
+    np.testing.assert_allclose(scales[0], scales[1], rtol=1e-9)
+    np.testing.assert_allclose(scales[0], [2.5, 1e-3 * 8e5 * 9.80665, 0.2, 1.3, 1e-3], rtol=1e-9)
+
+
 @pytest.mark.parametrize("model", ["linear", pytest.param("bilinear", marks=[pytest.mark.slow, pytest.mark.skipif(
     not SLOW, reason="opt-in (QUICKRELEASE_SLOW=1): three bilinear fits; CI's whole run took 884 s of its 900")])])
 @pytest.mark.slow
