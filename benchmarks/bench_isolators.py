@@ -32,6 +32,13 @@ Measured 2026-11-27 (fourth session; paired runs, the session's base 0b1e3bb and
 mu_fast, which found the truth's basin on 3 of 11 seeds where every start had missed it), boucwen 11.0-11.3 ->
 7.8 s, power 2.6-2.7 -> 2.3-2.5 s, boucwen-weak 15.5-16.6 -> 12.1 s; chi2_red and the certificates unchanged.
 
+Measured 2026-11-27 (seventh session, seed 11, paired with the session's base e81088f, load ~1.7 on 2 cores), after
+the solver's steps were measured against each parameter's own magnitude (scipy's ``xtol`` had read the dampers'
+coefficient as the scale of every step) and the sliders' face was tried: pendulum 4.1 -> 3.5 s, boucwen 10.6 -> 10.9
+s, power 1.5 -> 1.7 s, boucwen-damper 9.0 -> 9.1 s ("not confirmed" -> confirmed; seeds 1 and 3 likewise, 10.3 and
+12.1 s), boucwen-weak 9.7 -> 15.9 s (12.8 s alone; "not confirmed" -> confirmed: the record's, the loop's and the
+bilinear fit's starts now reach its minimum); every chi-square the truth-started fit's, as before.
+
 Timed by process CPU time (one core), best of ``--repeat``. Printed: CPU seconds, the issue's target (10 s),
 the ratio to the baseline, the reduced chi-square and whether the global minimum was confirmed. ``--seeds``:
 the records' noise seeds (one row each); ``--truth``: each record also fitted from the true parameters alone
