@@ -321,6 +321,7 @@ a_roof = {{ column = "a_roof_g", unit = "g0", file = "roof.csv", time = "t_r_s" 
         assert abs(est[key] / truth - 1) < rel, (key, est[key], truth)
 
 
+@pytest.mark.slow  # (1.1-1.5 s of fits: the README's quick run stays under 3 minutes; CI runs it)
 def test_a_long_building_fit_tells_a_pipe_what_runs(monkeypatch):
     """Piped (stderr no terminal), a run that goes past PROGRESS_AFTER seconds prints ``progress:`` lines on
     stderr naming the model and the start with counts, and stdout stays the one JSON object."""

@@ -86,6 +86,7 @@ def test_run_and_report_carry_the_title(tmp_path):
     assert html.escape("Prüfung 試験 $x$ $^$", quote=True) in (tmp_path / "rep" / "report.html").read_text(encoding="utf-8")
 
 
+@pytest.mark.slow  # (1.1-1.5 s of fits: the README's quick run stays under 3 minutes; CI runs it)
 def test_campaign_names_and_title_in_every_output(tmp_path):
     text = (EXAMPLES / "campaign.toml").read_text(encoding="utf-8")
     text = text.replace('name = "T1"', f"name = {_toml(NAME)}", 1)

@@ -117,6 +117,7 @@ def test_html_checker_finds_what_it_looks_for():
     assert any("DOCTYPE" in f for f in html_faults(good.replace("<!DOCTYPE html>", "")))
 
 
+@pytest.mark.slow  # (1.1-1.5 s of fits: the README's quick run stays under 3 minutes; CI runs it)
 def test_every_figure_of_the_case_is_labelled(written):
     result, _, _ = written
     figs = render_figures(result)

@@ -357,6 +357,7 @@ def test_a_release_that_does_not_identify_a_quantity_is_left_out_of_its_laws(how
     assert "(not identified)</td>" in report and "F_s: release(s) R2 left out of its laws" in report
 
 
+@pytest.mark.slow  # (1.1-1.5 s of fits: the README's quick run stays under 3 minutes; CI runs it)
 def test_a_quantity_identified_by_fewer_than_three_releases_has_no_law(monkeypatch, capsys):
     releases = _linear_releases(3)
     real = _real_fits(bc._fit_releases, 3)

@@ -36,6 +36,7 @@ def record(seed=1, span=8.0):
             BuildingChannel("a", "a", t, motion.a + rng.normal(0, 0.01, t.size))]
 
 
+@pytest.mark.slow  # (1.1-1.5 s of fits: the README's quick run stays under 3 minutes; CI runs it)
 def test_the_compared_models_get_the_fits_damper_law(monkeypatch):
     """Each other model's fit, 2dof's too (its linear layer with fluid dampers under the superstructure, on the
     flexible integrator), is asked for with damping = "power" and the dampers' start values (C and alpha are the
