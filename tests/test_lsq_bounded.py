@@ -15,6 +15,23 @@ LO, HI = np.array([0.0, 0.0, 0.5, 0.0]), np.array([5.0, 5.0, 5.0, 10.0])
 X0 = np.array([0.8, 0.5, 2.1, 2.0])
 
 
+def _central(fun, rel: float):
+    """The Jacobian of ``fun`` by central differences written here (steps ``rel`` times max(1, |p_i|))."""
+
+    def jac(p):
+        f0 = fun(p)
+        J = np.empty((f0.size, p.size))
+        for i in range(p.size):
+            h = rel * max(1.0, abs(p[i]))
+            up, down = p.copy(), p.copy()
+            up[i] += h
+            down[i] -= h
+            J[:, i] = (fun(up) - fun(down)) / (2.0 * h)
+        return J
+
+    return jac
+
+
 def _model(p):
     """A decaying cosine a exp(-r t) cos(w t) plus a constant c >= 0 (the bounded parameter)."""
     a, r, w, c = p
@@ -27,17 +44,7 @@ def _problem(c_true: float):
     def fun(p):
         return (_model(p) - data) / 1e-3
 
-    def jac(p):  # central differences written here
-        J = np.empty((T.size, 4))
-        for i in range(4):
-            h = 1e-6 * max(1.0, abs(p[i]))
-            up, down = p.copy(), p.copy()
-            up[i] += h
-            down[i] -= h
-            J[:, i] = (fun(up) - fun(down)) / (2.0 * h)
-        return J
-
-    return fun, jac
+    return fun, _central(fun, 1e-6)
 
 
 def test_minimum_at_the_bound_is_the_reduced_problems_minimum():
@@ -99,17 +106,7 @@ def _curved(amplitude: float):
         return np.array([1e3 * (np.exp(5.0 * (p[1] - 2.0)) - 1.0), 1e3 * (p[0] / amplitude - 1.0),
                          0.1 * (p[0] / amplitude - 1.0) * p[1]])
 
-    def jac(p):  # central differences written here
-        J = np.empty((3, 2))
-        for i in range(2):
-            h = 1e-7 * max(1.0, abs(p[i]))
-            up, down = p.copy(), p.copy()
-            up[i] += h
-            down[i] -= h
-            J[:, i] = (fun(up) - fun(down)) / (2.0 * h)
-        return J
-
-    return fun, jac
+    return fun, _central(fun, 1e-7)
 
 
 @pytest.mark.parametrize("w0", [0.5, 1.0, 3.0])
