@@ -232,3 +232,62 @@ def test_a_record_that_starts_mid_swing():
     assert law.reduced_chi2 < 2.0
     naive = analyse_decay(t, x, noise=sigma)  # the first sample taken as the release from rest
     assert naive.law.reduced_chi2 > 100 and any("misfits" in n for n in naive.notes)
+
+
+#: The physical dimension (power of the length) of each law parameter: how it scales with the peaks' unit.
+_LENGTH_POWER = {"ratio": 0, "damping_ratio": 0, "friction_displacement": 1, "quadratic_coefficient": -1, "kappa": 0,
+                 "exponent": 0, "reference_amplitude": 1, "rest": 1}
+
+
+def _noisy(law, sigma, seed):
+    return _sequence(law) + np.random.default_rng(seed).normal(0.0, sigma, 13)
+
+
+@pytest.mark.parametrize("law", ["quadratic", "power"])
+def test_a_sensor_zero_far_away_does_not_move_the_laws(law):
+    """The same noisy peaks read on a sensor whose zero lies far from the motion (a survey coordinate: 4.5e5 m, and
+    a northing of -6e6 m): every law gives the parameters (the rest reading less the shift) and standard errors of
+    the peaks read about 0, and the true law's own parameter is where the peaks were made (by hand, _sequence).
+    The solvers' step tolerance (1e-10 |theta|) and the rest reading's difference step (sqrt(eps) |e|) were set by
+    the zero's distance: at -6e6 m the power law ended 140-240 standard errors away (AIC +2.8e4), the quadratic law
+    at 4.5e5 m 9e-3 of one, and the combined law's standard errors doubled. Left: the readings' rounding (9e-10 m
+    at 6e6 m, 5e-5 of the noise)."""
+    sigma = 2e-5
+    peaks = _noisy(law, sigma, 3)
+    truth = {"quadratic": ("quadratic_coefficient", 1.2), "power": ("exponent", 1.5)}[law]
+    near = {f.name: f for f in decay_laws(peaks, peak_se=sigma)}
+    assert near[law].parameters[truth[0]] == pytest.approx(truth[1], abs=4 * near[law].std_errors[truth[0]])
+    for shift in (4.5e5, -6e6):
+        far = {f.name: f for f in decay_laws(peaks + shift, peak_se=sigma)}
+        assert set(far) == set(near)
+        for name, a in near.items():
+            b = far[name]
+            for key, se in a.std_errors.items():
+                if se == 0.0:  # the power law's reference amplitude: half the first swing, read off the peaks
+                    continue
+                moved = b.parameters[key] - (shift if key == "rest" else 0.0) - a.parameters[key]
+                assert abs(moved) <= 1e-3 * se, (name, key, shift, moved / se)
+                assert b.std_errors[key] == pytest.approx(se, rel=1e-3, abs=1e-300), (name, key, shift)
+        for name in near:  # the laws' order and their AIC differences
+            assert far[name].aic - far[law].aic == pytest.approx(near[name].aic - near[law].aic, abs=0.05), name
+
+
+@pytest.mark.parametrize("law", ["quadratic", "power"])
+def test_tiny_peaks_fit_as_large_ones(law):
+    """The same peaks and errors times 1e-5 (a swing of 1.5 um, errors of 0.2 nm): each parameter scales with its
+    dimension (mu as 1/length, the rest reading as a length, kappa and the exponent not at all) to 1e-4 of a
+    standard error, and so do the standard errors (to 1e-4). In the law's own coefficients the rest reading's
+    steps were measured against the coefficients (xtol 1e-10 of |theta|, about 2e-11 absolute) and its difference
+    step was sqrt(eps) m, 1e-3 of the amplitude: 4e-3 standard errors and 5e-4 in the errors."""
+    sigma, k = 2e-5, 1e-5
+    peaks = _noisy(law, sigma, 4)
+    big = {f.name: f for f in decay_laws(peaks, peak_se=sigma)}
+    small = {f.name: f for f in decay_laws(peaks * k, peak_se=sigma * k)}
+    for name in ("quadratic", "power"):
+        a, b = big[name], small[name]
+        for key, se in a.std_errors.items():
+            if se == 0.0:
+                continue
+            unit = k ** _LENGTH_POWER[key]
+            assert abs(b.parameters[key] / unit - a.parameters[key]) < 1e-4 * se, (name, key)
+            assert b.std_errors[key] / unit == pytest.approx(se, rel=1e-4), (name, key)

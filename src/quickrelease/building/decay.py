@@ -344,7 +344,14 @@ def _linear_law(name: str, x: np.ndarray, s: np.ndarray, se: np.ndarray, offset:
 
 def _nonlinear_law(name: str, x: np.ndarray, s: np.ndarray, se: np.ndarray, offset: bool, starts, scale: float):
     """The quadratic and power laws: bounded nonlinear least squares (scipy least_squares, trust region
-    reflective) of the whitened one-step residuals, the covariance updated with the law's slope F'(a)."""
+    reflective) of the whitened one-step residuals, the covariance updated with the law's slope F'(a).
+
+    Solved in u = theta / (1, ..., scale): the law's coefficients are numbers per half-cycle (mu ref, kappa, the
+    exponent), the rest reading e counts in ``scale`` (the first half-swing) [m]. scipy's step tolerance compares the
+    step's norm with xtol times the norm of the parameters: in theta, a rest reading of tiny peaks (1e-5 m) had its
+    steps measured against the coefficients (and the difference step of e, sqrt(eps) max(1, |e|) m, was 1e-3 of
+    the amplitude); in u each counts against its own magnitude. e is measured from a level inside the peaks
+    (:func:`decay_laws`), so a sensor's zero far away does not set either."""
     from scipy.optimize import least_squares
 
     def next_amp(a, th):
@@ -355,6 +362,8 @@ def _nonlinear_law(name: str, x: np.ndarray, s: np.ndarray, se: np.ndarray, offs
     npar = 1 if name == "quadratic" else 2
     lo = [0.0] + ([0.0] if name == "power" else []) + ([-np.inf] if offset else [])
     hi = [np.inf] + ([3.0] if name == "power" else []) + ([np.inf] if offset else [])
+    unit = np.array([1.0] * npar + ([scale] if offset else []))  # the solver's coordinates u = theta / unit
+    lo, hi = np.array(lo), np.array(hi)
 
     def raw(th):
         e = th[npar] if offset else 0.0
@@ -372,10 +381,9 @@ def _nonlinear_law(name: str, x: np.ndarray, s: np.ndarray, se: np.ndarray, offs
         cov = _one_step_cov(f[1:], se, f)  # the last peak's slope enters the next equation's covariance only
         L, logdet = _whitener(cov)
         Li = np.linalg.inv(L)
-        sol = least_squares(lambda p: Li @ raw(p), th, bounds=(lo, hi), method="trf",
-                            x_scale=[1.0] * npar + ([scale] if offset else []), xtol=1e-10, ftol=1e-10,
-                            gtol=1e-10, max_nfev=200)
-        return float(sol.fun @ sol.fun), sol.x, sol.jac, sol.fun, logdet
+        sol = least_squares(lambda u: Li @ raw(u * unit), th / unit, bounds=(lo / unit, hi / unit), method="trf",
+                            x_scale=1.0, xtol=1e-10, ftol=1e-10, gtol=1e-10, max_nfev=200)
+        return float(sol.fun @ sol.fun), sol.x * unit, sol.jac / unit, sol.fun, logdet
 
     # each start once with the covariance at the start, then the best one twice more with its own
     best = min((run(np.clip(np.asarray(th0, dtype=float), lo, hi)) for th0 in starts), key=lambda b: b[0])
@@ -415,7 +423,9 @@ def decay_laws(peaks, peak_se=None, offset: bool = True, laws=LAW_NAMES) -> tupl
     sqrt(chi2 / dof) where it does not (the law's own misfit). Without ``peak_se`` the errors' common
     scale comes from the residuals. AIC ``= chi2 + ln det C + 2 k`` (k parameters, e included), or with
     unknown scale ``n ln(chi2 / n) + ln det C + 2 k``; the lowest describes the peaks best for its
-    parameters (a difference above about 4 is clear support).
+    parameters (a difference above about 4 is clear support). With ``offset`` the laws are fitted to the peaks
+    measured from the middle of the last swing (and e reported on the sensor's scale): the answer does not depend
+    on where the sensor's zero lies.
     """
     x = np.asarray(peaks, dtype=float)
     if x.ndim != 1 or x.size < 3 or not np.all(np.isfinite(x)):
@@ -429,7 +439,12 @@ def decay_laws(peaks, peak_se=None, offset: bool = True, laws=LAW_NAMES) -> tupl
         raise ParameterError("peaks", "two equal successive peaks", "alternating turning points", "m")
     n = x.size - 1
     ref = max(abs(x[0] - x[1]) / 2.0, np.finfo(float).tiny)
-    floor = n * (_RMS_FLOOR * float(np.max(np.abs(x)))) ** 2
+    floor = n * (_RMS_FLOOR * float(np.max(np.abs(x)))) ** 2  # the readings' rounding: of x as read
+    # with a rest reading fitted, the peaks measured from the middle of the last swing (exact: Sterbenz), e from
+    # there: a sensor's zero far from the motion (a survey coordinate, 6e6 m) set the solvers' step tolerance
+    # (1e-10 |x|) and e's difference step (sqrt(eps) |e|, 9 cm); the power law's fit ended 140 standard errors away
+    level = 0.5 * (float(x[-2]) + float(x[-1])) if offset else 0.0
+    x = x - level
     fits = []
     linear = {}
     unknown = sorted(set(laws) - set(LAW_NAMES))
@@ -457,6 +472,8 @@ def decay_laws(peaks, peak_se=None, offset: bool = True, laws=LAW_NAMES) -> tupl
             starts = [st + ([e0] if offset else []) for st in starts]
             coef, cov, rw, raw, logdet, bound = _nonlinear_law(name, x, s, se, offset, starts, ref)
             params, grads, names = _physical(name, coef, offset, ref)
+        if offset:
+            params["rest"] += level
         chi2 = float(rw @ rw)
         dof = n - k
         if known:
