@@ -586,14 +586,14 @@ def test_iterations_from_a_poor_start_do_not_grow_with_the_sampling_rate(paper, 
 
 def test_a_heavy_device_fits_as_the_paper_device(paper, paper_motion):
     """scipy's step tolerance (xtol) compares the step's norm with xtol times the norm of all the parameters in
-    their own units: a friction force of 4e6 N beside a release instant known to 3e-6 s. The same instrument
+    their own units: a friction force of 4e6 N beside a release instant known to a few microseconds. The same instrument
     record (solve_ivp motion at 5 kHz: the coarse stages run) fitted for the paper's device and for one with its
     masses and E_S 1e4 times larger (the same motion under friction 1e4 times larger): F / 1e4, the release
     instant and the offsets where the paper device's fit put them (measured: within 1e-6 standard errors), the
     standard errors of F 1e4 times larger, and the truth within 4 of them. The step test does not bite here: the
     forces, the release and the offsets move together, so no step is small for F and still large for the
-    release (with xtol raised to 1e-5 in every solve both fits ended on it, and within 6e-6 standard errors of
-    these). A guard: the record fit keeps scipy's tolerances in the parameters' own units."""
+    release (with xtol raised to 1e-5 in every solve both fits ended on it, within 6e-6 standard errors of each
+    other). A guard: the record fit keeps scipy's tolerances in the parameters' own units."""
     from dataclasses import replace
 
     t, clean = instrument_channels(paper_motion, 0.43, rate=5000.0)
