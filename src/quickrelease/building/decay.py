@@ -440,9 +440,11 @@ def decay_laws(peaks, peak_se=None, offset: bool = True, laws=LAW_NAMES) -> tupl
     n = x.size - 1
     ref = max(abs(x[0] - x[1]) / 2.0, np.finfo(float).tiny)
     floor = n * (_RMS_FLOOR * float(np.max(np.abs(x)))) ** 2  # the readings' rounding: of x as read
-    # with a rest reading fitted, the peaks measured from the middle of the last swing (exact: Sterbenz), e from
-    # there: a sensor's zero far from the motion (a survey coordinate, 6e6 m) set the solvers' step tolerance
-    # (1e-10 |x|) and e's difference step (sqrt(eps) |e|, 9 cm); the power law's fit ended 140 standard errors away
+    # with a rest reading fitted, the peaks measured from the middle of the last swing (exactly, where the zero is
+    # far: Sterbenz), e from there. A sensor's zero far from the motion (a survey coordinate, 6e6 m) set the
+    # nonlinear laws' step tolerance (1e-10 |theta|) and e's difference step (sqrt(eps) |e|, 9 cm): the power law
+    # ended 140 standard errors away; and the linear laws' columns x_n and 1 became parallel to 1e-7, the
+    # pseudo-inverse dropped their difference and the combined law's standard error of zeta fell to 1e-9
     level = 0.5 * (float(x[-2]) + float(x[-1])) if offset else 0.0
     x = x - level
     fits = []
