@@ -1237,9 +1237,10 @@ def _multistart(named, names: list[str], values: dict[str, float], solve, thin_m
         if progress is not None:
             progress(f"{model}: start {k + 1} of {len(named)} ({origin})")
         r = solve(names, values, [trial[n] for n in names], tol=THIN_TOLERANCE, on=thin_misfit,
-                  max_nfev=THIN_EVALUATIONS * len(names))
+                  max_nfev=THIN_EVALUATIONS * len(names), xtol=THIN_XTOL)
         polished.append({"origin": origin, "chi2": 2.0 * float(r.cost) * factor, "x": np.asarray(r.x), "jac": r.jac})
     polished.sort(key=lambda d: d["chi2"])
+    dof_thin = thin_misfit.data.size - len(names)
     if "friction" in names:
         # the sliders' force trades against the other dissipation (a damper, the rubber's hysteresis), and the
         # stick it causes changes the motion's pieces (a layer with sliders stops, one without creeps back): a
@@ -1250,7 +1251,6 @@ def _multistart(named, names: list[str], values: dict[str, float], solve, thin_m
         # the thinned record's over the square root of the thinning: a start's 0.007 N did not count, the 10.6 kN
         # did, 7.6 errors).
         i = names.index("friction")
-        dof_thin = thin_misfit.data.size - len(names)
 
         def carries(d) -> bool:
             se = _basin_errors(d["jac"], names, ["friction"], d["chi2"] / factor, dof_thin)["friction"]
@@ -1264,7 +1264,8 @@ def _multistart(named, names: list[str], values: dict[str, float], solve, thin_m
             origin = f"{item['origin']}, no sliders"
             if progress is not None:
                 progress(f"{model}: start {len(named) + 1} ({origin})")
-            r = solve(names, values, x0, tol=THIN_TOLERANCE, on=thin_misfit, max_nfev=THIN_EVALUATIONS * len(names))
+            r = solve(names, values, x0, tol=THIN_TOLERANCE, on=thin_misfit, max_nfev=THIN_EVALUATIONS * len(names),
+                      xtol=THIN_XTOL)
             new = {"origin": origin, "chi2": 2.0 * float(r.cost) * factor, "x": np.asarray(r.x), "jac": r.jac}
             low = min(polished[0], new, key=lambda d: d["chi2"])
             se = _basin_errors(low["jac"], names, _compared(names, model), low["chi2"] / factor, dof_thin)
@@ -1273,7 +1274,6 @@ def _multistart(named, names: list[str], values: dict[str, float], solve, thin_m
                 polished.append(new)
                 polished.sort(key=lambda d: d["chi2"])
     compare = _compared(names, model)
-    dof_thin = thin_misfit.data.size - len(names)
     se = _basin_errors(polished[0]["jac"], names, compare, polished[0]["chi2"] / factor, dof_thin)
     groups: list[dict[str, Any]] = []
     for item in polished:
@@ -1515,7 +1515,9 @@ def _spikes(fit: IsolationFit, channels) -> dict[str, tuple[float, ...]]:
 def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_release_time, start, fixed, profile,
                    superstructure_mass, tolerance, global_search, seed, progress=None,
                    damping: str = "viscous", memo: FitMemo | None = None, polish: bool = True,
-                   flexible: bool = False) -> IsolationFit:
+                   flexible: bool = False, step_tolerance: float | None = None) -> IsolationFit:
+    # step_tolerance: the whole-record solves' xtol, relative to each parameter's magnitude (None: ``tolerance``);
+    # a fit that is itself a start (the Bouc-Wen fit's bilinear start) takes the starts' THIN_XTOL
     channels = list(channels)
     if not channels:
         raise ParameterError("channels", "none", "at least one channel of the isolation layer")
@@ -1583,8 +1585,7 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
     def jacobian(theta, free=names, base=values):
         return misfit.jacobian(theta, free, base)
 
-    def solve(free, base, x0, tol=tolerance, on=misfit, max_nfev=None):
-        xtol = THIN_XTOL if tol == THIN_TOLERANCE else None
+    def solve(free, base, x0, tol=tolerance, on=misfit, max_nfev=None, xtol=step_tolerance):
         lo = np.array([lower.get(n, -math.inf) for n in free])
         hi = np.array([upper.get(n, math.inf) for n in free])
         x0 = np.clip(np.asarray(x0, dtype=float), lo, hi)
@@ -1614,7 +1615,7 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
         if memo is None:
             return run()
         return memo.value(("solve", on.fingerprint(), tuple(free), _held(base, free), x0.tobytes(), float(tol),
-                           int(max_nfev)), run)
+                           int(max_nfev), None if xtol is None else float(xtol)), run)
 
     def stage(name, step, res, *args):
         """A refinement of ``res`` on the whole record (the polish, the step search), kept in the memo."""
@@ -1646,7 +1647,7 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
         origin, trial = loop[0]
         inner = [n for n in names if n not in LOOP_HELD]
         r = solve(inner, trial, [trial[n] for n in inner], tol=THIN_TOLERANCE, on=thin_misfit,
-                  max_nfev=THIN_EVALUATIONS * len(inner))
+                  max_nfev=THIN_EVALUATIONS * len(inner), xtol=THIN_XTOL)
         named = [(o, {**trial, **_unpack(r.x, inner, trial)} if o == origin else t) for o, t in named]
     evaluations = 0
     if global_search:
@@ -1888,7 +1889,8 @@ def _boucwen_from_bilinear(channels, mass: float, t_r0: float, fit_release_time:
     try:
         bl = _fit_isolation(channels, mass, "bilinear", release_time=t_r0, fit_release_time=fit_release_time,
                             start=None, fixed=keep, profile=False, superstructure_mass=None, tolerance=1e-6,
-                            global_search=global_search, seed=seed, progress=progress, memo=memo, polish=False)
+                            global_search=global_search, seed=seed, progress=progress, memo=memo, polish=False,
+                            step_tolerance=THIN_XTOL)
     except QuickReleaseError:
         return []
     e = bl.parameters
