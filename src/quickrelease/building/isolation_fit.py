@@ -683,6 +683,12 @@ class _Misfit:
         t_all, where = np.unique(np.concatenate([c.t for c in channels]), return_inverse=True)
         self.t_all = t_all
         self.where = np.split(where.ravel(), np.cumsum([c.t.size for c in channels])[:-1])
+        # each channel's samples of the union (None where the channel's times are the union's: no gather) and its
+        # rows of the stacked vector
+        self._take = [None if at.size == t_all.size and np.array_equal(at, np.arange(t_all.size)) else at
+                      for at in self.where]
+        self._rows = [slice(int(i), int(i) + c.t.size)
+                      for c, i in zip(channels, np.cumsum([0] + [c.t.size for c in channels])[:-1], strict=True)]
         # the offsets enter linearly: their columns are exact (1 / sigma on their channel's rows), and only the
         # other parameters need the two model evaluations each of the central differences
         self.rows_of, i0 = {}, 0
@@ -760,15 +766,24 @@ class _Misfit:
 
     def vector(self, fv, p: dict[str, float]) -> np.ndarray:
         """The channels of the motion ``fv`` released at ``p["release_time"]``, with their offsets and drifts."""
-        out = []
+        # written into one array (each channel's samples plus its offset, then its drift: the arithmetic, and so
+        # the bits, of adding them channel by channel and stacking)
+        out = np.empty(self.data.size)
         kinds = fv.channels(self.t_all - p["release_time"])
-        for c, at in zip(self.channels, self.where, strict=True):
-            y = kinds[c.kind][at]
-            y = y + p.get(f"offset_{c.name}", 0.0)
+        for c, at, rows in zip(self.channels, self._take, self._rows, strict=True):
+            y = kinds[c.kind]
+            o = out[rows]
+            np.add(y if at is None else y[at], p.get(f"offset_{c.name}", 0.0), out=o)
             if c.drift:
-                y = y + p.get(f"drift_{c.name}", 0.0) * self.ramp[f"drift_{c.name}"]
-            out.append(y)
-        return np.concatenate(out)
+                o += p.get(f"drift_{c.name}", 0.0) * self.ramp[f"drift_{c.name}"]
+        return out
+
+    def _residuals_of(self, fv, p: dict[str, float]) -> np.ndarray:
+        """``(vector - data) / sigma``, in place on the fresh vector."""
+        r = self.vector(fv, p)
+        r -= self.data
+        r /= self.sig
+        return r
 
     def model_vector(self, p: dict[str, float]) -> np.ndarray:
         return self.vector(self.motion(p), p)
@@ -780,7 +795,7 @@ class _Misfit:
         p = _unpack(theta, free, base)
         try:
             fv = self.motion(p)
-            r = (self.vector(fv, p) - self.data) / self.sig
+            r = self._residuals_of(fv, p)
         except ParameterError:  # outside the model's domain (e.g. held by friction at a bound): penalise
             fv, r = None, np.full(self.data.size, 1e6)
         self._last = (theta.copy(), tuple(free), dict(base), r, fv)
@@ -856,20 +871,44 @@ class _Misfit:
                 if n == "release_time" and motion is not None:  # the same motion released earlier or later: no
                     # integration (the motion does not depend on the instant it starts)
                     p = _unpack(moved, free, base)
-                    return (self.vector(motion, p) - self.data) / self.sig
+                    return self._residuals_of(motion, p)
                 return self.residuals(moved, free, base)
 
             if x - h < lo or x + h > hi:  # one-sided, second order, into the feasible side
                 s_ = 1.0 if x + 2.0 * h <= hi else -1.0
                 f1, f2 = at(x + s_ * h), at(x + 2.0 * s_ * h)
-                d1, d2 = (f1 - f0) / (s_ * h), (f2 - f1) / (s_ * h)
-                J[:, i] = np.where(np.abs(d1 - d2) > 0.5 * (np.abs(d1) + np.abs(d2)),
-                                   np.where(np.abs(d1) < np.abs(d2), d1, d2), 1.5 * d1 - 0.5 * d2)
+                d1 = f1 - f0
+                d1 /= s_ * h
+                d2 = f2 - f1
+                d2 /= s_ * h
+                smooth = 1.5 * d1
+                smooth -= 0.5 * d2
+                J[:, i] = _guarded(d1, d2, smooth)
             else:
-                dp, dm = (at(x + h) - f0) / h, (f0 - at(x - h)) / h
-                J[:, i] = np.where(np.abs(dp - dm) > 0.5 * (np.abs(dp) + np.abs(dm)),
-                                   np.where(np.abs(dp) < np.abs(dm), dp, dm), 0.5 * (dp + dm))
+                dp = at(x + h) - f0
+                dp /= h
+                dm = f0 - at(x - h)
+                dm /= h
+                smooth = dp + dm
+                smooth *= 0.5
+                J[:, i] = _guarded(dp, dm, smooth)
         return J
+
+
+def _guarded(d1: np.ndarray, d2: np.ndarray, smooth: np.ndarray) -> np.ndarray:
+    """A Jacobian column from two difference quotients ``d1``, ``d2`` and their ``smooth`` combination: that, but
+    the smaller quotient where they differ by more than half their mean magnitude (a jump inside the stencil);
+    ``np.where(|d1 - d2| > (|d1| + |d2|) / 2, np.where(|d1| < |d2|, d1, d2), smooth)``, computed in place on
+    ``smooth`` and on the few rows that jump."""
+    a1, a2 = np.abs(d1), np.abs(d2)
+    gap = d1 - d2
+    np.abs(gap, out=gap)
+    a1 += a2  # the sum of the magnitudes, in a1 until the jumping rows are found
+    a1 *= 0.5
+    jump = np.flatnonzero(gap > a1)
+    if jump.size:
+        smooth[jump] = np.where(np.abs(d1[jump]) < a2[jump], d1[jump], d2[jump])
+    return smooth
 
 
 #: The bytes of arrays a :class:`FitMemo` keeps at most (beyond, results are computed and not kept).
