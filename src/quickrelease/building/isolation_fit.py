@@ -50,7 +50,7 @@ from scipy.optimize import brentq
 from .._lsq import bounded_least_squares, identified_covariance, jacobian_covariance
 from ..errors import ParameterError, QuickReleaseError
 from .flexible import FlexibleBuilding
-from .hysteretic import EXPONENT_RANGE, GRAVITY, SHAPE_RANGE, BoucWen, Pendulum
+from .hysteretic import EXPONENT_RANGE, GRAVITY, SHAPE_RANGE, BoucWen, HystereticVibration, Pendulum
 from .isolation_search import (
     COMPETING_DELTA_CHI2,
     SAME_BASIN_SE,
@@ -769,7 +769,12 @@ class _Misfit:
         # written into one array (each channel's samples plus its offset, then its drift: the arithmetic, and so
         # the bits, of adding them channel by channel and stacking)
         out = np.empty(self.data.size)
-        kinds = fv.channels(self.t_all - p["release_time"])
+        t = self.t_all - p["release_time"]
+        if type(fv) is HystereticVibration:  # the union's times shifted are sorted: its state's path for sorted
+            x, v, a = fv._motion(t)  # times, without the check of their order
+            kinds = {"x": x, "v": v, "a": a, "x_roof": x, "v_roof": v, "a_roof": a}  # as its channels()
+        else:
+            kinds = fv.channels(t)
         for c, at, rows in zip(self.channels, self._take, self._rows, strict=True):
             y = kinds[c.kind]
             o = out[rows]
