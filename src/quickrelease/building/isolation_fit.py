@@ -852,14 +852,16 @@ class _Misfit:
             scale[i] = max(abs(v), floor)
         return origin, scale
 
-    def jacobian(self, theta, free, base) -> np.ndarray:
+    def jacobian(self, theta, free, base, order: str = "C") -> np.ndarray:
+        # order: the array's layout; "F" for the solver (bounded_least_squares hands scipy its columns, which come
+        # out in Fortran order: built so, each column is written and taken contiguously)
         # Central differences, guarded against the jumps of the record model: where a piece boundary (a
         # reversal, where the friction force flips and the acceleration jumps; the stick) passes a sample
         # inside the stencil, one one-sided difference holds the jump over h and the other does not. There
         # the smaller one is the derivative (the jump would make the sample look infinitely informative
         # and the standard errors far too small, as the optimiser likes to park a jump on a sample).
         theta = np.asarray(theta, dtype=float)
-        J = np.zeros((self.data.size, len(free)))
+        J = np.zeros((self.data.size, len(free)), order=order)
         f0 = motion = None
         for i, n in enumerate(free):
             if n in self.rows_of:
@@ -1637,19 +1639,22 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
 
         origin, scale = on.scales(free, x0)
 
+        def jacobian_f(theta, free, base):
+            return on.jacobian(theta, free, base, order="F")
+
         def run():
             # the Jacobian by central differences over a relative step of 1e-4 (_Misfit.jacobian): the misfit
             # jumps where a piece boundary (a stick, a yield) passes a sample, so a step near the rounding level
             # would see those jumps; a parameter whose optimum is its bound is held there (bounded_least_squares);
             # each parameter's step measured against its own magnitude (``scale``)
-            res = bounded_least_squares(on.residuals, x0, on.jacobian, lo, hi, args=(free, base), tol=tol,
+            res = bounded_least_squares(on.residuals, x0, jacobian_f, lo, hi, args=(free, base), tol=tol,
                                         max_nfev=max_nfev, x_scale="jac", scale=scale, origin=origin, xtol=xtol)
             # stopped against a sample instant: solved again with the release bounded there (on the whole record;
             # a start's solve on the thinned record is one of several, refined on the whole record after it: a
             # benchmark Bouc-Wen + fluid damper fit spent 2.5 s of 12.4 s re-solving one of them)
             edge = None if on.coarse_steps else on.release_edge(res.x, free, lo, hi)
             if edge is not None:
-                pinned = bounded_least_squares(on.residuals, res.x, on.jacobian, *edge, args=(free, base), tol=tol,
+                pinned = bounded_least_squares(on.residuals, res.x, jacobian_f, *edge, args=(free, base), tol=tol,
                                                max_nfev=max_nfev, x_scale="jac", scale=scale, origin=origin, xtol=xtol)
                 if pinned.cost < res.cost:
                     pinned.nfev += res.nfev
