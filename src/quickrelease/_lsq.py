@@ -233,8 +233,8 @@ def bounded_least_squares(fun, x0, jac, lower, upper, *, args=(), tol: float = 1
         if not held:
             r.x, r.held, r.nfev, r.njev = x, [], nfev, njev
             return r
-        J = jac(x, *args)
-        njev += 1
+        J = np.ascontiguousarray(jac(x, *args))  # (row-major: the gradient's and the result's arithmetic whatever
+        njev += 1  # the layout jac builds its columns in)
         g = J.T @ r.fun
         variance = 2.0 * float(r.cost) / max(r.fun.size - n, 1)
         out = []

@@ -30,6 +30,29 @@ def test_linear_coulomb_against_solve_ivp(zeta, mu):
         assert fv.stop_time == pytest.approx(t_stop, rel=1e-9)
 
 
+@pytest.mark.parametrize("model", ["linear", "bilinear"])
+def test_every_sample_inside_the_motion_against_solve_ivp(model):
+    """x, v and the acceleration where every sample lies on the moving pieces of one kind (after the release,
+    before the stick; a bilinear layer that never yields): the evaluation without gathers, against the independent
+    solve_ivp simulator."""
+    import isolator_reference as ref
+
+    m, k, c, Fs = 4.0e5, 4.0e6, 4.0e4, 8.0e3
+    if model == "linear":
+        iso, system, d0 = Isolation(m, k, c, Fs), ref.linear(m, k, c, friction=Fs), 0.15
+    else:  # F_y far above what d0 = 2 cm pushes: every piece elastic
+        iso, system, d0 = Isolation(m, k, c, Fs, 0.1 * k, 1.0e6), ref.bilinear(m, k, 0.1 * k, 1.0e6, c, friction=Fs), 0.02
+    fv = free_vibration(iso, d0, t_end=3.0)
+    t = np.linspace(0.01, 2.0, 400)
+    assert fv.stop_time > 2.0
+    x, v, a = fv.state(t)
+    want = ref.simulate(system, d0, t, t_end=3.0)
+    scale = abs(d0) * k / m
+    assert np.max(np.abs(x - want.x)) < 1e-8 * abs(d0)
+    assert np.max(np.abs(v - want.v)) < 1e-8 * abs(d0) * math.sqrt(k / m)
+    assert np.max(np.abs(a - want.a)) < 1e-8 * scale
+
+
 @pytest.mark.parametrize("zeta, Fs, d0", [(0.05, 2.0e4, 0.15), (0.0, 0.0, 0.2), (0.1, 5.0e4, -0.12),
                                           (0.02, 1.0e4, 0.01), (0.5, 2.0e4, 0.15)])
 def test_bilinear_against_solve_ivp(zeta, Fs, d0):

@@ -113,6 +113,54 @@ def test_bad_input():
         fit_isolation([ch], M, fixed={"stiffness": 1.0}, release_time=0.5)
 
 
+def test_the_guarded_difference_takes_the_smaller_quotient_where_the_two_disagree():
+    """The Jacobian's column from two difference quotients (``_guarded``): their smooth combination, but where they
+    differ by more than half their mean magnitude (a jump inside the stencil) the smaller of the two; written out
+    here element by element."""
+    from quickrelease.building.isolation_fit import _guarded
+
+    rng = np.random.default_rng(4)
+    d1 = rng.normal(size=400)
+    d2 = d1 * (1.0 + 0.1 * rng.normal(size=400))
+    jumps = rng.random(400) < 0.2
+    d2[jumps] = d1[jumps] * rng.choice([-3.0, 40.0, 0.01], size=int(jumps.sum()))
+    d1[:3], d2[:3] = [np.nan, 0.0, -0.0], [1.0, 0.0, 5.0]
+    smooth = 0.5 * (d1 + d2)
+    want = []
+    for p, q, s in zip(d1, d2, smooth, strict=True):
+        if abs(p - q) > 0.5 * (abs(p) + abs(q)):
+            want.append(p if abs(p) < abs(q) else q)
+        else:
+            want.append(s)
+    got = _guarded(d1.copy(), d2.copy(), smooth.copy())
+    np.testing.assert_array_equal(got, np.array(want))
+    assert 20 < int(np.sum(got != smooth)) and np.isnan(got[0]) and got[2] == -0.0
+
+
+def test_the_jacobian_at_a_bound_agrees_with_the_central_difference():
+    """A parameter at its bound takes the one-sided second-order difference into the feasible side: on a smooth
+    misfit (no sliders) its column agrees with the central difference's away from the bound to O(h^2), far
+    closer than the first-order quotient's O(h)."""
+    from quickrelease.building import isolation_fit as F
+
+    k = M * (2 * math.pi / 2.0) ** 2
+    channels = _record(k, k, math.inf, 2 * 0.04 * math.sqrt(k * M), 0.0, 0.15, 1, duration=4.0)
+    noise = {"lvdt": 2e-4, "acc": 0.02}
+    lower, upper = F._bounds(channels, 0.731, 2.0)
+    names = ["period", "damping_ratio", "d0", "release_time", "offset_lvdt", "offset_acc"]
+    base = {"period": 2.0, "damping_ratio": 0.04, "friction": 0.0, "d0": 0.15, "release_time": 0.731,
+            "offset_lvdt": 0.004, "offset_acc": 0.01}
+    theta = np.array([base[n] for n in names])
+    free = F._Misfit(channels, noise, M, "linear", None, lower, {**upper, "period": math.inf})
+    bound = F._Misfit(channels, noise, M, "linear", None, lower, {**upper, "period": 2.0})
+    central, one_sided = free.jacobian(theta, names, base)[:, 0], bound.jacobian(theta, names, base)[:, 0]
+    h = free.step("period", 2.0)
+    first = (bound.residuals(theta - [h, 0, 0, 0, 0, 0], names, base) - bound.residuals(theta, names, base)) / -h
+    scale = np.linalg.norm(central)
+    # (4e-6 and 5e-4 of the column's norm)
+    assert np.linalg.norm(one_sided - central) < 2e-5 * scale and np.linalg.norm(first - central) > 1e-4 * scale
+
+
 def test_the_jacobian_reuses_the_residuals_only_at_the_same_point():
     """The Jacobian's centre is the last residual evaluation where that was the same point (parameters, free names
     and fixed values: the solvers ask for the Jacobian where they have just evaluated the residuals); anywhere else

@@ -1132,7 +1132,10 @@ def boucwen_push(n, dy, d0, steps):
         steps = int(math.ceil(rest / h - 1e-9)) if rest > 0.0 else 0
         h = rest / steps if steps > 0 else 0.0
     for _ in range(steps):
-        z = _push_step(n, dy, z, h, k)
+        znew = _push_step(n, dy, z, h, k)
+        if znew == z:  # saturated to rounding: the step (a function of z alone here) gives z again every time
+            break
+        z = znew
     return z if d0 > 0.0 else -z
 
 

@@ -50,7 +50,7 @@ from scipy.optimize import brentq
 from .._lsq import bounded_least_squares, identified_covariance, jacobian_covariance
 from ..errors import ParameterError, QuickReleaseError
 from .flexible import FlexibleBuilding
-from .hysteretic import EXPONENT_RANGE, GRAVITY, SHAPE_RANGE, BoucWen, Pendulum
+from .hysteretic import EXPONENT_RANGE, GRAVITY, SHAPE_RANGE, BoucWen, HystereticVibration, Pendulum
 from .isolation_search import (
     COMPETING_DELTA_CHI2,
     SAME_BASIN_SE,
@@ -683,6 +683,12 @@ class _Misfit:
         t_all, where = np.unique(np.concatenate([c.t for c in channels]), return_inverse=True)
         self.t_all = t_all
         self.where = np.split(where.ravel(), np.cumsum([c.t.size for c in channels])[:-1])
+        # each channel's samples of the union (None where the channel's times are the union's: no gather) and its
+        # rows of the stacked vector
+        self._take = [None if at.size == t_all.size and np.array_equal(at, np.arange(t_all.size)) else at
+                      for at in self.where]
+        self._rows = [slice(int(i), int(i) + c.t.size)
+                      for c, i in zip(channels, np.cumsum([0] + [c.t.size for c in channels])[:-1], strict=True)]
         # the offsets enter linearly: their columns are exact (1 / sigma on their channel's rows), and only the
         # other parameters need the two model evaluations each of the central differences
         self.rows_of, i0 = {}, 0
@@ -760,15 +766,29 @@ class _Misfit:
 
     def vector(self, fv, p: dict[str, float]) -> np.ndarray:
         """The channels of the motion ``fv`` released at ``p["release_time"]``, with their offsets and drifts."""
-        out = []
-        kinds = fv.channels(self.t_all - p["release_time"])
-        for c, at in zip(self.channels, self.where, strict=True):
-            y = kinds[c.kind][at]
-            y = y + p.get(f"offset_{c.name}", 0.0)
+        # written into one array (each channel's samples plus its offset, then its drift: the arithmetic, and so
+        # the bits, of adding them channel by channel and stacking)
+        out = np.empty(self.data.size)
+        t = self.t_all - p["release_time"]
+        if type(fv) is HystereticVibration:  # the union's times shifted are sorted: its state's path for sorted
+            x, v, a = fv._motion(t)  # times, without the check of their order
+            kinds = {"x": x, "v": v, "a": a, "x_roof": x, "v_roof": v, "a_roof": a}  # as its channels()
+        else:
+            kinds = fv.channels(t)
+        for c, at, rows in zip(self.channels, self._take, self._rows, strict=True):
+            y = kinds[c.kind]
+            o = out[rows]
+            np.add(y if at is None else y[at], p.get(f"offset_{c.name}", 0.0), out=o)
             if c.drift:
-                y = y + p.get(f"drift_{c.name}", 0.0) * self.ramp[f"drift_{c.name}"]
-            out.append(y)
-        return np.concatenate(out)
+                o += p.get(f"drift_{c.name}", 0.0) * self.ramp[f"drift_{c.name}"]
+        return out
+
+    def _residuals_of(self, fv, p: dict[str, float]) -> np.ndarray:
+        """``(vector - data) / sigma``, in place on the fresh vector."""
+        r = self.vector(fv, p)
+        r -= self.data
+        r /= self.sig
+        return r
 
     def model_vector(self, p: dict[str, float]) -> np.ndarray:
         return self.vector(self.motion(p), p)
@@ -780,7 +800,7 @@ class _Misfit:
         p = _unpack(theta, free, base)
         try:
             fv = self.motion(p)
-            r = (self.vector(fv, p) - self.data) / self.sig
+            r = self._residuals_of(fv, p)
         except ParameterError:  # outside the model's domain (e.g. held by friction at a bound): penalise
             fv, r = None, np.full(self.data.size, 1e6)
         self._last = (theta.copy(), tuple(free), dict(base), r, fv)
@@ -832,14 +852,16 @@ class _Misfit:
             scale[i] = max(abs(v), floor)
         return origin, scale
 
-    def jacobian(self, theta, free, base) -> np.ndarray:
+    def jacobian(self, theta, free, base, order: str = "C") -> np.ndarray:
+        # order: the array's layout; "F" for the solver (bounded_least_squares hands scipy its columns, which come
+        # out in Fortran order: built so, each column is written and taken contiguously)
         # Central differences, guarded against the jumps of the record model: where a piece boundary (a
         # reversal, where the friction force flips and the acceleration jumps; the stick) passes a sample
         # inside the stencil, one one-sided difference holds the jump over h and the other does not. There
         # the smaller one is the derivative (the jump would make the sample look infinitely informative
         # and the standard errors far too small, as the optimiser likes to park a jump on a sample).
         theta = np.asarray(theta, dtype=float)
-        J = np.zeros((self.data.size, len(free)))
+        J = np.zeros((self.data.size, len(free)), order=order)
         f0 = motion = None
         for i, n in enumerate(free):
             if n in self.rows_of:
@@ -856,20 +878,44 @@ class _Misfit:
                 if n == "release_time" and motion is not None:  # the same motion released earlier or later: no
                     # integration (the motion does not depend on the instant it starts)
                     p = _unpack(moved, free, base)
-                    return (self.vector(motion, p) - self.data) / self.sig
+                    return self._residuals_of(motion, p)
                 return self.residuals(moved, free, base)
 
             if x - h < lo or x + h > hi:  # one-sided, second order, into the feasible side
                 s_ = 1.0 if x + 2.0 * h <= hi else -1.0
                 f1, f2 = at(x + s_ * h), at(x + 2.0 * s_ * h)
-                d1, d2 = (f1 - f0) / (s_ * h), (f2 - f1) / (s_ * h)
-                J[:, i] = np.where(np.abs(d1 - d2) > 0.5 * (np.abs(d1) + np.abs(d2)),
-                                   np.where(np.abs(d1) < np.abs(d2), d1, d2), 1.5 * d1 - 0.5 * d2)
+                d1 = f1 - f0
+                d1 /= s_ * h
+                d2 = f2 - f1
+                d2 /= s_ * h
+                smooth = 1.5 * d1
+                smooth -= 0.5 * d2
+                J[:, i] = _guarded(d1, d2, smooth)
             else:
-                dp, dm = (at(x + h) - f0) / h, (f0 - at(x - h)) / h
-                J[:, i] = np.where(np.abs(dp - dm) > 0.5 * (np.abs(dp) + np.abs(dm)),
-                                   np.where(np.abs(dp) < np.abs(dm), dp, dm), 0.5 * (dp + dm))
+                dp = at(x + h) - f0
+                dp /= h
+                dm = f0 - at(x - h)
+                dm /= h
+                smooth = dp + dm
+                smooth *= 0.5
+                J[:, i] = _guarded(dp, dm, smooth)
         return J
+
+
+def _guarded(d1: np.ndarray, d2: np.ndarray, smooth: np.ndarray) -> np.ndarray:
+    """A Jacobian column from two difference quotients ``d1``, ``d2`` and their ``smooth`` combination: that, but
+    the smaller quotient where they differ by more than half their mean magnitude (a jump inside the stencil);
+    ``np.where(|d1 - d2| > (|d1| + |d2|) / 2, np.where(|d1| < |d2|, d1, d2), smooth)``, computed in place on
+    ``smooth`` and on the few rows that jump."""
+    a1, a2 = np.abs(d1), np.abs(d2)
+    gap = d1 - d2
+    np.abs(gap, out=gap)
+    a1 += a2  # the sum of the magnitudes, in a1 until the jumping rows are found
+    a1 *= 0.5
+    jump = np.flatnonzero(gap > a1)
+    if jump.size:
+        smooth[jump] = np.where(np.abs(d1[jump]) < a2[jump], d1[jump], d2[jump])
+    return smooth
 
 
 #: The bytes of arrays a :class:`FitMemo` keeps at most (beyond, results are computed and not kept).
@@ -1611,19 +1657,22 @@ def _fit_isolation(channels, mass: float, model: str, *, release_time, fit_relea
 
         origin, scale = on.scales(free, x0)
 
+        def jacobian_f(theta, free, base):
+            return on.jacobian(theta, free, base, order="F")
+
         def run():
             # the Jacobian by central differences over a relative step of 1e-4 (_Misfit.jacobian): the misfit
             # jumps where a piece boundary (a stick, a yield) passes a sample, so a step near the rounding level
             # would see those jumps; a parameter whose optimum is its bound is held there (bounded_least_squares);
             # each parameter's step measured against its own magnitude (``scale``)
-            res = bounded_least_squares(on.residuals, x0, on.jacobian, lo, hi, args=(free, base), tol=tol,
+            res = bounded_least_squares(on.residuals, x0, jacobian_f, lo, hi, args=(free, base), tol=tol,
                                         max_nfev=max_nfev, x_scale="jac", scale=scale, origin=origin, xtol=xtol)
             # stopped against a sample instant: solved again with the release bounded there (on the whole record;
             # a start's solve on the thinned record is one of several, refined on the whole record after it: a
             # benchmark Bouc-Wen + fluid damper fit spent 2.5 s of 12.4 s re-solving one of them)
             edge = None if on.coarse_steps else on.release_edge(res.x, free, lo, hi)
             if edge is not None:
-                pinned = bounded_least_squares(on.residuals, res.x, on.jacobian, *edge, args=(free, base), tol=tol,
+                pinned = bounded_least_squares(on.residuals, res.x, jacobian_f, *edge, args=(free, base), tol=tol,
                                                max_nfev=max_nfev, x_scale="jac", scale=scale, origin=origin, xtol=xtol)
                 if pinned.cost < res.cost:
                     pinned.nfev += res.nfev

@@ -29,6 +29,7 @@ from __future__ import annotations
 import cmath
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -383,6 +384,13 @@ class FreeVibration:
         x, _, _, z = self._evaluate(t)
         return self.isolation.k2 * x + z
 
+    @cached_property
+    def _columns(self) -> tuple[np.ndarray, ...]:
+        """The pieces' t0, x0, v0, z0, x_eq, direction and yielding, each as an array (:meth:`_evaluate`'s)."""
+        pieces = self.pieces
+        return (*(np.array([getattr(p, f) for p in pieces]) for f in ("t0", "x0", "v0", "z0", "x_eq", "direction")),
+                np.array([p.yielding for p in pieces]))
+
     def _evaluate(self, t):
         # One vectorised closed-form evaluation per kind of piece (elastic, yielding: the pieces of a kind
         # share a, b and q), each sample taking its piece's start state by a search on the start times;
@@ -397,8 +405,8 @@ class FreeVibration:
         z = np.full(t.shape, pushed_state(iso, self.d0)[0])
         pieces = self.pieces
         if pieces:
-            starts = np.array([p.t0 for p in pieces])
-            index = np.searchsorted(starts, t, side="right") - 1
+            t0, x0, v0, z0, x_eq, direction, yielding = self._columns
+            index = np.searchsorted(t0, t, side="right") - 1
             moving = index >= 0
             last = pieces[-1]
             if last.end == "stick":  # only the last piece sticks: at rest from its end on
@@ -406,27 +414,30 @@ class FreeVibration:
                 moving &= ~after
                 x[after], z[after] = self.rest
                 v[after] = acc[after] = 0.0
-            t0, x0, v0, z0, x_eq, direction = (np.array([getattr(p, f) for p in pieces])
-                                               for f in ("t0", "x0", "v0", "z0", "x_eq", "direction"))
-            yielding = np.array([p.yielding for p in pieces])
             for kind in (False, True):
-                if not np.any(yielding == kind):
+                of_kind = yielding == kind
+                if not of_kind.any():
                     continue
-                first = pieces[int(np.argmax(yielding == kind))]
-                sel = moving & (yielding[np.maximum(index, 0)] == kind)
-                if not np.any(sel):
+                first = pieces[int(np.argmax(of_kind))]
+                where = np.flatnonzero(moving & of_kind[np.maximum(index, 0)])
+                if not where.size:
                     continue
-                i = index[sel]
-                y0 = x0[i] - x_eq[i]
-                ec, es = _ec_es(first.a, first.q, t[sel] - t0[i])
-                xs = x_eq[i] + ec * y0 + es * (v0[i] + first.a * y0)
-                vs = ec * v0[i] - es * (first.a * v0[i] + first.b * y0)
+                every = where.size == t.size  # every sample on pieces of this kind: no gathers
+                i = index if every else index[where]
+                x0i, x_eqi, v0i = x0[i], x_eq[i], v0[i]
+                y0 = x0i - x_eqi
+                ec, es = _ec_es(first.a, first.q, (t if every else t[where]) - t0[i])
+                xs = x_eqi + ec * y0 + es * (v0i + first.a * y0)
+                vs = ec * v0i - es * (first.a * v0i + first.b * y0)
                 if kind or iso.model == "linear":
                     zs = z0[i]
                 else:
-                    zs = z0[i] + (iso.stiffness - iso.k2) * (xs - x0[i])
-                x[sel], v[sel], z[sel] = xs, vs, zs
-                acc[sel] = -(iso.damping * vs + iso.k2 * xs + zs + iso.friction * direction[i]) / iso.mass
+                    zs = z0[i] + (iso.stiffness - iso.k2) * (xs - x0i)
+                accs = -(iso.damping * vs + iso.k2 * xs + zs + iso.friction * direction[i]) / iso.mass
+                if every:
+                    x, v, z, acc = xs, vs, zs, accs
+                else:
+                    x[where], v[where], z[where], acc[where] = xs, vs, zs, accs
         return x.reshape(shape), v.reshape(shape), acc.reshape(shape), z.reshape(shape)
 
     def energies(self, t) -> dict[str, np.ndarray]:
