@@ -39,6 +39,13 @@ s, power 1.5 -> 1.7 s, boucwen-damper 9.0 -> 9.1 s ("not confirmed" -> confirmed
 12.1 s), boucwen-weak 9.7 -> 15.9 s (12.8 s alone; "not confirmed" -> confirmed: the record's, the loop's and the
 bilinear fit's starts now reach its minimum); every chi-square the truth-started fit's, as before.
 
+Measured 2026-11-28 (eighth session, seed 11, paired with the session's base 1eb24a7, load ~1 on 2 cores), after
+the Bouc-Wen fit's bilinear start was fitted as a start (its best basin alone on the whole record, no polish) and
+the misfit's evaluations lost overhead (bit for bit the same): pendulum 3.39 -> 3.17 s, boucwen 8.08 -> 7.44 s,
+power 1.77 -> 1.72 s, boucwen-damper 8.96 -> 8.42 s, boucwen-weak 11.86 -> 9.54 s; every chi-square as before, each
+confirmed. Seeds 1-4 (without the profile intervals): boucwen-weak 7.6, 8.6, 10.7, 8.9 s, boucwen-damper 6.9, 8.9,
+9.4, 7.4 s.
+
 Timed by process CPU time (one core), best of ``--repeat``. Printed: CPU seconds, the issue's target (10 s),
 the ratio to the baseline, the reduced chi-square and whether the global minimum was confirmed. ``--seeds``:
 the records' noise seeds (one row each); ``--truth``: each record also fitted from the true parameters alone
