@@ -291,3 +291,15 @@ def test_tiny_peaks_fit_as_large_ones(law):
             unit = k ** _LENGTH_POWER[key]
             assert abs(b.parameters[key] / unit - a.parameters[key]) < 1e-4 * se, (name, key)
             assert b.std_errors[key] / unit == pytest.approx(se, rel=1e-4), (name, key)
+
+
+@pytest.mark.parametrize("peaks", [[1e308, -1e308, 9e307, -8e307, 7e307], [1e-300, -1e-300, 9e-301, -8e-301, 7e-301],
+                                   [2e100, -1.5e100, 1.1e100, -0.8e100], [1e-101, -1e-101, 0.9e-101, -0.8e-101]])
+def test_peaks_beyond_the_representable_range_are_refused_in_one_line(peaks):
+    """Readings of 1e308 m overflowed (OverflowError) and swings of 1e-300 m underflowed into a math domain error:
+    both, and readings beyond +-1e100 m or swings under 1e-100 m, are refused naming the parameter and its range
+    (peaks of 1e-99 and 1e99 m fit as those of 1 m: measured)."""
+    from quickrelease.errors import ParameterError
+
+    with pytest.raises(ParameterError, match=r"peaks = readings up to .* is outside readings within \+-1e\+100"):
+        decay_laws(peaks)

@@ -396,6 +396,10 @@ def _nonlinear_law(name: str, x: np.ndarray, s: np.ndarray, se: np.ndarray, offs
     return th, cov_th, resid_w, raw(th), logdet, bound
 
 
+#: The peaks :func:`decay_laws` takes: the smallest swing between successive peaks and the largest reading [m].
+PEAK_RANGE = (1e-100, 1e100)
+
+
 def decay_laws(peaks, peak_se=None, offset: bool = True, laws=LAW_NAMES) -> tuple[LawFit, ...]:
     """The decrement laws fitted to successive signed turning points [m], best (lowest AIC) first.
 
@@ -430,6 +434,15 @@ def decay_laws(peaks, peak_se=None, offset: bool = True, laws=LAW_NAMES) -> tupl
     x = np.asarray(peaks, dtype=float)
     if x.ndim != 1 or x.size < 3 or not np.all(np.isfinite(x)):
         raise ParameterError("peaks", f"{x.size} value(s)", "at least 3 finite successive peaks", "m")
+    # the laws' arithmetic (squared swings, their logarithms, the one-step covariances) stays finite for readings
+    # within +-PEAK_RANGE[1] and swings of at least PEAK_RANGE[0] (1e308 overflowed, 1e-300 underflowed to a
+    # math domain error; 1e-99 and 1e99 fit as 1)
+    top = float(np.max(np.abs(x)))
+    swing = float(np.min(np.abs(np.diff(x)))) if top <= PEAK_RANGE[1] else math.nan
+    if not (top <= PEAK_RANGE[1] and (swing >= PEAK_RANGE[0] or swing == 0.0)):  # (equal peaks: refused below)
+        raise ParameterError("peaks", f"readings up to {top:.3g}" + ("" if math.isnan(swing) else
+                             f" with swings down to {swing:.3g}"),
+                             f"readings within +-{PEAK_RANGE[1]:g} and swings of at least {PEAK_RANGE[0]:g}", "m")
     known = peak_se is not None
     se = np.broadcast_to(np.asarray(peak_se if known else 1.0, dtype=float), x.shape).astype(float)
     if not np.all(np.isfinite(se) & (se > 0)):
